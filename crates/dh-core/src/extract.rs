@@ -1,0 +1,567 @@
+//! The recursive DH frame construction of the paper (§3.1), generalised to real robots: any
+//! first axis (a base transform), a tool transform to the tip link, prismatic and mimic joints,
+//! and both conventions from one skeleton of frames.
+//!
+//! # Frames and free choices
+//! Input lines and the tip pose are in the base link frame. The construction walks the axes
+//! keeping `S`, the current standard DH frame, whose z axis is the table's version of the
+//! current joint axis. Every row is computed in `S`'s own coordinates and `S` then advances by
+//! that row's transform, so snapping one pair never makes a later row inconsistent. The free
+//! choices, made so that tables read like vendor sheets:
+//! - frame 0: z along joint 1 (its URDF direction, so `q` keeps its sign), origin at the point of
+//!   axis 1 nearest the base origin, x along x_1 so that `theta_1 = 0`; the base transform
+//!   carries the rest;
+//! - intersecting axes: x = ±(z_i × z_{i+1}) (eq. 17, normalised), sign chosen so that
+//!   `theta ∈ (−90°, 90°]`;
+//! - skew axes: x along the common normal from axis i to axis i+1 (eq. 19), so `a > 0`;
+//! - parallel axes: the common normal through the current origin (§2.3), so `d = 0`, x from
+//!   axis i towards axis i+1 (eq. 18);
+//! - coincident axes: `a = 0`, `d = 0`, x unchanged (`theta = 0`);
+//! - last frame (standard): z along the last axis, origin at the tip link's origin when it is off
+//!   the axis (x pointing at it), else at the tip origin's foot with x from the tip's own x
+//!   axis (its y axis when x is along the joint axis); the tool transform is then a rotation
+//!   (ERRATA: the paper excludes a tip on the last axis);
+//! - last frame (modified): Craig's rule, `d_n = 0` and `theta_n = 0`; the tool carries the rest.
+
+use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
+use std::fmt;
+
+use nalgebra::{Isometry3, Vector3};
+
+use crate::pose::{from_axes, rot_z};
+use crate::relation::{classify, PairGeometry, Relation};
+use crate::table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
+use crate::tolerance::NOISE_RELATIVE;
+use crate::{CoreError, Line, Tolerance};
+
+/// One moving joint as a line in the base link frame at `q = 0`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointAxis {
+    /// Joint name.
+    pub name: String,
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// The axis line; its direction is the positive sense of the joint (for prismatic joints
+    /// any parallel line would do; the given one is kept).
+    pub line: Line,
+    /// Joint limits, `None` for continuous joints.
+    pub limits: Option<Limits>,
+    /// Set for a joint that follows another.
+    pub mimic: Option<Mimic>,
+}
+
+/// How one consecutive pair of axes was classified.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairReport {
+    /// The earlier joint.
+    pub first: String,
+    /// The later joint.
+    pub second: String,
+    /// Class, angle and distance (the earlier axis as the table has it, the later as given).
+    pub geometry: PairGeometry,
+}
+
+/// Something the user must know about a table that is not exact or not well conditioned.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Warning {
+    /// A pair within the angular tolerance of parallel was treated as parallel (or coincident):
+    /// the table's axis of `second` is tilted from the given one by `angle_deviation`.
+    SnappedParallel {
+        /// Earlier joint.
+        first: String,
+        /// Later joint.
+        second: String,
+        /// The class it was put in.
+        relation: Relation,
+        /// Angle from exact parallelism (radians).
+        angle_deviation: f64,
+        /// The angular tolerance used (radians).
+        tolerance: f64,
+        /// Largest position change this can cause at the tip (metres; a bound).
+        position_cost: f64,
+        /// Largest orientation change (radians; a bound).
+        orientation_cost: f64,
+    },
+    /// A pair within the linear tolerance of intersecting was treated as intersecting.
+    SnappedIntersecting {
+        /// Earlier joint.
+        first: String,
+        /// Later joint.
+        second: String,
+        /// Length of the common normal that was set to zero (metres).
+        distance: f64,
+        /// The linear tolerance used (metres).
+        tolerance: f64,
+        /// Largest position change this can cause at the tip (metres; a bound).
+        position_cost: f64,
+    },
+    /// A nearly parallel pair beyond the tolerance gives an exact but ill-conditioned row whose
+    /// common normal lies far from the robot.
+    IllConditioned {
+        /// Earlier joint.
+        first: String,
+        /// Later joint.
+        second: String,
+        /// Angle from exact parallelism (radians).
+        angle_from_parallel: f64,
+        /// The largest of `|a|`, `|d|` in the row (metres).
+        offset: f64,
+        /// An angular tolerance that would treat the pair as parallel (radians).
+        suggested_tolerance: f64,
+    },
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Warning::SnappedParallel {
+                first,
+                second,
+                relation,
+                angle_deviation,
+                tolerance,
+                position_cost,
+                orientation_cost,
+            } => write!(
+                f,
+                "axes of '{first}' and '{second}' are {angle_deviation:.3e} rad from {relation} \
+                 (angular tolerance {tolerance:.1e} rad): treated as {relation}; FK cost of \
+                 snapping at most {position_cost:.3e} m, {orientation_cost:.3e} rad"
+            ),
+            Warning::SnappedIntersecting {
+                first,
+                second,
+                distance,
+                tolerance,
+                position_cost,
+            } => write!(
+                f,
+                "axes of '{first}' and '{second}' miss each other by {distance:.3e} m (linear \
+                 tolerance {tolerance:.1e} m): treated as intersecting; FK cost of snapping at \
+                 most {position_cost:.3e} m"
+            ),
+            Warning::IllConditioned {
+                first,
+                second,
+                angle_from_parallel,
+                offset,
+                suggested_tolerance,
+            } => write!(
+                f,
+                "ILL-CONDITIONED: axes of '{first}' and '{second}' are {angle_from_parallel:.3e} \
+                 rad from parallel, beyond the angular tolerance, so their common normal lies \
+                 {offset:.3e} m away and the row is exact but meaningless to a reader; if the \
+                 axes are meant to be parallel, pass --angular-tol {suggested_tolerance:.1e}"
+            ),
+        }
+    }
+}
+
+/// Largest deviations an extraction may show against its source and still be exact (or exact
+/// up to the reported snaps).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound {
+    /// Position (metres).
+    pub position: f64,
+    /// Orientation (radians).
+    pub orientation: f64,
+}
+
+/// A DH table with the facts behind it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Extraction {
+    /// The table, with base and tool.
+    pub table: DhTable,
+    /// Classification of every consecutive pair of axes.
+    pub pairs: Vec<PairReport>,
+    /// Snaps and ill-conditioned rows.
+    pub warnings: Vec<Warning>,
+    /// Tolerance used.
+    pub tolerance: Tolerance,
+    /// How far forward kinematics of the table may stray from the source: floating-point
+    /// rounding over the chain plus the cost of every snap.
+    pub bound: Bound,
+}
+
+/// Relative rounding allowance per transform in a chain, in units of machine epsilon.
+const ROUNDING_ULPS: f64 = 64.0;
+
+/// A row computed in the current frame's coordinates, with the snap it needed.
+struct Step {
+    theta: f64,
+    d: f64,
+    a: f64,
+    alpha: f64,
+    geometry: PairGeometry,
+    /// Tilt (radians) and displacement (metres) between the table's next axis and the given one.
+    snap: Option<(f64, f64)>,
+}
+
+/// Extracts a DH table from joint axis lines and the tip link's pose, all in the base link
+/// frame at `q = 0` (paper §3.1, eq. 16-24, generalised as the module docs say).
+///
+/// # Errors
+/// [`CoreError::NoJoints`] for an empty chain; [`CoreError::NonFinite`] when a pose or line
+/// holds NaN or infinity.
+pub fn extract(
+    axes: &[JointAxis],
+    tip: &Isometry3<f64>,
+    tol: Tolerance,
+    convention: Convention,
+) -> Result<Extraction, CoreError> {
+    let first = axes.first().ok_or(CoreError::NoJoints)?;
+    crate::line::check_finite("tip position", &tip.translation.vector)?;
+    if !tip.rotation.coords.iter().all(|c| c.is_finite()) {
+        return Err(CoreError::NonFinite {
+            what: "tip rotation".into(),
+            value: f64::NAN,
+        });
+    }
+    let input_scale = axes
+        .iter()
+        .map(|ax| ax.line.point().norm())
+        .fold(tip.translation.vector.norm(), f64::max)
+        .max(1e-3);
+
+    // Frame 0: z along joint 1, origin nearest the base origin, x from the base x (or y) for now.
+    let z0 = first.line.direction();
+    let pick = |v: Vector3<f64>| v - z0 * v.dot(&z0);
+    let x_try = pick(Vector3::x());
+    let x0 = if x_try.norm() >= FRAC_1_SQRT_2 {
+        x_try.normalize()
+    } else {
+        pick(Vector3::y()).normalize()
+    };
+    let mut frame = from_axes(first.line.point(), x0, z0);
+    let mut base = frame;
+
+    let n = axes.len();
+    let mut rows = Vec::with_capacity(n);
+    let mut pairs = Vec::with_capacity(n.saturating_sub(1));
+    let mut snaps = Vec::new();
+    let mut warnings = Vec::new();
+    let mut last_standard_frame = frame;
+    for i in 0..n {
+        let ax = &axes[i];
+        let step = match axes.get(i + 1) {
+            Some(next) => pair_step(&next.line.transformed(&frame.inverse()), tol),
+            None => last_step(&(frame.inverse() * tip), tol),
+        };
+        let mut row = DhRow {
+            name: ax.name.clone(),
+            kind: ax.kind,
+            a: step.a,
+            alpha: step.alpha,
+            d: step.d,
+            theta: step.theta,
+            limits: ax.limits,
+            mimic: ax.mimic.clone(),
+        };
+        if i == 0 {
+            // Absorb theta_1 into the base so that the table starts at theta_1 = 0.
+            base = frame * rot_z(row.theta);
+            frame = base;
+            row.theta = 0.0;
+        }
+        if let Some(next) = axes.get(i + 1) {
+            pairs.push(PairReport {
+                first: ax.name.clone(),
+                second: next.name.clone(),
+                geometry: step.geometry,
+            });
+            if let Some(snap) = step.snap {
+                snaps.push((i, snap));
+            }
+            let from_parallel = step.geometry.angle.min(PI - step.geometry.angle);
+            let offset = row.d.abs().max(row.a.abs());
+            if step.snap.is_none() && offset > 100.0 * input_scale {
+                warnings.push(Warning::IllConditioned {
+                    first: ax.name.clone(),
+                    second: next.name.clone(),
+                    angle_from_parallel: from_parallel,
+                    offset,
+                    suggested_tolerance: round_up(2.0 * from_parallel),
+                });
+            }
+        }
+        last_standard_frame = frame;
+        frame *= row.transform(Convention::Standard, 0.0);
+        rows.push(row);
+    }
+
+    let mut table = DhTable {
+        convention: Convention::Standard,
+        base,
+        tool: frame.inverse() * tip,
+        rows,
+    };
+    if convention == Convention::Modified {
+        table = table.to_convention(Convention::Modified);
+        // Craig's rule for the last frame: d_n = 0, theta_n = 0, the tool carries the rest.
+        let last = table.rows.len() - 1;
+        table.rows[last].d = 0.0;
+        table.rows[last].theta = 0.0;
+        table.tool = last_standard_frame.inverse() * tip;
+    }
+
+    let size = table.size();
+    let mut bound = Bound {
+        position: (n as f64 + 1.0) * ROUNDING_ULPS * f64::EPSILON * size,
+        orientation: (n as f64 + 1.0) * ROUNDING_ULPS * f64::EPSILON,
+    };
+    for (i, (tilt, shift)) in snaps {
+        let position_cost = 4.0 * tilt * size + 2.0 * shift;
+        let orientation_cost = 2.0 * tilt;
+        bound.position += position_cost;
+        bound.orientation += orientation_cost;
+        let (first, second) = (axes[i].name.clone(), axes[i + 1].name.clone());
+        let geometry = pairs[i].geometry;
+        if tilt > NOISE_RELATIVE {
+            warnings.push(Warning::SnappedParallel {
+                first,
+                second,
+                relation: geometry.relation,
+                angle_deviation: tilt,
+                tolerance: tol.angular,
+                position_cost,
+                orientation_cost,
+            });
+        } else if shift > NOISE_RELATIVE * size {
+            warnings.push(Warning::SnappedIntersecting {
+                first,
+                second,
+                distance: shift,
+                tolerance: tol.linear,
+                position_cost,
+            });
+        }
+    }
+    Ok(Extraction {
+        table,
+        pairs,
+        warnings,
+        tolerance: tol,
+        bound,
+    })
+}
+
+/// The standard row from the current frame (its z axis is the current joint axis) to the frame
+/// on the next axis `next`, given in the current frame's coordinates.
+fn pair_step(next: &Line, tol: Tolerance) -> Step {
+    let z = Line::z_axis();
+    let geometry = classify(&z, next, tol);
+    let u = next.direction();
+    match geometry.relation {
+        Relation::Parallel | Relation::Antiparallel | Relation::Coincident { .. } => {
+            let alpha = if u.z < 0.0 { PI } else { 0.0 };
+            let foot = next.point();
+            let (theta, a) = match geometry.relation {
+                Relation::Coincident { .. } => (0.0, 0.0),
+                _ => (foot.y.atan2(foot.x), foot.xy().norm()),
+            };
+            let origin = Vector3::new(a * theta.cos(), a * theta.sin(), 0.0);
+            Step {
+                theta,
+                d: 0.0,
+                a,
+                alpha,
+                geometry,
+                snap: Some((geometry.angle_deviation, next.distance_to_point(&origin))),
+            }
+        }
+        Relation::Intersecting | Relation::Skew => {
+            // `classify` returned non-parallel, so the cross product is not zero.
+            let (f1, f2) = z
+                .closest_points(next)
+                .unwrap_or((Vector3::zeros(), next.point()));
+            let s = (u.x * u.x + u.y * u.y).sqrt();
+            let mut x = Vector3::new(-u.y / s, u.x / s, 0.0);
+            let (a, snap) = if geometry.relation == Relation::Skew {
+                if (f2 - f1).dot(&x) < 0.0 {
+                    x = -x;
+                }
+                ((f2 - f1).dot(&x), None)
+            } else {
+                let theta = x.y.atan2(x.x);
+                if theta > FRAC_PI_2 + tol.angular || theta <= -FRAC_PI_2 + tol.angular {
+                    x = -x;
+                }
+                (0.0, Some((0.0, geometry.distance)))
+            };
+            // eq. (24): alpha = atan2((z_i × z_{i+1}) · x_{i+1}, z_i · z_{i+1}).
+            let alpha = (-u.y * x.x + u.x * x.y).atan2(u.z);
+            Step {
+                // eq. (22) with x_i = (1, 0, 0) in the current frame.
+                theta: x.y.atan2(x.x),
+                // eq. (21): the foot on the current axis.
+                d: f1.z,
+                a,
+                alpha,
+                geometry,
+                snap,
+            }
+        }
+    }
+}
+
+/// The last standard row: from the frame on the last axis to a frame with z parallel to it at
+/// the tip link's origin (see the module docs). `tip` is in the current frame's coordinates.
+fn last_step(tip: &Isometry3<f64>, tol: Tolerance) -> Step {
+    let t = tip.translation.vector;
+    let radial = t.xy().norm();
+    let (theta, a) = if radial > tol.linear {
+        (t.y.atan2(t.x), radial)
+    } else {
+        let tx = tip.rotation * Vector3::x();
+        let axis = if tx.xy().norm() >= FRAC_1_SQRT_2 {
+            tx
+        } else {
+            tip.rotation * Vector3::y()
+        };
+        (axis.y.atan2(axis.x), 0.0)
+    };
+    Step {
+        theta,
+        d: t.z,
+        a,
+        alpha: 0.0,
+        geometry: PairGeometry {
+            relation: Relation::Parallel,
+            angle: 0.0,
+            distance: radial,
+            angle_deviation: 0.0,
+            distance_deviation: 0.0,
+        },
+        snap: None,
+    }
+}
+
+/// `x` rounded up to one significant digit (for a suggested tolerance).
+fn round_up(x: f64) -> f64 {
+    if x <= 0.0 || !x.is_finite() {
+        return x;
+    }
+    let p = 10f64.powf(x.log10().floor());
+    (x / p).ceil() * p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::{from_xyz_rpy, pose_error};
+    use approx::assert_relative_eq;
+
+    fn axis(name: &str, p: [f64; 3], d: [f64; 3]) -> JointAxis {
+        JointAxis {
+            name: name.into(),
+            kind: JointKind::Revolute,
+            line: Line::through(Vector3::from(p), Vector3::from(d)).unwrap(),
+            limits: None,
+            mimic: None,
+        }
+    }
+
+    /// A planar 2R arm along x: both axes along z, 1 m apart, tip 0.5 m further.
+    #[test]
+    fn planar_2r_by_hand() {
+        let axes = [
+            axis("j1", [0.0; 3], [0.0, 0.0, 1.0]),
+            axis("j2", [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ];
+        let tip = Isometry3::translation(1.5, 0.0, 0.0);
+        let ex = extract(&axes, &tip, Tolerance::default(), Convention::Standard).unwrap();
+        let r = &ex.table.rows;
+        assert_eq!(ex.pairs[0].geometry.relation, Relation::Parallel);
+        assert_relative_eq!(r[0].a, 1.0, epsilon = 1e-15);
+        assert_relative_eq!(r[1].a, 0.5, epsilon = 1e-15);
+        for row in r {
+            assert_eq!((row.alpha, row.d, row.theta), (0.0, 0.0, 0.0));
+        }
+        let (dp, dr) = pose_error(&ex.table.base, &Isometry3::identity());
+        assert!(dp < 1e-15 && dr < 1e-15);
+        assert!(ex.warnings.is_empty());
+    }
+
+    /// Two skew axes: z through the origin and x through (0, 0.3, 0.2): common normal along
+    /// +y of length 0.3 at height 0.2; turning z about +y by +90° gives x.
+    #[test]
+    fn skew_pair_by_hand() {
+        let axes = [
+            axis("j1", [0.0; 3], [0.0, 0.0, 1.0]),
+            axis("j2", [0.0, 0.3, 0.2], [1.0, 0.0, 0.0]),
+        ];
+        let tip = Isometry3::translation(0.5, 0.3, 0.2);
+        let ex = extract(&axes, &tip, Tolerance::default(), Convention::Standard).unwrap();
+        let r0 = &ex.table.rows[0];
+        assert_eq!(ex.pairs[0].geometry.relation, Relation::Skew);
+        assert_relative_eq!(r0.a, 0.3, epsilon = 1e-15);
+        assert_relative_eq!(r0.d, 0.2, epsilon = 1e-15);
+        assert_relative_eq!(r0.alpha, FRAC_PI_2, epsilon = 1e-15);
+        let fk = ex.table.fk(&[0.0, 0.0]).unwrap();
+        let (dp, dr) = pose_error(&fk, &tip);
+        assert!(dp < 1e-15 && dr < 1e-15);
+    }
+
+    /// An axis through the base origin in a plane through the origin: eq. (4) divides by zero
+    /// here; the closest-point form does not.
+    #[test]
+    fn intersection_in_a_plane_through_the_origin() {
+        let axes = [
+            axis("j1", [0.0; 3], [0.0, 0.0, 1.0]),
+            axis("j2", [0.0, 0.0, 0.4], [0.0, 1.0, 0.0]),
+        ];
+        let tip = from_xyz_rpy([0.0, 0.0, 0.9], [0.0, 0.0, 0.0]);
+        let ex = extract(&axes, &tip, Tolerance::default(), Convention::Standard).unwrap();
+        let r0 = &ex.table.rows[0];
+        assert_eq!(ex.pairs[0].geometry.relation, Relation::Intersecting);
+        assert_relative_eq!(r0.d, 0.4, epsilon = 1e-15);
+        assert_eq!(r0.a, 0.0);
+    }
+
+    #[test]
+    fn rounded_pi_half_snaps_with_a_warning_and_exact_tolerance_does_not() {
+        // Two parallel axes written with rpy 1.5708: axis 2 is 3.7e-6 rad off, tilted in the
+        // plane of the two axes (the ill-conditioned direction: the axes meet 115 km away).
+        let tilt = 1.5708_f64 - FRAC_PI_2;
+        let axes = [
+            axis("j1", [0.0; 3], [0.0, 1.0, 0.0]),
+            axis("j2", [0.425, 0.0, 0.0], [tilt.sin(), tilt.cos(), 0.0]),
+        ];
+        let tip = Isometry3::translation(0.8, 0.0, 0.0);
+        let ex = extract(&axes, &tip, Tolerance::default(), Convention::Standard).unwrap();
+        assert!(ex.table.rows.iter().all(|r| r.d.abs() < 1.0));
+        assert!(
+            matches!(ex.warnings[0], Warning::SnappedParallel { .. }),
+            "{:?}",
+            ex.warnings
+        );
+        assert!(ex.bound.position > 1e-6 && ex.bound.position < 1e-4);
+        let exact = extract(&axes, &tip, Tolerance::EXACT, Convention::Standard).unwrap();
+        assert!(exact.table.rows[0].d.abs() > 1e4);
+        assert!(
+            matches!(exact.warnings[0], Warning::IllConditioned { .. }),
+            "{:?}",
+            exact.warnings
+        );
+    }
+
+    #[test]
+    fn tilt_about_the_offset_direction_is_well_conditioned_even_exactly() {
+        let tilt = 1.5708_f64 - FRAC_PI_2;
+        let axes = [
+            axis("j1", [0.0; 3], [0.0, 1.0, 0.0]),
+            axis("j2", [0.425, 0.0, 0.0], [0.0, tilt.cos(), tilt.sin()]),
+        ];
+        let tip = Isometry3::translation(0.8, 0.0, 0.0);
+        let exact = extract(&axes, &tip, Tolerance::EXACT, Convention::Standard).unwrap();
+        assert!(exact.warnings.is_empty());
+        assert_relative_eq!(exact.table.rows[0].a, 0.425, epsilon = 1e-12);
+        assert_relative_eq!(exact.table.rows[0].alpha.abs(), tilt.abs(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn round_up_keeps_one_digit() {
+        assert_relative_eq!(round_up(7.4e-6), 8e-6, epsilon = 1e-20);
+        assert_relative_eq!(round_up(1e-4), 1e-4, epsilon = 1e-18);
+    }
+}

@@ -1,0 +1,361 @@
+//! DH tables in the standard (distal) and modified (Craig, proximal) conventions, and their
+//! forward kinematics.
+
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+use crate::pose::{rot_x, trans_x};
+use crate::CoreError;
+
+/// Where a row's link parameters sit.
+///
+/// With `q` the joint value (added to `theta` for revolute joints, to `d` for prismatic ones):
+/// - `Standard` (distal): `A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i)`; frame `i` has
+///   its z axis along joint `i + 1`, so frame 0 has z along joint 1.
+/// - `Modified` (Craig, proximal): `A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i + q_i) Tz(d_i)`;
+///   row `i` holds `alpha_{i-1}`, `a_{i-1}` in its own `alpha`, `a` fields, and frame `i` has
+///   its z axis along joint `i`.
+///
+/// In both, `FK(q) = base · A_1(q_1) ⋯ A_n(q_n) · tool`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Convention {
+    /// Standard (distal) DH.
+    Standard,
+    /// Modified (proximal, Craig) DH.
+    Modified,
+}
+
+impl fmt::Display for Convention {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Convention::Standard => "standard",
+            Convention::Modified => "modified",
+        })
+    }
+}
+
+impl FromStr for Convention {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "standard" => Ok(Convention::Standard),
+            "modified" => Ok(Convention::Modified),
+            other => Err(format!(
+                "expected convention 'standard' or 'modified', found '{other}'"
+            )),
+        }
+    }
+}
+
+/// What a joint's value moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum JointKind {
+    /// The value (radians) adds to `theta`.
+    Revolute,
+    /// The value (metres) adds to `d`.
+    Prismatic,
+}
+
+impl fmt::Display for JointKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Prismatic => "prismatic",
+        })
+    }
+}
+
+/// Joint limits in the joint's own unit (radians or metres).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Lowest joint value.
+    pub lower: f64,
+    /// Highest joint value.
+    pub upper: f64,
+}
+
+/// A joint whose value follows another: `q = multiplier · q_driver + offset` (URDF `<mimic>`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mimic {
+    /// Name of the driving joint.
+    pub joint: String,
+    /// Gear ratio.
+    pub multiplier: f64,
+    /// Offset (radians or metres).
+    pub offset: f64,
+}
+
+/// One row of a DH table: one joint and the link after it (standard) or before it (modified).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DhRow {
+    /// Joint name.
+    pub name: String,
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Link length (metres).
+    pub a: f64,
+    /// Link twist (radians).
+    pub alpha: f64,
+    /// Link offset (metres); the joint value adds to it for prismatic joints.
+    pub d: f64,
+    /// Joint angle offset (radians); the joint value adds to it for revolute joints.
+    pub theta: f64,
+    /// Joint limits, `None` for a continuous joint.
+    pub limits: Option<Limits>,
+    /// Set when the joint follows another one.
+    pub mimic: Option<Mimic>,
+}
+
+impl DhRow {
+    /// A revolute row without limits or mimic.
+    pub fn revolute(name: &str, a: f64, alpha: f64, d: f64, theta: f64) -> Self {
+        Self {
+            name: name.into(),
+            kind: JointKind::Revolute,
+            a,
+            alpha,
+            d,
+            theta,
+            limits: None,
+            mimic: None,
+        }
+    }
+
+    /// A prismatic row without limits or mimic.
+    pub fn prismatic(name: &str, a: f64, alpha: f64, d: f64, theta: f64) -> Self {
+        Self {
+            kind: JointKind::Prismatic,
+            ..Self::revolute(name, a, alpha, d, theta)
+        }
+    }
+
+    /// `theta` and `d` with the joint value `q` applied.
+    fn moved(&self, q: f64) -> (f64, f64) {
+        match self.kind {
+            JointKind::Revolute => (self.theta + q, self.d),
+            JointKind::Prismatic => (self.theta, self.d + q),
+        }
+    }
+
+    /// The row's transform at joint value `q` in `convention` (see [`Convention`]).
+    pub fn transform(&self, convention: Convention, q: f64) -> Isometry3<f64> {
+        let (theta, d) = self.moved(q);
+        let (st, ct) = theta.sin_cos();
+        let (sa, ca) = self.alpha.sin_cos();
+        let qz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), theta);
+        let qx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha);
+        match convention {
+            Convention::Standard => {
+                Isometry3::from_parts(Translation3::new(self.a * ct, self.a * st, d), qz * qx)
+            }
+            Convention::Modified => {
+                Isometry3::from_parts(Translation3::new(self.a, -sa * d, ca * d), qx * qz)
+            }
+        }
+    }
+}
+
+/// A DH table with the base and tool transforms that make it exact.
+///
+/// `base` is the pose of DH frame 0 in the robot's base link frame; `tool` is the pose of the
+/// tip link frame in the last DH frame (frame `n`). Lengths in metres, angles in radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DhTable {
+    /// Where `a` and `alpha` sit in each row.
+    pub convention: Convention,
+    /// DH frame 0 in the base link frame.
+    pub base: Isometry3<f64>,
+    /// Tip link frame in DH frame `n`.
+    pub tool: Isometry3<f64>,
+    /// One row per moving joint, base to tip.
+    pub rows: Vec<DhRow>,
+}
+
+impl DhTable {
+    /// Forward kinematics: the tip link's pose in the base link frame at joint values `q`
+    /// (one per row, mimic rows included).
+    ///
+    /// # Errors
+    /// [`CoreError::JointCount`] when `q` has the wrong length.
+    pub fn fk(&self, q: &[f64]) -> Result<Isometry3<f64>, CoreError> {
+        self.check_len(q)?;
+        let mut t = self.base;
+        for (row, &qi) in self.rows.iter().zip(q) {
+            t *= row.transform(self.convention, qi);
+        }
+        Ok(t * self.tool)
+    }
+
+    /// Poses of DH frames `0..=n` in the base link frame at joint values `q`. For the modified
+    /// convention frame `i` (`i ≥ 1`) sits on joint `i`; for the standard one on joint `i + 1`.
+    ///
+    /// # Errors
+    /// [`CoreError::JointCount`] when `q` has the wrong length.
+    pub fn frames(&self, q: &[f64]) -> Result<Vec<Isometry3<f64>>, CoreError> {
+        self.check_len(q)?;
+        let mut out = Vec::with_capacity(self.rows.len() + 1);
+        let mut t = self.base;
+        out.push(t);
+        for (row, &qi) in self.rows.iter().zip(q) {
+            t *= row.transform(self.convention, qi);
+            out.push(t);
+        }
+        Ok(out)
+    }
+
+    fn check_len(&self, q: &[f64]) -> Result<(), CoreError> {
+        if q.len() == self.rows.len() {
+            Ok(())
+        } else {
+            Err(CoreError::JointCount {
+                expected: self.rows.len(),
+                found: q.len(),
+            })
+        }
+    }
+
+    /// The same kinematics in the other convention, exactly: `a` and `alpha` move one row along
+    /// (standard row `i` holds what modified row `i + 1` holds) and the base or tool takes the
+    /// pair that falls off the end. `theta`, `d`, joint directions and zero pose stay as they are.
+    pub fn to_convention(&self, convention: Convention) -> DhTable {
+        if convention == self.convention || self.rows.is_empty() {
+            return DhTable {
+                convention,
+                ..self.clone()
+            };
+        }
+        let n = self.rows.len();
+        let mut rows = self.rows.clone();
+        let (mut base, mut tool) = (self.base, self.tool);
+        match convention {
+            Convention::Modified => {
+                // Standard: ... Rz Tz Tx(a_i) Rx(alpha_i) Rz Tz ...; Tx and Rx commute.
+                let last = &self.rows[n - 1];
+                tool = trans_x(last.a) * rot_x(last.alpha) * tool;
+                for i in (0..n).rev() {
+                    let (a, alpha) = if i == 0 {
+                        (0.0, 0.0)
+                    } else {
+                        (self.rows[i - 1].a, self.rows[i - 1].alpha)
+                    };
+                    rows[i].a = a;
+                    rows[i].alpha = alpha;
+                }
+            }
+            Convention::Standard => {
+                let first = &self.rows[0];
+                base = base * rot_x(first.alpha) * trans_x(first.a);
+                for i in 0..n {
+                    let (a, alpha) = if i + 1 < n {
+                        (self.rows[i + 1].a, self.rows[i + 1].alpha)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    rows[i].a = a;
+                    rows[i].alpha = alpha;
+                }
+            }
+        }
+        DhTable {
+            convention,
+            base,
+            tool,
+            rows,
+        }
+    }
+
+    /// A length that bounds the chain's size (metres, at least 1 mm): the sum of `|a|`, `|d|`,
+    /// prismatic travel and the base and tool offsets. Tolerances relative to the chain's size
+    /// use it.
+    pub fn size(&self) -> f64 {
+        let travel = |r: &DhRow| match (r.kind, r.limits) {
+            (JointKind::Prismatic, Some(l)) => l.lower.abs().max(l.upper.abs()),
+            _ => 0.0,
+        };
+        let links: f64 = self
+            .rows
+            .iter()
+            .map(|r| r.a.abs() + r.d.abs() + travel(r))
+            .sum();
+        (links + self.base.translation.vector.norm() + self.tool.translation.vector.norm())
+            .max(1e-3)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::{from_xyz_rpy, pose_error, rot_z, trans_z};
+    use std::f64::consts::FRAC_PI_2;
+
+    fn ur5() -> DhTable {
+        DhTable {
+            convention: Convention::Standard,
+            base: from_xyz_rpy([0.1, -0.2, 0.3], [0.1, 0.2, 0.3]),
+            tool: from_xyz_rpy([0.0, 0.0, 0.05], [0.0, 0.0, 0.7]),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, FRAC_PI_2, 0.089159, 0.0),
+                DhRow::revolute("j2", -0.425, 0.0, 0.0, 0.0),
+                DhRow::revolute("j3", -0.39225, 0.0, 0.0, 0.0),
+                DhRow::revolute("j4", 0.0, FRAC_PI_2, 0.10915, 0.0),
+                DhRow::revolute("j5", 0.0, -FRAC_PI_2, 0.09465, 0.0),
+                DhRow::prismatic("j6", 0.0, 0.0, 0.0823, 0.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn closed_forms_equal_the_products_they_stand_for() {
+        let row = DhRow::revolute("j", 0.3, 0.7, -0.2, 0.4);
+        let q = 0.9;
+        let std = rot_z(0.4 + q) * trans_z(-0.2) * trans_x(0.3) * rot_x(0.7);
+        let md = rot_x(0.7) * trans_x(0.3) * rot_z(0.4 + q) * trans_z(-0.2);
+        let (dp, dr) = pose_error(&row.transform(Convention::Standard, q), &std);
+        assert!(dp < 1e-15 && dr < 1e-15);
+        let (dp, dr) = pose_error(&row.transform(Convention::Modified, q), &md);
+        assert!(dp < 1e-15 && dr < 1e-15);
+        let p = DhRow::prismatic("p", 0.3, 0.7, -0.2, 0.4);
+        let std = rot_z(0.4) * trans_z(-0.2 + q) * trans_x(0.3) * rot_x(0.7);
+        let (dp, dr) = pose_error(&p.transform(Convention::Standard, q), &std);
+        assert!(dp < 1e-15 && dr < 1e-15);
+    }
+
+    #[test]
+    fn ur5_zero_pose_reaches_where_the_vendor_says() {
+        let mut t = ur5();
+        t.base = Isometry3::identity();
+        t.tool = Isometry3::identity();
+        let p = t.fk(&[0.0; 6]).unwrap().translation.vector;
+        // UR5 at zero: x = a2 + a3, y = -(d4 + d6) (z5 points along -y), z = d1 - d5.
+        assert!((p - Vector3::new(-0.81725, -0.19145, -0.005491)).norm() < 1e-12);
+    }
+
+    #[test]
+    fn conversion_round_trips_and_keeps_the_kinematics() {
+        let std = ur5();
+        let md = std.to_convention(Convention::Modified);
+        let back = md.to_convention(Convention::Standard);
+        for q in [[0.0; 6], [0.3, -1.2, 2.0, 0.5, -0.7, 0.02]] {
+            let a = std.fk(&q).unwrap();
+            for other in [&md, &back] {
+                let (dp, dr) = pose_error(&a, &other.fk(&q).unwrap());
+                assert!(dp < 1e-14 && dr < 1e-14, "{dp} {dr}");
+            }
+        }
+        assert_eq!(md.rows[2].a, -0.425);
+        assert_eq!(md.rows[0].a, 0.0);
+    }
+
+    #[test]
+    fn wrong_joint_count_is_an_error() {
+        assert_eq!(
+            ur5().fk(&[0.0; 3]),
+            Err(CoreError::JointCount {
+                expected: 6,
+                found: 3
+            })
+        );
+    }
+}
