@@ -1,1 +1,952 @@
-//! (to be written)
+//! The canonical measurement CSV: reading ([`parse_measurements`]) and writing
+//! ([`write_measurements`]).
+//!
+//! # Layout
+//! One header line, then one measured point per line:
+//!
+//! ```text
+//! # comment lines start with '#'; blank lines are skipped
+//! joint_1,joint_2,x,y,z,target,config,sigma,set
+//! 0.1,-0.25,1.2034,0.4411,0.9873,A,7,1e-5,train
+//! ```
+//!
+//! - one column per joint, named exactly as the model's joints: radians for revolute joints,
+//!   metres for prismatic ones (other units through [`CsvOptions`]);
+//! - `x`, `y`, `z`: the measured position of a target on the tool, in the measuring device's
+//!   own frame, metres;
+//! - optional `target`: which reflector or marker was measured (a name; targets are numbered in
+//!   order of first appearance; without the column every row measures one target called
+//!   [`DEFAULT_TARGET`]);
+//! - optional `config`: pose identifier, rows with the same id repeat one pose (an empty cell
+//!   means none);
+//! - optional `sigma` (isotropic) or `sx`, `sy`, `sz` (per axis): the point's standard deviation
+//!   in the length unit (an empty cell means unknown);
+//! - optional `set`: `train`/`calibration` or `test`/`validation` (an empty cell or no column
+//!   means calibration).
+//!
+//! Other columns are ignored. Cells may be double-quoted (`""` inside quotes is one quote).
+//! Column names and cells are trimmed of surrounding spaces.
+
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::Vector3;
+use thiserror::Error;
+
+use crate::data::{Measurements, Sample, Split};
+
+/// Name of the single target of a file without a `target` column.
+pub const DEFAULT_TARGET: &str = "tip";
+
+/// A revolute joint value beyond this many radians (four turns) is taken for degrees.
+const MAX_PLAUSIBLE_RADIANS: f64 = 8.0 * std::f64::consts::PI;
+/// A point coordinate beyond this many metres is taken for millimetres: no laser tracker,
+/// camera system or total station used for arm calibration measures 100 m away.
+const MAX_PLAUSIBLE_METRES: f64 = 100.0;
+
+/// Everything that can be wrong with a measurement file: the message names the line, the column
+/// and the text found.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum DataError {
+    /// Nothing but comments and blank lines, or a header without data rows.
+    #[error("expected a header line and at least one data row, found {found}")]
+    Empty {
+        /// What was there instead ("an empty file", "only a header").
+        found: &'static str,
+    },
+    /// The header lacks a column for some of the model's joints.
+    #[error(
+        "line {line}: missing joint column(s) {}; the header has {}",
+        list(.missing),
+        list(.found)
+    )]
+    MissingJoints {
+        /// Header line.
+        line: usize,
+        /// Joint names without a column.
+        missing: Vec<String>,
+        /// The columns the header has.
+        found: Vec<String>,
+    },
+    /// The header lacks `x`, `y` or `z`.
+    #[error("line {line}: missing point column '{column}'; the header has {}", list(.found))]
+    MissingCoordinate {
+        /// Header line.
+        line: usize,
+        /// `x`, `y` or `z`.
+        column: &'static str,
+        /// The columns the header has.
+        found: Vec<String>,
+    },
+    /// Two header columns share a name.
+    #[error("line {line}: duplicate column '{column}'")]
+    DuplicateColumn {
+        /// Header line.
+        line: usize,
+        /// The repeated name.
+        column: String,
+    },
+    /// Two columns that say the same thing in different ways (`sigma` and `sx`).
+    #[error("line {line}: columns '{first}' and '{second}' conflict; give one of them")]
+    ConflictingColumns {
+        /// Header line.
+        line: usize,
+        /// One column.
+        first: String,
+        /// The other.
+        second: String,
+    },
+    /// A row with more or fewer cells than the header.
+    #[error("line {line}: expected {expected} fields, found {found}")]
+    FieldCount {
+        /// The row's line.
+        line: usize,
+        /// Fields in the header.
+        expected: usize,
+        /// Fields in the row.
+        found: usize,
+    },
+    /// A cell that should be a number is not one.
+    #[error("line {line}, column '{column}': expected a number, found '{text}'")]
+    NotANumber {
+        /// The row's line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// The cell's text.
+        text: String,
+    },
+    /// A cell holds NaN or infinity.
+    #[error("line {line}, column '{column}': expected a finite number, found '{text}'")]
+    NonFinite {
+        /// The row's line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// The cell's text.
+        text: String,
+    },
+    /// A standard deviation that is zero or negative.
+    #[error("line {line}, column '{column}': expected a standard deviation > 0, found '{text}'")]
+    BadSigma {
+        /// The row's line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// The cell's text.
+        text: String,
+    },
+    /// A `set` cell that names no known split.
+    #[error(
+        "line {line}, column 'set': expected train, calibration, test or validation, found '{text}'"
+    )]
+    UnknownSet {
+        /// The row's line.
+        line: usize,
+        /// The cell's text.
+        text: String,
+    },
+    /// A value far outside the range of the declared unit.
+    #[error("line {line}, column '{column}': {value} {unit} {hint}")]
+    SuspiciousUnit {
+        /// The row's line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// The value in the declared unit.
+        value: f64,
+        /// The declared unit (`rad`, `m`).
+        unit: &'static str,
+        /// What it looks like and what to do.
+        hint: &'static str,
+    },
+    /// A quoted cell without its closing quote.
+    #[error("line {line}: unterminated quoted field")]
+    UnterminatedQuote {
+        /// The line where the quote opened.
+        line: usize,
+    },
+    /// A dataset layout found something other than it expects.
+    #[error("line {line}: expected {expected}, found {found}")]
+    Format {
+        /// The line (1-based) in the file.
+        line: usize,
+        /// What the layout needs there.
+        expected: String,
+        /// What is there.
+        found: String,
+    },
+    /// The content does not fit the layout where no single line is to blame: files of one
+    /// dataset that disagree in row counts, a structured document missing a field.
+    #[error("expected {expected}, found {found}")]
+    Content {
+        /// What should hold.
+        expected: String,
+        /// What does.
+        found: String,
+    },
+    /// A file a dataset layout needs was not given.
+    #[error("layout '{layout}' needs file '{file}', which was not given; given: {}", list(.given))]
+    MissingFile {
+        /// Layout name.
+        layout: &'static str,
+        /// The missing file.
+        file: &'static str,
+        /// The names of the files given.
+        given: Vec<String>,
+    },
+    /// An error inside one file of a multi-file dataset.
+    #[error("{file}: {source}")]
+    InFile {
+        /// File name.
+        file: String,
+        /// The error.
+        source: Box<DataError>,
+    },
+}
+
+/// `'a', 'b', 'c'`, or `none`.
+fn list(items: &[String]) -> String {
+    if items.is_empty() {
+        return "none".into();
+    }
+    items
+        .iter()
+        .map(|s| format!("'{s}'"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Unit of lengths in a file: point coordinates, standard deviations and prismatic joints.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum LengthUnit {
+    /// Metres (the canonical unit).
+    #[default]
+    Metre,
+    /// Millimetres.
+    Millimetre,
+}
+
+impl LengthUnit {
+    /// `value` (in this unit) in metres; millimetres are divided by 1000, which rounds
+    /// correctly (`7 mm` is the double nearest `0.007 m`).
+    pub fn to_metres(self, value: f64) -> f64 {
+        match self {
+            LengthUnit::Metre => value,
+            LengthUnit::Millimetre => value / 1000.0,
+        }
+    }
+}
+
+impl fmt::Display for LengthUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            LengthUnit::Metre => "m",
+            LengthUnit::Millimetre => "mm",
+        })
+    }
+}
+
+impl FromStr for LengthUnit {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "m" => Ok(LengthUnit::Metre),
+            "mm" => Ok(LengthUnit::Millimetre),
+            other => Err(format!("expected length unit 'm' or 'mm', found '{other}'")),
+        }
+    }
+}
+
+/// Unit of revolute joint values in a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum AngleUnit {
+    /// Radians (the canonical unit).
+    #[default]
+    Radian,
+    /// Degrees.
+    Degree,
+}
+
+impl AngleUnit {
+    /// `value` (in this unit) in radians.
+    pub fn to_radians(self, value: f64) -> f64 {
+        match self {
+            AngleUnit::Radian => value,
+            AngleUnit::Degree => value.to_radians(),
+        }
+    }
+}
+
+impl fmt::Display for AngleUnit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            AngleUnit::Radian => "rad",
+            AngleUnit::Degree => "deg",
+        })
+    }
+}
+
+impl FromStr for AngleUnit {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "rad" => Ok(AngleUnit::Radian),
+            "deg" => Ok(AngleUnit::Degree),
+            other => Err(format!(
+                "expected angle unit 'rad' or 'deg', found '{other}'"
+            )),
+        }
+    }
+}
+
+/// Units of a measurement file; values are converted to metres and radians on reading.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct CsvOptions {
+    /// Unit of `x`, `y`, `z`, of `sigma`/`sx`/`sy`/`sz` and of prismatic joint columns.
+    pub length_unit: LengthUnit,
+    /// Unit of revolute joint columns.
+    pub angle_unit: AngleUnit,
+    /// Names of the prismatic joints (their columns are lengths, not angles); every other joint
+    /// column is an angle.
+    pub prismatic: Vec<String>,
+}
+
+/// One CSV record: its first line (1-based) and its cells, unquoted and trimmed.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Record {
+    pub line: usize,
+    pub fields: Vec<String>,
+}
+
+/// Splits `text` into CSV records with `delimiter`. Double-quoted cells may hold delimiters,
+/// `""` and line breaks. With `comments`, lines starting with `#` (after spaces) are skipped;
+/// blank lines are always skipped. A leading byte-order mark is dropped.
+///
+/// # Errors
+/// [`DataError::UnterminatedQuote`] for a quote that never closes.
+pub(crate) fn records(
+    text: &str,
+    delimiter: char,
+    comments: bool,
+) -> Result<Vec<Record>, DataError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut out = Vec::new();
+    let mut lines = text.split('\n').enumerate().peekable();
+    while let Some((index, raw)) = lines.next() {
+        let line = index + 1;
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        let trimmed = raw.trim();
+        if trimmed.is_empty() || comments && trimmed.starts_with('#') {
+            continue;
+        }
+        let mut fields = Vec::new();
+        let mut cell = String::new();
+        let mut quoted = false;
+        let mut was_quoted = false;
+        let mut current = raw.to_string();
+        loop {
+            let mut chars = current.chars().peekable();
+            while let Some(c) = chars.next() {
+                if quoted {
+                    if c == '"' {
+                        if chars.peek() == Some(&'"') {
+                            chars.next();
+                            cell.push('"');
+                        } else {
+                            quoted = false;
+                        }
+                    } else {
+                        cell.push(c);
+                    }
+                } else if c == '"' && cell.trim().is_empty() && !was_quoted {
+                    cell.clear();
+                    quoted = true;
+                    was_quoted = true;
+                } else if c == delimiter {
+                    fields.push(finish(&mut cell, &mut was_quoted));
+                } else {
+                    cell.push(c);
+                }
+            }
+            if !quoted {
+                break;
+            }
+            // A quoted cell runs on over the line break.
+            match lines.next() {
+                Some((_, next)) => {
+                    cell.push('\n');
+                    current = next.strip_suffix('\r').unwrap_or(next).to_string();
+                }
+                None => return Err(DataError::UnterminatedQuote { line }),
+            }
+        }
+        fields.push(finish(&mut cell, &mut was_quoted));
+        out.push(Record { line, fields });
+    }
+    Ok(out)
+}
+
+fn finish(cell: &mut String, was_quoted: &mut bool) -> String {
+    let s = if *was_quoted {
+        // Keep spaces inside quotes, drop those after the closing quote.
+        cell.trim_end().to_string()
+    } else {
+        cell.trim().to_string()
+    };
+    cell.clear();
+    *was_quoted = false;
+    s
+}
+
+/// Parses a finite number from a cell.
+///
+/// # Errors
+/// [`DataError::NotANumber`] or [`DataError::NonFinite`], naming `line` and `column`.
+pub(crate) fn number(text: &str, line: usize, column: &str) -> Result<f64, DataError> {
+    let value: f64 = text.trim().parse().map_err(|_| DataError::NotANumber {
+        line,
+        column: column.into(),
+        text: text.into(),
+    })?;
+    if !value.is_finite() {
+        return Err(DataError::NonFinite {
+            line,
+            column: column.into(),
+            text: text.into(),
+        });
+    }
+    Ok(value)
+}
+
+/// Column indices of the canonical header.
+struct Columns {
+    joints: Vec<usize>,
+    xyz: [usize; 3],
+    target: Option<usize>,
+    config: Option<usize>,
+    sigma: Sigma,
+    set: Option<usize>,
+}
+
+enum Sigma {
+    None,
+    Isotropic(usize),
+    PerAxis([usize; 3]),
+}
+
+fn header_columns(header: &Record, joint_names: &[String]) -> Result<Columns, DataError> {
+    let line = header.line;
+    let names = &header.fields;
+    for (i, name) in names.iter().enumerate() {
+        if names[..i].contains(name) {
+            return Err(DataError::DuplicateColumn {
+                line,
+                column: name.clone(),
+            });
+        }
+    }
+    let find = |name: &str| names.iter().position(|n| n == name);
+    let missing: Vec<String> = joint_names
+        .iter()
+        .filter(|j| find(j).is_none())
+        .cloned()
+        .collect();
+    if !missing.is_empty() {
+        return Err(DataError::MissingJoints {
+            line,
+            missing,
+            found: names.clone(),
+        });
+    }
+    let joints = joint_names.iter().filter_map(|j| find(j)).collect();
+    let mut xyz = [0; 3];
+    for (slot, column) in xyz.iter_mut().zip(["x", "y", "z"]) {
+        *slot = find(column).ok_or_else(|| DataError::MissingCoordinate {
+            line,
+            column,
+            found: names.clone(),
+        })?;
+    }
+    let per_axis = [find("sx"), find("sy"), find("sz")];
+    let sigma = match (find("sigma"), per_axis) {
+        (None, [None, None, None]) => Sigma::None,
+        (Some(i), [None, None, None]) => Sigma::Isotropic(i),
+        (None, [Some(a), Some(b), Some(c)]) => Sigma::PerAxis([a, b, c]),
+        (Some(_), _) => {
+            let other = ["sx", "sy", "sz"]
+                .into_iter()
+                .zip(per_axis)
+                .find_map(|(n, i)| i.map(|_| n))
+                .unwrap_or("sx");
+            return Err(DataError::ConflictingColumns {
+                line,
+                first: "sigma".into(),
+                second: other.into(),
+            });
+        }
+        (None, _) => {
+            let missing = ["sx", "sy", "sz"]
+                .into_iter()
+                .zip(per_axis)
+                .find_map(|(n, i)| i.is_none().then_some(n))
+                .unwrap_or("sx");
+            return Err(DataError::MissingCoordinate {
+                line,
+                column: missing,
+                found: names.clone(),
+            });
+        }
+    };
+    Ok(Columns {
+        joints,
+        xyz,
+        target: find("target"),
+        config: find("config"),
+        sigma,
+        set: find("set"),
+    })
+}
+
+/// Reads a measurement set in the canonical CSV layout (see the [module docs](self)).
+///
+/// `joint_names` are the model's joints: each needs a column, and every sample's `q` follows
+/// their order. Values are converted to metres and radians with `opts`. Frames: points are in
+/// the measuring device's frame. `Sample::line` is the row's 1-based line in `text`.
+///
+/// # Errors
+/// A [`DataError`] naming the line and column for: no header or no data rows, a missing joint
+/// or point column, duplicate or conflicting columns, a row with the wrong number of fields, a
+/// cell that is not a finite number, a standard deviation ≤ 0, an unknown `set` value, and
+/// values that look like another unit (a revolute joint beyond 8π rad, a coordinate beyond
+/// 100 m).
+pub fn parse_measurements(
+    text: &str,
+    joint_names: &[String],
+    opts: &CsvOptions,
+) -> Result<Measurements, DataError> {
+    let recs = records(text, ',', true)?;
+    let (header, rows) = recs.split_first().ok_or(DataError::Empty {
+        found: "an empty file",
+    })?;
+    if rows.is_empty() {
+        return Err(DataError::Empty {
+            found: "only a header",
+        });
+    }
+    let cols = header_columns(header, joint_names)?;
+    let length = |v: f64| opts.length_unit.to_metres(v);
+    let revolute: Vec<bool> = joint_names
+        .iter()
+        .map(|j| !opts.prismatic.contains(j))
+        .collect();
+
+    let mut m = Measurements {
+        joint_names: joint_names.to_vec(),
+        targets: Vec::new(),
+        samples: Vec::with_capacity(rows.len()),
+    };
+    let expected = header.fields.len();
+    for row in rows {
+        let line = row.line;
+        if row.fields.len() != expected {
+            return Err(DataError::FieldCount {
+                line,
+                expected,
+                found: row.fields.len(),
+            });
+        }
+        let cell = |i: usize| row.fields[i].as_str();
+        let name = |i: usize| header.fields[i].as_str();
+
+        let mut q = Vec::with_capacity(joint_names.len());
+        for (&col, &revolute) in cols.joints.iter().zip(&revolute) {
+            let value = number(cell(col), line, name(col))?;
+            if revolute
+                && opts.angle_unit == AngleUnit::Radian
+                && value.abs() > MAX_PLAUSIBLE_RADIANS
+            {
+                return Err(DataError::SuspiciousUnit {
+                    line,
+                    column: name(col).into(),
+                    value,
+                    unit: "rad",
+                    hint: "looks like degrees; pass --angle-unit deg",
+                });
+            }
+            q.push(if revolute {
+                opts.angle_unit.to_radians(value)
+            } else {
+                length(value)
+            });
+        }
+
+        let mut point = Vector3::zeros();
+        for (k, &col) in cols.xyz.iter().enumerate() {
+            let value = number(cell(col), line, name(col))?;
+            if opts.length_unit == LengthUnit::Metre && value.abs() > MAX_PLAUSIBLE_METRES {
+                return Err(DataError::SuspiciousUnit {
+                    line,
+                    column: name(col).into(),
+                    value,
+                    unit: "m",
+                    hint: "looks like millimetres; pass --length-unit mm",
+                });
+            }
+            point[k] = length(value);
+        }
+
+        let sigma_cell = |col: usize| -> Result<Option<f64>, DataError> {
+            let text = cell(col);
+            if text.is_empty() {
+                return Ok(None);
+            }
+            let value = number(text, line, name(col))?;
+            if value <= 0.0 {
+                return Err(DataError::BadSigma {
+                    line,
+                    column: name(col).into(),
+                    text: text.into(),
+                });
+            }
+            Ok(Some(length(value)))
+        };
+        let sigma = match cols.sigma {
+            Sigma::None => None,
+            Sigma::Isotropic(col) => sigma_cell(col)?.map(|s| Vector3::new(s, s, s)),
+            Sigma::PerAxis(c) => match (sigma_cell(c[0])?, sigma_cell(c[1])?, sigma_cell(c[2])?) {
+                (Some(a), Some(b), Some(c)) => Some(Vector3::new(a, b, c)),
+                (None, None, None) => None,
+                _ => {
+                    return Err(DataError::Format {
+                        line,
+                        expected: "all of sx, sy, sz or none".into(),
+                        found: "some of them empty".into(),
+                    })
+                }
+            },
+        };
+
+        let target_name = cols.target.map_or(DEFAULT_TARGET, cell);
+        let target = match m.targets.iter().position(|t| t == target_name) {
+            Some(i) => i,
+            None => {
+                m.targets.push(target_name.to_string());
+                m.targets.len() - 1
+            }
+        };
+        let config = cols
+            .config
+            .map(cell)
+            .filter(|c| !c.is_empty())
+            .map(str::to_string);
+        let split = match cols.set.map(cell) {
+            None | Some("") => Split::Calibration,
+            Some(text) => parse_split(text).ok_or_else(|| DataError::UnknownSet {
+                line,
+                text: text.into(),
+            })?,
+        };
+        m.samples.push(Sample {
+            q,
+            target,
+            point,
+            sigma,
+            config,
+            split,
+            line,
+        });
+    }
+    Ok(m)
+}
+
+fn parse_split(text: &str) -> Option<Split> {
+    match text.to_ascii_lowercase().as_str() {
+        "train" | "calibration" => Some(Split::Calibration),
+        "test" | "validation" => Some(Split::Validation),
+        _ => None,
+    }
+}
+
+/// Writes a measurement set in the canonical CSV layout: metres, radians, points in the device
+/// frame, numbers in Rust's shortest round-trip form, so that [`parse_measurements`] with the
+/// same joint names and default options gives back the same set (except `Sample::line`, which
+/// becomes the line in the written text).
+///
+/// Columns: the joints, `x,y,z`, `target`; `config` when any sample has one; `sigma` when every
+/// known standard deviation is isotropic, else `sx,sy,sz`; `set` when any sample is for
+/// validation. Targets are written by name, so a target that no sample uses is not kept, and the
+/// targets come back numbered in order of first use.
+pub fn write_measurements(m: &Measurements) -> String {
+    let any_config = m.samples.iter().any(|s| s.config.is_some());
+    let sigmas: Vec<&Vector3<f64>> = m.samples.iter().filter_map(|s| s.sigma.as_ref()).collect();
+    let any_sigma = !sigmas.is_empty();
+    let isotropic = sigmas.iter().all(|s| s.x == s.y && s.y == s.z);
+    let any_validation = m.samples.iter().any(|s| s.split == Split::Validation);
+
+    let mut out = String::from(
+        "# urdf-dh measurements: joints in rad (m for prismatic), x,y,z in m in the device frame\n",
+    );
+    let mut header: Vec<String> = m.joint_names.iter().map(|n| quote(n)).collect();
+    header.extend(["x", "y", "z", "target"].map(String::from));
+    if any_config {
+        header.push("config".into());
+    }
+    if any_sigma {
+        if isotropic {
+            header.push("sigma".into());
+        } else {
+            header.extend(["sx", "sy", "sz"].map(String::from));
+        }
+    }
+    if any_validation {
+        header.push("set".into());
+    }
+    out.push_str(&header.join(","));
+    out.push('\n');
+
+    for s in &m.samples {
+        let mut cells: Vec<String> = s.q.iter().map(|v| format!("{v:?}")).collect();
+        cells.extend(s.point.iter().map(|v| format!("{v:?}")));
+        let target = m
+            .targets
+            .get(s.target)
+            .map_or(DEFAULT_TARGET, String::as_str);
+        cells.push(quote(target));
+        if any_config {
+            cells.push(s.config.as_deref().map(quote).unwrap_or_default());
+        }
+        if any_sigma {
+            match (&s.sigma, isotropic) {
+                (Some(v), true) => cells.push(format!("{:?}", v.x)),
+                (Some(v), false) => cells.extend(v.iter().map(|c| format!("{c:?}"))),
+                (None, true) => cells.push(String::new()),
+                (None, false) => cells.extend([String::new(), String::new(), String::new()]),
+            }
+        }
+        if any_validation {
+            cells.push(
+                match s.split {
+                    Split::Calibration => "calibration",
+                    Split::Validation => "validation",
+                }
+                .into(),
+            );
+        }
+        out.push_str(&cells.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// Quotes a cell when it holds a delimiter, a quote, a line break, surrounding spaces, a
+/// leading `#` or nothing at all would be mistaken for something else.
+fn quote(s: &str) -> String {
+    let needs =
+        s.contains([',', '"', '\n', '\r']) || s.trim() != s || s.starts_with('#') || s.is_empty();
+    if needs {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(n: &[&str]) -> Vec<String> {
+        n.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn reads_all_optional_columns() {
+        let text = "\
+# a comment
+j1, j2 ,x,y,z,target,config,sigma,set
+
+0.1,0.2,1,2,3,A,c1,1e-5,train
+0.1,0.2,1.5,2,3,B,c1,,test
+  # indented comment
+0.3,0.4,1,2,3.5,A,,2e-5,
+";
+        let m = parse_measurements(text, &names(&["j1", "j2"]), &CsvOptions::default()).unwrap();
+        assert_eq!(m.targets, names(&["A", "B"]));
+        assert_eq!(m.samples.len(), 3);
+        let s = &m.samples;
+        assert_eq!(s[0].q, vec![0.1, 0.2]);
+        assert_eq!(s[0].point, Vector3::new(1.0, 2.0, 3.0));
+        assert_eq!(s[0].sigma, Some(Vector3::new(1e-5, 1e-5, 1e-5)));
+        assert_eq!(s[0].config.as_deref(), Some("c1"));
+        assert_eq!(s[0].line, 4);
+        assert_eq!(
+            (s[1].target, s[1].split, s[1].sigma),
+            (1, Split::Validation, None)
+        );
+        assert_eq!(
+            (s[2].config.clone(), s[2].split, s[2].line),
+            (None, Split::Calibration, 7)
+        );
+    }
+
+    #[test]
+    fn joint_columns_follow_the_models_order_not_the_files() {
+        let text = "z,y,x,b,a\n3,2,1,20,10\n";
+        let m = parse_measurements(text, &names(&["a", "b"]), &CsvOptions::default()).unwrap();
+        assert_eq!(m.samples[0].q, vec![10.0, 20.0]);
+        assert_eq!(m.samples[0].point, Vector3::new(1.0, 2.0, 3.0));
+        assert_eq!(m.targets, vec![DEFAULT_TARGET.to_string()]);
+    }
+
+    #[test]
+    fn converts_units_and_keeps_prismatic_joints_as_lengths() {
+        let text = "rot,slide,x,y,z,sx,sy,sz\n90,250,1000,-2000,500,0.01,0.02,0.03\n";
+        let opts = CsvOptions {
+            length_unit: LengthUnit::Millimetre,
+            angle_unit: AngleUnit::Degree,
+            prismatic: names(&["slide"]),
+        };
+        let m = parse_measurements(text, &names(&["rot", "slide"]), &opts).unwrap();
+        let s = &m.samples[0];
+        assert!((s.q[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert!((s.q[1] - 0.25).abs() < 1e-15);
+        assert!((s.point - Vector3::new(1.0, -2.0, 0.5)).norm() < 1e-15);
+        assert!((s.sigma.unwrap() - Vector3::new(1e-5, 2e-5, 3e-5)).norm() < 1e-18);
+    }
+
+    #[test]
+    fn quoted_cells_keep_commas() {
+        let text = "j,x,y,z,target\n0,1,2,3,\"left, upper\"\n";
+        let m = parse_measurements(text, &names(&["j"]), &CsvOptions::default()).unwrap();
+        assert_eq!(m.targets, names(&["left, upper"]));
+    }
+
+    fn err(text: &str, joints: &[&str]) -> String {
+        parse_measurements(text, &names(joints), &CsvOptions::default())
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn error_messages_name_line_column_and_text() {
+        assert_eq!(
+            err("", &["j"]),
+            "expected a header line and at least one data row, found an empty file"
+        );
+        assert_eq!(
+            err("# only comments\n\nj,x,y,z\n", &["j"]),
+            "expected a header line and at least one data row, found only a header"
+        );
+        assert_eq!(
+            err("j1,x,y,z\n0,0,0,0\n", &["j1", "j2", "j3"]),
+            "line 1: missing joint column(s) 'j2', 'j3'; the header has 'j1', 'x', 'y', 'z'"
+        );
+        assert_eq!(
+            err("j,x,z\n0,0,0\n", &["j"]),
+            "line 1: missing point column 'y'; the header has 'j', 'x', 'z'"
+        );
+        assert_eq!(
+            err("j,x,y,z,x\n0,0,0,0,0\n", &["j"]),
+            "line 1: duplicate column 'x'"
+        );
+        assert_eq!(
+            err("j,x,y,z\n0,0,0,0\n0,0,0\n", &["j"]),
+            "line 3: expected 4 fields, found 3"
+        );
+        assert_eq!(
+            err("j,x,y,z\n0,0,abc,0\n", &["j"]),
+            "line 2, column 'y': expected a number, found 'abc'"
+        );
+        assert_eq!(
+            err("j,x,y,z\nNaN,0,0,0\n", &["j"]),
+            "line 2, column 'j': expected a finite number, found 'NaN'"
+        );
+        assert_eq!(
+            err("j,x,y,z\n0,inf,0,0\n", &["j"]),
+            "line 2, column 'x': expected a finite number, found 'inf'"
+        );
+        assert_eq!(
+            err("j,x,y,z,set\n0,0,0,0,holdout\n", &["j"]),
+            "line 2, column 'set': expected train, calibration, test or validation, found 'holdout'"
+        );
+        assert_eq!(
+            err("j,x,y,z,sigma,sy\n0,0,0,0,1,1\n", &["j"]),
+            "line 1: columns 'sigma' and 'sy' conflict; give one of them"
+        );
+        assert_eq!(
+            err("j,x,y,z,sigma\n0,0,0,0,-1\n", &["j"]),
+            "line 2, column 'sigma': expected a standard deviation > 0, found '-1'"
+        );
+        assert_eq!(
+            err("j,x,y,z,target\n0,0,0,0,\"open\n", &["j"]),
+            "line 2: unterminated quoted field"
+        );
+    }
+
+    #[test]
+    fn suspicious_units_say_what_to_pass() {
+        assert_eq!(
+            err("j,x,y,z\n90,0,0,0\n", &["j"]),
+            "line 2, column 'j': 90 rad looks like degrees; pass --angle-unit deg"
+        );
+        assert_eq!(
+            err("j,x,y,z\n0,0,1250.5,0\n", &["j"]),
+            "line 2, column 'y': 1250.5 m looks like millimetres; pass --length-unit mm"
+        );
+        // Prismatic columns are lengths: 90 (m!) is not an angle, and is not checked as one.
+        let opts = CsvOptions {
+            prismatic: names(&["j"]),
+            ..CsvOptions::default()
+        };
+        assert!(parse_measurements("j,x,y,z\n90,0,0,0\n", &names(&["j"]), &opts).is_ok());
+    }
+
+    #[test]
+    fn writing_round_trips_exactly() {
+        let mk = |q: Vec<f64>, target, point, sigma, config: Option<&str>, split| Sample {
+            q,
+            target,
+            point,
+            sigma,
+            config: config.map(String::from),
+            split,
+            line: 0,
+        };
+        let m = Measurements {
+            joint_names: names(&["joint 1", "a,b"]),
+            targets: names(&["SMR1", "with \"quote\""]),
+            samples: vec![
+                mk(
+                    vec![0.1 + 0.2, -1e-300],
+                    0,
+                    Vector3::new(1.0 / 3.0, -2.5e-7, 12.345_678_901_234_568),
+                    Some(Vector3::new(1e-5, 2e-5, 3e-5)),
+                    Some("pose 1"),
+                    Split::Calibration,
+                ),
+                mk(
+                    vec![std::f64::consts::PI, 0.0],
+                    1,
+                    Vector3::new(-0.0, 5e-324, 99.999_999_999_999_99),
+                    None,
+                    None,
+                    Split::Validation,
+                ),
+            ],
+        };
+        let text = write_measurements(&m);
+        let back = parse_measurements(&text, &m.joint_names, &CsvOptions::default()).unwrap();
+        let strip = |m: &Measurements| {
+            let mut m = m.clone();
+            m.samples.iter_mut().for_each(|s| s.line = 0);
+            m
+        };
+        assert_eq!(strip(&back), m);
+        for (a, b) in back.samples.iter().zip(&m.samples) {
+            for (x, y) in a.point.iter().zip(b.point.iter()) {
+                assert_eq!(x.to_bits(), y.to_bits());
+            }
+        }
+        assert_eq!(back.samples[1].line, 4);
+    }
+}
