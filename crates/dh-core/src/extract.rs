@@ -53,10 +53,8 @@ pub struct JointAxis {
 /// How one consecutive pair of axes was classified.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PairReport {
-    /// The earlier joint.
-    pub first: String,
-    /// The later joint.
-    pub second: String,
+    /// Row index of the earlier joint (the later one is `first + 1`).
+    pub first: usize,
     /// Class, angle and distance (the earlier axis as the table has it, the later as given).
     pub geometry: PairGeometry,
 }
@@ -265,8 +263,7 @@ pub fn extract(
         }
         if let Some(next) = axes.get(i + 1) {
             pairs.push(PairReport {
-                first: ax.name.clone(),
-                second: next.name.clone(),
+                first: i,
                 geometry: step.geometry,
             });
             if let Some(snap) = step.snap {

@@ -4,7 +4,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
 use crate::pose::{rot_x, trans_x};
 use crate::CoreError;
@@ -140,18 +140,30 @@ impl DhRow {
     }
 
     /// The row's transform at joint value `q` in `convention` (see [`Convention`]).
+    ///
+    /// Closed form from half-angle quaternions: `Rz(theta) Rx(alpha)` is the quaternion
+    /// `(c_t c_a, c_t s_a, s_t s_a, s_t c_a)` with `c_t = cos(theta/2)` etc., and
+    /// `Rx(alpha) Rz(theta)` is `(c_a c_t, s_a c_t, −s_a s_t, c_a s_t)`.
     pub fn transform(&self, convention: Convention, q: f64) -> Isometry3<f64> {
         let (theta, d) = self.moved(q);
-        let (st, ct) = theta.sin_cos();
-        let (sa, ca) = self.alpha.sin_cos();
-        let qz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), theta);
-        let qx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha);
+        let (st, ct) = (0.5 * theta).sin_cos();
+        let (sa, ca) = (0.5 * self.alpha).sin_cos();
         match convention {
             Convention::Standard => {
-                Isometry3::from_parts(Translation3::new(self.a * ct, self.a * st, d), qz * qx)
+                let (cos_t, sin_t) = (ct * ct - st * st, 2.0 * st * ct);
+                let rot = Quaternion::new(ct * ca, ct * sa, st * sa, st * ca);
+                Isometry3::from_parts(
+                    Translation3::new(self.a * cos_t, self.a * sin_t, d),
+                    UnitQuaternion::new_unchecked(rot),
+                )
             }
             Convention::Modified => {
-                Isometry3::from_parts(Translation3::new(self.a, -sa * d, ca * d), qx * qz)
+                let (cos_a, sin_a) = (ca * ca - sa * sa, 2.0 * sa * ca);
+                let rot = Quaternion::new(ca * ct, sa * ct, -sa * st, ca * st);
+                Isometry3::from_parts(
+                    Translation3::new(self.a, -sin_a * d, cos_a * d),
+                    UnitQuaternion::new_unchecked(rot),
+                )
             }
         }
     }
@@ -288,6 +300,7 @@ impl DhTable {
 mod tests {
     use super::*;
     use crate::pose::{from_xyz_rpy, pose_error, rot_z, trans_z};
+    use nalgebra::Vector3;
     use std::f64::consts::FRAC_PI_2;
 
     fn ur5() -> DhTable {
