@@ -1,1 +1,14 @@
-//! placeholder
+//! The `urdf-dh` command line: files, formats and printing around the `dh-core`, `urdf-axes`
+//! and `dh-calib` libraries. The binary is a thin `main` over [`cli::run`].
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+pub mod cli;
+pub mod commands;
+pub mod error;
+pub mod input;
+pub mod render;
+pub mod sheet;
+pub mod units;

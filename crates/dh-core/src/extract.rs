@@ -13,9 +13,11 @@
 //!   carries the rest;
 //! - intersecting axes: x = ±(z_i × z_{i+1}) (eq. 17, normalised), sign chosen so that
 //!   `theta ∈ (−90°, 90°]`;
-//! - skew axes: x along the common normal from axis i to axis i+1 (eq. 19), so `a > 0`;
-//! - parallel axes: the common normal through the current origin (§2.3), so `d = 0`, x from
-//!   axis i towards axis i+1 (eq. 18);
+//! - skew axes: x along the common normal (eq. 19), `a` the signed distance along it;
+//! - parallel axes: the common normal through the current origin (§2.3), so `d = 0`, x along
+//!   the offset between the axes (eq. 18), `a` the signed distance along it;
+//! - the sign of x at skew, parallel and intersecting pairs: `theta` within 90° of the
+//!   previous x (see `orient`), so that zero offsets appear wherever the zero pose allows;
 //! - coincident axes: `a = 0`, `d = 0`, x unchanged (`theta = 0`);
 //! - last frame (standard): z along the last axis, origin at the tip link's origin when it is off
 //!   the axis (x pointing at it), else at the tip origin's foot with x from the tip's own x
@@ -354,7 +356,11 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             let foot = next.point();
             let (theta, a) = match geometry.relation {
                 Relation::Coincident { .. } => (0.0, 0.0),
-                _ => (foot.y.atan2(foot.x), foot.xy().norm()),
+                _ => {
+                    let radial = foot.xy().norm();
+                    let (x, a) = orient(Vector3::new(foot.x, foot.y, 0.0) / radial, radial, tol);
+                    (x.y.atan2(x.x), a)
+                }
             };
             let origin = Vector3::new(a * theta.cos(), a * theta.sin(), 0.0);
             Step {
@@ -372,18 +378,13 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
                 .closest_points(next)
                 .unwrap_or((Vector3::zeros(), next.point()));
             let s = (u.x * u.x + u.y * u.y).sqrt();
-            let mut x = Vector3::new(-u.y / s, u.x / s, 0.0);
-            let (a, snap) = if geometry.relation == Relation::Skew {
-                if (f2 - f1).dot(&x) < 0.0 {
-                    x = -x;
-                }
-                ((f2 - f1).dot(&x), None)
+            let n = Vector3::new(-u.y / s, u.x / s, 0.0);
+            let (x, a, snap) = if geometry.relation == Relation::Skew {
+                let (x, a) = orient(n, (f2 - f1).dot(&n), tol);
+                (x, a, None)
             } else {
-                let theta = x.y.atan2(x.x);
-                if theta > FRAC_PI_2 + tol.angular || theta <= -FRAC_PI_2 + tol.angular {
-                    x = -x;
-                }
-                (0.0, Some((0.0, geometry.distance)))
+                let (x, _) = orient(n, 0.0, tol);
+                (x, 0.0, Some((0.0, geometry.distance)))
             };
             // eq. (24): alpha = atan2((z_i × z_{i+1}) · x_{i+1}, z_i · z_{i+1}).
             let alpha = (-u.y * x.x + u.x * x.y).atan2(u.z);
@@ -430,6 +431,26 @@ fn last_step(tip: &Isometry3<f64>, tol: Tolerance) -> Step {
             distance_deviation: 0.0,
         },
         snap: None,
+    }
+}
+
+/// Chooses the sign of a common normal `x` (unit, in the current frame's xy plane) and of the
+/// link length `a` measured along it, so that `theta = atan2(x.y, x.x)` lies within 90° of the
+/// current x axis: the table then reads like a vendor sheet (zero offsets where the zero pose
+/// allows, a negative `a` rather than a 180° offset). At exactly ±90° (within the angular
+/// tolerance) `a ≥ 0` wins, and for `a = 0` the +90° side.
+fn orient(x: Vector3<f64>, a: f64, tol: Tolerance) -> (Vector3<f64>, f64) {
+    let theta = x.y.atan2(x.x);
+    let boundary = (theta.abs() - FRAC_PI_2).abs() <= tol.angular;
+    let flip = if boundary {
+        a < 0.0 || (a == 0.0 && theta < 0.0)
+    } else {
+        theta.abs() > FRAC_PI_2
+    };
+    if flip {
+        (-x, -a)
+    } else {
+        (x, a)
     }
 }
 

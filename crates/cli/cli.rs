@@ -1,0 +1,136 @@
+//! Command-line definitions and the exit-code contract: 0 success, 1 a check or verification
+//! found a difference, 2 bad input or usage.
+
+use std::ffi::OsString;
+use std::io::Write;
+
+use clap::{Args, Parser, Subcommand};
+use dh_core::Tolerance;
+
+use crate::commands::extract::{extract, ExtractArgs};
+use crate::error::{Hinted, Outcome};
+use crate::render::Format;
+use crate::sheet::ConventionDoc;
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Denavit-Hartenberg parameters of serial manipulators: from URDFs, vendor DH sheets and
+/// measurements of the real arm.
+#[derive(Debug, Parser)]
+#[command(name = "urdf-dh", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
+    /// forward kinematics against the URDF at many joint values.
+    Extract(ExtractCli),
+}
+
+/// Options shared by every command that reads a URDF chain.
+#[derive(Debug, Args)]
+struct ChainCli {
+    /// Base link of the chain [default: the URDF's root link].
+    #[arg(long)]
+    base: Option<String>,
+    /// Tip link of the chain [default: the only leaf link].
+    #[arg(long)]
+    tip: Option<String>,
+}
+
+/// Tolerances of the axis classification.
+#[derive(Debug, Args)]
+struct ToleranceCli {
+    /// Common normals shorter than this count as zero (metres).
+    #[arg(long, value_name = "M", default_value_t = Tolerance::DEFAULT_LINEAR)]
+    linear_tol: f64,
+    /// Axes this close to parallel count as parallel (radians).
+    #[arg(long, value_name = "RAD", default_value_t = Tolerance::DEFAULT_ANGULAR)]
+    angular_tol: f64,
+}
+
+impl ToleranceCli {
+    fn tolerance(&self) -> anyhow::Result<Tolerance> {
+        Tolerance::new(self.linear_tol, self.angular_tol).map_err(|e| anyhow::anyhow!("{e}"))
+    }
+}
+
+#[derive(Debug, Args)]
+struct ExtractCli {
+    /// The robot: a URDF file, a .xacro file (needs `xacro` on PATH), or - for standard input.
+    robot: String,
+    #[command(flatten)]
+    chain: ChainCli,
+    /// DH convention of the table.
+    #[arg(long, value_enum, default_value_t = ConventionDoc::Standard)]
+    convention: ConventionDoc,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+    /// Length unit of the output.
+    #[arg(long, value_enum, default_value_t = LengthUnit::M)]
+    length_unit: LengthUnit,
+    /// Angle unit of the output.
+    #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
+    angle_unit: AngleUnit,
+    #[command(flatten)]
+    tol: ToleranceCli,
+    /// Random joint-value samples of the self-check (the zero pose is always the first).
+    #[arg(long, value_name = "N", default_value_t = 1000)]
+    samples: usize,
+    /// Seed of the self-check's sampler.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
+}
+
+/// Runs the command line `args`, writing results to `out` and messages to `err`; returns the
+/// exit code.
+pub fn run<I, T>(args: I, out: &mut dyn Write, err: &mut dyn Write) -> i32
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let text = e.render().ansi().to_string();
+            let code = e.exit_code();
+            let sink: &mut dyn Write = if code == 0 { out } else { err };
+            let _ = sink.write_all(text.as_bytes());
+            return if code == 0 { 0 } else { 2 };
+        }
+    };
+    match dispatch(cli, out, err) {
+        Ok(Outcome::Pass) => 0,
+        Ok(Outcome::Differs) => 1,
+        Err(e) => {
+            let _ = writeln!(err, "urdf-dh: error: {e:#}");
+            if let Some(h) = e.chain().find_map(|c| c.downcast_ref::<Hinted>()) {
+                let _ = writeln!(err, "hint: {}", h.hint);
+            }
+            2
+        }
+    }
+}
+
+fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
+    match cli.command {
+        Command::Extract(a) => {
+            let args = ExtractArgs {
+                path: a.robot,
+                base: a.chain.base,
+                tip: a.chain.tip,
+                convention: a.convention.into(),
+                format: a.format,
+                length_unit: a.length_unit,
+                angle_unit: a.angle_unit,
+                tolerance: a.tol.tolerance()?,
+                samples: a.samples,
+                seed: a.seed,
+            };
+            extract(&args, out, err)
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! `urdf-dh extract`: URDF -> DH table in either convention, proved by forward kinematics.
+
+use anyhow::{Context, Result};
+use dh_core::{Convention, Extraction, Tolerance};
+use urdf_axes::{Chain, UrdfModel};
+
+use crate::error::Outcome;
+use crate::input::{display_name, read_robot};
+use crate::render::{render_sheet, Format};
+use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc, VerificationDoc};
+use crate::units::{clean, AngleUnit, LengthUnit};
+
+/// Everything `extract` needs.
+#[derive(Clone, Debug)]
+pub struct ExtractArgs {
+    /// URDF path, `.xacro` path or `-`.
+    pub path: String,
+    /// Base link (default: the root link).
+    pub base: Option<String>,
+    /// Tip link (default: the only leaf).
+    pub tip: Option<String>,
+    /// DH convention of the table.
+    pub convention: Convention,
+    /// Output format.
+    pub format: Format,
+    /// Length unit of the output.
+    pub length_unit: LengthUnit,
+    /// Angle unit of the output.
+    pub angle_unit: AngleUnit,
+    /// Tolerances for the axis classification.
+    pub tolerance: Tolerance,
+    /// Joint-value samples for the self-check.
+    pub samples: usize,
+    /// Seed of the sampler.
+    pub seed: u64,
+}
+
+/// The result of an extraction and its verification, ready to print.
+pub struct Extracted {
+    /// The chain the table describes.
+    pub chain: Chain,
+    /// The extraction.
+    pub extraction: Extraction,
+    /// The sheet (table, facts, verification) in the requested units.
+    pub sheet: SheetDoc,
+    /// Whether the self-check passed.
+    pub passed: bool,
+}
+
+/// Loads the URDF and its chain.
+///
+/// # Errors
+/// Unreadable file, invalid URDF, unknown or ambiguous base/tip.
+pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(UrdfModel, Chain)> {
+    let bytes = read_robot(path)?;
+    let name = display_name(path);
+    let model = UrdfModel::from_bytes(&bytes).with_context(|| format!("{name}: invalid URDF"))?;
+    let chain = model
+        .chain(base, tip)
+        .with_context(|| format!("{name}: cannot choose the chain"))?;
+    Ok((model, chain))
+}
+
+/// Extracts and verifies; the caller prints.
+///
+/// # Errors
+/// As [`load_chain`], plus geometry errors (a chain without moving joints).
+pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
+    let (model, chain) = load_chain(&args.path, args.base.as_deref(), args.tip.as_deref())?;
+    let extraction = dh_core::extract(
+        chain.axes(),
+        &chain.tip_pose(),
+        args.tolerance,
+        args.convention,
+    )
+    .with_context(|| format!("{}: extraction failed", display_name(&args.path)))?;
+    let deviation = dh_core::compare(&extraction.table, |q| chain.fk(q), args.samples, args.seed)?;
+    let passed = deviation.max_position_error <= extraction.bound.position
+        && deviation.max_orientation_error <= extraction.bound.orientation;
+
+    let (lu, au) = (args.length_unit.metres(), args.angle_unit.radians());
+    let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
+    sheet.robot = Some(model.robot_name().to_string());
+    sheet.base_link = Some(chain.base().to_string());
+    sheet.tip_link = Some(chain.tip().to_string());
+    let ex_rows = &extraction.table.rows;
+    sheet.pairs = Some(
+        extraction
+            .pairs
+            .iter()
+            .map(|p| PairDoc {
+                joints: [
+                    ex_rows[p.first].name.clone(),
+                    ex_rows[p.first + 1].name.clone(),
+                ],
+                relation: p.geometry.relation.to_string(),
+                angle: clean(p.geometry.angle) / au,
+                distance: clean(p.geometry.distance) / lu,
+            })
+            .collect(),
+    );
+    sheet.tolerances = Some(TolerancesDoc {
+        linear: args.tolerance.linear,
+        angular: args.tolerance.angular,
+    });
+    sheet.warnings = Some(extraction.warnings.iter().map(|w| w.to_string()).collect());
+    sheet.verification = Some(VerificationDoc {
+        samples: deviation.samples,
+        seed: args.seed,
+        max_position_error: deviation.max_position_error,
+        max_orientation_error: deviation.max_orientation_error,
+        position_bound: extraction.bound.position,
+        orientation_bound: extraction.bound.orientation,
+        passed,
+    });
+    Ok(Extracted {
+        chain,
+        extraction,
+        sheet,
+        passed,
+    })
+}
+
+/// Runs `extract`, writing the table to `out` and warnings to `err`.
+///
+/// # Errors
+/// As [`run_extract`], and failures to write.
+pub fn extract(
+    args: &ExtractArgs,
+    out: &mut dyn std::io::Write,
+    err: &mut dyn std::io::Write,
+) -> Result<Outcome> {
+    let ex = run_extract(args)?;
+    for w in &ex.extraction.warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
+    out.write_all(render_sheet(&ex.sheet, args.format)?.as_bytes())?;
+    if ex.passed {
+        Ok(Outcome::Pass)
+    } else {
+        let v = ex.sheet.verification.as_ref();
+        writeln!(
+            err,
+            "urdf-dh: error: verification failed: forward kinematics of the table strays {:.3e} m, {:.3e} rad from the URDF (bound {:.3e} m, {:.3e} rad)",
+            v.map_or(f64::NAN, |v| v.max_position_error),
+            v.map_or(f64::NAN, |v| v.max_orientation_error),
+            ex.extraction.bound.position,
+            ex.extraction.bound.orientation
+        )?;
+        Ok(Outcome::Differs)
+    }
+}

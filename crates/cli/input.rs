@@ -1,0 +1,79 @@
+//! Reading input files (or standard input) with errors that name the file.
+
+use std::io::Read;
+use std::path::Path;
+use std::process::Command;
+
+use anyhow::{Context, Result};
+
+use crate::error::hinted;
+
+/// Reads `path`, or standard input when it is `-`, as bytes.
+///
+/// # Errors
+/// The file cannot be read; the message names it.
+pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
+    if path == "-" {
+        let mut buf = Vec::new();
+        std::io::stdin()
+            .read_to_end(&mut buf)
+            .context("reading standard input")?;
+        return Ok(buf);
+    }
+    std::fs::read(path).with_context(|| format!("{path}: cannot read the file"))
+}
+
+/// Reads `path` (or `-`) as UTF-8 text.
+///
+/// # Errors
+/// The file cannot be read or is not UTF-8 (the message gives the line of the first bad byte).
+pub fn read_text(path: &str) -> Result<String> {
+    let bytes = read_bytes(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        anyhow::anyhow!(
+            "{path}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})"
+        )
+    })
+}
+
+/// Reads a robot description: a URDF, or a `.xacro` file expanded by the `xacro` command.
+///
+/// # Errors
+/// The file cannot be read; a `.xacro` file when `xacro` is not on PATH or fails.
+pub fn read_robot(path: &str) -> Result<Vec<u8>> {
+    if !path.ends_with(".xacro") {
+        return read_bytes(path);
+    }
+    let pipe = format!("xacro {path} | urdf-dh extract -");
+    let out = match Command::new("xacro").arg(path).output() {
+        Ok(out) => out,
+        Err(_) => {
+            return Err(hinted(
+                format!("{path}: a .xacro file needs the 'xacro' command, which is not on PATH"),
+                format!("install it with 'pip install xacro', or expand it yourself: {pipe}"),
+            ))
+        }
+    };
+    if !out.status.success() {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        return Err(hinted(
+            format!("{path}: xacro failed: {}", stderr.trim()),
+            format!("try it by hand: {pipe}"),
+        ));
+    }
+    Ok(out.stdout)
+}
+
+/// A display name for a path argument (`<stdin>` for `-`), without directories so that outputs
+/// stay the same wherever the file lives.
+pub fn display_name(path: &str) -> String {
+    if path == "-" {
+        return "<stdin>".into();
+    }
+    Path::new(path)
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.to_string())
+}

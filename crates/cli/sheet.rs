@@ -1,0 +1,464 @@
+//! The DH sheet format: the output of `extract` and the input of `check`, `convert`, `to-urdf`
+//! and `calibrate --model`. YAML and JSON carry the same keys.
+//!
+//! ```yaml
+//! convention: standard          # standard | modified
+//! length_unit: m                # m | mm
+//! angle_unit: rad               # rad | deg
+//! base: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # DH frame 0 in the base link frame (optional)
+//! tool: {xyz: [0, 0, 0], rpy: [0, 0, 0]}   # tip link frame in the last DH frame (optional)
+//! joints:
+//!   - {name: j1, type: revolute, a: 0, alpha: 90, d: 0.089, theta: 0, lower: -360, upper: 360}
+//! ```
+//! `theta` is the offset added to the joint value (prismatic joints add it to `d`); `rpy` is
+//! URDF roll-pitch-yaw. Lengths in `length_unit`, angles in `angle_unit` (joint limits of
+//! prismatic joints in `length_unit`). Extraction adds `tolerances`, `pairs`, `warnings` and
+//! `verification`; a sheet may carry them and they are ignored on input.
+
+use anyhow::{bail, Context, Result};
+use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
+use dh_core::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
+use nalgebra::Isometry3;
+use serde::{Deserialize, Serialize};
+
+use crate::units::{clean, clean_angle, AngleUnit, LengthUnit};
+
+/// A pose as URDF writes it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoseDoc {
+    /// Translation, in the sheet's length unit.
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw about fixed x, y, z, in the sheet's angle unit.
+    pub rpy: [f64; 3],
+}
+
+/// A mimic coupling: `q = multiplier * q_joint + offset`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MimicDoc {
+    /// The driving joint.
+    pub joint: String,
+    /// Gear ratio.
+    #[serde(default = "one")]
+    pub multiplier: f64,
+    /// Offset in the joint's unit.
+    #[serde(default)]
+    pub offset: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// Joint type as sheets spell it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum JointType {
+    /// Rotates.
+    Revolute,
+    /// Slides.
+    Prismatic,
+}
+
+/// One row of a sheet.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointDoc {
+    /// Joint name (as in the URDF).
+    pub name: String,
+    /// Revolute or prismatic.
+    #[serde(rename = "type")]
+    pub kind: JointType,
+    /// Link length.
+    pub a: f64,
+    /// Link twist.
+    pub alpha: f64,
+    /// Link offset.
+    pub d: f64,
+    /// Joint angle offset.
+    pub theta: f64,
+    /// Lower joint limit (absent for continuous joints).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower: Option<f64>,
+    /// Upper joint limit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub upper: Option<f64>,
+    /// Coupling to another joint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mimic: Option<MimicDoc>,
+}
+
+/// Tolerances echoed in outputs (metres, radians, whatever the sheet's units).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TolerancesDoc {
+    /// Linear tolerance (metres).
+    pub linear: f64,
+    /// Angular tolerance (radians).
+    pub angular: f64,
+}
+
+/// Classification of one consecutive pair of axes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairDoc {
+    /// The two joints.
+    pub joints: [String; 2],
+    /// intersecting | parallel | antiparallel | coincident | coincident (opposite) | skew.
+    pub relation: String,
+    /// Angle between the axes (angle unit).
+    pub angle: f64,
+    /// Common normal length (length unit).
+    pub distance: f64,
+}
+
+/// The result of the self-check.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VerificationDoc {
+    /// Joint-value samples compared.
+    pub samples: usize,
+    /// Seed of the sampler.
+    pub seed: u64,
+    /// Largest tip position deviation (metres).
+    pub max_position_error: f64,
+    /// Largest tip orientation deviation (radians).
+    pub max_orientation_error: f64,
+    /// Position bound it must stay within (metres).
+    pub position_bound: f64,
+    /// Orientation bound (radians).
+    pub orientation_bound: f64,
+    /// Whether both stayed within their bounds.
+    pub passed: bool,
+}
+
+/// A DH sheet as written to and read from YAML or JSON.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SheetDoc {
+    /// Robot name (free text).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<String>,
+    /// Where the numbers come from (free text).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    /// URDF base link of the chain (extraction output).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_link: Option<String>,
+    /// URDF tip link of the chain (extraction output).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip_link: Option<String>,
+    /// standard | modified.
+    pub convention: ConventionDoc,
+    /// m | mm.
+    pub length_unit: LengthUnit,
+    /// rad | deg.
+    pub angle_unit: AngleUnit,
+    /// DH frame 0 in the base link frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<PoseDoc>,
+    /// Tip link frame in the last DH frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<PoseDoc>,
+    /// Rows, base to tip.
+    pub joints: Vec<JointDoc>,
+    /// Consecutive axis pairs (extraction output).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pairs: Option<Vec<PairDoc>>,
+    /// Tolerances used (extraction output; metres and radians).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerances: Option<TolerancesDoc>,
+    /// Warnings (extraction output).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warnings: Option<Vec<String>>,
+    /// Self-check (extraction output).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verification: Option<VerificationDoc>,
+}
+
+/// `standard` or `modified` in a sheet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum ConventionDoc {
+    /// Standard (distal) DH.
+    Standard,
+    /// Modified (Craig) DH.
+    Modified,
+}
+
+impl From<ConventionDoc> for Convention {
+    fn from(c: ConventionDoc) -> Self {
+        match c {
+            ConventionDoc::Standard => Convention::Standard,
+            ConventionDoc::Modified => Convention::Modified,
+        }
+    }
+}
+
+impl From<Convention> for ConventionDoc {
+    fn from(c: Convention) -> Self {
+        match c {
+            Convention::Standard => ConventionDoc::Standard,
+            Convention::Modified => ConventionDoc::Modified,
+        }
+    }
+}
+
+/// A sheet read into SI units, remembering which transforms it gave.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sheet {
+    /// The table in metres and radians; a missing base or tool is the identity.
+    pub table: DhTable,
+    /// The sheet gave `base`.
+    pub has_base: bool,
+    /// The sheet gave `tool`.
+    pub has_tool: bool,
+    /// Free-text robot name.
+    pub robot: Option<String>,
+    /// Warnings about suspicious values (not errors).
+    pub warnings: Vec<String>,
+}
+
+/// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
+const SUSPICIOUS_METRES: f64 = 20.0;
+
+impl Sheet {
+    /// Parses a sheet from YAML or JSON text (JSON is YAML). `origin` names the file in errors.
+    ///
+    /// # Errors
+    /// Syntax errors with line and column, unknown or missing keys, non-finite numbers,
+    /// duplicate joint names, a row without joints, limits out of order, a mimic naming no row.
+    pub fn parse(text: &str, origin: &str) -> Result<Sheet> {
+        if text.trim().is_empty() {
+            bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
+        }
+        let doc: SheetDoc = serde_yaml::from_str(text).map_err(|e| {
+            let at = e
+                .location()
+                .map(|l| format!(" (line {}, column {})", l.line(), l.column()))
+                .unwrap_or_default();
+            anyhow::anyhow!("{origin}{at}: {e}")
+        })?;
+        doc.into_sheet(origin)
+    }
+}
+
+impl SheetDoc {
+    /// Converts to SI units and checks the numbers (see [`Sheet::parse`]).
+    ///
+    /// # Errors
+    /// As [`Sheet::parse`].
+    pub fn into_sheet(self, origin: &str) -> Result<Sheet> {
+        let (lu, au) = (self.length_unit.metres(), self.angle_unit.radians());
+        if self.joints.is_empty() {
+            bail!("{origin}: 'joints' is empty; expected at least one joint");
+        }
+        let mut warnings = Vec::new();
+        let mut rows = Vec::with_capacity(self.joints.len());
+        let mut seen = std::collections::HashSet::new();
+        for j in &self.joints {
+            if !seen.insert(j.name.as_str()) {
+                bail!("{origin}: joint '{}' appears twice", j.name);
+            }
+            for (field, v) in [
+                ("a", j.a),
+                ("alpha", j.alpha),
+                ("d", j.d),
+                ("theta", j.theta),
+            ]
+            .into_iter()
+            .chain(j.lower.map(|v| ("lower", v)))
+            .chain(j.upper.map(|v| ("upper", v)))
+            {
+                if !v.is_finite() {
+                    bail!(
+                        "{origin}: joint '{}': {field} must be a finite number, found {v}",
+                        j.name
+                    );
+                }
+            }
+            let kind = match j.kind {
+                JointType::Revolute => JointKind::Revolute,
+                JointType::Prismatic => JointKind::Prismatic,
+            };
+            let limit_unit = if kind == JointKind::Prismatic { lu } else { au };
+            let limits = match (j.lower, j.upper) {
+                (Some(l), Some(u)) if l > u => {
+                    bail!(
+                        "{origin}: joint '{}': lower limit {l} is above upper limit {u}",
+                        j.name
+                    )
+                }
+                (Some(l), Some(u)) => Some(Limits {
+                    lower: l * limit_unit,
+                    upper: u * limit_unit,
+                }),
+                (None, None) => None,
+                _ => bail!(
+                    "{origin}: joint '{}': give both 'lower' and 'upper', or neither",
+                    j.name
+                ),
+            };
+            if self.length_unit == LengthUnit::M
+                && (j.a.abs() > SUSPICIOUS_METRES || j.d.abs() > SUSPICIOUS_METRES)
+            {
+                warnings.push(format!(
+                    "{origin}: joint '{}': a = {}, d = {} with length_unit m looks like millimetres; set length_unit: mm if so",
+                    j.name, j.a, j.d
+                ));
+            }
+            if self.angle_unit == AngleUnit::Rad
+                && (j.alpha.abs() > 2.0 * std::f64::consts::PI + 1e-9
+                    || j.theta.abs() > 2.0 * std::f64::consts::PI + 1e-9)
+            {
+                warnings.push(format!(
+                    "{origin}: joint '{}': alpha = {}, theta = {} with angle_unit rad looks like degrees; set angle_unit: deg if so",
+                    j.name, j.alpha, j.theta
+                ));
+            }
+            let mimic = match &j.mimic {
+                Some(m) => {
+                    if !m.multiplier.is_finite() || !m.offset.is_finite() {
+                        bail!(
+                            "{origin}: joint '{}': mimic multiplier and offset must be finite",
+                            j.name
+                        );
+                    }
+                    Some(Mimic {
+                        joint: m.joint.clone(),
+                        multiplier: m.multiplier,
+                        offset: m.offset * limit_unit,
+                    })
+                }
+                None => None,
+            };
+            rows.push(DhRow {
+                name: j.name.clone(),
+                kind,
+                a: j.a * lu,
+                alpha: j.alpha * au,
+                d: j.d * lu,
+                theta: j.theta * au,
+                limits,
+                mimic,
+            });
+        }
+        let pose = |p: &Option<PoseDoc>, what: &str| -> Result<Isometry3<f64>> {
+            match p {
+                None => Ok(Isometry3::identity()),
+                Some(p) => {
+                    if p.xyz.iter().chain(&p.rpy).any(|v| !v.is_finite()) {
+                        bail!("{origin}: {what}: xyz and rpy must be finite numbers");
+                    }
+                    Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
+                }
+            }
+        };
+        let table = DhTable {
+            convention: self.convention.into(),
+            base: pose(&self.base, "base").context("reading the base transform")?,
+            tool: pose(&self.tool, "tool").context("reading the tool transform")?,
+            rows,
+        };
+        Ok(Sheet {
+            table,
+            has_base: self.base.is_some(),
+            has_tool: self.tool.is_some(),
+            robot: self.robot,
+            warnings,
+        })
+    }
+
+    /// A sheet of `table` in the given units (no extraction facts attached).
+    pub fn from_table(table: &DhTable, length: LengthUnit, angle: AngleUnit) -> SheetDoc {
+        let (lu, au) = (length.metres(), angle.radians());
+        let pose = |p: &Isometry3<f64>| {
+            let (xyz, rpy) = to_xyz_rpy(p);
+            PoseDoc {
+                xyz: xyz.map(|v| clean(v) / lu),
+                rpy: rpy.map(|v| clean_angle(v) / au),
+            }
+        };
+        let joints = table
+            .rows
+            .iter()
+            .map(|r| {
+                let limit_unit = if r.kind == JointKind::Prismatic {
+                    lu
+                } else {
+                    au
+                };
+                JointDoc {
+                    name: r.name.clone(),
+                    kind: match r.kind {
+                        JointKind::Revolute => JointType::Revolute,
+                        JointKind::Prismatic => JointType::Prismatic,
+                    },
+                    a: clean(r.a) / lu,
+                    alpha: clean_angle(r.alpha) / au,
+                    d: clean(r.d) / lu,
+                    theta: clean_angle(r.theta) / au,
+                    lower: r.limits.map(|l| l.lower / limit_unit),
+                    upper: r.limits.map(|l| l.upper / limit_unit),
+                    mimic: r.mimic.as_ref().map(|m| MimicDoc {
+                        joint: m.joint.clone(),
+                        multiplier: m.multiplier,
+                        offset: m.offset / limit_unit,
+                    }),
+                }
+            })
+            .collect();
+        SheetDoc {
+            robot: None,
+            source: None,
+            base_link: None,
+            tip_link: None,
+            convention: table.convention.into(),
+            length_unit: length,
+            angle_unit: angle,
+            base: Some(pose(&table.base)),
+            tool: Some(pose(&table.tool)),
+            joints,
+            pairs: None,
+            tolerances: None,
+            warnings: None,
+            verification: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn units_convert_on_read_and_write() {
+        let text = "convention: standard\nlength_unit: mm\nangle_unit: deg\njoints:\n  - {name: j1, type: revolute, a: 180, alpha: -90, d: 400, theta: 0, lower: -155, upper: 155}\n";
+        let s = Sheet::parse(text, "t.yaml").unwrap();
+        let r = &s.table.rows[0];
+        assert!(
+            (r.a - 0.18).abs() < 1e-15 && (r.alpha + std::f64::consts::FRAC_PI_2).abs() < 1e-15
+        );
+        assert!(!s.has_base && !s.has_tool);
+        let back = SheetDoc::from_table(&s.table, LengthUnit::Mm, AngleUnit::Deg);
+        assert!((back.joints[0].a - 180.0).abs() < 1e-12);
+        assert!((back.joints[0].upper.unwrap() - 155.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_errors() {
+        let e = Sheet::parse(
+            "convention: standard\nlength_unit: m\nangle_unit: rad\njoints: []\nfoo: 1\n",
+            "s.yaml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("unknown field `foo`"), "{e}");
+        let e = Sheet::parse(
+            "convention: sideways\nlength_unit: m\nangle_unit: rad\njoints: []\n",
+            "s.yaml",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("line 1"), "{e}");
+    }
+}
