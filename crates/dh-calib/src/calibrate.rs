@@ -1,1 +1,971 @@
-//! (to be written)
+//! The geometric calibration pipeline: register, fit the device frame and targets, find what
+//! the data can identify, fit the identifiable DH errors, validate each step.
+//!
+//! # Steps
+//! 1. Closed-form start: the device frame by rigid registration (Kabsch, "A solution for the
+//!    best rotation to relate two sets of vectors", Acta Cryst. A32, 1976; Horn, "Closed-form
+//!    solution of absolute orientation using unit quaternions", JOSA A 4(4), 1987) of the
+//!    nominal model's points to the measured ones, alternated with the closed-form target
+//!    positions given the frame, so that any device pose converges.
+//! 2. `nominal`: only the device frame and the targets are estimated.
+//! 3. Identifiability at that estimate over every geometric parameter
+//!    ([`crate::fit::identifiability`]): the non-identifiable ones are fixed at nominal and
+//!    reported with their aliases.
+//! 4. `geometric`: the identifiable DH, base, tool, device and target parameters together.
+//! 5. `effects` (only when effects are given): the same with the effect parameters added.
+//!
+//! Each step reports the RMS, mean and largest Euclidean distance between modelled and measured
+//! points on the calibration samples and on validation samples: the validation split when
+//! there is one, else k-fold cross-validation over poses (samples sharing `config`, or else the
+//! same joint values, stay in one fold).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use dh_core::DhTable;
+use nalgebra::{
+    DMatrix, Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3,
+};
+
+use crate::data::{Measurements, Split};
+use crate::fit::{self, CalibError, FitOptions, FitOutcome, Termination};
+use crate::model::{
+    xyz_rpy, Block, Effect, Model, ModelOptions, ModelProblem, Observation, Observed,
+    PairParametrisation,
+};
+
+/// Options of [`calibrate`].
+#[derive(Clone, Debug)]
+pub struct CalibrationOptions {
+    /// Parametrisation (Hayati threshold, scales).
+    pub model: ModelOptions,
+    /// Solver options; `fit.rank_tolerance` also decides identifiability.
+    pub fit: FitOptions,
+    /// Folds of cross-validation when there is no validation split (at least 2). Default 5.
+    pub folds: usize,
+    /// A start for `T_device_base` instead of the closed-form registration.
+    pub device_guess: Option<Isometry3<f64>>,
+    /// Starts for the target positions in the tip frame (one per target).
+    pub target_guesses: Option<Vec<Vector3<f64>>>,
+    /// Known per-axis measurement noise (metres); overrides the samples' own `sigma`.
+    pub sigma: Option<f64>,
+    /// Non-geometric effects to estimate in a last step.
+    pub effects: Vec<Arc<dyn Effect>>,
+}
+
+impl Default for CalibrationOptions {
+    fn default() -> Self {
+        Self {
+            model: ModelOptions::default(),
+            fit: FitOptions::default(),
+            folds: 5,
+            device_guess: None,
+            target_guesses: None,
+            sigma: None,
+            effects: Vec::new(),
+        }
+    }
+}
+
+/// Distances between modelled and measured points (metres).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stats {
+    /// Root mean square of the 3-D distances.
+    pub rms: f64,
+    /// Mean distance.
+    pub mean: f64,
+    /// Largest distance.
+    pub max: f64,
+    /// Number of points.
+    pub count: usize,
+}
+
+impl Stats {
+    /// Statistics of `distances`; `None` when empty.
+    pub fn of(distances: &[f64]) -> Option<Stats> {
+        if distances.is_empty() {
+            return None;
+        }
+        let n = distances.len() as f64;
+        Some(Stats {
+            rms: (distances.iter().map(|d| d * d).sum::<f64>() / n).sqrt(),
+            mean: distances.iter().sum::<f64>() / n,
+            max: distances.iter().copied().fold(0.0, f64::max),
+            count: distances.len(),
+        })
+    }
+}
+
+/// One step of the pipeline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepReport {
+    /// `nominal`, `geometric` or `effects`.
+    pub label: String,
+    /// RMS distance on the calibration samples (metres).
+    pub rms: f64,
+    /// Mean distance on the calibration samples (metres).
+    pub mean: f64,
+    /// Largest distance on the calibration samples (metres).
+    pub max: f64,
+    /// RMS distance on validation (metres); `None` when there is nothing to validate on.
+    pub val_rms: Option<f64>,
+    /// Mean distance on validation (metres).
+    pub val_mean: Option<f64>,
+    /// Largest distance on validation (metres).
+    pub val_max: Option<f64>,
+    /// Number of free parameters.
+    pub free: usize,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Why the solver stopped.
+    pub termination: Termination,
+}
+
+/// How validation figures were obtained.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Validation {
+    /// On the samples marked [`Split::Validation`].
+    Split {
+        /// Their number.
+        samples: usize,
+    },
+    /// k-fold cross-validation over pose groups of the calibration samples.
+    CrossValidation {
+        /// Number of folds.
+        folds: usize,
+        /// Number of pose groups.
+        groups: usize,
+    },
+    /// Too few pose groups for either.
+    None,
+}
+
+/// Where the noise floor comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NoiseSource {
+    /// The `sigma` option.
+    Given,
+    /// Every sample's own `sigma`.
+    Samples,
+    /// Pure error of repeated measurements (samples sharing `config` and target).
+    Repeats {
+        /// Groups with at least two samples.
+        groups: usize,
+        /// Degrees of freedom of the pooled estimate.
+        dof: usize,
+    },
+}
+
+/// The RMS 3-D residual that noise alone would leave after the fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoiseFloor {
+    /// `sqrt(E‖e‖² · (1 − p / (3N)))` with `E‖e‖²` the expected squared 3-D noise of one point
+    /// (`3σ²` for isotropic σ), `p` free parameters and `N` calibration points (metres).
+    pub rms: f64,
+    /// Per-axis noise standard deviation it corresponds to, `sqrt(E‖e‖² / 3)` (metres).
+    pub sigma: f64,
+    /// Where it comes from.
+    pub source: NoiseSource,
+}
+
+/// One parameter's estimate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParameterEstimate {
+    /// Name (see [`crate::model`]).
+    pub name: String,
+    /// Nominal value: the table's value for DH parameters (0 for `beta`), the table's base and
+    /// tool as `x y z` metres and roll-pitch-yaw radians (`R = Rz(rz) Ry(ry) Rx(rx)`, URDF
+    /// convention), and for the device frame (`T_device_base`, same layout) and targets the
+    /// `nominal` step's estimate.
+    pub nominal: f64,
+    /// Estimated value, same layout.
+    pub estimate: f64,
+    /// Standard error (same unit), `None` when held fixed. For pose blocks it is propagated from
+    /// the fit's small motions to `x y z` / roll-pitch-yaw to first order.
+    pub std_error: Option<f64>,
+    /// `true` when estimated, `false` when held at nominal.
+    pub free: bool,
+}
+
+/// A parameter held at nominal because the data cannot identify it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedParameter {
+    /// Its name.
+    pub name: String,
+    /// Names of the free parameters that absorb its error (its null-space partners), empty
+    /// when it has no effect on the data at all.
+    pub aliases: Vec<String>,
+}
+
+/// The calibration's result. Lengths in metres, angles in radians.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// One entry per step, in order.
+    pub steps: Vec<StepReport>,
+    /// Calibration RMS of the `nominal` step.
+    pub rms_before: f64,
+    /// Calibration RMS of the last step.
+    pub rms_after: f64,
+    /// Validation RMS of the `nominal` step.
+    pub val_rms_before: Option<f64>,
+    /// Validation RMS of the last step.
+    pub val_rms_after: Option<f64>,
+    /// How validation was done.
+    pub validation: Validation,
+    /// Noise floor, when the noise is known or can be estimated from repeats.
+    pub noise_floor: Option<NoiseFloor>,
+    /// Condition number of the scaled Jacobian of the free parameters at the estimate.
+    pub condition_number: f64,
+    /// Number of free parameters in the last step.
+    pub rank: usize,
+    /// Residual standard deviation per coordinate, `sqrt(ssr / (3N − p))` (metres).
+    pub sigma_hat: Option<f64>,
+    /// Characteristic length that scaled the angle columns (metres).
+    pub length_scale: f64,
+    /// The relative singular value threshold used for identifiability.
+    pub rank_tolerance: f64,
+    /// Every parameter of the model.
+    pub parameters: Vec<ParameterEstimate>,
+    /// The parameters held at nominal, with their aliases.
+    pub fixed: Vec<FixedParameter>,
+    /// Classic DH or Hayati-Mirmirani for each consecutive pair of joints.
+    pub parametrisation: Vec<PairParametrisation>,
+    /// The calibrated table (see [`Model::table_at`] for how `beta` is folded in).
+    pub calibrated: DhTable,
+    /// Tilts that could not be folded into the table (name, radians).
+    pub unfolded: Vec<(String, f64)>,
+    /// Estimated `T_device_base`.
+    pub device: Isometry3<f64>,
+    /// Estimated target positions in the tip frame.
+    pub targets: Vec<(String, Vector3<f64>)>,
+    /// Remarks for the user (unused targets, approximations).
+    pub notes: Vec<String>,
+}
+
+/// Calibration samples, validation samples and the pose group of each calibration sample.
+struct Prepared {
+    cal: Vec<Observed>,
+    val: Vec<Observed>,
+    groups: Vec<usize>,
+    group_count: usize,
+    repeat_keys: Vec<Option<(String, usize)>>,
+    sigmas: Vec<Option<Vector3<f64>>>,
+}
+
+fn prepare(table: &DhTable, data: &Measurements) -> Result<Prepared, CalibError> {
+    enum Source {
+        Column(usize),
+        Mimic(usize, f64, f64),
+    }
+    let column = |name: &str| data.joint_names.iter().position(|n| n == name);
+    let mut sources = Vec::with_capacity(table.rows.len());
+    for r in &table.rows {
+        let s = match (column(&r.name), &r.mimic) {
+            (Some(c), _) => Source::Column(c),
+            (None, Some(m)) => match column(&m.joint) {
+                Some(c) => Source::Mimic(c, m.multiplier, m.offset),
+                None => {
+                    return Err(CalibError::MissingJoint {
+                        joint: r.name.clone(),
+                    })
+                }
+            },
+            (None, None) => {
+                return Err(CalibError::MissingJoint {
+                    joint: r.name.clone(),
+                })
+            }
+        };
+        sources.push(s);
+    }
+    let mut out = Prepared {
+        cal: vec![],
+        val: vec![],
+        groups: vec![],
+        group_count: 0,
+        repeat_keys: vec![],
+        sigmas: vec![],
+    };
+    let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
+    let mut config_ids: HashMap<String, usize> = HashMap::new();
+    for s in &data.samples {
+        if s.q.len() != data.joint_names.len() {
+            return Err(CalibError::Length {
+                what: format!("joint values at line {}", s.line),
+                expected: data.joint_names.len(),
+                found: s.q.len(),
+            });
+        }
+        if s.target >= data.targets.len() {
+            return Err(CalibError::BadTarget {
+                line: s.line,
+                target: s.target,
+                count: data.targets.len(),
+            });
+        }
+        if s.q.iter().chain(s.point.iter()).any(|v| !v.is_finite()) {
+            return Err(CalibError::NonFinite {
+                what: format!("sample at line {}", s.line),
+            });
+        }
+        let q: Vec<f64> = sources
+            .iter()
+            .map(|src| match *src {
+                Source::Column(c) => s.q[c],
+                Source::Mimic(c, m, o) => m * s.q[c] + o,
+            })
+            .collect();
+        let obs = Observed {
+            q,
+            observation: Observation::Point {
+                target: s.target,
+                point: s.point,
+            },
+        };
+        match s.split {
+            Split::Validation => out.val.push(obs),
+            Split::Calibration => {
+                let next = group_ids.len() + config_ids.len();
+                let g = match &s.config {
+                    Some(c) => *config_ids.entry(c.clone()).or_insert(next),
+                    None => *group_ids
+                        .entry(obs.q.iter().map(|v| v.to_bits()).collect())
+                        .or_insert(next),
+                };
+                out.groups.push(g);
+                out.repeat_keys
+                    .push(s.config.as_ref().map(|c| (c.clone(), s.target)));
+                out.sigmas.push(s.sigma);
+                out.cal.push(obs);
+            }
+        }
+    }
+    out.group_count = group_ids.len() + config_ids.len();
+    Ok(out)
+}
+
+/// Rigid registration: the `T` minimising `Σ ‖T·a_i − b_i‖²` (Kabsch 1976, with the reflection
+/// guard of Umeyama 1991).
+///
+/// # Errors
+/// [`CalibError::TooFewSamples`] for fewer than 3 pairs, [`CalibError::Degenerate`] when the
+/// points are collinear.
+pub fn register(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Result<Isometry3<f64>, CalibError> {
+    if a.len() != b.len() || a.len() < 3 {
+        return Err(CalibError::TooFewSamples {
+            what: "rigid registration".into(),
+            needed: 3,
+            found: a.len().min(b.len()),
+        });
+    }
+    let n = a.len() as f64;
+    let ca = a.iter().sum::<Vector3<f64>>() / n;
+    let cb = b.iter().sum::<Vector3<f64>>() / n;
+    let mut h = Matrix3::zeros();
+    for (p, q) in a.iter().zip(b) {
+        h += (p - ca) * (q - cb).transpose();
+    }
+    let svd = h.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return Err(CalibError::Degenerate {
+            what: "rigid registration".into(),
+        });
+    };
+    let s = svd.singular_values;
+    let smax = s.max();
+    let mut sorted = [s[0], s[1], s[2]];
+    sorted.sort_by(|x, y| y.total_cmp(x));
+    if smax.is_nan() || smax <= 0.0 || sorted[1] <= 1e-12 * smax {
+        return Err(CalibError::Degenerate {
+            what: "rigid registration".into(),
+        });
+    }
+    let v = vt.transpose();
+    let det = (v * u.transpose()).determinant();
+    let d = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, det.signum()));
+    let r = v * d * u.transpose();
+    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    let t = cb - rot * ca;
+    Ok(Isometry3::from_parts(Translation3::from(t), rot))
+}
+
+fn observed_position(o: &Observed) -> Vector3<f64> {
+    match &o.observation {
+        Observation::Point { point, .. } => *point,
+        Observation::Pose(p) => p.translation.vector,
+    }
+}
+
+/// Closed-form target positions given the device frame: the mean of each target's measured
+/// points mapped into the tip frame (the exact least-squares solution, rotations being
+/// orthogonal).
+fn targets_given_device(model: &mut Model, x: &[f64], cal: &[Observed]) {
+    let k = model.targets().len();
+    let mut sums = vec![(Vector3::zeros(), 0usize); k];
+    for o in cal {
+        if let Observation::Point { target, point } = &o.observation {
+            let tip = model.tip(x, &o.q);
+            if let Some(s) = sums.get_mut(*target) {
+                s.0 += tip.inverse_transform_point(&(*point).into()).coords;
+                s.1 += 1;
+            }
+        }
+    }
+    for (t, (sum, n)) in sums.into_iter().enumerate() {
+        if n > 0 {
+            model.set_target(t, sum / n as f64);
+        }
+    }
+}
+
+fn initialise(
+    model: &mut Model,
+    x: &[f64],
+    cal: &[Observed],
+    options: &CalibrationOptions,
+) -> Result<(), CalibError> {
+    if let Some(t) = &options.target_guesses {
+        if t.len() != model.targets().len() {
+            return Err(CalibError::Length {
+                what: "target guesses".into(),
+                expected: model.targets().len(),
+                found: t.len(),
+            });
+        }
+        for (k, v) in t.iter().enumerate() {
+            model.set_target(k, *v);
+        }
+    }
+    if let Some(d) = &options.device_guess {
+        model.set_device(d);
+        if options.target_guesses.is_none() {
+            targets_given_device(model, x, cal);
+        }
+        return Ok(());
+    }
+    let measured: Vec<Vector3<f64>> = cal.iter().map(observed_position).collect();
+    // Alternate registration and targets; a few rounds reach the basin of the least squares.
+    let rounds = if options.target_guesses.is_some() {
+        1
+    } else {
+        4
+    };
+    for _ in 0..rounds {
+        let modelled: Vec<Vector3<f64>> = cal
+            .iter()
+            .map(|o| {
+                let fk = model.robot_fk(x, &o.q);
+                match &o.observation {
+                    Observation::Point { target, .. } => {
+                        (fk * Point3::from(model.target_at(x, *target))).coords
+                    }
+                    Observation::Pose(_) => fk.translation.vector,
+                }
+            })
+            .collect();
+        let d = register(&modelled, &measured)?;
+        model.set_device(&d);
+        if options.target_guesses.is_none() {
+            targets_given_device(model, x, cal);
+        }
+    }
+    Ok(())
+}
+
+fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
+    let mut r = [0.0; 6];
+    obs.iter()
+        .map(|o| {
+            model.residuals(x, o, &mut r);
+            Vector3::new(r[0], r[1], r[2]).norm()
+        })
+        .collect()
+}
+
+struct StepResult {
+    outcome: FitOutcome,
+    report: StepReport,
+}
+
+/// What every step shares.
+struct Context<'a> {
+    model: &'a Model,
+    prep: &'a Prepared,
+    scales: &'a [f64],
+    options: &'a CalibrationOptions,
+    validation: &'a Validation,
+}
+
+fn run_step(
+    ctx: &Context<'_>,
+    label: &str,
+    x0: &[f64],
+    free: &[usize],
+) -> Result<StepResult, CalibError> {
+    let Context {
+        model,
+        prep,
+        scales,
+        options,
+        validation,
+    } = *ctx;
+    let problem = ModelProblem {
+        model,
+        observations: &prep.cal,
+    };
+    let outcome = fit::solve(&problem, x0, free, scales, &options.fit)?;
+    let cal = Stats::of(&distances(model, &outcome.x, &prep.cal));
+    let val = match validation {
+        Validation::Split { .. } => Stats::of(&distances(model, &outcome.x, &prep.val)),
+        Validation::CrossValidation { folds, .. } => {
+            let mut d = Vec::with_capacity(prep.cal.len());
+            for f in 0..*folds {
+                let (mut train, mut test) = (Vec::new(), Vec::new());
+                for (o, g) in prep.cal.iter().zip(&prep.groups) {
+                    if g % folds == f {
+                        test.push(o.clone());
+                    } else {
+                        train.push(o.clone());
+                    }
+                }
+                let p = ModelProblem {
+                    model,
+                    observations: &train,
+                };
+                let fold = fit::solve(&p, &outcome.x, free, scales, &options.fit)?;
+                d.extend(distances(model, &fold.x, &test));
+            }
+            Stats::of(&d)
+        }
+        Validation::None => None,
+    };
+    let cal = cal.unwrap_or(Stats {
+        rms: 0.0,
+        mean: 0.0,
+        max: 0.0,
+        count: 0,
+    });
+    let report = StepReport {
+        label: label.into(),
+        rms: cal.rms,
+        mean: cal.mean,
+        max: cal.max,
+        val_rms: val.map(|v| v.rms),
+        val_mean: val.map(|v| v.mean),
+        val_max: val.map(|v| v.max),
+        free: free.len(),
+        iterations: outcome.iterations,
+        termination: outcome.termination,
+    };
+    Ok(StepResult { outcome, report })
+}
+
+fn noise_floor(prep: &Prepared, options: &CalibrationOptions, p: usize) -> Option<NoiseFloor> {
+    let n = prep.cal.len();
+    if n == 0 {
+        return None;
+    }
+    let (e2, source) = if let Some(s) = options.sigma {
+        (3.0 * s * s, NoiseSource::Given)
+    } else if prep.sigmas.iter().all(Option::is_some) {
+        let sum: f64 = prep.sigmas.iter().flatten().map(|s| s.norm_squared()).sum();
+        (sum / n as f64, NoiseSource::Samples)
+    } else {
+        // Pooled pure error of repeated points.
+        let mut groups: HashMap<&(String, usize), Vec<Vector3<f64>>> = HashMap::new();
+        for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
+            if let Some(k) = key {
+                groups.entry(k).or_default().push(observed_position(o));
+            }
+        }
+        let (mut ss, mut dof, mut count) = (0.0, 0usize, 0usize);
+        for pts in groups.values().filter(|v| v.len() > 1) {
+            let mean = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
+            ss += pts.iter().map(|v| (v - mean).norm_squared()).sum::<f64>();
+            dof += pts.len() - 1;
+            count += 1;
+        }
+        if dof == 0 {
+            return None;
+        }
+        (ss / dof as f64, NoiseSource::Repeats { groups: count, dof })
+    };
+    let factor = (1.0 - p as f64 / (3.0 * n as f64)).max(0.0);
+    Some(NoiseFloor {
+        rms: (e2 * factor).sqrt(),
+        sigma: (e2 / 3.0).sqrt(),
+        source,
+    })
+}
+
+/// Runs the calibration of `nominal` against `data` (see the module docs).
+///
+/// Joint values are matched to rows by name; a mimic row without its own column follows its
+/// driver. The report's contract (names, units, layout) is described on [`Report`] and
+/// [`crate::model`].
+///
+/// # Errors
+/// [`CalibError::MissingJoint`] when a row has no column, [`CalibError::BadTarget`] /
+/// [`CalibError::Length`] / [`CalibError::NonFinite`] for bad samples,
+/// [`CalibError::TooFewSamples`] with fewer than 3 calibration samples,
+/// [`CalibError::Degenerate`] when the measured points are collinear, and any error of
+/// [`Model::new`] or [`fit::solve`].
+pub fn calibrate(
+    nominal: &DhTable,
+    data: &Measurements,
+    options: &CalibrationOptions,
+) -> Result<Report, CalibError> {
+    let prep = prepare(nominal, data)?;
+    if prep.cal.len() < 3 {
+        return Err(CalibError::TooFewSamples {
+            what: "calibration".into(),
+            needed: 3,
+            found: prep.cal.len(),
+        });
+    }
+    let mut model = Model::new(nominal, &data.targets, &options.model)?;
+    for e in &options.effects {
+        model.add_effect(e.clone())?;
+    }
+    let n = model.parameter_count();
+    let scales = model.scales();
+    let mut x = vec![0.0; n];
+    let mut notes = Vec::new();
+    initialise(&mut model, &x, &prep.cal, options)?;
+
+    let validation = if !prep.val.is_empty() {
+        Validation::Split {
+            samples: prep.val.len(),
+        }
+    } else if prep.group_count >= 2 && options.folds >= 2 {
+        Validation::CrossValidation {
+            folds: options.folds.min(prep.group_count),
+            groups: prep.group_count,
+        }
+    } else {
+        Validation::None
+    };
+
+    // Targets never measured stay where they are and are reported as fixed.
+    let mut measured = vec![false; model.targets().len()];
+    for o in &prep.cal {
+        if let Observation::Point { target, .. } = &o.observation {
+            measured[*target] = true;
+        }
+    }
+    for (k, m) in measured.iter().enumerate() {
+        if !m {
+            notes.push(format!(
+                "target '{}' has no calibration sample; its position is not estimated",
+                model.targets()[k].0
+            ));
+        }
+    }
+
+    // Step 1: nominal.
+    let nominal_free = model.indices(|b| match b {
+        Block::Device => true,
+        Block::Target(k) => measured[k],
+        _ => false,
+    });
+    let mut steps = Vec::new();
+    let step = run_step(
+        &Context {
+            model: &model,
+            prep: &prep,
+            scales: &scales,
+            options,
+            validation: &validation,
+        },
+        "nominal",
+        &x,
+        &nominal_free,
+    )?;
+    x = step.outcome.x.clone();
+    steps.push(step.report);
+    model.rebase(&mut x);
+    let device_nominal = model.device();
+    let targets_nominal: Vec<Vector3<f64>> = model.targets().iter().map(|t| t.1).collect();
+
+    // Identifiability over the geometric parameters at the nominal step's estimate.
+    let geometric: Vec<usize> = model.indices(|b| !matches!(b, Block::Effect(_)));
+    let (mut free, mut fixed) = identify(&model, &prep.cal, &x, &geometric, &scales, options)?;
+    let step = run_step(
+        &Context {
+            model: &model,
+            prep: &prep,
+            scales: &scales,
+            options,
+            validation: &validation,
+        },
+        "geometric",
+        &x,
+        &free,
+    )?;
+    let mut last = step.outcome;
+    steps.push(step.report);
+    if !options.effects.is_empty() {
+        let all: Vec<usize> = (0..n).collect();
+        let (f2, fixed2) = identify(&model, &prep.cal, &last.x, &all, &scales, options)?;
+        free = f2;
+        fixed = fixed2;
+        let step = run_step(
+            &Context {
+                model: &model,
+                prep: &prep,
+                scales: &scales,
+                options,
+                validation: &validation,
+            },
+            "effects",
+            &last.x,
+            &free,
+        )?;
+        last = step.outcome;
+        steps.push(step.report);
+    }
+    let x = last.x.clone();
+
+    let noise_floor = noise_floor(&prep, options, free.len());
+    let parameters = estimates(&model, &x, &last, device_nominal, &targets_nominal);
+    let folded = model.table_at(&x);
+    if !folded.unfolded.is_empty() {
+        notes.push(
+            "some beta tilts could not be folded into DH values exactly; the calibrated table \
+             omits them and is an approximation"
+                .into(),
+        );
+    }
+    if !options.effects.is_empty() {
+        notes.push("effects are not part of the calibrated DH table".into());
+    }
+    let fixed = fixed
+        .into_iter()
+        .map(|f| FixedParameter {
+            name: model.parameters()[f.index].name.clone(),
+            aliases: f
+                .aliases
+                .iter()
+                .map(|&a| model.parameters()[a].name.clone())
+                .collect(),
+        })
+        .collect();
+    let (first, final_) = (&steps[0], &steps[steps.len() - 1]);
+    Ok(Report {
+        rms_before: first.rms,
+        rms_after: final_.rms,
+        val_rms_before: first.val_rms,
+        val_rms_after: final_.val_rms,
+        steps: steps.clone(),
+        validation,
+        noise_floor,
+        condition_number: last.condition_number,
+        rank: last.rank,
+        sigma_hat: last.sigma,
+        length_scale: model.length_scale(),
+        rank_tolerance: options.fit.rank_tolerance,
+        parameters,
+        fixed,
+        parametrisation: model.pairs().to_vec(),
+        calibrated: folded.table,
+        unfolded: folded.unfolded,
+        device: model.device_at(&x),
+        targets: (0..model.targets().len())
+            .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
+            .collect(),
+        notes,
+    })
+}
+
+/// Identifiability of `columns` at `x`; returns the free parameter indices and the fixed ones
+/// (indices into the model's parameters).
+fn identify(
+    model: &Model,
+    cal: &[Observed],
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+    options: &CalibrationOptions,
+) -> Result<(Vec<usize>, Vec<fit::Fixed>), CalibError> {
+    let problem = ModelProblem {
+        model,
+        observations: cal,
+    };
+    let f = fit::factor(&problem, x, columns, scales)?;
+    let prio_all = model.priorities();
+    let prio: Vec<u32> = columns.iter().map(|&c| prio_all[c]).collect();
+    let id = fit::identifiability(
+        &f.r,
+        &vec![1.0; columns.len()],
+        &prio,
+        options.fit.rank_tolerance,
+    )?;
+    let free = id.free.iter().map(|&i| columns[i]).collect();
+    let fixed = id
+        .fixed
+        .into_iter()
+        .map(|f| {
+            let mut combination = vec![0.0; model.parameter_count()];
+            for (i, c) in f.combination.iter().enumerate() {
+                // Back to parameter units: the factor was of scaled columns.
+                combination[columns[i]] = c * scales[columns[i]] / scales[columns[f.index]];
+            }
+            fit::Fixed {
+                index: columns[f.index],
+                aliases: f.aliases.iter().map(|&a| columns[a]).collect(),
+                combination,
+            }
+        })
+        .collect();
+    Ok((free, fixed))
+}
+
+/// Parameter estimates in the report's layout.
+fn estimates(
+    model: &Model,
+    x: &[f64],
+    fit: &FitOutcome,
+    device_nominal: Isometry3<f64>,
+    targets_nominal: &[Vector3<f64>],
+) -> Vec<ParameterEstimate> {
+    let params = model.parameters();
+    let nominal = model.nominal();
+    let position = |c: usize| fit.free.iter().position(|&f| f == c);
+    let mut out = Vec::with_capacity(params.len());
+    let mut done_blocks: Vec<Block> = Vec::new();
+    for (c, p) in params.iter().enumerate() {
+        match p.block {
+            Block::Device | Block::Base | Block::Tool => {
+                if done_blocks.contains(&p.block) {
+                    continue;
+                }
+                done_blocks.push(p.block);
+                let idx = model.indices(|b| b == p.block);
+                let nom = match p.block {
+                    Block::Device => xyz_rpy(&device_nominal),
+                    Block::Base => xyz_rpy(&nominal.base),
+                    _ => xyz_rpy(&nominal.tool),
+                };
+                let est = xyz_rpy(&model.pose_at(x, p.block));
+                let std = pose_std(model, x, fit, p.block, &idx);
+                for (k, &i) in idx.iter().enumerate() {
+                    out.push(ParameterEstimate {
+                        name: params[i].name.clone(),
+                        nominal: nom[k],
+                        estimate: est[k],
+                        std_error: std.as_ref().map(|s| s[k]),
+                        free: position(i).is_some(),
+                    });
+                }
+            }
+            Block::Joint(r) => {
+                let row = &nominal.rows[r];
+                let nom = match p.field {
+                    crate::model::Field::A => row.a,
+                    crate::model::Field::Alpha => row.alpha,
+                    crate::model::Field::D => row.d,
+                    crate::model::Field::Theta => row.theta,
+                    _ => 0.0,
+                };
+                out.push(ParameterEstimate {
+                    name: p.name.clone(),
+                    nominal: nom,
+                    estimate: nom + x[c],
+                    std_error: fit.std_errors[c],
+                    free: position(c).is_some(),
+                });
+            }
+            Block::Target(k) => {
+                let axis = match p.field {
+                    crate::model::Field::X => 0,
+                    crate::model::Field::Y => 1,
+                    _ => 2,
+                };
+                out.push(ParameterEstimate {
+                    name: p.name.clone(),
+                    nominal: targets_nominal.get(k).map_or(0.0, |t| t[axis]),
+                    estimate: model.target_at(x, k)[axis],
+                    std_error: fit.std_errors[c],
+                    free: position(c).is_some(),
+                });
+            }
+            Block::Effect(_) => out.push(ParameterEstimate {
+                name: p.name.clone(),
+                nominal: 0.0,
+                estimate: x[c],
+                std_error: fit.std_errors[c],
+                free: position(c).is_some(),
+            }),
+        }
+    }
+    out
+}
+
+/// Standard errors of a pose block's `x y z rx ry rz` (absolute, roll-pitch-yaw), propagated
+/// from the covariance of its six small-motion parameters by a central-difference Jacobian.
+fn pose_std(
+    model: &Model,
+    x: &[f64],
+    fit: &FitOutcome,
+    block: Block,
+    idx: &[usize],
+) -> Option<[f64; 6]> {
+    let cov = fit.covariance.as_ref()?;
+    let pos: Vec<Option<usize>> = idx
+        .iter()
+        .map(|&i| fit.free.iter().position(|&f| f == i))
+        .collect();
+    if pos.iter().all(Option::is_none) {
+        return None;
+    }
+    let h = 1e-6;
+    let mut g = DMatrix::zeros(6, idx.len());
+    let mut xp = x.to_vec();
+    for (k, &i) in idx.iter().enumerate() {
+        xp[i] = x[i] + h;
+        let a = xyz_rpy(&model.pose_at(&xp, block));
+        xp[i] = x[i] - h;
+        let b = xyz_rpy(&model.pose_at(&xp, block));
+        xp[i] = x[i];
+        for r in 0..6 {
+            let mut d = a[r] - b[r];
+            if r >= 3 {
+                // Angles wrap at ±pi.
+                d = (d + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                    - std::f64::consts::PI;
+            }
+            g[(r, k)] = d / (2.0 * h);
+        }
+    }
+    let c = DMatrix::from_fn(idx.len(), idx.len(), |a, b| match (pos[a], pos[b]) {
+        (Some(i), Some(j)) => cov[(i, j)],
+        _ => 0.0,
+    });
+    let v = &g * c * g.transpose();
+    Some(std::array::from_fn(|r| v[(r, r)].max(0.0).sqrt()))
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn registration_recovers_a_pose() {
+        let t = Isometry3::from_parts(
+            Translation3::new(1.0, -2.0, 0.5),
+            UnitQuaternion::from_euler_angles(0.3, -1.2, 2.5),
+        );
+        let a: Vec<Vector3<f64>> = (0..10)
+            .map(|i| {
+                let f = i as f64;
+                Vector3::new(f.sin(), (1.7 * f).cos(), 0.3 * f)
+            })
+            .collect();
+        let b: Vec<Vector3<f64>> = a
+            .iter()
+            .map(|p| t * nalgebra::Point3::from(*p))
+            .map(|p| p.coords)
+            .collect();
+        let r = register(&a, &b).unwrap();
+        let (dp, dr) = dh_core::pose::pose_error(&r, &t);
+        assert!(dp < 1e-12 && dr < 1e-12, "{dp} {dr}");
+    }
+}

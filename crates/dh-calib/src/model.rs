@@ -1,1 +1,1248 @@
-//! (to be written)
+//! The parametrised measurement model: a DH table with errors on every parameter, the
+//! measuring device's frame, the measured targets, and room for non-geometric effects.
+//!
+//! # Frames
+//! Everything is expressed in the measuring device's frame ("world"). A measured point is
+//!
+//! ```text
+//! p = T_device_base · FK(q) · t_k,    FK(q) = base · A_1(q_1) ⋯ A_n(q_n) · tool
+//! ```
+//!
+//! with `T_device_base` the pose of the robot's base link frame in the device frame, `FK` the
+//! table's forward kinematics (its `base` and `tool` transforms included) and `t_k` target `k`'s
+//! position in the tip (tool) frame. A measured pose (for comparing with another model of the
+//! same robot, where the "device" is the base link frame itself) is `T_device_base · FK(q)`.
+//!
+//! # Parameters
+//! Every parameter is an offset from a reference model (`x = 0` is the reference):
+//! - `<joint>.a`, `<joint>.alpha`, `<joint>.d`, `<joint>.theta`: errors of the row's DH values
+//!   (metres, radians), added to the nominal values;
+//! - `<joint>.beta`: the Hayati-Mirmirani tilt of a near-parallel pair (radians, nominal 0); the
+//!   pair's `d` error is then not a parameter (see [`PairParametrisation`]);
+//! - `base.x|y|z|rx|ry|rz`: `base = base_nominal · Tr(x, y, z) · Rx(rx) Ry(ry) Rz(rz)`, a small
+//!   motion expressed in DH frame 0 (metres, radians); `tool.*` likewise in the tip frame;
+//! - `device.x|y|z|rx|ry|rz`: `T_device_base = T_ref · Tr(x, y, z) · Rx(rx) Ry(ry) Rz(rz)`, a
+//!   small motion of the robot expressed in its own base link frame, so that `device.z` is a
+//!   lift along the robot's base z axis and `device.rz` a turn about it;
+//! - `target.<name>.x|y|z`: offset of the target's position in the tip frame (metres);
+//! - effect parameters, named by their [`Effect`].
+//!
+//! # Hayati-Mirmirani parametrisation
+//! Consecutive joint axes within [`ModelOptions::hayati_threshold`] of parallel at the nominal
+//! zero pose make the DH `d` (where the common normal sits along the axis) ill conditioned: a
+//! tilt of 0.01 degree moves it by metres. For such a pair the row that holds the pair's link
+//! gets a rotation `Ry(beta)` and the `d` error that locates the common normal is dropped
+//! (S. Hayati and M. Mirmirani, "Improving the absolute positioning accuracy of robot
+//! manipulators", J. Robotic Systems 2(4), 1985, eq. 3):
+//! - standard convention, joints `i`, `i+1` (rows `i`, `i+1`): row `i` becomes
+//!   `A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)` and `<joint_i>.d` is
+//!   dropped;
+//! - modified convention: row `i+1` becomes
+//!   `A_{i+1} = Rx(alpha_i) Tx(a_i) Ry(beta_i) Rz(theta_{i+1} + q_{i+1}) Tz(d_{i+1})` and
+//!   `<joint_i>.d` is dropped.
+//!
+//! In both, `beta` turns about the y axis of the frame that sits on the later joint's axis
+//! just before that joint, at the far end of the common normal.
+
+use std::fmt;
+use std::ops::Range;
+use std::sync::Arc;
+
+use dh_core::{Convention, DhTable, JointKind, JointSampler};
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
+
+use crate::fit::{CalibError, Problem};
+
+/// Physical kind of a parameter, which decides its column scale.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Unit {
+    /// Metres.
+    Length,
+    /// Radians.
+    Angle,
+    /// Defined by the effect that owns the parameter.
+    Other,
+}
+
+/// Which part of the model a parameter belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Block {
+    /// The device frame (`T_device_base`).
+    Device,
+    /// The table's base transform.
+    Base,
+    /// A row of the table (index into its rows).
+    Joint(usize),
+    /// The table's tool transform.
+    Tool,
+    /// A target (index into the target list).
+    Target(usize),
+    /// An effect (index in the order added).
+    Effect(usize),
+}
+
+/// Which quantity of its block a parameter is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Field {
+    /// Translation along x (metres).
+    X,
+    /// Translation along y (metres).
+    Y,
+    /// Translation along z (metres).
+    Z,
+    /// Rotation about x (radians).
+    Rx,
+    /// Rotation about y (radians).
+    Ry,
+    /// Rotation about z (radians).
+    Rz,
+    /// DH link length error (metres).
+    A,
+    /// DH link twist error (radians).
+    Alpha,
+    /// DH link offset error (metres).
+    D,
+    /// DH joint angle offset error (radians).
+    Theta,
+    /// Hayati-Mirmirani tilt about y (radians).
+    Beta,
+    /// The effect's `k`-th parameter.
+    Effect(usize),
+}
+
+/// One estimable quantity of a [`Model`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameter {
+    /// Name, part of the report's contract (see the module docs).
+    pub name: String,
+    /// What it belongs to.
+    pub block: Block,
+    /// Which quantity.
+    pub field: Field,
+    /// Its unit.
+    pub unit: Unit,
+}
+
+/// Which DH quantity an [`Effect`] changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum EffectField {
+    /// The row's joint angle (radians).
+    Theta,
+    /// The row's link offset (metres).
+    D,
+}
+
+/// A non-geometric error source: a change of one row's `theta` or `d` that depends on the
+/// joint values and on the effect's own parameters (gear ratio errors, joint compliance,
+/// coupling between joints). Added to a model with [`Model::add_effect`]; its parameters become
+/// extra Jacobian columns.
+pub trait Effect: fmt::Debug + Send + Sync {
+    /// Full names of the effect's parameters (e.g. `gear_ratio:j2`).
+    fn parameter_names(&self) -> Vec<String>;
+    /// The joint (row name) whose `theta` or `d` the effect changes.
+    fn joint(&self) -> &str;
+    /// Which of the two.
+    fn field(&self) -> EffectField;
+    /// The change (radians or metres) at joint values `q` (one per row, in row order).
+    fn delta(&self, q: &[f64], params: &[f64]) -> f64;
+    /// `∂delta/∂params` at `q` into `out` (one per parameter).
+    fn gradient(&self, q: &[f64], params: &[f64], out: &mut [f64]);
+    /// Column scales: the tip motion (metres) that a unit change of each parameter causes,
+    /// roughly, in a robot of characteristic length `length`.
+    fn scales(&self, length: f64) -> Vec<f64>;
+}
+
+/// A gear ratio error: `theta_J += eps · q_J` (radians per radian), named `gear_ratio:<J>`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GearRatio {
+    joint: String,
+    row: usize,
+}
+
+impl GearRatio {
+    /// A gear ratio error of `joint` (a row of `table`).
+    ///
+    /// # Errors
+    /// [`CalibError::MissingJoint`] when the table has no such row.
+    pub fn new(table: &DhTable, joint: &str) -> Result<Self, CalibError> {
+        let row = table
+            .rows
+            .iter()
+            .position(|r| r.name == joint)
+            .ok_or_else(|| CalibError::MissingJoint {
+                joint: joint.into(),
+            })?;
+        Ok(Self {
+            joint: joint.into(),
+            row,
+        })
+    }
+}
+
+impl Effect for GearRatio {
+    fn parameter_names(&self) -> Vec<String> {
+        vec![format!("gear_ratio:{}", self.joint)]
+    }
+    fn joint(&self) -> &str {
+        &self.joint
+    }
+    fn field(&self) -> EffectField {
+        EffectField::Theta
+    }
+    fn delta(&self, q: &[f64], params: &[f64]) -> f64 {
+        params.first().copied().unwrap_or(0.0) * q.get(self.row).copied().unwrap_or(0.0)
+    }
+    fn gradient(&self, q: &[f64], _params: &[f64], out: &mut [f64]) {
+        if let Some(o) = out.first_mut() {
+            *o = q.get(self.row).copied().unwrap_or(0.0);
+        }
+    }
+    fn scales(&self, length: f64) -> Vec<f64> {
+        vec![length]
+    }
+}
+
+/// How one pair of consecutive joints is parametrised.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairParametrisation {
+    /// The earlier joint.
+    pub first: String,
+    /// The later joint.
+    pub second: String,
+    /// Angle between the two axes at the nominal zero pose, folded to `[0, pi/2]` (radians).
+    pub angle: f64,
+    /// `true` when the pair uses Hayati-Mirmirani (`beta` instead of a `d` error).
+    pub hayati: bool,
+    /// The row whose `beta` parameter the pair adds (when `hayati`).
+    pub beta_row: Option<String>,
+    /// The row whose `d` error the pair drops (when `hayati`).
+    pub dropped_d: Option<String>,
+}
+
+/// Options of [`Model::new`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelOptions {
+    /// Pairs of consecutive axes within this angle of parallel (radians) at the nominal zero
+    /// pose use Hayati-Mirmirani. Default 1 degree.
+    pub hayati_threshold: f64,
+    /// Characteristic length (metres) that scales angle columns; `None` uses
+    /// [`DhTable::size`].
+    pub length_scale: Option<f64>,
+    /// Metres per radian of orientation residual for pose measurements; `None` uses the
+    /// length scale.
+    pub orientation_scale: Option<f64>,
+}
+
+impl ModelOptions {
+    /// Default Hayati threshold: 1 degree.
+    pub const DEFAULT_HAYATI_THRESHOLD: f64 = std::f64::consts::PI / 180.0;
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        Self {
+            hayati_threshold: Self::DEFAULT_HAYATI_THRESHOLD,
+            length_scale: None,
+            orientation_scale: None,
+        }
+    }
+}
+
+/// What is measured in one sample.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Observation {
+    /// A target's position in the device frame (3 residuals: model minus measured, metres).
+    Point {
+        /// Target index.
+        target: usize,
+        /// Measured position (metres).
+        point: Vector3<f64>,
+    },
+    /// The tip frame's pose in the device frame (6 residuals: position difference in metres,
+    /// then `orientation_scale · log(R_model R_measuredᵀ)` as a rotation vector).
+    Pose(Isometry3<f64>),
+}
+
+/// One sample: joint values in row order and what was measured there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Observed {
+    /// One value per table row (radians or metres).
+    pub q: Vec<f64>,
+    /// The measurement.
+    pub observation: Observation,
+}
+
+/// A calibrated table, and what could not be put in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoldedTable {
+    /// Nominal values plus errors, `beta` folded into exact DH values where possible.
+    pub table: DhTable,
+    /// `(parameter name, beta)` of the tilts that could not be folded exactly (the table then
+    /// lacks them and is an approximation; see [`Model::table_at`]).
+    pub unfolded: Vec<(String, f64)>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Axis {
+    X = 0,
+    Y = 1,
+    Z = 2,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum OpKind {
+    Trans(Axis),
+    Rot(Axis),
+    Fixed,
+}
+
+/// A rotation matrix and translation: cheaper to compose than quaternions in the hot loop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Frame {
+    r: Matrix3<f64>,
+    t: Vector3<f64>,
+}
+
+impl Frame {
+    const IDENTITY: Frame = Frame {
+        r: Matrix3::new(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+        t: Vector3::new(0.0, 0.0, 0.0),
+    };
+
+    fn from_iso(iso: &Isometry3<f64>) -> Self {
+        Self {
+            r: *iso.rotation.to_rotation_matrix().matrix(),
+            t: iso.translation.vector,
+        }
+    }
+
+    fn to_iso(self) -> Isometry3<f64> {
+        Isometry3::from_parts(
+            Translation3::from(self.t),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(self.r)),
+        )
+    }
+
+    fn apply(&mut self, kind: OpKind, v: f64, fixed: &Frame) {
+        match kind {
+            OpKind::Trans(a) => self.t += self.r.column(a as usize) * v,
+            OpKind::Rot(a) => {
+                let (i, j) = match a {
+                    Axis::X => (1, 2),
+                    Axis::Y => (2, 0),
+                    Axis::Z => (0, 1),
+                };
+                let (s, c) = v.sin_cos();
+                let ci = self.r.column(i).into_owned();
+                let cj = self.r.column(j).into_owned();
+                self.r.set_column(i, &(ci * c + cj * s));
+                self.r.set_column(j, &(cj * c - ci * s));
+            }
+            OpKind::Fixed => {
+                self.t += self.r * fixed.t;
+                self.r *= fixed.r;
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct Op {
+    kind: OpKind,
+    value: f64,
+    fixed: Frame,
+    joint: Option<usize>,
+    param: Option<usize>,
+}
+
+#[derive(Clone, Debug)]
+struct EffectSlot {
+    effect: Arc<dyn Effect>,
+    params: Range<usize>,
+    op: usize,
+}
+
+/// Op indices of one row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RowOps {
+    theta: usize,
+    d: usize,
+}
+
+const POSE_FIELDS: [(Field, &str, OpKind); 6] = [
+    (Field::X, "x", OpKind::Trans(Axis::X)),
+    (Field::Y, "y", OpKind::Trans(Axis::Y)),
+    (Field::Z, "z", OpKind::Trans(Axis::Z)),
+    (Field::Rx, "rx", OpKind::Rot(Axis::X)),
+    (Field::Ry, "ry", OpKind::Rot(Axis::Y)),
+    (Field::Rz, "rz", OpKind::Rot(Axis::Z)),
+];
+
+/// Largest position deviation (metres) and orientation deviation (radians) accepted between a
+/// table with `beta` folded into DH values and the model it stands for; beyond it (a tilt so
+/// small that the equivalent `d` loses its digits) the tilt is left unfolded.
+pub const FOLD_TOLERANCE: f64 = 1e-9;
+
+/// A tilt below this (radians) is no tilt: folding it would put the common normal beyond any
+/// representable distance.
+const MIN_FOLD_TILT: f64 = 1e-12;
+
+/// The parametrised measurement model (see the module docs for frames and parameters).
+#[derive(Clone, Debug)]
+pub struct Model {
+    nominal: DhTable,
+    length_scale: f64,
+    orientation_scale: f64,
+    ops: Vec<Op>,
+    rows: Vec<RowOps>,
+    tool_end: usize,
+    parameters: Vec<Parameter>,
+    param_op: Vec<Option<usize>>,
+    targets: Vec<(String, Vector3<f64>)>,
+    target_params: usize,
+    effects: Vec<EffectSlot>,
+    pairs: Vec<PairParametrisation>,
+}
+
+fn finite(what: &str, v: f64) -> Result<f64, CalibError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(CalibError::Core(dh_core::CoreError::NonFinite {
+            what: what.into(),
+            value: v,
+        }))
+    }
+}
+
+impl Model {
+    /// Builds the model of `table` measured at the targets named `targets` (their positions
+    /// start at the tip frame's origin, the device frame at the base link frame; set them with
+    /// [`Model::set_device`] and [`Model::set_target`]).
+    ///
+    /// # Errors
+    /// [`CalibError::Core`] for a non-finite table value or an empty table;
+    /// [`CalibError::BadOption`] for a negative or non-finite threshold or scale.
+    pub fn new(
+        table: &DhTable,
+        targets: &[String],
+        options: &ModelOptions,
+    ) -> Result<Model, CalibError> {
+        if table.rows.is_empty() {
+            return Err(CalibError::Core(dh_core::CoreError::NoJoints));
+        }
+        for r in &table.rows {
+            for (f, v) in [
+                ("a", r.a),
+                ("alpha", r.alpha),
+                ("d", r.d),
+                ("theta", r.theta),
+            ] {
+                finite(&format!("{}.{f}", r.name), v)?;
+            }
+        }
+        let t = options.hayati_threshold;
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(CalibError::BadOption {
+                what: "hayati threshold".into(),
+                reason: format!("expected a finite angle >= 0, found {t}"),
+            });
+        }
+        let length_scale = options.length_scale.unwrap_or_else(|| table.size());
+        let orientation_scale = options.orientation_scale.unwrap_or(length_scale);
+        for (what, v) in [
+            ("length scale", length_scale),
+            ("orientation scale", orientation_scale),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(CalibError::BadOption {
+                    what: what.into(),
+                    reason: format!("expected a positive length, found {v}"),
+                });
+            }
+        }
+        let n = table.rows.len();
+        let pairs = classify_pairs(table, t)?;
+        let mut beta_rows = vec![false; n];
+        let mut drop_d = vec![false; n];
+        for (i, p) in pairs.iter().enumerate() {
+            if p.hayati {
+                drop_d[i] = true;
+                match table.convention {
+                    Convention::Standard => beta_rows[i] = true,
+                    Convention::Modified => beta_rows[i + 1] = true,
+                }
+            }
+        }
+
+        let mut m = Model {
+            nominal: table.clone(),
+            length_scale,
+            orientation_scale,
+            ops: Vec::new(),
+            rows: Vec::new(),
+            tool_end: 0,
+            parameters: Vec::new(),
+            param_op: Vec::new(),
+            targets: targets
+                .iter()
+                .map(|name| (name.clone(), Vector3::zeros()))
+                .collect(),
+            target_params: 0,
+            effects: Vec::new(),
+            pairs,
+        };
+        m.push_pose_block("device", Block::Device, &Isometry3::identity());
+        m.push_pose_block("base", Block::Base, &table.base);
+        for (i, row) in table.rows.iter().enumerate() {
+            let revolute = (row.kind == JointKind::Revolute).then_some(i);
+            let prismatic = (row.kind == JointKind::Prismatic).then_some(i);
+            let blk = Block::Joint(i);
+            let name = |f: &str| format!("{}.{f}", row.name);
+            let alpha = (OpKind::Rot(Axis::X), row.alpha, None, Some(Field::Alpha));
+            let a = (OpKind::Trans(Axis::X), row.a, None, Some(Field::A));
+            let beta = (OpKind::Rot(Axis::Y), 0.0, None, Some(Field::Beta));
+            let theta = (
+                OpKind::Rot(Axis::Z),
+                row.theta,
+                revolute,
+                Some(Field::Theta),
+            );
+            let d_field = (!drop_d[i]).then_some(Field::D);
+            let d = (OpKind::Trans(Axis::Z), row.d, prismatic, d_field);
+            let mut seq = Vec::with_capacity(5);
+            match table.convention {
+                Convention::Standard => {
+                    seq.extend([theta, d, a, alpha]);
+                    if beta_rows[i] {
+                        seq.push(beta);
+                    }
+                }
+                Convention::Modified => {
+                    seq.extend([alpha, a]);
+                    if beta_rows[i] {
+                        seq.push(beta);
+                    }
+                    seq.extend([theta, d]);
+                }
+            }
+            let mut ops = RowOps { theta: 0, d: 0 };
+            for (kind, value, joint, field) in seq {
+                let param = field.map(|f| {
+                    let fname = match f {
+                        Field::A => "a",
+                        Field::Alpha => "alpha",
+                        Field::D => "d",
+                        Field::Theta => "theta",
+                        _ => "beta",
+                    };
+                    m.push_param(name(fname), blk, f, unit_of(kind))
+                });
+                let idx = m.push_op(kind, value, joint, param);
+                if field == Some(Field::Theta) {
+                    ops.theta = idx;
+                }
+                if kind == OpKind::Trans(Axis::Z) {
+                    ops.d = idx;
+                }
+            }
+            m.rows.push(ops);
+        }
+        m.push_pose_block("tool", Block::Tool, &table.tool);
+        m.tool_end = m.ops.len();
+        m.target_params = m.parameters.len();
+        let names: Vec<String> = m.targets.iter().map(|(n, _)| n.clone()).collect();
+        for (k, name) in names.iter().enumerate() {
+            for (f, s) in [(Field::X, "x"), (Field::Y, "y"), (Field::Z, "z")] {
+                m.push_param(
+                    format!("target.{name}.{s}"),
+                    Block::Target(k),
+                    f,
+                    Unit::Length,
+                );
+            }
+        }
+        Ok(m)
+    }
+
+    fn push_param(&mut self, name: String, block: Block, field: Field, unit: Unit) -> usize {
+        self.parameters.push(Parameter {
+            name,
+            block,
+            field,
+            unit,
+        });
+        self.param_op.push(None);
+        self.parameters.len() - 1
+    }
+
+    fn push_op(
+        &mut self,
+        kind: OpKind,
+        value: f64,
+        joint: Option<usize>,
+        param: Option<usize>,
+    ) -> usize {
+        let idx = self.ops.len();
+        self.ops.push(Op {
+            kind,
+            value,
+            fixed: Frame::IDENTITY,
+            joint,
+            param,
+        });
+        if let Some(p) = param {
+            self.param_op[p] = Some(idx);
+        }
+        idx
+    }
+
+    fn push_pose_block(&mut self, prefix: &str, block: Block, reference: &Isometry3<f64>) {
+        let f = self.push_op(OpKind::Fixed, 0.0, None, None);
+        self.ops[f].fixed = Frame::from_iso(reference);
+        for (field, s, kind) in POSE_FIELDS {
+            let p = self.push_param(format!("{prefix}.{s}"), block, field, unit_of(kind));
+            self.push_op(kind, 0.0, None, Some(p));
+        }
+    }
+
+    /// Adds an effect; its parameters are appended to the parameter list.
+    ///
+    /// # Errors
+    /// [`CalibError::MissingJoint`] when the effect names no row of the table.
+    pub fn add_effect(&mut self, effect: Arc<dyn Effect>) -> Result<Range<usize>, CalibError> {
+        let row = self
+            .nominal
+            .rows
+            .iter()
+            .position(|r| r.name == effect.joint())
+            .ok_or_else(|| CalibError::MissingJoint {
+                joint: effect.joint().into(),
+            })?;
+        let op = match effect.field() {
+            EffectField::Theta => self.rows[row].theta,
+            EffectField::D => self.rows[row].d,
+        };
+        let e = self.effects.len();
+        let start = self.parameters.len();
+        for (k, name) in effect.parameter_names().into_iter().enumerate() {
+            self.push_param(name, Block::Effect(e), Field::Effect(k), Unit::Other);
+        }
+        let params = start..self.parameters.len();
+        self.effects.push(EffectSlot {
+            effect,
+            params: params.clone(),
+            op,
+        });
+        Ok(params)
+    }
+
+    /// The parameters, in the order of `x`: device (6), base (6), per row in chain order
+    /// (standard: `theta`, `d`, `a`, `alpha`, `beta`; modified: `alpha`, `a`, `beta`, `theta`,
+    /// `d`; `d` absent when dropped, `beta` only for Hayati rows), tool (6), targets (3 each),
+    /// effects.
+    pub fn parameters(&self) -> &[Parameter] {
+        &self.parameters
+    }
+
+    /// Number of parameters.
+    pub fn parameter_count(&self) -> usize {
+        self.parameters.len()
+    }
+
+    /// Index of the parameter named `name`.
+    pub fn index_of(&self, name: &str) -> Option<usize> {
+        self.parameters.iter().position(|p| p.name == name)
+    }
+
+    /// Indices of the parameters of blocks for which `keep` is true.
+    pub fn indices(&self, keep: impl Fn(Block) -> bool) -> Vec<usize> {
+        (0..self.parameters.len())
+            .filter(|&i| keep(self.parameters[i].block))
+            .collect()
+    }
+
+    /// The nominal table the model was built from.
+    pub fn nominal(&self) -> &DhTable {
+        &self.nominal
+    }
+
+    /// Characteristic length (metres) used to scale angle columns.
+    pub fn length_scale(&self) -> f64 {
+        self.length_scale
+    }
+
+    /// Column scales for [`crate::fit`]: 1 for lengths, the length scale for angles (so a
+    /// column is the tip motion in metres per metre or per radian times the robot's size), and
+    /// the effect's own scales for effect parameters.
+    pub fn scales(&self) -> Vec<f64> {
+        let mut s: Vec<f64> = self
+            .parameters
+            .iter()
+            .map(|p| match p.unit {
+                Unit::Length => 1.0,
+                Unit::Angle | Unit::Other => self.length_scale,
+            })
+            .collect();
+        for slot in &self.effects {
+            for (k, v) in slot
+                .effect
+                .scales(self.length_scale)
+                .into_iter()
+                .enumerate()
+            {
+                if let Some(x) = s.get_mut(slot.params.start + k) {
+                    if v.is_finite() && v > 0.0 {
+                        *x = v;
+                    }
+                }
+            }
+        }
+        s
+    }
+
+    /// Priorities for [`crate::fit::identifiability`] (lower is fixed first): base and tool
+    /// (always aliased with the device frame and the targets) 0, effects 1, DH rows 2, targets
+    /// 3, device 4 (the device frame and the targets are what every step estimates).
+    pub fn priorities(&self) -> Vec<u32> {
+        self.parameters
+            .iter()
+            .map(|p| match p.block {
+                Block::Base | Block::Tool => 0,
+                Block::Effect(_) => 1,
+                Block::Joint(_) => 2,
+                Block::Target(_) => 3,
+                Block::Device => 4,
+            })
+            .collect()
+    }
+
+    /// How each consecutive pair of joints is parametrised.
+    pub fn pairs(&self) -> &[PairParametrisation] {
+        &self.pairs
+    }
+
+    /// Target names and reference positions (tip frame, metres).
+    pub fn targets(&self) -> &[(String, Vector3<f64>)] {
+        &self.targets
+    }
+
+    /// The reference device frame `T_device_base` (at `x = 0`).
+    pub fn device(&self) -> Isometry3<f64> {
+        self.ops[0].fixed.to_iso()
+    }
+
+    /// Sets the reference device frame `T_device_base`.
+    pub fn set_device(&mut self, device: &Isometry3<f64>) {
+        self.ops[0].fixed = Frame::from_iso(device);
+    }
+
+    /// Sets target `k`'s reference position in the tip frame (metres); ignored when out of
+    /// range.
+    pub fn set_target(&mut self, k: usize, position: Vector3<f64>) {
+        if let Some(t) = self.targets.get_mut(k) {
+            t.1 = position;
+        }
+    }
+
+    /// Moves the device and target offsets of `x` into the reference and zeroes them.
+    pub fn rebase(&mut self, x: &mut [f64]) {
+        let device = self.device_at(x);
+        self.set_device(&device);
+        for k in 0..self.targets.len() {
+            let t = self.target_at(x, k);
+            self.targets[k].1 = t;
+        }
+        for (i, p) in self.parameters.iter().enumerate() {
+            if matches!(p.block, Block::Device | Block::Target(_)) {
+                if let Some(v) = x.get_mut(i) {
+                    *v = 0.0;
+                }
+            }
+        }
+    }
+
+    /// The pose of a pose block (`Device`, `Base` or `Tool`) at `x`; identity for other blocks.
+    pub fn pose_at(&self, x: &[f64], block: Block) -> Isometry3<f64> {
+        let Some(first) = self.parameters.iter().position(|p| p.block == block) else {
+            return Isometry3::identity();
+        };
+        let Some(op) = self.param_op[first] else {
+            return Isometry3::identity();
+        };
+        // The block's Fixed op precedes its six parameter ops.
+        let mut f = Frame::IDENTITY;
+        for o in &self.ops[op - 1..op + 6] {
+            let v = o.value + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0);
+            f.apply(o.kind, v, &o.fixed);
+        }
+        f.to_iso()
+    }
+
+    /// `T_device_base` at `x`.
+    pub fn device_at(&self, x: &[f64]) -> Isometry3<f64> {
+        self.pose_at(x, Block::Device)
+    }
+
+    /// Target `k`'s position in the tip frame at `x` (metres).
+    pub fn target_at(&self, x: &[f64], k: usize) -> Vector3<f64> {
+        let Some((_, r)) = self.targets.get(k) else {
+            return Vector3::zeros();
+        };
+        let s = self.target_params + 3 * k;
+        r + Vector3::new(
+            x.get(s).copied().unwrap_or(0.0),
+            x.get(s + 1).copied().unwrap_or(0.0),
+            x.get(s + 2).copied().unwrap_or(0.0),
+        )
+    }
+
+    fn op_values(&self, x: &[f64], q: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(self.ops.iter().map(|o| {
+            o.value
+                + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0)
+                + o.joint.and_then(|j| q.get(j)).copied().unwrap_or(0.0)
+        }));
+        for slot in &self.effects {
+            let params = x.get(slot.params.clone()).unwrap_or(&[]);
+            out[slot.op] += slot.effect.delta(q, params);
+        }
+    }
+
+    /// Tip frame in the device frame; `before[i]` receives the frame before op `i`.
+    fn chain(
+        &self,
+        values: &[f64],
+        mut before: Option<&mut Vec<Frame>>,
+        ops: Range<usize>,
+    ) -> Frame {
+        let mut f = Frame::IDENTITY;
+        if let Some(b) = before.as_deref_mut() {
+            b.clear();
+        }
+        for i in ops {
+            let o = &self.ops[i];
+            if let Some(b) = before.as_deref_mut() {
+                b.push(f);
+            }
+            f.apply(o.kind, values[i], &o.fixed);
+        }
+        f
+    }
+
+    /// Where target `k` is in the device frame at parameters `x` and joint values `q` (one per
+    /// row), metres.
+    pub fn point(&self, x: &[f64], q: &[f64], target: usize) -> Vector3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &mut v);
+        let f = self.chain(&v, None, 0..self.tool_end);
+        f.t + f.r * self.target_at(x, target)
+    }
+
+    /// The tip frame's pose in the device frame at `x` and `q`.
+    pub fn tip(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &mut v);
+        self.chain(&v, None, 0..self.tool_end).to_iso()
+    }
+
+    /// The robot's own forward kinematics at `x` and `q` (tip in the base link frame, without
+    /// the device frame).
+    pub fn robot_fk(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &mut v);
+        // Ops 0..7 are the device block.
+        self.chain(&v, None, 7..self.tool_end).to_iso()
+    }
+
+    /// Residuals of one observation (model minus measured) into `out` (3 or 6 values).
+    pub fn residuals(&self, x: &[f64], obs: &Observed, out: &mut [f64]) {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, &obs.q, &mut v);
+        let f = self.chain(&v, None, 0..self.tool_end);
+        self.write_residuals(x, &f, obs, out);
+    }
+
+    fn write_residuals(
+        &self,
+        x: &[f64],
+        f: &Frame,
+        obs: &Observed,
+        out: &mut [f64],
+    ) -> Vector3<f64> {
+        match &obs.observation {
+            Observation::Point { target, point } => {
+                let p = f.t + f.r * self.target_at(x, *target);
+                let r = p - point;
+                out[..3].copy_from_slice(r.as_slice());
+                Vector3::zeros()
+            }
+            Observation::Pose(m) => {
+                let r = f.t - m.translation.vector;
+                out[..3].copy_from_slice(r.as_slice());
+                let rel = Rotation3::from_matrix_unchecked(
+                    f.r * m.rotation.to_rotation_matrix().matrix().transpose(),
+                );
+                let phi = UnitQuaternion::from_rotation_matrix(&rel).scaled_axis();
+                for k in 0..3 {
+                    out[3 + k] = self.orientation_scale * phi[k];
+                }
+                phi
+            }
+        }
+    }
+
+    /// Residuals and the analytic Jacobian of one observation for the parameters `columns`
+    /// (row-major, `residual count × columns.len()`).
+    ///
+    /// Each parameter moves one elementary transform of the chain; with `F` the frame before
+    /// it, `w` = `F`'s axis (rotation) or `t` = `F`'s axis (translation), and `P` the measured
+    /// point in the device frame, `∂P = w × (P − F.origin)` or `∂P = t` (screw motion), and
+    /// the orientation moves by `w` or not at all. Orientation residuals use the exact
+    /// derivative of the logarithm map, `J_l⁻¹(φ) w`.
+    pub fn jacobian(
+        &self,
+        x: &[f64],
+        obs: &Observed,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+    ) {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, &obs.q, &mut v);
+        let mut before = Vec::with_capacity(self.ops.len());
+        let f = self.chain(&v, Some(&mut before), 0..self.tool_end);
+        let phi = self.write_residuals(x, &f, obs, residuals);
+        let (point, target, pose) = match &obs.observation {
+            Observation::Point { target, .. } => {
+                (f.t + f.r * self.target_at(x, *target), Some(*target), false)
+            }
+            Observation::Pose(_) => (f.t, None, true),
+        };
+        let jl_inv = if pose {
+            left_jacobian_inverse(&phi) * self.orientation_scale
+        } else {
+            Matrix3::zeros()
+        };
+        let nc = columns.len();
+        let rows = if pose { 6 } else { 3 };
+        let mut grad = Vec::new();
+        for (k, &c) in columns.iter().enumerate() {
+            let mut dp = Vector3::zeros();
+            let mut dw = Vector3::zeros();
+            let op_motion = |o: usize, g: f64, dp: &mut Vector3<f64>, dw: &mut Vector3<f64>| {
+                let fr = &before[o];
+                match self.ops[o].kind {
+                    OpKind::Trans(a) => *dp += fr.r.column(a as usize) * g,
+                    OpKind::Rot(a) => {
+                        let w = fr.r.column(a as usize).into_owned();
+                        *dp += w.cross(&(point - fr.t)) * g;
+                        *dw += w * g;
+                    }
+                    OpKind::Fixed => {}
+                }
+            };
+            match self.parameters.get(c).map(|p| p.block) {
+                Some(Block::Target(t)) if target == Some(t) => {
+                    let axis = (c - self.target_params) % 3;
+                    dp = f.r.column(axis).into_owned();
+                }
+                Some(Block::Target(_)) => {}
+                Some(Block::Effect(e)) => {
+                    let slot = &self.effects[e];
+                    grad.resize(slot.params.len(), 0.0);
+                    let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                    slot.effect.gradient(&obs.q, params, &mut grad);
+                    let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
+                    op_motion(slot.op, g, &mut dp, &mut dw);
+                }
+                Some(_) => {
+                    if let Some(o) = self.param_op[c] {
+                        op_motion(o, 1.0, &mut dp, &mut dw);
+                    }
+                }
+                None => {}
+            }
+            for i in 0..3 {
+                jacobian[i * nc + k] = dp[i];
+            }
+            if rows == 6 {
+                let dr = jl_inv * dw;
+                for i in 0..3 {
+                    jacobian[(3 + i) * nc + k] = dr[i];
+                }
+            }
+        }
+    }
+
+    /// The calibrated table at `x`: nominal values plus errors, base and tool with their small
+    /// motions, and every Hayati tilt folded into exact DH values.
+    ///
+    /// Folding (standard row `i`): `Tz(d) Tx(a) Rx(alpha) Ry(beta)` is rewritten as
+    /// `Rz(δθ) Tz(d') Tx(a') Rx(alpha') · Rz(φ) Tz(s)`, i.e. frame `i` is moved along the tilted
+    /// axis to the foot of the true common normal; `θ_i += δθ`, and `Rz(φ) Tz(s)` is absorbed by
+    /// the next row (`θ_{i+1} += φ`, `d_{i+1} += s`). Modified row `i+1`:
+    /// `Rx(alpha) Tx(a) Ry(beta)` is rewritten as `Rz(δθ) Tz(δd) · Rx(alpha') Tx(a') · Rz(φ) Tz(s)`
+    /// with the first screw absorbed by row `i` and the last by row `i+1`'s own `theta`, `d`.
+    /// The result is exact (checked against the model within [`FOLD_TOLERANCE`] at sampled
+    /// joint values) but a small tilt gives a large `d` (a tilt `beta` at link length `a` puts
+    /// the common normal about `a / beta` away): that is the ill conditioning Hayati avoids,
+    /// and it is the form vendors' calibration files use. When the check fails (tilts so small
+    /// that the digits are lost) the tilts are left out of the table and listed in
+    /// [`FoldedTable::unfolded`]. Effects cannot be expressed in DH and are never in the table.
+    pub fn table_at(&self, x: &[f64]) -> FoldedTable {
+        let mut table = self.nominal.clone();
+        table.base = self.pose_at(x, Block::Base);
+        table.tool = self.pose_at(x, Block::Tool);
+        let mut betas = Vec::new();
+        for (c, p) in self.parameters.iter().enumerate() {
+            let v = x.get(c).copied().unwrap_or(0.0);
+            if let Block::Joint(i) = p.block {
+                let row = &mut table.rows[i];
+                match p.field {
+                    Field::A => row.a += v,
+                    Field::Alpha => row.alpha += v,
+                    Field::D => row.d += v,
+                    Field::Theta => row.theta += v,
+                    Field::Beta if v != 0.0 => betas.push((i, p.name.clone(), v)),
+                    _ => {}
+                }
+            }
+        }
+        if betas.is_empty() {
+            return FoldedTable {
+                table,
+                unfolded: vec![],
+            };
+        }
+        let unfolded: Vec<(String, f64)> = betas.iter().map(|(_, n, v)| (n.clone(), *v)).collect();
+        let approx = table.clone();
+        let mut folded = table;
+        let mut ok = true;
+        for (i, _, beta) in &betas {
+            if !fold_beta(&mut folded, *i, *beta) {
+                ok = false;
+            }
+        }
+        if ok && self.matches(&folded, x) {
+            FoldedTable {
+                table: folded,
+                unfolded: vec![],
+            }
+        } else {
+            FoldedTable {
+                table: approx,
+                unfolded,
+            }
+        }
+    }
+
+    fn matches(&self, table: &DhTable, x: &[f64]) -> bool {
+        let mut sampler = JointSampler::new(&table.rows, table.size(), 0x5eed);
+        let mut q = Vec::new();
+        for _ in 0..8 {
+            sampler.next_into(&mut q);
+            let Ok(a) = table.fk(&q) else { return false };
+            let b = self.robot_fk(x, &q);
+            let (dp, dr) = dh_core::pose::pose_error(&a, &b);
+            if !(dp <= FOLD_TOLERANCE && dr <= FOLD_TOLERANCE) {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+fn unit_of(kind: OpKind) -> Unit {
+    match kind {
+        OpKind::Rot(_) => Unit::Angle,
+        _ => Unit::Length,
+    }
+}
+
+/// Inverse of SO(3)'s left Jacobian at rotation vector `phi` (Barfoot, *State Estimation for
+/// Robotics*, 2017, eq. 7.77b in its left form).
+fn left_jacobian_inverse(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let th = phi.norm();
+    let k = phi.cross_matrix();
+    let c = if th < 1e-4 {
+        1.0 / 12.0 + th * th / 720.0
+    } else {
+        1.0 / (th * th) - (1.0 + th.cos()) / (2.0 * th * th.sin())
+    };
+    Matrix3::identity() - k * 0.5 + k * k * c
+}
+
+fn classify_pairs(table: &DhTable, threshold: f64) -> Result<Vec<PairParametrisation>, CalibError> {
+    let n = table.rows.len();
+    let frames = table.frames(&vec![0.0; n])?;
+    let shift = usize::from(table.convention == Convention::Modified);
+    let axis = |i: usize| frames[i + shift].rotation * Vector3::z();
+    let mut out = Vec::new();
+    for i in 0..n.saturating_sub(1) {
+        let (u, w) = (axis(i), axis(i + 1));
+        let angle = u.cross(&w).norm().atan2(u.dot(&w).abs());
+        let hayati = angle <= threshold;
+        let beta_row = match table.convention {
+            Convention::Standard => i,
+            Convention::Modified => i + 1,
+        };
+        out.push(PairParametrisation {
+            first: table.rows[i].name.clone(),
+            second: table.rows[i + 1].name.clone(),
+            angle,
+            hayati,
+            beta_row: hayati.then(|| table.rows[beta_row].name.clone()),
+            dropped_d: hayati.then(|| table.rows[i].name.clone()),
+        });
+    }
+    Ok(out)
+}
+
+fn tz(d: f64) -> Isometry3<f64> {
+    Isometry3::translation(0.0, 0.0, d)
+}
+fn tx(a: f64) -> Isometry3<f64> {
+    Isometry3::translation(a, 0.0, 0.0)
+}
+fn rx(v: f64) -> Isometry3<f64> {
+    Isometry3::rotation(Vector3::x() * v)
+}
+fn ry(v: f64) -> Isometry3<f64> {
+    Isometry3::rotation(Vector3::y() * v)
+}
+
+/// The DH split of `m` (a transform from a frame `G` to a frame whose z axis is a line `L`):
+/// `m = Rz(δθ) Tz(δd) Tx(a) Rx(alpha) Rz(φ) Tz(s)`, returned as `[δθ, δd, a, alpha, φ, s]`.
+/// `None` when `L` is parallel to `G`'s z axis.
+fn dh_split(m: &Isometry3<f64>) -> Option<[f64; 6]> {
+    let ez = Vector3::z();
+    let o = m.translation.vector;
+    let u = m.rotation * ez;
+    let c = ez.cross(&u);
+    let sn = c.norm();
+    if sn < MIN_FOLD_TILT {
+        return None;
+    }
+    let n = c / sn;
+    let b = u.z;
+    let s2 = (o.z * b - o.dot(&u)) / (1.0 - b * b);
+    let s1 = o.z + s2 * b;
+    let foot2 = o + u * s2;
+    let v = foot2 - ez * s1;
+    let hint = m.rotation * Vector3::x();
+    let dot = n.dot(&hint);
+    let sign = if dot.abs() > 1e-9 {
+        dot.signum()
+    } else if n.dot(&v) >= 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    let x = n * sign;
+    let dtheta = x.y.atan2(x.x);
+    let a = v.dot(&x);
+    let alpha = (sn * sign).atan2(b);
+    let frame = dh_core::pose::rot_z(dtheta) * tz(s1) * tx(a) * rx(alpha);
+    let rest = frame.inverse() * m;
+    let rx_ = rest.rotation * Vector3::x();
+    let phi = rx_.y.atan2(rx_.x);
+    Some([dtheta, s1, a, alpha, phi, rest.translation.vector.z])
+}
+
+/// Folds row `i`'s tilt `beta` into exact DH values of `table` (see [`Model::table_at`]).
+fn fold_beta(table: &mut DhTable, i: usize, beta: f64) -> bool {
+    let n = table.rows.len();
+    match table.convention {
+        Convention::Standard => {
+            let r = &table.rows[i];
+            if r.kind == JointKind::Prismatic {
+                // The joint value moves d, so the split would depend on it.
+                return false;
+            }
+            let m = tz(r.d) * tx(r.a) * rx(r.alpha) * ry(beta);
+            let Some([dth, dd, a, alpha, phi, s]) = dh_split(&m) else {
+                return false;
+            };
+            let r = &mut table.rows[i];
+            r.theta += dth;
+            r.d = dd;
+            r.a = a;
+            r.alpha = alpha;
+            if i + 1 < n {
+                table.rows[i + 1].theta += phi;
+                table.rows[i + 1].d += s;
+            } else {
+                table.tool = dh_core::pose::rot_z(phi) * tz(s) * table.tool;
+            }
+        }
+        Convention::Modified => {
+            let r = &table.rows[i];
+            let m = rx(r.alpha) * tx(r.a) * ry(beta);
+            let Some([dth, dd, a, alpha, phi, s]) = dh_split(&m) else {
+                return false;
+            };
+            if i == 0 {
+                table.base = table.base * dh_core::pose::rot_z(dth) * tz(dd);
+            } else {
+                table.rows[i - 1].theta += dth;
+                table.rows[i - 1].d += dd;
+            }
+            let r = &mut table.rows[i];
+            r.a = a;
+            r.alpha = alpha;
+            r.theta += phi;
+            r.d += s;
+        }
+    }
+    true
+}
+
+/// A model with observations: the [`Problem`] that [`crate::fit::solve`] minimises.
+#[derive(Clone, Copy, Debug)]
+pub struct ModelProblem<'a> {
+    /// The model.
+    pub model: &'a Model,
+    /// The samples.
+    pub observations: &'a [Observed],
+}
+
+impl Problem for ModelProblem<'_> {
+    fn parameter_count(&self) -> usize {
+        self.model.parameter_count()
+    }
+    fn block_count(&self) -> usize {
+        self.observations.len()
+    }
+    fn block_size(&self, block: usize) -> usize {
+        match self.observations.get(block).map(|o| &o.observation) {
+            Some(Observation::Pose(_)) => 6,
+            _ => 3,
+        }
+    }
+    fn residuals(&self, x: &[f64], block: usize, out: &mut [f64]) {
+        if let Some(o) = self.observations.get(block) {
+            self.model.residuals(x, o, out);
+        }
+    }
+    fn jacobian(
+        &self,
+        x: &[f64],
+        block: usize,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+    ) {
+        if let Some(o) = self.observations.get(block) {
+            self.model.jacobian(x, o, columns, residuals, jacobian);
+        }
+    }
+}
+
+/// The pose `xyz`, `rpy` of an isometry as a 6-vector (URDF convention, see
+/// [`dh_core::pose::to_xyz_rpy`]).
+pub fn xyz_rpy(pose: &Isometry3<f64>) -> Vector6<f64> {
+    let (t, r) = dh_core::pose::to_xyz_rpy(pose);
+    Vector6::new(t[0], t[1], t[2], r[0], r[1], r[2])
+}

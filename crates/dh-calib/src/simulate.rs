@@ -1,1 +1,317 @@
-//! (to be written)
+//! A measurement simulator: known truth, noisy points, for testing calibration end to end.
+//!
+//! The true robot is the nominal table's [`Model`] with errors on its parameters (same names
+//! and layout as the fit uses, Hayati `beta` included), seen by a device at a random or given
+//! frame, measuring targets at random or given positions in the tip frame, with Gaussian noise
+//! of a given standard deviation on each device axis. Everything is drawn from one ChaCha8
+//! stream seeded by [`SimulationOptions::seed`], so a seed reproduces a data set exactly.
+
+use dh_core::{DhTable, JointSampler};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+use crate::data::{Measurements, Sample, Split};
+use crate::fit::CalibError;
+use crate::model::{Block, Field, Model, ModelOptions, Unit};
+
+/// Which parameter errors the true robot has.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum Errors {
+    /// The nominal table is the truth.
+    #[default]
+    None,
+    /// Every DH row parameter (`a`, `alpha`, `d`, `theta`, `beta`) off by a uniform draw in
+    /// `±length` metres or `±angle` radians; base, tool and effects untouched.
+    Random {
+        /// Largest length error (metres).
+        length: f64,
+        /// Largest angle error (radians).
+        angle: f64,
+    },
+    /// Given errors by parameter name (see [`crate::model`]), in metres or radians.
+    Explicit(Vec<(String, f64)>),
+}
+
+/// How joint values are chosen.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum Mode {
+    /// [`SimulationOptions::poses`] random poses, uniform within the joint limits (continuous
+    /// joints within ±pi), the first one the zero pose.
+    #[default]
+    Random,
+    /// Circle-point analysis: each joint in turn sweeps `angles` values evenly over `arc`
+    /// (radians, metres for prismatic joints) centred on the home pose while the others rest at
+    /// home; `config` is `cpa:<joint>:<k>`.
+    Cpa {
+        /// Values per joint (at least 1).
+        angles: usize,
+        /// Width of the sweep.
+        arc: f64,
+        /// Home pose, one value per row; `None` is all zeros.
+        home: Option<Vec<f64>>,
+    },
+}
+
+/// Options of [`simulate`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimulationOptions {
+    /// Seed of the ChaCha8 stream.
+    pub seed: u64,
+    /// Number of poses in [`Mode::Random`].
+    pub poses: usize,
+    /// How poses are chosen.
+    pub mode: Mode,
+    /// Noise standard deviation on each device axis (metres).
+    pub sigma: f64,
+    /// Target positions in the tip frame; `None` draws `target_count` of them uniformly in
+    /// `±target_offset` per axis.
+    pub targets: Option<Vec<Vector3<f64>>>,
+    /// Number of random targets.
+    pub target_count: usize,
+    /// Half-width of the random target box (metres).
+    pub target_offset: f64,
+    /// `T_device_base`; `None` draws a random rotation and a position at `device_distance`
+    /// from the base origin.
+    pub device: Option<Isometry3<f64>>,
+    /// Distance of a random device from the base (metres); `None` is twice the table's size.
+    pub device_distance: Option<f64>,
+    /// Errors of the true robot.
+    pub errors: Errors,
+    /// Fraction of poses (the last ones) marked [`Split::Validation`].
+    pub validation_fraction: f64,
+    /// Measurements of each pose (at least 1); repeats share `config`, giving pure error.
+    pub repeats: usize,
+    /// Parametrisation of the truth (Hayati threshold decides which rows have `beta`).
+    pub model: ModelOptions,
+}
+
+impl Default for SimulationOptions {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            poses: 100,
+            mode: Mode::Random,
+            sigma: 0.0,
+            targets: None,
+            target_count: 1,
+            target_offset: 0.1,
+            device: None,
+            device_distance: None,
+            errors: Errors::None,
+            validation_fraction: 0.0,
+            repeats: 1,
+            model: ModelOptions::default(),
+        }
+    }
+}
+
+/// What the simulated data was generated from, for the CLI's side file and for tests.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Truth {
+    /// The true table (errors applied, `beta` folded as [`Model::table_at`] describes).
+    pub table: DhTable,
+    /// Tilts that could not be folded into `table` (name, radians).
+    pub unfolded: Vec<(String, f64)>,
+    /// True `T_device_base`.
+    pub device: Isometry3<f64>,
+    /// True target positions in the tip frame (metres).
+    pub targets: Vec<(String, Vector3<f64>)>,
+    /// The non-zero parameter errors, by name, in model order.
+    pub errors: Vec<(String, f64)>,
+    /// Noise standard deviation per axis (metres).
+    pub sigma: f64,
+}
+
+fn bad(what: &str, reason: String) -> CalibError {
+    CalibError::BadOption {
+        what: what.into(),
+        reason,
+    }
+}
+
+/// Simulates measurements of `nominal` with errors (see the module docs).
+///
+/// # Errors
+/// [`CalibError::BadOption`] for negative or non-finite sizes, no targets, or a home pose of
+/// the wrong length; [`CalibError::UnknownParameter`] for an explicit error that names no
+/// parameter; any error of [`Model::new`].
+pub fn simulate(
+    nominal: &DhTable,
+    options: &SimulationOptions,
+) -> Result<(Measurements, Truth), CalibError> {
+    let o = options;
+    for (what, v) in [
+        ("sigma", o.sigma),
+        ("target offset", o.target_offset),
+        ("validation fraction", o.validation_fraction),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad(
+                what,
+                format!("expected a finite value >= 0, found {v}"),
+            ));
+        }
+    }
+    if o.validation_fraction > 1.0 {
+        return Err(bad(
+            "validation fraction",
+            format!(
+                "expected a value in [0, 1], found {}",
+                o.validation_fraction
+            ),
+        ));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
+    let n = nominal.rows.len();
+    let size = nominal.size();
+
+    let target_pos: Vec<Vector3<f64>> = match &o.targets {
+        Some(t) => t.clone(),
+        None => (0..o.target_count)
+            .map(|_| Vector3::from_fn(|_, _| rng.random_range(-1.0..=1.0) * o.target_offset))
+            .collect(),
+    };
+    if target_pos.is_empty() {
+        return Err(bad("targets", "expected at least one target".into()));
+    }
+    let names: Vec<String> = (1..=target_pos.len()).map(|k| format!("t{k}")).collect();
+
+    let device = match o.device {
+        Some(d) => d,
+        None => {
+            let dist = o.device_distance.unwrap_or(2.0 * size);
+            if !(dist.is_finite() && dist >= 0.0) {
+                return Err(bad(
+                    "device distance",
+                    format!("expected a finite value >= 0, found {dist}"),
+                ));
+            }
+            random_pose(&mut rng, dist)
+        }
+    };
+
+    let mut model = Model::new(nominal, &names, &o.model)?;
+    model.set_device(&device);
+    for (k, t) in target_pos.iter().enumerate() {
+        model.set_target(k, *t);
+    }
+    let mut x = vec![0.0; model.parameter_count()];
+    match &o.errors {
+        Errors::None => {}
+        Errors::Random { length, angle } => {
+            for (c, p) in model.parameters().iter().enumerate() {
+                if matches!(p.block, Block::Joint(_)) && !matches!(p.field, Field::Effect(_)) {
+                    let m = match p.unit {
+                        Unit::Angle => *angle,
+                        _ => *length,
+                    };
+                    x[c] = rng.random_range(-1.0..=1.0) * m;
+                }
+            }
+        }
+        Errors::Explicit(list) => {
+            for (name, v) in list {
+                let c = model
+                    .index_of(name)
+                    .ok_or_else(|| CalibError::UnknownParameter { name: name.clone() })?;
+                x[c] = *v;
+            }
+        }
+    }
+
+    // Joint values and the config of each pose.
+    let mut poses: Vec<(Vec<f64>, String)> = Vec::new();
+    match &o.mode {
+        Mode::Random => {
+            let mut sampler = JointSampler::new(&nominal.rows, size, rng.random());
+            let mut q = Vec::with_capacity(n);
+            for i in 0..o.poses {
+                sampler.next_into(&mut q);
+                poses.push((q.clone(), format!("p{i}")));
+            }
+        }
+        Mode::Cpa { angles, arc, home } => {
+            let home = home.clone().unwrap_or_else(|| vec![0.0; n]);
+            if home.len() != n {
+                return Err(bad(
+                    "home pose",
+                    format!("expected {n} joint values, found {}", home.len()),
+                ));
+            }
+            if !arc.is_finite() {
+                return Err(bad("arc", format!("expected a finite value, found {arc}")));
+            }
+            for (j, row) in nominal.rows.iter().enumerate() {
+                for k in 0..*angles {
+                    let f = if *angles > 1 {
+                        k as f64 / (*angles - 1) as f64 - 0.5
+                    } else {
+                        0.0
+                    };
+                    let mut q = home.clone();
+                    q[j] += arc * f;
+                    poses.push((q, format!("cpa:{}:{k}", row.name)));
+                }
+            }
+        }
+    }
+    let n_val = (o.validation_fraction * poses.len() as f64).round() as usize;
+    let first_val = poses.len() - n_val.min(poses.len());
+    let mut samples = Vec::with_capacity(poses.len() * target_pos.len() * o.repeats.max(1));
+    for (i, (q, config)) in poses.iter().enumerate() {
+        let split = if i >= first_val {
+            Split::Validation
+        } else {
+            Split::Calibration
+        };
+        for _ in 0..o.repeats.max(1) {
+            for k in 0..target_pos.len() {
+                let p = model.point(&x, q, k);
+                let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * o.sigma);
+                samples.push(Sample {
+                    q: q.clone(),
+                    target: k,
+                    point: p + noise,
+                    sigma: Some(Vector3::repeat(o.sigma)),
+                    config: Some(config.clone()),
+                    split,
+                    line: 0,
+                });
+            }
+        }
+    }
+    let folded = model.table_at(&x);
+    let errors = model
+        .parameters()
+        .iter()
+        .zip(&x)
+        .filter(|(_, v)| **v != 0.0)
+        .map(|(p, v)| (p.name.clone(), *v))
+        .collect();
+    let data = Measurements {
+        joint_names: nominal.rows.iter().map(|r| r.name.clone()).collect(),
+        targets: names.clone(),
+        samples,
+    };
+    let truth = Truth {
+        table: folded.table,
+        unfolded: folded.unfolded,
+        device,
+        targets: names.into_iter().zip(target_pos).collect(),
+        errors,
+        sigma: o.sigma,
+    };
+    Ok((data, truth))
+}
+
+/// A uniformly random rotation and a position uniformly on the sphere of radius `distance`.
+fn random_pose(rng: &mut ChaCha8Rng, distance: f64) -> Isometry3<f64> {
+    let mut g = || rng.sample::<f64, _>(StandardNormal);
+    let (w, i, j, k) = (g(), g(), g(), g());
+    let rot = UnitQuaternion::from_quaternion(Quaternion::new(w, i, j, k));
+    let dir = Vector3::new(g(), g(), g());
+    let dir = dir.try_normalize(1e-12).unwrap_or_else(Vector3::x);
+    Isometry3::from_parts(Translation3::from(dir * distance), rot)
+}
