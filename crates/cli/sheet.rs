@@ -21,7 +21,7 @@ use dh_core::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
-use crate::units::{clean, clean_angle, AngleUnit, LengthUnit};
+use crate::units::{AngleUnit, LengthUnit};
 
 /// A pose as URDF writes it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -372,22 +372,20 @@ impl SheetDoc {
 
     /// A sheet of `table` in the given units (no extraction facts attached).
     pub fn from_table(table: &DhTable, length: LengthUnit, angle: AngleUnit) -> SheetDoc {
-        let (lu, au) = (length.metres(), angle.radians());
         let pose = |p: &Isometry3<f64>| {
             let (xyz, rpy) = to_xyz_rpy(p);
             PoseDoc {
-                xyz: xyz.map(|v| clean(v) / lu),
-                rpy: rpy.map(|v| clean_angle(v) / au),
+                xyz: xyz.map(|v| length.from_si(v)),
+                rpy: rpy.map(|v| angle.from_si(v)),
             }
         };
         let joints = table
             .rows
             .iter()
             .map(|r| {
-                let limit_unit = if r.kind == JointKind::Prismatic {
-                    lu
-                } else {
-                    au
+                let limit = |v: f64| match r.kind {
+                    JointKind::Prismatic => length.from_si(v),
+                    JointKind::Revolute => angle.from_si_unwrapped(v),
                 };
                 JointDoc {
                     name: r.name.clone(),
@@ -395,16 +393,16 @@ impl SheetDoc {
                         JointKind::Revolute => JointType::Revolute,
                         JointKind::Prismatic => JointType::Prismatic,
                     },
-                    a: clean(r.a) / lu,
-                    alpha: clean_angle(r.alpha) / au,
-                    d: clean(r.d) / lu,
-                    theta: clean_angle(r.theta) / au,
-                    lower: r.limits.map(|l| l.lower / limit_unit),
-                    upper: r.limits.map(|l| l.upper / limit_unit),
+                    a: length.from_si(r.a),
+                    alpha: angle.from_si(r.alpha),
+                    d: length.from_si(r.d),
+                    theta: angle.from_si(r.theta),
+                    lower: r.limits.map(|l| limit(l.lower)),
+                    upper: r.limits.map(|l| limit(l.upper)),
                     mimic: r.mimic.as_ref().map(|m| MimicDoc {
                         joint: m.joint.clone(),
                         multiplier: m.multiplier,
-                        offset: m.offset / limit_unit,
+                        offset: limit(m.offset),
                     }),
                 }
             })

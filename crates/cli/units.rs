@@ -83,3 +83,55 @@ pub fn clean_angle(x: f64) -> f64 {
     }
     clean(a)
 }
+
+impl LengthUnit {
+    /// Decimals kept when printing a length in this unit: a picometre.
+    pub fn decimals(self) -> usize {
+        match self {
+            LengthUnit::M => 12,
+            LengthUnit::Mm => 9,
+        }
+    }
+    /// `metres` in this unit, rounded to a picometre so that outputs show `0.6`, not
+    /// `0.6000000000000001`.
+    pub fn from_si(self, metres: f64) -> f64 {
+        round_decimals(clean(metres) / self.metres(), self.decimals())
+    }
+}
+
+impl AngleUnit {
+    /// Decimals kept when printing an angle in this unit (1e-12 rad).
+    pub fn decimals(self) -> usize {
+        match self {
+            AngleUnit::Rad => 12,
+            AngleUnit::Deg => 10,
+        }
+    }
+    /// `radians` (wrapped to (-pi, pi]) in this unit, rounded like [`LengthUnit::from_si`];
+    /// within 1e-12 rad of a multiple of 45° it is that multiple exactly, so that pi/2 prints
+    /// as `1.5707963267948966` (or `90`), the value readers recognise.
+    pub fn from_si(self, radians: f64) -> f64 {
+        let a = clean_angle(radians);
+        let eighths = (a / std::f64::consts::FRAC_PI_4).round();
+        if (a - eighths * std::f64::consts::FRAC_PI_4).abs() < PRINT_NOISE * 10.0 {
+            return match self {
+                AngleUnit::Rad => eighths * std::f64::consts::FRAC_PI_4,
+                AngleUnit::Deg => eighths * 45.0,
+            };
+        }
+        round_decimals(a / self.radians(), self.decimals())
+    }
+    /// `radians` in this unit without wrapping (joint limits may exceed pi).
+    pub fn from_si_unwrapped(self, radians: f64) -> f64 {
+        round_decimals(clean(radians) / self.radians(), self.decimals())
+    }
+}
+
+/// `x` rounded to `decimals` decimal places (through decimal text, so the result is the double
+/// nearest the rounded decimal and prints in its shortest form).
+pub fn round_decimals(x: f64, decimals: usize) -> f64 {
+    if !x.is_finite() {
+        return x;
+    }
+    format!("{x:.decimals$}").parse().unwrap_or(x)
+}

@@ -1,1 +1,5 @@
+//! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
+mod common;
+mod corpus;
+mod extract;

@@ -8,7 +8,7 @@ use crate::error::Outcome;
 use crate::input::{display_name, read_robot};
 use crate::render::{render_sheet, Format};
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc, VerificationDoc};
-use crate::units::{clean, AngleUnit, LengthUnit};
+use crate::units::{AngleUnit, LengthUnit};
 
 /// Everything `extract` needs.
 #[derive(Clone, Debug)]
@@ -78,7 +78,6 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
     let passed = deviation.max_position_error <= extraction.bound.position
         && deviation.max_orientation_error <= extraction.bound.orientation;
 
-    let (lu, au) = (args.length_unit.metres(), args.angle_unit.radians());
     let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
     sheet.robot = Some(model.robot_name().to_string());
     sheet.base_link = Some(chain.base().to_string());
@@ -94,8 +93,8 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
                     ex_rows[p.first + 1].name.clone(),
                 ],
                 relation: p.geometry.relation.to_string(),
-                angle: clean(p.geometry.angle) / au,
-                distance: clean(p.geometry.distance) / lu,
+                angle: args.angle_unit.from_si_unwrapped(p.geometry.angle),
+                distance: args.length_unit.from_si(p.geometry.distance),
             })
             .collect(),
     );

@@ -81,6 +81,9 @@ pub enum Warning {
         position_cost: f64,
         /// Largest orientation change (radians; a bound).
         orientation_cost: f64,
+        /// The axis of `first` was itself snapped, and the deviation is measured from the
+        /// table's version of it.
+        after_snap: bool,
     },
     /// A pair within the linear tolerance of intersecting was treated as intersecting.
     SnappedIntersecting {
@@ -122,11 +125,17 @@ impl fmt::Display for Warning {
                 tolerance,
                 position_cost,
                 orientation_cost,
+                after_snap,
             } => write!(
                 f,
                 "axes of '{first}' and '{second}' are {angle_deviation:.3e} rad from {relation} \
-                 (angular tolerance {tolerance:.1e} rad): treated as {relation}; FK cost of \
-                 snapping at most {position_cost:.3e} m, {orientation_cost:.3e} rad"
+                 (angular tolerance {tolerance:.1e} rad){}: treated as {relation}; FK cost of \
+                 snapping at most {position_cost:.3e} m, {orientation_cost:.3e} rad",
+                if *after_snap {
+                    format!(" measured from the snapped axis of '{first}'")
+                } else {
+                    String::new()
+                }
             ),
             Warning::SnappedIntersecting {
                 first,
@@ -308,6 +317,11 @@ pub fn extract(
         position: (n as f64 + 1.0) * ROUNDING_ULPS * f64::EPSILON * size,
         orientation: (n as f64 + 1.0) * ROUNDING_ULPS * f64::EPSILON,
     };
+    let tilted: Vec<usize> = snaps
+        .iter()
+        .filter(|(_, (tilt, _))| *tilt > NOISE_RELATIVE)
+        .map(|(i, _)| *i)
+        .collect();
     for (i, (tilt, shift)) in snaps {
         let position_cost = 4.0 * tilt * size + 2.0 * shift;
         let orientation_cost = 2.0 * tilt;
@@ -324,6 +338,7 @@ pub fn extract(
                 tolerance: tol.angular,
                 position_cost,
                 orientation_cost,
+                after_snap: i > 0 && tilted.contains(&(i - 1)),
             });
         } else if shift > NOISE_RELATIVE * size {
             warnings.push(Warning::SnappedIntersecting {

@@ -1,0 +1,90 @@
+//! Helpers shared by the CLI tests.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+/// The workspace root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `../shared` beside the checkout, when it is there.
+pub fn shared() -> Option<PathBuf> {
+    let p = root().join("../shared");
+    p.is_dir().then_some(p)
+}
+
+/// Prints why a test that needs `../shared` does nothing, and says whether to skip.
+pub fn skip_without_shared(test: &str) -> Option<PathBuf> {
+    let s = shared();
+    if s.is_none() {
+        println!("{test}: skipped: ../shared (real URDFs and measurements written by others) is absent");
+    }
+    s
+}
+
+/// Runs the binary with `args` (and `stdin`), returning "exit: N", stdout and stderr as one
+/// text for a snapshot.
+pub fn run(args: &[&str], stdin: Option<&[u8]>) -> String {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(args)
+        .current_dir(root())
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn urdf-dh");
+    {
+        let mut pipe = child.stdin.take().expect("stdin");
+        if let Some(bytes) = stdin {
+            pipe.write_all(bytes).expect("write stdin");
+        }
+    }
+    let out = child.wait_with_output().expect("wait");
+    format!(
+        "exit: {}\n--- stdout\n{}--- stderr\n{}",
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+/// The exit code alone.
+pub fn exit_code(args: &[&str]) -> i32 {
+    Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(args)
+        .current_dir(root())
+        .stdin(Stdio::null())
+        .output()
+        .expect("run urdf-dh")
+        .status
+        .code()
+        .unwrap_or(-1)
+}
+
+/// Fixture robot ids (folders of `fixtures/robots`).
+pub fn fixture_robots() -> Vec<String> {
+    let mut ids: Vec<String> = std::fs::read_dir(root().join("fixtures/robots"))
+        .expect("fixtures/robots")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().join("robot.urdf").is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    ids.sort();
+    ids
+}
+
+/// A path relative to the workspace root, as a string.
+pub fn rel(p: &Path) -> String {
+    p.strip_prefix(root()).unwrap_or(p).to_string_lossy().into_owned()
+}
+
+/// Snapshot settings: floating-point noise in verification figures (machine-dependent last
+/// digits) is redacted; the tests assert those figures against their bounds separately.
+pub fn settings() -> insta::Settings {
+    let mut s = insta::Settings::clone_current();
+    s.add_filter(r"(max_position_error|max_orientation_error)(\W+)[0-9.e+-]+", "$1$2[noise]");
+    s.add_filter(r"(max position error|max orientation error) [0-9.e+-]+", "$1 [noise]");
+    s
+}
