@@ -1,7 +1,7 @@
 //! Helpers shared by the CLI tests.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
 /// The workspace root.
@@ -19,7 +19,9 @@ pub fn shared() -> Option<PathBuf> {
 pub fn skip_without_shared(test: &str) -> Option<PathBuf> {
     let s = shared();
     if s.is_none() {
-        println!("{test}: skipped: ../shared (real URDFs and measurements written by others) is absent");
+        println!(
+            "{test}: skipped: ../shared (real URDFs and measurements written by others) is absent"
+        );
     }
     s
 }
@@ -75,16 +77,17 @@ pub fn fixture_robots() -> Vec<String> {
     ids
 }
 
-/// A path relative to the workspace root, as a string.
-pub fn rel(p: &Path) -> String {
-    p.strip_prefix(root()).unwrap_or(p).to_string_lossy().into_owned()
-}
-
 /// Snapshot settings: floating-point noise in verification figures (machine-dependent last
 /// digits) is redacted; the tests assert those figures against their bounds separately.
 pub fn settings() -> insta::Settings {
     let mut s = insta::Settings::clone_current();
-    s.add_filter(r"(max_position_error|max_orientation_error)(\W+)[0-9.e+-]+", "$1$2[noise]");
-    s.add_filter(r"(max position error|max orientation error) [0-9.e+-]+", "$1 [noise]");
+    s.add_filter(
+        r"(max_position_error|max_orientation_error)(\W+)[0-9.e+-]+",
+        "$1$2[noise]",
+    );
+    s.add_filter(
+        r"(max position error|max orientation error) [0-9.e+-]+",
+        "$1 [noise]",
+    );
     s
 }

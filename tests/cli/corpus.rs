@@ -8,10 +8,21 @@ use crate::common::skip_without_shared;
 
 #[test]
 fn every_shared_urdf_extracts_with_fk_agreement() {
-    let Some(shared) = skip_without_shared("corpus") else { return };
-    let mut dirs: Vec<_> = std::fs::read_dir(shared.join("robots")).unwrap().filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.join("robot.urdf").is_file()).collect();
+    let Some(shared) = skip_without_shared("corpus") else {
+        return;
+    };
+    let mut dirs: Vec<_> = std::fs::read_dir(shared.join("robots"))
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.join("robot.urdf").is_file())
+        .collect();
     dirs.sort();
-    assert!(dirs.len() >= 40, "expected the shared corpus, found {} robots", dirs.len());
+    assert!(
+        dirs.len() >= 40,
+        "expected the shared corpus, found {} robots",
+        dirs.len()
+    );
     let mut chains = 0;
     let mut report = String::new();
     for dir in dirs {
@@ -20,16 +31,24 @@ fn every_shared_urdf_extracts_with_fk_agreement() {
         let model = UrdfModel::from_bytes(&text).unwrap_or_else(|e| panic!("{id}: {e}"));
         let root = model.root_link().to_string();
         for leaf in model.leaves() {
-            let Ok(chain) = model.chain(Some(&root), Some(leaf)) else { continue };
+            let Ok(chain) = model.chain(Some(&root), Some(leaf)) else {
+                continue;
+            };
             if chain.axes().is_empty() {
                 continue;
             }
             for convention in [Convention::Standard, Convention::Modified] {
-                let ex = extract(chain.axes(), &chain.tip_pose(), Tolerance::default(), convention)
-                    .unwrap_or_else(|e| panic!("{id} -> {leaf}: {e}"));
+                let ex = extract(
+                    chain.axes(),
+                    &chain.tip_pose(),
+                    Tolerance::default(),
+                    convention,
+                )
+                .unwrap_or_else(|e| panic!("{id} -> {leaf}: {e}"));
                 let dev = compare(&ex.table, |q| chain.fk(q), 200, 1).unwrap();
                 assert!(
-                    dev.max_position_error <= ex.bound.position && dev.max_orientation_error <= ex.bound.orientation,
+                    dev.max_position_error <= ex.bound.position
+                        && dev.max_orientation_error <= ex.bound.orientation,
                     "{id} -> {leaf} ({convention}): {dev:?} beyond {:?}",
                     ex.bound
                 );

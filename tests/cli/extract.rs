@@ -6,14 +6,28 @@ use crate::common::{exit_code, fixture_robots, run, settings};
 fn every_fixture_robot_extracts_and_verifies() {
     let _snap = settings().bind_to_scope();
     let robots = fixture_robots();
-    assert!(robots.len() >= 7, "expected at least 7 fixture robots, found {robots:?}");
+    assert!(
+        robots.len() >= 7,
+        "expected at least 7 fixture robots, found {robots:?}"
+    );
     for id in robots {
         let path = format!("fixtures/robots/{id}/robot.urdf");
         insta::with_settings!({snapshot_suffix => id.clone()}, {
             insta::assert_snapshot!("extract_yaml", run(&["extract", &path, "--format", "yaml"], None));
         });
         for convention in ["standard", "modified"] {
-            assert_eq!(exit_code(&["extract", &path, "--convention", convention, "--samples", "300"]), 0, "{id} {convention}");
+            assert_eq!(
+                exit_code(&[
+                    "extract",
+                    &path,
+                    "--convention",
+                    convention,
+                    "--samples",
+                    "300"
+                ]),
+                0,
+                "{id} {convention}"
+            );
         }
     }
 }
@@ -21,7 +35,15 @@ fn every_fixture_robot_extracts_and_verifies() {
 #[test]
 fn text_is_the_default_format() {
     let _snap = settings().bind_to_scope();
-    insta::assert_snapshot!(run(&["extract", "fixtures/robots/ur5/robot.urdf", "--angle-unit", "deg"], None));
+    insta::assert_snapshot!(run(
+        &[
+            "extract",
+            "fixtures/robots/ur5/robot.urdf",
+            "--angle-unit",
+            "deg"
+        ],
+        None
+    ));
 }
 
 #[test]
@@ -40,7 +62,9 @@ fn every_format_of_the_panda_in_craig_convention() {
 #[test]
 fn reads_standard_input() {
     let _snap = settings().bind_to_scope();
-    let urdf = std::fs::read(crate::common::root().join("fixtures/robots/scara_prismatic/robot.urdf")).unwrap();
+    let urdf =
+        std::fs::read(crate::common::root().join("fixtures/robots/scara_prismatic/robot.urdf"))
+            .unwrap();
     insta::assert_snapshot!(run(&["extract", "-", "--format", "yaml"], Some(&urdf)));
 }
 
@@ -49,7 +73,12 @@ fn json_and_yaml_carry_the_same_keys() {
     let _snap = settings().bind_to_scope();
     let get = |format: &str| {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-            .args(["extract", "fixtures/robots/kuka_kr5_arc/robot.urdf", "--format", format])
+            .args([
+                "extract",
+                "fixtures/robots/kuka_kr5_arc/robot.urdf",
+                "--format",
+                format,
+            ])
             .current_dir(crate::common::root())
             .output()
             .unwrap();
@@ -58,7 +87,17 @@ fn json_and_yaml_carry_the_same_keys() {
     let yaml: serde_json::Value = serde_yaml::from_str(&get("yaml")).unwrap();
     let json: serde_json::Value = serde_json::from_str(&get("json")).unwrap();
     assert!(same(&yaml, &json), "{yaml}\n{json}");
-    for key in ["convention", "length_unit", "angle_unit", "base", "tool", "joints", "tolerances", "warnings", "verification"] {
+    for key in [
+        "convention",
+        "length_unit",
+        "angle_unit",
+        "base",
+        "tool",
+        "joints",
+        "tolerances",
+        "warnings",
+        "verification",
+    ] {
         assert!(json.get(key).is_some(), "missing key {key}");
     }
 }
@@ -83,24 +122,69 @@ fn rounded_half_pi_gives_a_sane_table_and_a_warning() {
   <joint name="flange" type="fixed"><parent link="l4"/><child link="tip"/>
     <origin xyz="0.1 0 0" rpy="0 1.5708 0"/></joint>
 </robot>"#;
-    insta::assert_snapshot!(run(&["extract", "-", "--angle-unit", "deg"], Some(urdf.as_bytes())));
+    insta::assert_snapshot!(run(
+        &["extract", "-", "--angle-unit", "deg"],
+        Some(urdf.as_bytes())
+    ));
     // Beyond the tolerance the exact, ill-conditioned table comes with a loud warning.
     insta::assert_snapshot!(
         "rounded_half_pi_exact",
-        run(&["extract", "-", "--angular-tol", "1e-6", "--format", "yaml"], Some(urdf.as_bytes()))
+        run(
+            &["extract", "-", "--angular-tol", "1e-6", "--format", "yaml"],
+            Some(urdf.as_bytes())
+        )
     );
 }
 
 #[test]
 fn bad_input_exits_2_with_a_message() {
     let _snap = settings().bind_to_scope();
-    insta::assert_snapshot!("missing_file", run(&["extract", "fixtures/robots/nope.urdf"], None));
+    insta::assert_snapshot!(
+        "missing_file",
+        run(&["extract", "fixtures/robots/nope.urdf"], None)
+    );
     insta::assert_snapshot!("not_xml", run(&["extract", "-"], Some(b"this is not xml")));
     insta::assert_snapshot!("empty", run(&["extract", "-"], Some(b"")));
-    insta::assert_snapshot!("unknown_tip", run(&["extract", "fixtures/robots/ur5/robot.urdf", "--tip", "wrist"], None));
-    insta::assert_snapshot!("bad_tolerance", run(&["extract", "fixtures/robots/ur5/robot.urdf", "--linear-tol", "-1"], None));
-    insta::assert_snapshot!("bad_format", run(&["extract", "fixtures/robots/ur5/robot.urdf", "--format", "xml"], None));
-    insta::assert_snapshot!("xacro_without_xacro", run(&["extract", "robot.urdf.xacro"], None));
+    insta::assert_snapshot!(
+        "unknown_tip",
+        run(
+            &[
+                "extract",
+                "fixtures/robots/ur5/robot.urdf",
+                "--tip",
+                "wrist"
+            ],
+            None
+        )
+    );
+    insta::assert_snapshot!(
+        "bad_tolerance",
+        run(
+            &[
+                "extract",
+                "fixtures/robots/ur5/robot.urdf",
+                "--linear-tol",
+                "-1"
+            ],
+            None
+        )
+    );
+    insta::assert_snapshot!(
+        "bad_format",
+        run(
+            &[
+                "extract",
+                "fixtures/robots/ur5/robot.urdf",
+                "--format",
+                "xml"
+            ],
+            None
+        )
+    );
+    insta::assert_snapshot!(
+        "xacro_without_xacro",
+        run(&["extract", "robot.urdf.xacro"], None)
+    );
 }
 
 /// Equal up to the last digit of floats (YAML and JSON print shortest forms independently).
@@ -112,7 +196,9 @@ fn same(a: &serde_json::Value, b: &serde_json::Value) -> bool {
             (x - y).abs() <= 1e-15 * x.abs().max(y.abs()).max(1e-300)
         }
         (Array(x), Array(y)) => x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same(x, y)),
-        (Object(x), Object(y)) => x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w))),
+        (Object(x), Object(y)) => {
+            x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
+        }
         _ => a == b,
     }
 }

@@ -259,14 +259,13 @@ impl DhTable {
             Convention::Standard => {
                 let first = &self.rows[0];
                 base = base * rot_x(first.alpha) * trans_x(first.a);
-                for i in 0..n {
-                    let (a, alpha) = if i + 1 < n {
-                        (self.rows[i + 1].a, self.rows[i + 1].alpha)
-                    } else {
-                        (0.0, 0.0)
-                    };
-                    rows[i].a = a;
-                    rows[i].alpha = alpha;
+                for (i, row) in rows.iter_mut().enumerate() {
+                    let (a, alpha) = self
+                        .rows
+                        .get(i + 1)
+                        .map_or((0.0, 0.0), |next| (next.a, next.alpha));
+                    row.a = a;
+                    row.alpha = alpha;
                 }
             }
         }
