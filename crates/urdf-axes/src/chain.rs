@@ -1,0 +1,373 @@
+//! A serial chain of a URDF: its joint axis lines at `q = 0` and its forward kinematics.
+
+use dh_core::pose::from_xyz_rpy;
+use dh_core::{CoreError, JointAxis, JointKind, Limits, Line, Mimic};
+use nalgebra::{Isometry3, Unit, UnitQuaternion, Vector3};
+use urdf_rs::JointType;
+
+use crate::model::UrdfModel;
+use crate::UrdfError;
+
+/// A moving joint of a [`Chain`] that follows another joint (URDF `<mimic>`):
+/// `q = multiplier · q_driver + offset`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MimicJoint {
+    /// The following joint.
+    pub joint: String,
+    /// The joint it follows.
+    pub driver: String,
+    /// Gear ratio (URDF default 1).
+    pub multiplier: f64,
+    /// Offset in the follower's unit, radians or metres (URDF default 0).
+    pub offset: f64,
+    /// Whether the driver is itself a moving joint of the chain; if not, the follower's value
+    /// is free as far as the chain can tell.
+    pub driver_in_chain: bool,
+}
+
+/// One moving joint with every fixed transform since the previous one folded in.
+#[derive(Clone, Debug)]
+struct Segment {
+    /// Pose of this joint's frame in the previous moving joint's child link frame (the base
+    /// link frame for the first).
+    origin: Isometry3<f64>,
+    /// Unit axis in the joint frame.
+    axis: Unit<Vector3<f64>>,
+    kind: JointKind,
+}
+
+/// A serial chain of a URDF from a base link down to a tip link.
+///
+/// Frames and units: every pose and line is in the base link's frame; lengths in metres,
+/// angles in radians. Joint values are one per moving joint (revolute, continuous,
+/// prismatic), base to tip, in the order of [`Chain::axes`]; mimic joints take their own value
+/// like any other.
+#[derive(Clone, Debug)]
+pub struct Chain {
+    base: String,
+    tip: String,
+    axes: Vec<JointAxis>,
+    segments: Vec<Segment>,
+    /// Tip link frame in the last moving joint's child link frame.
+    tail: Isometry3<f64>,
+    tip_pose: Isometry3<f64>,
+    folded_fixed: Vec<String>,
+    joints: Vec<String>,
+    mimics: Vec<MimicJoint>,
+}
+
+/// The unit direction of a URDF axis, `None` for a zero vector. Divides by the largest
+/// component first so that huge finite components cannot overflow the norm.
+pub(crate) fn unit_axis(xyz: [f64; 3]) -> Option<Unit<Vector3<f64>>> {
+    let v = Vector3::from(xyz);
+    let scale = v.amax();
+    if scale > 0.0 && scale.is_finite() {
+        Some(Unit::new_normalize(v / scale))
+    } else {
+        None
+    }
+}
+
+impl Chain {
+    /// Builds the chain along `path` (joint indices from `base` down to `tip`).
+    pub(crate) fn build(
+        model: &UrdfModel,
+        base: usize,
+        tip: usize,
+        path: &[usize],
+    ) -> Result<Chain, UrdfError> {
+        let base_name = model.link_name(base).to_owned();
+        let tip_name = model.link_name(tip).to_owned();
+        let mut pose = Isometry3::identity();
+        let mut pending = Isometry3::identity();
+        let mut axes = Vec::new();
+        let mut segments = Vec::new();
+        let mut folded_fixed = Vec::new();
+        let mut joints = Vec::with_capacity(path.len());
+        let mut mimics = Vec::new();
+        let mut on_path = vec![false; model.robot.joints.len()];
+        for &k in path {
+            if let Some(slot) = on_path.get_mut(k) {
+                *slot = true;
+            }
+        }
+        let in_path = |driver: &str| {
+            model.joint_index_of(driver).is_some_and(|d| {
+                on_path.get(d).copied().unwrap_or(false)
+                    && model.robot.joints.get(d).is_some_and(|j| {
+                        matches!(
+                            j.joint_type,
+                            JointType::Revolute | JointType::Continuous | JointType::Prismatic
+                        )
+                    })
+            })
+        };
+        for &k in path {
+            let Some(joint) = model.robot.joints.get(k) else {
+                continue;
+            };
+            let line = model.joint_sources.get(k).and_then(|s| s.line);
+            joints.push(joint.name.clone());
+            let origin = from_xyz_rpy(joint.origin.xyz.0, joint.origin.rpy.0);
+            let kind = match joint.joint_type {
+                JointType::Fixed => {
+                    pending *= origin;
+                    pose *= origin;
+                    folded_fixed.push(joint.name.clone());
+                    continue;
+                }
+                JointType::Revolute | JointType::Continuous => JointKind::Revolute,
+                JointType::Prismatic => JointKind::Prismatic,
+                JointType::Floating | JointType::Planar => {
+                    return Err(UrdfError::JointTypeInChain {
+                        joint: joint.name.clone(),
+                        found: if joint.joint_type == JointType::Floating {
+                            "floating"
+                        } else {
+                            "planar"
+                        },
+                        base: base_name,
+                        tip: tip_name,
+                        line,
+                    });
+                }
+                JointType::Spherical => {
+                    return Err(UrdfError::UnsupportedJointType {
+                        joint: joint.name.clone(),
+                        found: "spherical".into(),
+                        line,
+                    })
+                }
+            };
+            let axis = unit_axis(joint.axis.xyz.0).ok_or_else(|| UrdfError::ZeroAxis {
+                joint: joint.name.clone(),
+                axis: joint.axis.xyz.0,
+                line,
+            })?;
+            let frame = pose * origin;
+            let line_in_base = Line::through(frame.translation.vector, frame.rotation * *axis)
+                .map_err(|cause| UrdfError::Geometry {
+                    joint: joint.name.clone(),
+                    cause,
+                })?;
+            let limits = match joint.joint_type {
+                JointType::Continuous => None,
+                _ => {
+                    let (lower, upper) = (joint.limit.lower, joint.limit.upper);
+                    // Only URDF 1.2 lets infinities through validation: "no limit".
+                    (lower.is_finite() && upper.is_finite()).then_some(Limits { lower, upper })
+                }
+            };
+            let mimic = joint.mimic.as_ref().map(|m| Mimic {
+                joint: m.joint.clone(),
+                multiplier: m.multiplier.unwrap_or(1.0),
+                offset: m.offset.unwrap_or(0.0),
+            });
+            if let Some(m) = &mimic {
+                mimics.push(MimicJoint {
+                    joint: joint.name.clone(),
+                    driver: m.joint.clone(),
+                    multiplier: m.multiplier,
+                    offset: m.offset,
+                    driver_in_chain: in_path(&m.joint),
+                });
+            }
+            axes.push(JointAxis {
+                name: joint.name.clone(),
+                kind,
+                line: line_in_base,
+                limits,
+                mimic,
+            });
+            segments.push(Segment {
+                origin: pending * origin,
+                axis,
+                kind,
+            });
+            pending = Isometry3::identity();
+            pose = frame;
+        }
+        if axes.is_empty() {
+            return Err(UrdfError::NoMovingJoint {
+                base: base_name,
+                tip: tip_name,
+            });
+        }
+        let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+            && pose.rotation.coords.iter().all(|v| v.is_finite());
+        if !finite {
+            return Err(UrdfError::Geometry {
+                joint: joints.last().cloned().unwrap_or_default(),
+                cause: CoreError::NonFinite {
+                    what: format!("pose of tip link '{tip_name}'"),
+                    value: f64::INFINITY,
+                },
+            });
+        }
+        Ok(Chain {
+            base: base_name,
+            tip: tip_name,
+            axes,
+            segments,
+            tail: pending,
+            tip_pose: pose,
+            folded_fixed,
+            joints,
+            mimics,
+        })
+    }
+
+    /// The base link: the frame of every pose and line of the chain.
+    pub fn base(&self) -> &str {
+        &self.base
+    }
+
+    /// The tip link.
+    pub fn tip(&self) -> &str {
+        &self.tip
+    }
+
+    /// The moving joints (revolute, continuous, prismatic) in chain order, as axis lines in the
+    /// base link frame at `q = 0` (metres).
+    ///
+    /// The line of a joint passes through the origin of its joint frame (parent link pose times
+    /// joint origin) along the joint frame's rotation applied to the normalised URDF axis, so
+    /// its direction is the joint's positive sense. Revolute joints carry their limits
+    /// (radians), continuous ones none, prismatic ones theirs (metres); under URDF 1.2 an
+    /// omitted (infinite) limit gives `None`. Mimic joints carry their `<mimic>` with the URDF
+    /// defaults (multiplier 1, offset 0) filled in.
+    pub fn axes(&self) -> &[JointAxis] {
+        &self.axes
+    }
+
+    /// The tip link's pose in the base link frame at `q = 0` (metres, unit quaternion).
+    pub fn tip_pose(&self) -> Isometry3<f64> {
+        self.tip_pose
+    }
+
+    /// URDF forward kinematics, the oracle: the tip link's pose in the base link frame.
+    ///
+    /// `q` holds one value per moving joint in the order of [`Chain::axes`] (radians for
+    /// revolute and continuous joints, metres for prismatic ones); mimic joints take the value
+    /// given, not one computed from their driver. Each joint contributes
+    /// `origin(xyz, rpy) · motion(q)`, with `motion` the rotation by `q` about the normalised
+    /// axis or the translation `q · axis` (ROS URDF joint specification); fixed joints are
+    /// precomputed into their neighbours, and the call allocates nothing.
+    ///
+    /// A missing value reads as 0 and extra values are ignored; [`Chain::try_fk`] refuses both.
+    pub fn fk(&self, q: &[f64]) -> Isometry3<f64> {
+        let mut t = Isometry3::identity();
+        for (i, seg) in self.segments.iter().enumerate() {
+            let qi = q.get(i).copied().unwrap_or(0.0);
+            t *= seg.origin;
+            apply_motion(&mut t, seg, qi);
+        }
+        t * self.tail
+    }
+
+    /// [`Chain::fk`], refusing a `q` of the wrong length.
+    ///
+    /// # Errors
+    /// [`UrdfError::JointCount`] when `q.len()` differs from the number of moving joints.
+    pub fn try_fk(&self, q: &[f64]) -> Result<Isometry3<f64>, UrdfError> {
+        self.check_len(q)?;
+        Ok(self.fk(q))
+    }
+
+    /// Axis lines of the moving joints in the base link frame at joint values `q` (same order
+    /// and units as [`Chain::fk`]); at `q = 0` these are the lines of [`Chain::axes`].
+    ///
+    /// # Errors
+    /// [`UrdfError::JointCount`] when `q` has the wrong length; [`UrdfError::Geometry`] when a
+    /// value is NaN or infinite.
+    pub fn axis_lines(&self, q: &[f64]) -> Result<Vec<Line>, UrdfError> {
+        self.check_len(q)?;
+        let mut t = Isometry3::identity();
+        let mut lines = Vec::with_capacity(self.segments.len());
+        for ((seg, &qi), ax) in self.segments.iter().zip(q).zip(&self.axes) {
+            t *= seg.origin;
+            let line =
+                Line::through(t.translation.vector, t.rotation * *seg.axis).map_err(|cause| {
+                    UrdfError::Geometry {
+                        joint: ax.name.clone(),
+                        cause,
+                    }
+                })?;
+            lines.push(line);
+            apply_motion(&mut t, seg, qi);
+        }
+        Ok(lines)
+    }
+
+    /// Names of the fixed joints between base and tip, folded into their neighbours, in chain
+    /// order.
+    pub fn folded_fixed(&self) -> &[String] {
+        &self.folded_fixed
+    }
+
+    /// Names of every joint between base and tip (fixed ones included), in chain order.
+    pub fn joints(&self) -> &[String] {
+        &self.joints
+    }
+
+    /// The moving joints of the chain that follow another joint, in chain order.
+    pub fn mimics(&self) -> &[MimicJoint] {
+        &self.mimics
+    }
+
+    fn check_len(&self, q: &[f64]) -> Result<(), UrdfError> {
+        if q.len() == self.segments.len() {
+            Ok(())
+        } else {
+            Err(UrdfError::JointCount {
+                expected: self.segments.len(),
+                found: q.len(),
+            })
+        }
+    }
+}
+
+/// `t ← t · motion(q)` without building the motion as an isometry.
+fn apply_motion(t: &mut Isometry3<f64>, seg: &Segment, q: f64) {
+    match seg.kind {
+        JointKind::Revolute => t.rotation *= UnitQuaternion::from_axis_angle(&seg.axis, q),
+        JointKind::Prismatic => t.translation.vector += t.rotation * (seg.axis.into_inner() * q),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn unit_axis_survives_huge_and_refuses_zero() {
+        assert!(unit_axis([0.0; 3]).is_none());
+        let u = unit_axis([1e300, 1e300, 0.0]).unwrap();
+        assert_relative_eq!(u.x, std::f64::consts::FRAC_1_SQRT_2, epsilon = 1e-15);
+        let u = unit_axis([0.0, 0.0, -3.0]).unwrap();
+        assert_relative_eq!(*u, -Vector3::z(), epsilon = 1e-15);
+    }
+
+    #[test]
+    fn motion_matches_the_isometry_product() {
+        let t0 = Isometry3::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.4, -0.5, 0.6));
+        let axis = Unit::new_normalize(Vector3::new(1.0, 2.0, -1.0));
+        for kind in [JointKind::Revolute, JointKind::Prismatic] {
+            let seg = Segment {
+                origin: Isometry3::identity(),
+                axis,
+                kind,
+            };
+            let mut t = t0;
+            apply_motion(&mut t, &seg, 0.7);
+            let motion = match kind {
+                JointKind::Revolute => Isometry3::rotation(*axis * 0.7),
+                JointKind::Prismatic => {
+                    Isometry3::translation(axis.x * 0.7, axis.y * 0.7, axis.z * 0.7)
+                }
+            };
+            assert_relative_eq!(t, t0 * motion, epsilon = 1e-14);
+        }
+    }
+}

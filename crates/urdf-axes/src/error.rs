@@ -1,0 +1,383 @@
+use std::fmt;
+
+use thiserror::Error;
+
+/// Everything that can be wrong with a URDF or with the chain asked of it.
+///
+/// Messages are lowercase, say "expected X, found Y", and name the joint or link and, when it is
+/// known, the 1-based line of the source text where that joint or link (or the offending child
+/// element) starts.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum UrdfError {
+    /// The bytes are not UTF-8.
+    #[error("expected utf-8 text, found an invalid byte at offset {offset} (line {line})")]
+    NotUtf8 {
+        /// Byte offset of the first invalid byte.
+        offset: usize,
+        /// 1-based line of that byte.
+        line: usize,
+    },
+    /// The document declares entities. Refused before parsing: nested entity expansion (the
+    /// "billion laughs" document) can exhaust memory, and no URDF needs entities.
+    #[error(
+        "entity declaration (line {line}): expected a urdf without <!ENTITY declarations, \
+         found one (refused: entity expansion can exhaust memory)"
+    )]
+    EntityDeclaration {
+        /// 1-based line of the `<!ENTITY`.
+        line: usize,
+    },
+    /// Not XML, truncated XML, an empty document, a root element other than `<robot>`, a
+    /// missing required attribute or element, or a malformed number.
+    #[error("urdf parse error{}: {message}", at(.line))]
+    Parse {
+        /// What was expected and what was found.
+        message: String,
+        /// 1-based line, when it could be found.
+        line: Option<usize>,
+    },
+    /// The robot has no `<link>`.
+    #[error("robot '{robot}': expected at least one <link>, found none")]
+    NoLinks {
+        /// Robot name.
+        robot: String,
+    },
+    /// Two links share a name.
+    #[error(
+        "link '{link}'{}: expected unique link names, found '{link}' defined again{}",
+        at(.line),
+        first(.first_line)
+    )]
+    DuplicateLink {
+        /// The repeated name.
+        link: String,
+        /// Line of the second definition.
+        line: Option<usize>,
+        /// Line of the first definition.
+        first_line: Option<usize>,
+    },
+    /// Two joints share a name.
+    #[error(
+        "joint '{joint}'{}: expected unique joint names, found '{joint}' defined again{}",
+        at(.line),
+        first(.first_line)
+    )]
+    DuplicateJoint {
+        /// The repeated name.
+        joint: String,
+        /// Line of the second definition.
+        line: Option<usize>,
+        /// Line of the first definition.
+        first_line: Option<usize>,
+    },
+    /// A joint names a parent or child link that the URDF does not define.
+    #[error(
+        "joint '{joint}'{}: expected an existing {role} link, found '{link}', which no <link> defines",
+        at(.line)
+    )]
+    MissingLink {
+        /// The joint.
+        joint: String,
+        /// `parent` or `child`.
+        role: &'static str,
+        /// The undefined link name.
+        link: String,
+        /// Line of the joint (or of its `<parent>`/`<child>` element).
+        line: Option<usize>,
+    },
+    /// A link is the child of two joints.
+    #[error(
+        "link '{link}': expected one parent joint, found two: '{first}' and '{second}'{}",
+        at(.line)
+    )]
+    TwoParents {
+        /// The link.
+        link: String,
+        /// The first joint naming it as child.
+        first: String,
+        /// The second joint naming it as child.
+        second: String,
+        /// Line of the second joint.
+        line: Option<usize>,
+    },
+    /// The joints form a cycle (the URDF still has a root elsewhere).
+    #[error(
+        "joint '{joint}'{}: expected a tree of links, found a cycle {}",
+        at(.line),
+        cycle(.links)
+    )]
+    Cycle {
+        /// The links of the cycle, each the parent of the next, the first repeated at the end.
+        links: Vec<String>,
+        /// A joint of the cycle.
+        joint: String,
+        /// Line of that joint.
+        line: Option<usize>,
+    },
+    /// Every link is some joint's child, so there is no root (the joints form a cycle).
+    #[error(
+        "expected one root link (a link that is no joint's child), found none: the joints form a cycle {}",
+        cycle(.links)
+    )]
+    NoRoot {
+        /// The links of a cycle, as in [`UrdfError::Cycle`].
+        links: Vec<String>,
+    },
+    /// More than one link has no parent joint: the URDF is not one tree.
+    #[error(
+        "expected one root link (a link that is no joint's child), found {}: {}",
+        .roots.len(),
+        list(.roots)
+    )]
+    SeveralRoots {
+        /// The parentless links, in document order.
+        roots: Vec<String>,
+    },
+    /// A NaN or infinite number in an origin, axis, limit or mimic.
+    #[error("joint '{joint}'{}: {what}: expected a finite number, found {value}", at(.line))]
+    NonFinite {
+        /// The joint.
+        joint: String,
+        /// Which number: `origin xyz`, `origin rpy`, `axis xyz`, `limit lower`, ...
+        what: &'static str,
+        /// The value.
+        value: f64,
+        /// Line of the element holding it.
+        line: Option<usize>,
+    },
+    /// A moving joint's axis has zero length.
+    #[error(
+        "joint '{joint}'{}: axis xyz: expected a non-zero direction, found {} {} {}",
+        at(.line),
+        .axis[0],
+        .axis[1],
+        .axis[2]
+    )]
+    ZeroAxis {
+        /// The joint.
+        joint: String,
+        /// The axis as written.
+        axis: [f64; 3],
+        /// Line of the `<axis>` element.
+        line: Option<usize>,
+    },
+    /// A joint's lower limit is above its upper limit.
+    #[error(
+        "joint '{joint}'{}: limit: expected lower <= upper, found lower {lower} > upper {upper}",
+        at(.line)
+    )]
+    LimitsReversed {
+        /// The joint.
+        joint: String,
+        /// Lower limit (radians or metres).
+        lower: f64,
+        /// Upper limit (radians or metres).
+        upper: f64,
+        /// Line of the `<limit>` element.
+        line: Option<usize>,
+    },
+    /// A revolute or prismatic joint without `<limit>` (URDF requires one; only continuous
+    /// joints are unlimited).
+    #[error(
+        "joint '{joint}'{}: expected a <limit> element (required for {kind} joints; use type \
+         continuous for an unlimited revolute joint), found none",
+        at(.line)
+    )]
+    MissingLimit {
+        /// The joint.
+        joint: String,
+        /// `revolute` or `prismatic`.
+        kind: &'static str,
+        /// Line of the joint.
+        line: Option<usize>,
+    },
+    /// A joint type that is not URDF (urdf-rs's `spherical`, or an unknown word).
+    #[error(
+        "joint '{joint}'{}: expected type revolute, continuous, prismatic, fixed, floating or \
+         planar, found '{found}'",
+        at(.line)
+    )]
+    UnsupportedJointType {
+        /// The joint.
+        joint: String,
+        /// The type as written.
+        found: String,
+        /// Line of the joint.
+        line: Option<usize>,
+    },
+    /// A `<mimic>` names a joint the URDF does not define.
+    #[error(
+        "joint '{joint}'{}: mimic: expected an existing driver joint, found '{driver}', which no <joint> defines",
+        at(.line)
+    )]
+    UnknownMimicJoint {
+        /// The mimicking joint.
+        joint: String,
+        /// The undefined driver name.
+        driver: String,
+        /// Line of the `<mimic>` element.
+        line: Option<usize>,
+    },
+    /// A base or tip link name that the URDF does not define.
+    #[error(
+        "{role} link '{link}': expected a link of the urdf, found no such link{}",
+        suggest(.candidates)
+    )]
+    UnknownLink {
+        /// `base` or `tip`.
+        role: &'static str,
+        /// The name asked for.
+        link: String,
+        /// Close names (or every link, when there are few).
+        candidates: Vec<String>,
+    },
+    /// No tip was given and the base has several leaf links below it.
+    #[error(
+        "expected one leaf link below '{base}' to use as the tip, found {}: {} (choose one as the tip)",
+        .leaves.len(),
+        list(.leaves)
+    )]
+    SeveralLeaves {
+        /// The base link.
+        base: String,
+        /// The leaves below it, in document order.
+        leaves: Vec<String>,
+    },
+    /// The tip is not below the base.
+    #[error(
+        "tip link '{tip}' is not below base link '{base}': expected a chain of joints from \
+         '{base}' down to '{tip}', found none{}",
+        if *.reversed { " (the base is below the tip: swap them)" } else { "" }
+    )]
+    Disconnected {
+        /// The base link.
+        base: String,
+        /// The tip link.
+        tip: String,
+        /// The base is below the tip (the two were given the wrong way round).
+        reversed: bool,
+    },
+    /// A floating or planar joint between base and tip: neither has one axis line.
+    #[error(
+        "joint '{joint}'{}: on the chain from '{base}' to '{tip}', expected a revolute, \
+         continuous, prismatic or fixed joint, found a {found} joint",
+        at(.line)
+    )]
+    JointTypeInChain {
+        /// The joint.
+        joint: String,
+        /// `floating` or `planar`.
+        found: &'static str,
+        /// Chain base link.
+        base: String,
+        /// Chain tip link.
+        tip: String,
+        /// Line of the joint.
+        line: Option<usize>,
+    },
+    /// Base and tip are joined only by fixed joints (or are the same link).
+    #[error(
+        "chain from '{base}' to '{tip}': expected at least one revolute, continuous or prismatic \
+         joint, found none"
+    )]
+    NoMovingJoint {
+        /// The base link.
+        base: String,
+        /// The tip link.
+        tip: String,
+    },
+    /// Joint values given to [`crate::Chain::try_fk`] or [`crate::Chain::axis_lines`] do not match
+    /// the chain's moving joints.
+    #[error("expected {expected} joint values (one per moving joint), found {found}")]
+    JointCount {
+        /// Moving joints of the chain.
+        expected: usize,
+        /// Values given.
+        found: usize,
+    },
+    /// Finite inputs whose composition overflowed (for example two origins of 1e308 m).
+    #[error("joint '{joint}': {cause}")]
+    Geometry {
+        /// The joint (or the tip link) where it happened.
+        joint: String,
+        /// What dh-core refused.
+        cause: dh_core::CoreError,
+    },
+}
+
+/// Formats an optional line as ` (line N)`.
+struct At(Option<usize>);
+
+impl fmt::Display for At {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(n) => write!(f, " (line {n})"),
+            None => Ok(()),
+        }
+    }
+}
+
+fn at(line: &Option<usize>) -> At {
+    At(*line)
+}
+
+/// Formats an optional first definition as ` at line N`.
+struct First(Option<usize>);
+
+impl fmt::Display for First {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(n) => write!(f, " (first defined at line {n})"),
+            None => Ok(()),
+        }
+    }
+}
+
+fn first(line: &Option<usize>) -> First {
+    First(*line)
+}
+
+/// Formats names as `'a', 'b', 'c'`.
+pub(crate) fn list(names: &[String]) -> String {
+    names
+        .iter()
+        .map(|n| format!("'{n}'"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn cycle(links: &[String]) -> String {
+    links.join(" -> ")
+}
+
+fn suggest(candidates: &[String]) -> String {
+    if candidates.is_empty() {
+        String::new()
+    } else {
+        format!("; candidates: {}", list(candidates))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_appear_only_when_known() {
+        let e = UrdfError::ZeroAxis {
+            joint: "j".into(),
+            axis: [0.0; 3],
+            line: Some(7),
+        };
+        assert_eq!(
+            e.to_string(),
+            "joint 'j' (line 7): axis xyz: expected a non-zero direction, found 0 0 0"
+        );
+        let e = UrdfError::Parse {
+            message: "expected x, found y".into(),
+            line: None,
+        };
+        assert_eq!(e.to_string(), "urdf parse error: expected x, found y");
+    }
+}
