@@ -341,62 +341,70 @@ pub(crate) fn records(
             continue;
         }
         let mut fields = Vec::new();
-        let mut cell = String::new();
-        let mut quoted = false;
-        let mut was_quoted = false;
+        let mut cell = Cell::default();
         let mut current = raw.to_string();
         loop {
             let mut chars = current.chars().peekable();
             while let Some(c) = chars.next() {
-                if quoted {
+                if cell.open {
                     if c == '"' {
                         if chars.peek() == Some(&'"') {
                             chars.next();
-                            cell.push('"');
+                            cell.text.push('"');
                         } else {
-                            quoted = false;
+                            cell.open = false;
+                            cell.closed_at = Some(cell.text.len());
                         }
                     } else {
-                        cell.push(c);
+                        cell.text.push(c);
                     }
-                } else if c == '"' && cell.trim().is_empty() && !was_quoted {
-                    cell.clear();
-                    quoted = true;
-                    was_quoted = true;
+                } else if c == '"' && cell.closed_at.is_none() && cell.text.trim().is_empty() {
+                    cell.text.clear();
+                    cell.open = true;
                 } else if c == delimiter {
-                    fields.push(finish(&mut cell, &mut was_quoted));
+                    fields.push(cell.finish());
                 } else {
-                    cell.push(c);
+                    cell.text.push(c);
                 }
             }
-            if !quoted {
+            if !cell.open {
                 break;
             }
             // A quoted cell runs on over the line break.
             match lines.next() {
                 Some((_, next)) => {
-                    cell.push('\n');
+                    cell.text.push('\n');
                     current = next.strip_suffix('\r').unwrap_or(next).to_string();
                 }
                 None => return Err(DataError::UnterminatedQuote { line }),
             }
         }
-        fields.push(finish(&mut cell, &mut was_quoted));
+        fields.push(cell.finish());
         out.push(Record { line, fields });
     }
     Ok(out)
 }
 
-fn finish(cell: &mut String, was_quoted: &mut bool) -> String {
-    let s = if *was_quoted {
-        // Keep spaces inside quotes, drop those after the closing quote.
-        cell.trim_end().to_string()
-    } else {
-        cell.trim().to_string()
-    };
-    cell.clear();
-    *was_quoted = false;
-    s
+/// A cell being read.
+#[derive(Default)]
+struct Cell {
+    text: String,
+    /// Inside double quotes.
+    open: bool,
+    /// Length of the text when the closing quote came: what follows it is dropped.
+    closed_at: Option<usize>,
+}
+
+impl Cell {
+    /// The cell's value: a quoted cell exactly as quoted, a bare one trimmed. Resets the cell.
+    fn finish(&mut self) -> String {
+        let value = match self.closed_at {
+            Some(len) => self.text[..len].to_string(),
+            None => self.text.trim().to_string(),
+        };
+        *self = Cell::default();
+        value
+    }
 }
 
 /// Parses a finite number from a cell.
