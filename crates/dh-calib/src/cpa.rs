@@ -162,6 +162,14 @@ pub enum CpaError {
         /// Values in the sample.
         found: usize,
     },
+    /// A joint value or coordinate that is NaN or infinite.
+    #[error("line {line}: expected finite joint values and coordinates, found {value}")]
+    NonFinite {
+        /// The sample's line.
+        line: usize,
+        /// The offending value.
+        value: f64,
+    },
     /// An option out of range.
     #[error("option {option}: expected {expected}, found {found}")]
     InvalidOption {
@@ -405,8 +413,8 @@ pub struct CpaResult {
 /// radians.
 ///
 /// # Errors
-/// [`CpaError::NoSamples`], [`CpaError::JointCount`] and [`CpaError::InvalidOption`] for bad
-/// input; [`CpaError::NotSwept`] when some joint has no sweep of at least
+/// [`CpaError::NoSamples`], [`CpaError::JointCount`], [`CpaError::NonFinite`] and
+/// [`CpaError::InvalidOption`] for bad input; [`CpaError::NotSwept`] when some joint has no sweep of at least
 /// [`CpaOptions::min_poses`] poses; [`CpaError::Degenerate`] when a sweep's points fit no circle
 /// or line; [`CpaError::NotRigid`] for a coupled sweep that is not a rotation about the lead
 /// axis; [`CpaError::Sense`] when the sense of rotation cannot be told; [`CpaError::Core`] from
@@ -519,6 +527,12 @@ fn check_input(m: &Measurements, opts: &CpaOptions) -> Result<(), CpaError> {
                 line: s.line,
                 expected: m.joint_names.len(),
                 found: s.q.len(),
+            });
+        }
+        if let Some(&value) = s.q.iter().chain(s.point.iter()).find(|v| !v.is_finite()) {
+            return Err(CpaError::NonFinite {
+                line: s.line,
+                value,
             });
         }
     }
@@ -1574,6 +1588,34 @@ mod tests {
         assert_eq!(sweeps[0].samples, vec![0, 1, 2, 3, 4]);
         assert_relative_eq!(sweeps[0].span, 3.0);
         assert_eq!(sweeps[2].start, vec![5.5, -2.0]);
+    }
+
+    #[test]
+    fn bad_input_is_named() {
+        let mut m = set(&[[0.0, 0.0], [1.0, 0.0]]);
+        m.samples[1].point.y = f64::NAN;
+        let e = analyse(&m, &CpaOptions::default()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 2: expected finite joint values and coordinates, found NaN"
+        );
+        m.samples[1].q.pop();
+        let e = analyse(&m, &CpaOptions::default()).unwrap_err();
+        assert_eq!(e.to_string(), "line 2: expected 2 joint values, found 1");
+        let opts = CpaOptions {
+            min_poses: 2,
+            ..CpaOptions::default()
+        };
+        let e = analyse(&set(&[[0.0, 0.0]]), &opts).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "option min_poses: expected at least 3, found 2"
+        );
+        let e = analyse(&set(&[[0.0, 0.0], [1.0, 0.0]]), &CpaOptions::default()).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "no sweep of 'a', 'b' found; sweeps found: none"
+        );
     }
 
     #[test]

@@ -149,3 +149,31 @@ fn hilti_flat_444_waypoints() {
     assert_eq!(m.samples[0].line, 8);
     assert_eq!(m.samples[0].point.x, 7.332_081_008_983_251);
 }
+
+#[test]
+fn hilti_every_dataset_file_imports_every_waypoint() {
+    let dir = Path::new(MEASURED).join("hilti_trailblazer_total_station");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        println!("skipped: {} not readable", dir.display());
+        return;
+    };
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "yaml"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 7, "{files:?}");
+    for path in files {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let name = path.file_name().unwrap().to_str().unwrap();
+        let m = import(Layout::Hilti, &[Source { name, text: &text }])
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let entries = text
+            .lines()
+            .filter(|l| l.trim_start().starts_with("- id:"))
+            .count();
+        assert_eq!(m.samples.len(), entries, "{name}");
+        assert!(m.samples.iter().all(|s| s.line > 0), "{name}");
+        assert!(count(&m, Split::Calibration) > 0 && count(&m, Split::Validation) > 0);
+    }
+}
