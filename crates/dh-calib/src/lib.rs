@@ -17,3 +17,5 @@ pub mod fit;
 pub mod import;
 pub mod model;
 pub mod simulate;
+
+pub use fit::CalibError;
