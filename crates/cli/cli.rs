@@ -7,6 +7,7 @@ use std::io::Write;
 use clap::{Args, Parser, Subcommand};
 use dh_core::Tolerance;
 
+use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK_LINEAR};
 use crate::commands::extract::{extract, ExtractArgs};
 use crate::error::{Hinted, Outcome};
 use crate::render::Format;
@@ -27,6 +28,9 @@ enum Command {
     /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
     /// forward kinematics against the URDF at many joint values.
     Extract(ExtractCli),
+    /// Check a URDF against a vendor's DH sheet: exit 0 when they describe the same kinematics,
+    /// 1 naming every joint and parameter that differs.
+    Check(CheckCli),
 }
 
 /// Options shared by every command that reads a URDF chain.
@@ -85,6 +89,26 @@ struct ExtractCli {
     seed: u64,
 }
 
+#[derive(Debug, Args)]
+struct CheckCli {
+    /// The robot: a URDF file, a .xacro file, or - for standard input.
+    robot: String,
+    /// The DH sheet (YAML or JSON, the format `extract --format yaml` writes).
+    #[arg(long, value_name = "SHEET")]
+    sheet: String,
+    #[command(flatten)]
+    chain: ChainCli,
+    /// Lengths that differ by less than this match (metres).
+    #[arg(long, value_name = "M", default_value_t = CHECK_LINEAR)]
+    linear_tol: f64,
+    /// Angles that differ by less than this match (radians).
+    #[arg(long, value_name = "RAD", default_value_t = CHECK_ANGULAR)]
+    angular_tol: f64,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = CheckFormat::Text)]
+    format: CheckFormat,
+}
+
 /// Runs the command line `args`, writing results to `out` and messages to `err`; returns the
 /// exit code.
 pub fn run<I, T>(args: I, out: &mut dyn Write, err: &mut dyn Write) -> i32
@@ -131,6 +155,18 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 seed: a.seed,
             };
             extract(&args, out, err)
+        }
+        Command::Check(a) => {
+            let args = CheckArgs {
+                robot: a.robot,
+                sheet: a.sheet,
+                base: a.chain.base,
+                tip: a.chain.tip,
+                tolerance: Tolerance::new(a.linear_tol, a.angular_tol)
+                    .map_err(|e| anyhow::anyhow!("{e}"))?,
+                format: a.format,
+            };
+            check(&args, out, err)
         }
     }
 }

@@ -15,6 +15,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod equivalence;
 mod error;
 pub mod extract;
 pub mod line;
@@ -24,6 +25,7 @@ pub mod table;
 pub mod tolerance;
 pub mod verify;
 
+pub use equivalence::{compare_tables, Difference, Equivalence, Freedom, Parameter};
 pub use error::CoreError;
 pub use extract::{extract, Bound, Extraction, JointAxis, PairReport, Warning};
 pub use line::{DualNumber, Line};
