@@ -8,7 +8,9 @@ use clap::{Args, Parser, Subcommand};
 use dh_core::Tolerance;
 
 use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK_LINEAR};
+use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
+use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
 use crate::error::{Hinted, Outcome};
 use crate::render::Format;
 use crate::sheet::ConventionDoc;
@@ -31,6 +33,43 @@ enum Command {
     /// Check a URDF against a vendor's DH sheet: exit 0 when they describe the same kinematics,
     /// 1 naming every joint and parameter that differs.
     Check(CheckCli),
+    /// Convert a sheet to the other DH convention (or other units), exactly.
+    Convert(ConvertCli),
+    /// Write a URDF whose kinematics equal a DH sheet.
+    ToUrdf(ToUrdfCli),
+}
+
+#[derive(Debug, Args)]
+struct ConvertCli {
+    /// The DH sheet (YAML or JSON), or - for standard input.
+    sheet: String,
+    /// Target convention.
+    #[arg(long, value_enum)]
+    to: ConventionDoc,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Yaml)]
+    format: Format,
+    /// Length unit of the output [default: the sheet's].
+    #[arg(long, value_enum)]
+    length_unit: Option<LengthUnit>,
+    /// Angle unit of the output [default: the sheet's].
+    #[arg(long, value_enum)]
+    angle_unit: Option<AngleUnit>,
+}
+
+#[derive(Debug, Args)]
+struct ToUrdfCli {
+    /// The DH sheet (YAML or JSON), or - for standard input.
+    sheet: String,
+    /// Robot name [default: the sheet's `robot`].
+    #[arg(long)]
+    name: Option<String>,
+    /// Name of the base link.
+    #[arg(long, default_value = "base_link")]
+    base_link: String,
+    /// Name of the tip link.
+    #[arg(long, default_value = "tool0")]
+    tip_link: String,
 }
 
 /// Options shared by every command that reads a URDF chain.
@@ -168,5 +207,26 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             };
             check(&args, out, err)
         }
+        Command::Convert(a) => convert(
+            &ConvertArgs {
+                sheet: a.sheet,
+                to: a.to.into(),
+                format: a.format,
+                length_unit: a.length_unit,
+                angle_unit: a.angle_unit,
+            },
+            out,
+            err,
+        ),
+        Command::ToUrdf(a) => to_urdf(
+            &ToUrdfArgs {
+                sheet: a.sheet,
+                name: a.name,
+                base_link: a.base_link,
+                tip_link: a.tip_link,
+            },
+            out,
+            err,
+        ),
     }
 }

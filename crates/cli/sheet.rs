@@ -216,6 +216,12 @@ pub struct Sheet {
     pub has_tool: bool,
     /// Free-text robot name.
     pub robot: Option<String>,
+    /// Free-text source.
+    pub source: Option<String>,
+    /// The sheet's length unit.
+    pub length_unit: LengthUnit,
+    /// The sheet's angle unit.
+    pub angle_unit: AngleUnit,
     /// Warnings about suspicious values (not errors).
     pub warnings: Vec<String>,
 }
@@ -366,6 +372,9 @@ impl SheetDoc {
             has_base: self.base.is_some(),
             has_tool: self.tool.is_some(),
             robot: self.robot,
+            source: self.source,
+            length_unit: self.length_unit,
+            angle_unit: self.angle_unit,
             warnings,
         })
     }

@@ -1,0 +1,135 @@
+//! Writing output files so that a failed run never leaves one half-written.
+//!
+//! Every command that writes a file (rather than standard output) goes through
+//! [`write_atomically`]: the bytes go to a temporary file beside the target, are flushed to disk,
+//! and only then renamed over the target. A run that fails before that point (bad input, a full
+//! disk, a killed process) leaves the previous file, or no file, but never a truncated one.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+
+/// Writes `bytes` to `path` atomically: into a temporary file in the target's own directory
+/// (a rename is atomic only within one file system), synced to disk, then renamed over `path`.
+///
+/// A new file gets the usual permissions (`0666` less the umask on Unix); an existing file keeps
+/// its own. A symbolic link is followed, so the file it points to is replaced, not the link.
+/// On any error the temporary file is removed and `path` is untouched.
+///
+/// # Errors
+/// The directory does not exist or is not writable, the disk is full, or `path` is a directory;
+/// the message names `path`.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let target = resolve_symlink(path);
+    let shown = path.display();
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let existing = std::fs::metadata(&target).ok();
+    if existing.as_ref().is_some_and(|m| m.is_dir()) {
+        anyhow::bail!("{shown}: cannot write the output: expected a file, found a directory");
+    }
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".urdf-dh-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        // tempfile's default is 0600; 0666 lets the umask decide, as for any new file.
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder
+        .tempfile_in(dir)
+        .with_context(|| format!("{shown}: cannot write the output"))?;
+    let written = (|| -> std::io::Result<()> {
+        tmp.write_all(bytes)?;
+        if let Some(m) = &existing {
+            tmp.as_file().set_permissions(m.permissions())?;
+        }
+        tmp.as_file().sync_all()
+    })();
+    written.with_context(|| format!("{shown}: cannot write the output"))?;
+    tmp.persist(&target)
+        .map_err(|e| e.error)
+        .with_context(|| format!("{shown}: cannot write the output"))?;
+    Ok(())
+}
+
+/// The file a symbolic link points to (links of links followed); `path` itself otherwise.
+fn resolve_symlink(path: &Path) -> PathBuf {
+    let is_link = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+    if is_link {
+        if let Ok(real) = std::fs::canonicalize(path) {
+            return real;
+        }
+    }
+    path.to_path_buf()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn writes_a_new_file_and_replaces_an_old_one_leaving_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.yaml");
+        write_atomically(&path, b"first\n").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"first\n");
+        write_atomically(&path, b"second, longer\n").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"second, longer\n");
+        assert_eq!(entries(dir.path()), ["out.yaml"]);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_old_file_and_no_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        // The target is a directory: refused before anything is written.
+        let sub = dir.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        let e = write_atomically(&sub, b"x").unwrap_err();
+        assert!(format!("{e:#}").contains("found a directory"), "{e:#}");
+        // The directory does not exist.
+        let e = write_atomically(&dir.path().join("nope/out.csv"), b"x").unwrap_err();
+        assert!(format!("{e:#}").contains("out.csv"), "{e:#}");
+        assert_eq!(entries(dir.path()), ["sub"]);
+        assert!(entries(&sub).is_empty());
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn keeps_permissions_and_follows_links() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let real = dir.path().join("real.urdf");
+        std::fs::write(&real, b"old").unwrap();
+        std::fs::set_permissions(&real, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let link = dir.path().join("link.urdf");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        write_atomically(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(&real).unwrap(), b"new");
+        let mode = std::fs::metadata(&real).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o640);
+        // A new file gets what any new file gets (not the temporary's private 0600).
+        let fresh = dir.path().join("fresh.csv");
+        write_atomically(&fresh, b"x").unwrap();
+        let plain = dir.path().join("plain.csv");
+        std::fs::write(&plain, b"x").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&fresh), mode(&plain));
+    }
+}
