@@ -33,6 +33,7 @@ use crate::model::{
     xyz_rpy, Block, Effect, Model, ModelOptions, ModelProblem, Observation, Observed,
     PairParametrisation,
 };
+use crate::tree::DhTree;
 
 /// Options of [`calibrate`].
 #[derive(Clone, Debug)]
@@ -51,6 +52,10 @@ pub struct CalibrationOptions {
     pub sigma: Option<f64>,
     /// Non-geometric effects to estimate in a last step.
     pub effects: Vec<Arc<dyn Effect>>,
+    /// For a tree ([`calibrate_tree`]): `(target, branch)` pairs saying which branch a target
+    /// rides on. A target without an entry rides on the branch of its own name, or on the only
+    /// chain of a serial robot.
+    pub target_branches: Vec<(String, String)>,
 }
 
 impl Default for CalibrationOptions {
@@ -63,6 +68,7 @@ impl Default for CalibrationOptions {
             target_guesses: None,
             sigma: None,
             effects: Vec::new(),
+            target_branches: Vec::new(),
         }
     }
 }
@@ -99,8 +105,13 @@ impl Stats {
 /// One step of the pipeline.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepReport {
-    /// `nominal`, `geometric` or `effects`.
+    /// `nominal`, `geometric` or `effects`; the effect steps of [`crate::diagnose`] are
+    /// `+<label>`.
     pub label: String,
+    /// Calibration RMS before the step (the previous step's), metres; `None` for the first.
+    pub rms_before: Option<f64>,
+    /// Validation RMS before the step (the previous step's), metres.
+    pub val_rms_before: Option<f64>,
     /// RMS distance on the calibration samples (metres).
     pub rms: f64,
     /// Mean distance on the calibration samples (metres).
@@ -240,26 +251,37 @@ pub struct Report {
     pub targets: Vec<(String, Vector3<f64>)>,
     /// Remarks for the user (unused targets, approximations).
     pub notes: Vec<String>,
+    /// For a tree: the calibrated tree (its trunk is `calibrated`); `None` for a serial robot.
+    pub tree: Option<crate::tree::DhTree>,
+    /// The effects' candidate table of the automatic diagnosis ([`crate::diagnose`]), in the
+    /// order scored in its first round; empty otherwise.
+    pub candidates: Vec<crate::diagnose::CandidateReport>,
+    /// Labels of the effects estimated in the last step, in the order added.
+    pub selected_effects: Vec<String>,
+    /// What the automatic diagnosis found; `None` when it did not run.
+    pub diagnosis: Option<crate::diagnose::Diagnosis>,
 }
 
 /// Calibration samples, validation samples and the pose group of each calibration sample.
-struct Prepared {
-    cal: Vec<Observed>,
-    val: Vec<Observed>,
-    groups: Vec<usize>,
-    group_count: usize,
-    repeat_keys: Vec<Option<(String, usize)>>,
-    sigmas: Vec<Option<Vector3<f64>>>,
+pub(crate) struct Prepared {
+    pub(crate) cal: Vec<Observed>,
+    pub(crate) val: Vec<Observed>,
+    pub(crate) groups: Vec<usize>,
+    pub(crate) group_count: usize,
+    pub(crate) repeat_keys: Vec<Option<(String, usize)>>,
+    pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
+    /// Pose group of each validation sample (numbered apart from the calibration groups).
+    pub(crate) val_groups: Vec<usize>,
 }
 
-fn prepare(table: &DhTable, data: &Measurements) -> Result<Prepared, CalibError> {
+pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, CalibError> {
     enum Source {
         Column(usize),
         Mimic(usize, f64, f64),
     }
     let column = |name: &str| data.joint_names.iter().position(|n| n == name);
-    let mut sources = Vec::with_capacity(table.rows.len());
-    for r in &table.rows {
+    let mut sources = Vec::with_capacity(tree.rows().len());
+    for r in tree.rows() {
         let s = match (column(&r.name), &r.mimic) {
             (Some(c), _) => Source::Column(c),
             (None, Some(m)) => match column(&m.joint) {
@@ -285,7 +307,9 @@ fn prepare(table: &DhTable, data: &Measurements) -> Result<Prepared, CalibError>
         group_count: 0,
         repeat_keys: vec![],
         sigmas: vec![],
+        val_groups: vec![],
     };
+    let mut val_ids: HashMap<String, usize> = HashMap::new();
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
     let mut config_ids: HashMap<String, usize> = HashMap::new();
     for s in &data.samples {
@@ -323,7 +347,15 @@ fn prepare(table: &DhTable, data: &Measurements) -> Result<Prepared, CalibError>
             },
         };
         match s.split {
-            Split::Validation => out.val.push(obs),
+            Split::Validation => {
+                let key = match &s.config {
+                    Some(c) => c.clone(),
+                    None => format!("{:?}", obs.q),
+                };
+                let next = val_ids.len();
+                out.val_groups.push(*val_ids.entry(key).or_insert(next));
+                out.val.push(obs);
+            }
             Split::Calibration => {
                 let next = group_ids.len() + config_ids.len();
                 let g = match &s.config {
@@ -404,7 +436,7 @@ fn targets_given_device(model: &mut Model, x: &[f64], cal: &[Observed]) {
     let mut sums = vec![(Vector3::zeros(), 0usize); k];
     for o in cal {
         if let Observation::Point { target, point } = &o.observation {
-            let tip = model.tip(x, &o.q);
+            let tip = model.tip_of(x, &o.q, model.target_chain(*target));
             if let Some(s) = sums.get_mut(*target) {
                 s.0 += tip.inverse_transform_point(&(*point).into()).coords;
                 s.1 += 1;
@@ -453,14 +485,12 @@ fn initialise(
     for _ in 0..rounds {
         let modelled: Vec<Vector3<f64>> = cal
             .iter()
-            .map(|o| {
-                let fk = model.robot_fk(x, &o.q);
-                match &o.observation {
-                    Observation::Point { target, .. } => {
-                        (fk * Point3::from(model.target_at(x, *target))).coords
-                    }
-                    Observation::Pose(_) => fk.translation.vector,
+            .map(|o| match &o.observation {
+                Observation::Point { target, .. } => {
+                    let fk = model.robot_fk_of(x, &o.q, model.target_chain(*target));
+                    (fk * Point3::from(model.target_at(x, *target))).coords
                 }
+                Observation::Pose(_) => model.robot_fk(x, &o.q).translation.vector,
             })
             .collect();
         let d = register(&modelled, &measured)?;
@@ -472,7 +502,7 @@ fn initialise(
     Ok(())
 }
 
-fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
+pub(crate) fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
     let mut r = [0.0; 6];
     obs.iter()
         .map(|o| {
@@ -482,48 +512,36 @@ fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
         .collect()
 }
 
-struct StepResult {
-    outcome: FitOutcome,
-    report: StepReport,
+pub(crate) struct StepResult {
+    pub(crate) outcome: FitOutcome,
+    pub(crate) report: StepReport,
+    /// Held-out distance of every validation sample (split) or calibration sample
+    /// (cross-validation), in sample order; empty without validation.
+    pub(crate) held_out: Vec<f64>,
 }
 
-/// What every step shares.
-struct Context<'a> {
-    model: &'a Model,
-    prep: &'a Prepared,
-    scales: &'a [f64],
-    options: &'a CalibrationOptions,
-    validation: &'a Validation,
-}
-
-fn run_step(
-    ctx: &Context<'_>,
-    label: &str,
-    x0: &[f64],
+/// Held-out distances of `free` fitted from `x0`: the validation split's, or k-fold
+/// cross-validation's over pose groups (each calibration sample predicted by the fit without
+/// its fold), in sample order.
+pub(crate) fn held_out(
+    model: &Model,
+    prep: &Prepared,
+    validation: &Validation,
+    x: &[f64],
     free: &[usize],
-) -> Result<StepResult, CalibError> {
-    let Context {
-        model,
-        prep,
-        scales,
-        options,
-        validation,
-    } = *ctx;
-    let problem = ModelProblem {
-        model,
-        observations: &prep.cal,
-    };
-    let outcome = fit::solve(&problem, x0, free, scales, &options.fit)?;
-    let cal = Stats::of(&distances(model, &outcome.x, &prep.cal));
-    let val = match validation {
-        Validation::Split { .. } => Stats::of(&distances(model, &outcome.x, &prep.val)),
+    scales: &[f64],
+    fit_options: &FitOptions,
+) -> Result<Vec<f64>, CalibError> {
+    match validation {
+        Validation::Split { .. } => Ok(distances(model, x, &prep.val)),
         Validation::CrossValidation { folds, .. } => {
-            let mut d = Vec::with_capacity(prep.cal.len());
+            let mut d = vec![0.0; prep.cal.len()];
             for f in 0..*folds {
-                let (mut train, mut test) = (Vec::new(), Vec::new());
-                for (o, g) in prep.cal.iter().zip(&prep.groups) {
+                let (mut train, mut test, mut at) = (Vec::new(), Vec::new(), Vec::new());
+                for (i, (o, g)) in prep.cal.iter().zip(&prep.groups).enumerate() {
                     if g % folds == f {
                         test.push(o.clone());
+                        at.push(i);
                     } else {
                         train.push(o.clone());
                     }
@@ -532,32 +550,324 @@ fn run_step(
                     model,
                     observations: &train,
                 };
-                let fold = fit::solve(&p, &outcome.x, free, scales, &options.fit)?;
-                d.extend(distances(model, &fold.x, &test));
+                let fold = fit::solve(&p, x, free, scales, fit_options)?;
+                for (i, v) in at.into_iter().zip(distances(model, &fold.x, &test)) {
+                    d[i] = v;
+                }
             }
-            Stats::of(&d)
+            Ok(d)
         }
-        Validation::None => None,
-    };
-    let cal = cal.unwrap_or(Stats {
-        rms: 0.0,
-        mean: 0.0,
-        max: 0.0,
-        count: 0,
-    });
-    let report = StepReport {
-        label: label.into(),
-        rms: cal.rms,
-        mean: cal.mean,
-        max: cal.max,
-        val_rms: val.map(|v| v.rms),
-        val_mean: val.map(|v| v.mean),
-        val_max: val.map(|v| v.max),
-        free: free.len(),
-        iterations: outcome.iterations,
-        termination: outcome.termination,
-    };
-    Ok(StepResult { outcome, report })
+        Validation::None => Ok(vec![]),
+    }
+}
+
+/// Everything the steps of one calibration share: the samples, the model (with every effect
+/// that any step may free), the validation scheme.
+pub(crate) struct Session<'a> {
+    pub(crate) model: Model,
+    pub(crate) prep: Prepared,
+    pub(crate) scales: Vec<f64>,
+    pub(crate) options: &'a CalibrationOptions,
+    pub(crate) validation: Validation,
+    pub(crate) notes: Vec<String>,
+    measured: Vec<bool>,
+    device_nominal: Isometry3<f64>,
+    targets_nominal: Vec<Vector3<f64>>,
+}
+
+/// The chain of each target of `data` in `tree` (see [`CalibrationOptions::target_branches`]).
+fn target_chains(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+) -> Result<Vec<(String, usize)>, CalibError> {
+    data.targets
+        .iter()
+        .map(|t| {
+            if tree.branches().is_empty() {
+                return Ok((t.clone(), 0));
+            }
+            let branch = options
+                .target_branches
+                .iter()
+                .find(|(target, _)| target == t)
+                .map_or(t.as_str(), |(_, b)| b.as_str());
+            tree.branch_index(branch)
+                .map(|b| (t.clone(), b))
+                .ok_or_else(|| CalibError::BadOption {
+                    what: format!("target '{t}'"),
+                    reason: format!(
+                        "expected a branch of the tree ({}), found '{branch}'",
+                        tree.branches()
+                            .iter()
+                            .map(|b| b.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                })
+        })
+        .collect()
+}
+
+impl<'a> Session<'a> {
+    /// Prepares the samples, builds the model of `tree` with `effects` (their parameters start
+    /// at zero and are not estimated until a step frees them) and finds the closed-form start.
+    pub(crate) fn new(
+        tree: &DhTree,
+        data: &Measurements,
+        options: &'a CalibrationOptions,
+        effects: &[Arc<dyn Effect>],
+    ) -> Result<Session<'a>, CalibError> {
+        let prep = prepare(tree, data)?;
+        if prep.cal.len() < 3 {
+            return Err(CalibError::TooFewSamples {
+                what: "calibration".into(),
+                needed: 3,
+                found: prep.cal.len(),
+            });
+        }
+        let chains = target_chains(tree, data, options)?;
+        let mut model = Model::new_tree(tree, &chains, &options.model)?;
+        for e in effects {
+            model.add_effect(e.clone())?;
+        }
+        let scales = model.scales();
+        let x = vec![0.0; model.parameter_count()];
+        initialise(&mut model, &x, &prep.cal, options)?;
+        let validation = if !prep.val.is_empty() {
+            Validation::Split {
+                samples: prep.val.len(),
+            }
+        } else if prep.group_count >= 2 && options.folds >= 2 {
+            Validation::CrossValidation {
+                folds: options.folds.min(prep.group_count),
+                groups: prep.group_count,
+            }
+        } else {
+            Validation::None
+        };
+        let mut notes = Vec::new();
+        // Targets never measured stay where they are and are reported as fixed.
+        let mut measured = vec![false; model.targets().len()];
+        for o in &prep.cal {
+            if let Observation::Point { target, .. } = &o.observation {
+                measured[*target] = true;
+            }
+        }
+        for (k, m) in measured.iter().enumerate() {
+            if !m {
+                notes.push(format!(
+                    "target '{}' has no calibration sample; its position is not estimated",
+                    model.targets()[k].0
+                ));
+            }
+        }
+        let device_nominal = model.device();
+        let targets_nominal = model.targets().iter().map(|t| t.1).collect();
+        Ok(Session {
+            model,
+            prep,
+            scales,
+            options,
+            validation,
+            notes,
+            measured,
+            device_nominal,
+            targets_nominal,
+        })
+    }
+
+    /// Fits `free` from `x0` and reports the step; `previous` is the step before it.
+    pub(crate) fn step(
+        &self,
+        label: &str,
+        x0: &[f64],
+        free: &[usize],
+        previous: Option<&StepReport>,
+    ) -> Result<StepResult, CalibError> {
+        let problem = ModelProblem {
+            model: &self.model,
+            observations: &self.prep.cal,
+        };
+        let outcome = fit::solve(&problem, x0, free, &self.scales, &self.options.fit)?;
+        let cal = Stats::of(&distances(&self.model, &outcome.x, &self.prep.cal));
+        let held = held_out(
+            &self.model,
+            &self.prep,
+            &self.validation,
+            &outcome.x,
+            free,
+            &self.scales,
+            &self.options.fit,
+        )?;
+        let val = Stats::of(&held);
+        let cal = cal.unwrap_or(Stats {
+            rms: 0.0,
+            mean: 0.0,
+            max: 0.0,
+            count: 0,
+        });
+        let report = StepReport {
+            label: label.into(),
+            rms_before: previous.map(|p| p.rms),
+            val_rms_before: previous.and_then(|p| p.val_rms),
+            rms: cal.rms,
+            mean: cal.mean,
+            max: cal.max,
+            val_rms: val.map(|v| v.rms),
+            val_mean: val.map(|v| v.mean),
+            val_max: val.map(|v| v.max),
+            free: free.len(),
+            iterations: outcome.iterations,
+            termination: outcome.termination,
+        };
+        Ok(StepResult {
+            outcome,
+            report,
+            held_out: held,
+        })
+    }
+
+    /// Identifiability of `columns` at `x` (see [`identify`]).
+    pub(crate) fn identify(
+        &self,
+        x: &[f64],
+        columns: &[usize],
+    ) -> Result<(Vec<usize>, Vec<fit::Fixed>), CalibError> {
+        identify(
+            &self.model,
+            &self.prep.cal,
+            x,
+            columns,
+            &self.scales,
+            self.options,
+        )
+    }
+
+    /// The `nominal` step (device and targets), then the `geometric` one (every identifiable
+    /// geometric parameter). Returns the steps, the geometric fit and its free and fixed
+    /// parameters.
+    pub(crate) fn geometric(&mut self) -> Result<Geometric, CalibError> {
+        let mut x = vec![0.0; self.model.parameter_count()];
+        let measured = self.measured.clone();
+        let nominal_free = self.model.indices(|b| match b {
+            Block::Device => true,
+            Block::Target(k) => measured[k],
+            _ => false,
+        });
+        let step = self.step("nominal", &x, &nominal_free, None)?;
+        x = step.outcome.x.clone();
+        let mut steps = vec![step.report];
+        self.model.rebase(&mut x);
+        self.device_nominal = self.model.device();
+        self.targets_nominal = self.model.targets().iter().map(|t| t.1).collect();
+        let geometric: Vec<usize> = self.model.indices(|b| !matches!(b, Block::Effect(_)));
+        let (free, fixed) = self.identify(&x, &geometric)?;
+        let step = self.step("geometric", &x, &free, steps.last())?;
+        steps.push(step.report.clone());
+        Ok(Geometric {
+            steps,
+            last: step,
+            free,
+            fixed,
+        })
+    }
+
+    /// The report at the fit `last` (its free parameters `free`, the fixed ones `fixed`).
+    /// Effect parameters of effects listed in `hidden` are left out of the parameter list.
+    pub(crate) fn report(
+        &self,
+        last: &FitOutcome,
+        steps: Vec<StepReport>,
+        fixed: Vec<fit::Fixed>,
+        hidden: &[usize],
+    ) -> Report {
+        let model = &self.model;
+        let x = last.x.clone();
+        let mut notes = self.notes.clone();
+        let noise_floor = noise_floor(&self.prep, self.options, last.free.len());
+        let mut parameters = estimates(model, &x, last, self.device_nominal, &self.targets_nominal);
+        let hidden_names: Vec<&str> = model
+            .parameters()
+            .iter()
+            .filter(|p| matches!(p.block, Block::Effect(e) if hidden.contains(&e)))
+            .map(|p| p.name.as_str())
+            .collect();
+        parameters.retain(|p| !hidden_names.contains(&p.name.as_str()));
+        let (tree, unfolded) = model.tree_at(&x);
+        if !unfolded.is_empty() {
+            notes.push(
+                "some beta tilts could not be folded into DH values exactly; the calibrated table \
+                 omits them and is an approximation"
+                    .into(),
+            );
+        }
+        let effect_free = last
+            .free
+            .iter()
+            .any(|&c| matches!(model.parameters()[c].block, Block::Effect(_)));
+        if effect_free {
+            notes.push("effects are not part of the calibrated DH table".into());
+        }
+        let fixed = fixed
+            .into_iter()
+            .filter(|f| !hidden_names.contains(&model.parameters()[f.index].name.as_str()))
+            .map(|f| FixedParameter {
+                name: model.parameters()[f.index].name.clone(),
+                aliases: f
+                    .aliases
+                    .iter()
+                    .map(|&a| model.parameters()[a].name.clone())
+                    .collect(),
+            })
+            .collect();
+        let (first, final_) = (&steps[0], &steps[steps.len() - 1]);
+        let selected_effects = model
+            .effects()
+            .iter()
+            .enumerate()
+            .filter(|(e, (_, range))| {
+                !hidden.contains(e) && range.clone().any(|c| last.free.contains(&c))
+            })
+            .map(|(_, (effect, _))| crate::effects::label_of(effect.as_ref()))
+            .collect();
+        Report {
+            rms_before: first.rms,
+            rms_after: final_.rms,
+            val_rms_before: first.val_rms,
+            val_rms_after: final_.val_rms,
+            steps: steps.clone(),
+            validation: self.validation.clone(),
+            noise_floor,
+            condition_number: last.condition_number,
+            rank: last.rank,
+            sigma_hat: last.sigma,
+            length_scale: model.length_scale(),
+            rank_tolerance: self.options.fit.rank_tolerance,
+            parameters,
+            fixed,
+            parametrisation: model.pairs().to_vec(),
+            calibrated: tree.trunk().clone(),
+            unfolded,
+            device: model.device_at(&x),
+            targets: (0..model.targets().len())
+                .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
+                .collect(),
+            notes,
+            tree: (!tree.branches().is_empty()).then_some(tree),
+            candidates: vec![],
+            selected_effects,
+            diagnosis: None,
+        }
+    }
+}
+
+/// The result of [`Session::geometric`].
+pub(crate) struct Geometric {
+    pub(crate) steps: Vec<StepReport>,
+    pub(crate) last: StepResult,
+    pub(crate) free: Vec<usize>,
+    pub(crate) fixed: Vec<fit::Fixed>,
 }
 
 fn noise_floor(prep: &Prepared, options: &CalibrationOptions, p: usize) -> Option<NoiseFloor> {
@@ -615,171 +925,48 @@ pub fn calibrate(
     data: &Measurements,
     options: &CalibrationOptions,
 ) -> Result<Report, CalibError> {
-    let prep = prepare(nominal, data)?;
-    if prep.cal.len() < 3 {
-        return Err(CalibError::TooFewSamples {
-            what: "calibration".into(),
-            needed: 3,
-            found: prep.cal.len(),
-        });
-    }
-    let mut model = Model::new(nominal, &data.targets, &options.model)?;
-    for e in &options.effects {
-        model.add_effect(e.clone())?;
-    }
-    let n = model.parameter_count();
-    let scales = model.scales();
-    let mut x = vec![0.0; n];
-    let mut notes = Vec::new();
-    initialise(&mut model, &x, &prep.cal, options)?;
+    calibrate_tree(&DhTree::serial(nominal), data, options)
+}
 
-    let validation = if !prep.val.is_empty() {
-        Validation::Split {
-            samples: prep.val.len(),
-        }
-    } else if prep.group_count >= 2 && options.folds >= 2 {
-        Validation::CrossValidation {
-            folds: options.folds.min(prep.group_count),
-            groups: prep.group_count,
-        }
-    } else {
-        Validation::None
-    };
-
-    // Targets never measured stay where they are and are reported as fixed.
-    let mut measured = vec![false; model.targets().len()];
-    for o in &prep.cal {
-        if let Observation::Point { target, .. } = &o.observation {
-            measured[*target] = true;
-        }
-    }
-    for (k, m) in measured.iter().enumerate() {
-        if !m {
-            notes.push(format!(
-                "target '{}' has no calibration sample; its position is not estimated",
-                model.targets()[k].0
-            ));
-        }
-    }
-
-    // Step 1: nominal.
-    let nominal_free = model.indices(|b| match b {
-        Block::Device => true,
-        Block::Target(k) => measured[k],
-        _ => false,
-    });
-    let mut steps = Vec::new();
-    let step = run_step(
-        &Context {
-            model: &model,
-            prep: &prep,
-            scales: &scales,
-            options,
-            validation: &validation,
-        },
-        "nominal",
-        &x,
-        &nominal_free,
-    )?;
-    x = step.outcome.x.clone();
-    steps.push(step.report);
-    model.rebase(&mut x);
-    let device_nominal = model.device();
-    let targets_nominal: Vec<Vector3<f64>> = model.targets().iter().map(|t| t.1).collect();
-
-    // Identifiability over the geometric parameters at the nominal step's estimate.
-    let geometric: Vec<usize> = model.indices(|b| !matches!(b, Block::Effect(_)));
-    let (mut free, mut fixed) = identify(&model, &prep.cal, &x, &geometric, &scales, options)?;
-    let step = run_step(
-        &Context {
-            model: &model,
-            prep: &prep,
-            scales: &scales,
-            options,
-            validation: &validation,
-        },
-        "geometric",
-        &x,
-        &free,
-    )?;
-    let mut last = step.outcome;
-    steps.push(step.report);
+/// [`calibrate`] for a tree: the targets ride on the branches named by
+/// [`CalibrationOptions::target_branches`] (or their own names), the joint values are matched
+/// to the tree's rows by name, and the report's `tree` holds the calibrated tree.
+///
+/// # Errors
+/// As [`calibrate`], and [`CalibError::BadOption`] for a target on no branch.
+pub fn calibrate_tree(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+) -> Result<Report, CalibError> {
+    let mut session = Session::new(tree, data, options, &options.effects)?;
+    let Geometric {
+        mut steps,
+        last,
+        mut fixed,
+        ..
+    } = session.geometric()?;
+    let mut last = last.outcome;
     if !options.effects.is_empty() {
-        let all: Vec<usize> = (0..n).collect();
-        let (f2, fixed2) = identify(&model, &prep.cal, &last.x, &all, &scales, options)?;
-        free = f2;
+        let all: Vec<usize> = (0..session.model.parameter_count()).collect();
+        let (free, fixed2) = session.identify(&last.x, &all)?;
         fixed = fixed2;
-        let step = run_step(
-            &Context {
-                model: &model,
-                prep: &prep,
-                scales: &scales,
-                options,
-                validation: &validation,
-            },
-            "effects",
-            &last.x,
-            &free,
-        )?;
+        let step = session.step("effects", &last.x, &free, steps.last())?;
         last = step.outcome;
         steps.push(step.report);
     }
-    let x = last.x.clone();
-
-    let noise_floor = noise_floor(&prep, options, free.len());
-    let parameters = estimates(&model, &x, &last, device_nominal, &targets_nominal);
-    let folded = model.table_at(&x);
-    if !folded.unfolded.is_empty() {
-        notes.push(
-            "some beta tilts could not be folded into DH values exactly; the calibrated table \
-             omits them and is an approximation"
-                .into(),
-        );
-    }
-    if !options.effects.is_empty() {
-        notes.push("effects are not part of the calibrated DH table".into());
-    }
-    let fixed = fixed
-        .into_iter()
-        .map(|f| FixedParameter {
-            name: model.parameters()[f.index].name.clone(),
-            aliases: f
-                .aliases
-                .iter()
-                .map(|&a| model.parameters()[a].name.clone())
-                .collect(),
-        })
+    let mut report = session.report(&last, steps, fixed, &[]);
+    report.selected_effects = options
+        .effects
+        .iter()
+        .map(|e| crate::effects::label_of(e.as_ref()))
         .collect();
-    let (first, final_) = (&steps[0], &steps[steps.len() - 1]);
-    Ok(Report {
-        rms_before: first.rms,
-        rms_after: final_.rms,
-        val_rms_before: first.val_rms,
-        val_rms_after: final_.val_rms,
-        steps: steps.clone(),
-        validation,
-        noise_floor,
-        condition_number: last.condition_number,
-        rank: last.rank,
-        sigma_hat: last.sigma,
-        length_scale: model.length_scale(),
-        rank_tolerance: options.fit.rank_tolerance,
-        parameters,
-        fixed,
-        parametrisation: model.pairs().to_vec(),
-        calibrated: folded.table,
-        unfolded: folded.unfolded,
-        device: model.device_at(&x),
-        targets: (0..model.targets().len())
-            .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
-            .collect(),
-        notes,
-    })
+    Ok(report)
 }
 
 /// Identifiability of `columns` at `x`; returns the free parameter indices and the fixed ones
 /// (indices into the model's parameters).
-fn identify(
+pub(crate) fn identify(
     model: &Model,
     cal: &[Observed],
     x: &[f64],
@@ -835,7 +1022,7 @@ fn estimates(
     let mut done_blocks: Vec<Block> = Vec::new();
     for (c, p) in params.iter().enumerate() {
         match p.block {
-            Block::Device | Block::Base | Block::Tool => {
+            Block::Device | Block::Base | Block::Tool | Block::Mount(_) => {
                 if done_blocks.contains(&p.block) {
                     continue;
                 }
@@ -844,6 +1031,10 @@ fn estimates(
                 let nom = match p.block {
                     Block::Device => xyz_rpy(&device_nominal),
                     Block::Base => xyz_rpy(&nominal.base),
+                    Block::Mount(b) => model.tree().branches().get(b).map_or_else(
+                        || xyz_rpy(&Isometry3::identity()),
+                        |br| xyz_rpy(&br.table.base),
+                    ),
                     _ => xyz_rpy(&nominal.tool),
                 };
                 let est = xyz_rpy(&model.pose_at(x, p.block));

@@ -25,7 +25,21 @@
 //!   small motion of the robot expressed in its own base link frame, so that `device.z` is a
 //!   lift along the robot's base z axis and `device.rz` a turn about it;
 //! - `target.<name>.x|y|z`: offset of the target's position in the tip frame (metres);
+//! - `<branch>.base.x|y|z|rx|ry|rz`: for a tree ([`crate::tree`]), the small motion of branch
+//!   `<branch>`'s mount in the trunk's branch point frame, laid out as `base.*`;
 //! - effect parameters, named by their [`Effect`].
+//!
+//! # Trees
+//! [`Model::new_tree`] models a [`DhTree`]: every target rides on one chain (the trunk for a
+//! serial robot, else one branch), rows shared by several chains (the trunk's) have one set of
+//! parameters, and joint values are given per row of the tree, in its joint order. A tree's
+//! trunk tool and branch tools are fixed at nominal (with point measurements each is aliased
+//! with its chain's targets); [`Observation::Pose`] refers to the first chain's tip.
+//!
+//! # Device scale
+//! An [`Effect`] whose field is [`EffectField::Scale`] multiplies every modelled position in
+//! the device frame by `1 + delta` (about the device's origin): a measuring device whose length
+//! unit is off.
 //!
 //! # Hayati-Mirmirani parametrisation
 //! Consecutive joint axes within [`ModelOptions::hayati_threshold`] of parallel at the nominal
@@ -52,6 +66,7 @@ use dh_core::{Convention, DhTable, JointKind, JointSampler};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::fit::{CalibError, Problem};
+use crate::tree::{Branch, DhTree};
 
 /// Physical kind of a parameter, which decides its column scale.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -75,6 +90,8 @@ pub enum Block {
     Joint(usize),
     /// The table's tool transform.
     Tool,
+    /// A tree branch's mount (index into the tree's branches).
+    Mount(usize),
     /// A target (index into the target list).
     Target(usize),
     /// An effect (index in the order added).
@@ -123,27 +140,47 @@ pub struct Parameter {
     pub unit: Unit,
 }
 
-/// Which DH quantity an [`Effect`] changes.
+/// Which quantity an [`Effect`] changes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum EffectField {
     /// The row's joint angle (radians).
     Theta,
     /// The row's link offset (metres).
     D,
+    /// The row's link twist (radians): a rotation about the `x` axis that carries `alpha`.
+    Alpha,
+    /// The row's Hayati-Mirmirani tilt about `y` (radians), where the row has one (see
+    /// [`Model::tilt_rows`]).
+    Beta,
+    /// The measuring device's length scale: modelled positions are multiplied by `1 + delta`.
+    /// The effect's [`Effect::joint`] is ignored.
+    Scale,
 }
 
-/// A non-geometric error source: a change of one row's `theta` or `d` that depends on the
-/// joint values and on the effect's own parameters (gear ratio errors, joint compliance,
-/// coupling between joints). Added to a model with [`Model::add_effect`]; its parameters become
-/// extra Jacobian columns.
+/// A non-geometric error source: a change of one row's `theta`, `d`, `alpha` or tilt, or of the
+/// device's scale, that depends on the joint values and on the effect's own parameters (gear
+/// ratio errors, joint compliance, coupling between joints). Added to a model with
+/// [`Model::add_effect`]; its parameters become extra Jacobian columns.
 pub trait Effect: fmt::Debug + Send + Sync {
     /// Full names of the effect's parameters (e.g. `gear_ratio:j2`).
     fn parameter_names(&self) -> Vec<String>;
-    /// The joint (row name) whose `theta` or `d` the effect changes.
+    /// The joint (row name) whose quantity the effect changes.
     fn joint(&self) -> &str;
-    /// Which of the two.
+    /// Which quantity.
     fn field(&self) -> EffectField;
-    /// The change (radians or metres) at joint values `q` (one per row, in row order).
+    /// The unit of each parameter, for reports (e.g. `rad/(N m)`); empty when not given.
+    fn units(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// The effect's label (see [`crate::effects`]); by default its first parameter's name.
+    fn label(&self) -> String {
+        self.parameter_names()
+            .into_iter()
+            .next()
+            .unwrap_or_default()
+    }
+    /// The change (radians or metres) at joint values `q` (one per row, in row order). It must
+    /// be zero when every parameter is zero: the model skips such effects.
     fn delta(&self, q: &[f64], params: &[f64]) -> f64;
     /// `∂delta/∂params` at `q` into `out` (one per parameter).
     fn gradient(&self, q: &[f64], params: &[f64], out: &mut [f64]);
@@ -199,6 +236,9 @@ impl Effect for GearRatio {
     }
     fn scales(&self, length: f64) -> Vec<f64> {
         vec![length]
+    }
+    fn units(&self) -> Vec<String> {
+        vec!["rad/rad".into()]
     }
 }
 
@@ -359,7 +399,8 @@ struct Op {
 struct EffectSlot {
     effect: Arc<dyn Effect>,
     params: Range<usize>,
-    op: usize,
+    /// The op the effect changes; `None` for the device scale.
+    op: Option<usize>,
 }
 
 /// Op indices of one row.
@@ -367,6 +408,8 @@ struct EffectSlot {
 struct RowOps {
     theta: usize,
     d: usize,
+    alpha: usize,
+    beta: Option<usize>,
 }
 
 const POSE_FIELDS: [(Field, &str, OpKind); 6] = [
@@ -387,20 +430,32 @@ pub const FOLD_TOLERANCE: f64 = 1e-9;
 /// representable distance.
 const MIN_FOLD_TILT: f64 = 1e-12;
 
+/// Consecutive axes within this angle of parallel (radians, 5 degrees) that do not use
+/// Hayati-Mirmirani get a tilt about `y` held at zero, which an [`EffectField::Beta`] effect
+/// (the `parallel_tilt` candidate) can free.
+pub const NEAR_PARALLEL: f64 = 5.0 * std::f64::consts::PI / 180.0;
+
+/// Ops 0..7 are the device block.
+const DEVICE_OPS: usize = 7;
+
 /// The parametrised measurement model (see the module docs for frames and parameters).
 #[derive(Clone, Debug)]
 pub struct Model {
     nominal: DhTable,
+    tree: DhTree,
     length_scale: f64,
     orientation_scale: f64,
     ops: Vec<Op>,
     rows: Vec<RowOps>,
-    tool_end: usize,
+    /// Op indices of each chain, device block first.
+    chains: Vec<Vec<usize>>,
     parameters: Vec<Parameter>,
     param_op: Vec<Option<usize>>,
     targets: Vec<(String, Vector3<f64>)>,
+    target_chain: Vec<usize>,
     target_params: usize,
     effects: Vec<EffectSlot>,
+    scale_param: Option<usize>,
     pairs: Vec<PairParametrisation>,
 }
 
@@ -413,6 +468,37 @@ fn finite(what: &str, v: f64) -> Result<f64, CalibError> {
             value: v,
         }))
     }
+}
+
+/// Per table row: does it carry a Hayati `beta` parameter, a zero tilt placeholder, and is
+/// its `d` error dropped.
+#[derive(Clone, Copy, Debug, Default)]
+struct RowPlan {
+    beta: bool,
+    placeholder: bool,
+    drop_d: bool,
+}
+
+fn plan_table(
+    table: &DhTable,
+    threshold: f64,
+) -> Result<(Vec<PairParametrisation>, Vec<RowPlan>), CalibError> {
+    let n = table.rows.len();
+    let pairs = classify_pairs(table, threshold)?;
+    let mut plan = vec![RowPlan::default(); n];
+    for (i, p) in pairs.iter().enumerate() {
+        let beta_row = match table.convention {
+            Convention::Standard => i,
+            Convention::Modified => i + 1,
+        };
+        if p.hayati {
+            plan[i].drop_d = true;
+            plan[beta_row].beta = true;
+        } else if p.angle <= NEAR_PARALLEL {
+            plan[beta_row].placeholder = true;
+        }
+    }
+    Ok((pairs, plan))
 }
 
 impl Model {
@@ -428,10 +514,24 @@ impl Model {
         targets: &[String],
         options: &ModelOptions,
     ) -> Result<Model, CalibError> {
-        if table.rows.is_empty() {
+        let on: Vec<(String, usize)> = targets.iter().map(|t| (t.clone(), 0)).collect();
+        Self::new_tree(&DhTree::serial(table), &on, options)
+    }
+
+    /// Builds the model of a tree; each target is `(name, chain)` with `chain` a branch index
+    /// (0 for a serial robot). See the module docs.
+    ///
+    /// # Errors
+    /// As [`Model::new`], and [`CalibError::BadOption`] for a chain index out of range.
+    pub fn new_tree(
+        tree: &DhTree,
+        targets: &[(String, usize)],
+        options: &ModelOptions,
+    ) -> Result<Model, CalibError> {
+        if tree.rows().is_empty() {
             return Err(CalibError::Core(dh_core::CoreError::NoJoints));
         }
-        for r in &table.rows {
+        for r in tree.rows() {
             for (f, v) in [
                 ("a", r.a),
                 ("alpha", r.alpha),
@@ -441,6 +541,17 @@ impl Model {
                 finite(&format!("{}.{f}", r.name), v)?;
             }
         }
+        for (name, c) in targets {
+            if *c >= tree.chain_count() {
+                return Err(CalibError::BadOption {
+                    what: format!("target '{name}'"),
+                    reason: format!(
+                        "expected a chain index below {}, found {c}",
+                        tree.chain_count()
+                    ),
+                });
+            }
+        }
         let t = options.hayati_threshold;
         if !(t.is_finite() && t >= 0.0) {
             return Err(CalibError::BadOption {
@@ -448,7 +559,7 @@ impl Model {
                 reason: format!("expected a finite angle >= 0, found {t}"),
             });
         }
-        let length_scale = options.length_scale.unwrap_or_else(|| table.size());
+        let length_scale = options.length_scale.unwrap_or_else(|| tree.size());
         let orientation_scale = options.orientation_scale.unwrap_or(length_scale);
         for (what, v) in [
             ("length scale", length_scale),
@@ -461,95 +572,70 @@ impl Model {
                 });
             }
         }
-        let n = table.rows.len();
-        let pairs = classify_pairs(table, t)?;
-        let mut beta_rows = vec![false; n];
-        let mut drop_d = vec![false; n];
-        for (i, p) in pairs.iter().enumerate() {
-            if p.hayati {
-                drop_d[i] = true;
-                match table.convention {
-                    Convention::Standard => beta_rows[i] = true,
-                    Convention::Modified => beta_rows[i + 1] = true,
-                }
-            }
+        let (mut pairs, mut plan) = plan_table(tree.trunk(), t)?;
+        for b in tree.branches() {
+            let (p, r) = plan_table(&b.table, t)?;
+            pairs.extend(p);
+            plan.extend(r);
         }
+        let nominal = if tree.branches().is_empty() {
+            tree.trunk().clone()
+        } else {
+            tree.joint_table()
+        };
 
         let mut m = Model {
-            nominal: table.clone(),
+            nominal,
+            tree: tree.clone(),
             length_scale,
             orientation_scale,
             ops: Vec::new(),
             rows: Vec::new(),
-            tool_end: 0,
+            chains: Vec::new(),
             parameters: Vec::new(),
             param_op: Vec::new(),
             targets: targets
                 .iter()
-                .map(|name| (name.clone(), Vector3::zeros()))
+                .map(|(name, _)| (name.clone(), Vector3::zeros()))
                 .collect(),
+            target_chain: targets.iter().map(|(_, c)| *c).collect(),
             target_params: 0,
             effects: Vec::new(),
+            scale_param: None,
             pairs,
         };
         m.push_pose_block("device", Block::Device, &Isometry3::identity());
-        m.push_pose_block("base", Block::Base, &table.base);
-        for (i, row) in table.rows.iter().enumerate() {
-            let revolute = (row.kind == JointKind::Revolute).then_some(i);
-            let prismatic = (row.kind == JointKind::Prismatic).then_some(i);
-            let blk = Block::Joint(i);
-            let name = |f: &str| format!("{}.{f}", row.name);
-            let alpha = (OpKind::Rot(Axis::X), row.alpha, None, Some(Field::Alpha));
-            let a = (OpKind::Trans(Axis::X), row.a, None, Some(Field::A));
-            let beta = (OpKind::Rot(Axis::Y), 0.0, None, Some(Field::Beta));
-            let theta = (
-                OpKind::Rot(Axis::Z),
-                row.theta,
-                revolute,
-                Some(Field::Theta),
-            );
-            let d_field = (!drop_d[i]).then_some(Field::D);
-            let d = (OpKind::Trans(Axis::Z), row.d, prismatic, d_field);
-            let mut seq = Vec::with_capacity(5);
-            match table.convention {
-                Convention::Standard => {
-                    seq.extend([theta, d, a, alpha]);
-                    if beta_rows[i] {
-                        seq.push(beta);
-                    }
-                }
-                Convention::Modified => {
-                    seq.extend([alpha, a]);
-                    if beta_rows[i] {
-                        seq.push(beta);
-                    }
-                    seq.extend([theta, d]);
-                }
-            }
-            let mut ops = RowOps { theta: 0, d: 0 };
-            for (kind, value, joint, field) in seq {
-                let param = field.map(|f| {
-                    let fname = match f {
-                        Field::A => "a",
-                        Field::Alpha => "alpha",
-                        Field::D => "d",
-                        Field::Theta => "theta",
-                        _ => "beta",
-                    };
-                    m.push_param(name(fname), blk, f, unit_of(kind))
-                });
-                let idx = m.push_op(kind, value, joint, param);
-                if field == Some(Field::Theta) {
-                    ops.theta = idx;
-                }
-                if kind == OpKind::Trans(Axis::Z) {
-                    ops.d = idx;
-                }
-            }
-            m.rows.push(ops);
+        m.push_pose_block("base", Block::Base, &tree.trunk().base);
+        let trunk_n = tree.trunk().rows.len();
+        for (i, p) in plan.iter().enumerate().take(trunk_n) {
+            m.push_row(tree.trunk(), i, i, *p);
         }
-        m.push_pose_block("tool", Block::Tool, &table.tool);
-        m.tool_end = m.ops.len();
+        if tree.branches().is_empty() {
+            m.push_pose_block("tool", Block::Tool, &tree.trunk().tool);
+            m.chains.push((0..m.ops.len()).collect());
+        } else {
+            let f = m.push_op(OpKind::Fixed, 0.0, None, None);
+            m.ops[f].fixed = Frame::from_iso(&tree.trunk().tool);
+            let trunk_ops: Vec<usize> = (0..m.ops.len()).collect();
+            let mut g = trunk_n;
+            for (b, br) in tree.branches().iter().enumerate() {
+                let start = m.ops.len();
+                m.push_pose_block(
+                    &format!("{}.base", br.name),
+                    Block::Mount(b),
+                    &br.table.base,
+                );
+                for i in 0..br.table.rows.len() {
+                    m.push_row(&br.table, i, g, plan[g]);
+                    g += 1;
+                }
+                let f = m.push_op(OpKind::Fixed, 0.0, None, None);
+                m.ops[f].fixed = Frame::from_iso(&br.table.tool);
+                let mut chain = trunk_ops.clone();
+                chain.extend(start..m.ops.len());
+                m.chains.push(chain);
+            }
+        }
         m.target_params = m.parameters.len();
         let names: Vec<String> = m.targets.iter().map(|(n, _)| n.clone()).collect();
         for (k, name) in names.iter().enumerate() {
@@ -563,6 +649,70 @@ impl Model {
             }
         }
         Ok(m)
+    }
+
+    /// Pushes the ops and parameters of row `i` of `table` (global row `g`).
+    fn push_row(&mut self, table: &DhTable, i: usize, g: usize, plan: RowPlan) {
+        let row = &table.rows[i];
+        let revolute = (row.kind == JointKind::Revolute).then_some(g);
+        let prismatic = (row.kind == JointKind::Prismatic).then_some(g);
+        let blk = Block::Joint(g);
+        let alpha = (OpKind::Rot(Axis::X), row.alpha, None, Some(Field::Alpha));
+        let a = (OpKind::Trans(Axis::X), row.a, None, Some(Field::A));
+        let beta_field = plan.beta.then_some(Field::Beta);
+        let beta = (OpKind::Rot(Axis::Y), 0.0, None, beta_field);
+        let with_beta = plan.beta || plan.placeholder;
+        let theta = (
+            OpKind::Rot(Axis::Z),
+            row.theta,
+            revolute,
+            Some(Field::Theta),
+        );
+        let d_field = (!plan.drop_d).then_some(Field::D);
+        let d = (OpKind::Trans(Axis::Z), row.d, prismatic, d_field);
+        let mut seq = Vec::with_capacity(5);
+        match table.convention {
+            Convention::Standard => {
+                seq.extend([theta, d, a, alpha]);
+                if with_beta {
+                    seq.push(beta);
+                }
+            }
+            Convention::Modified => {
+                seq.extend([alpha, a]);
+                if with_beta {
+                    seq.push(beta);
+                }
+                seq.extend([theta, d]);
+            }
+        }
+        let mut ops = RowOps {
+            theta: 0,
+            d: 0,
+            alpha: 0,
+            beta: None,
+        };
+        for (kind, value, joint, field) in seq {
+            let param = field.map(|f| {
+                let fname = match f {
+                    Field::A => "a",
+                    Field::Alpha => "alpha",
+                    Field::D => "d",
+                    Field::Theta => "theta",
+                    _ => "beta",
+                };
+                self.push_param(format!("{}.{fname}", row.name), blk, f, unit_of(kind))
+            });
+            let idx = self.push_op(kind, value, joint, param);
+            match kind {
+                OpKind::Rot(Axis::Z) => ops.theta = idx,
+                OpKind::Trans(Axis::Z) => ops.d = idx,
+                OpKind::Rot(Axis::X) => ops.alpha = idx,
+                OpKind::Rot(Axis::Y) => ops.beta = Some(idx),
+                _ => {}
+            }
+        }
+        self.rows.push(ops);
     }
 
     fn push_param(&mut self, name: String, block: Block, field: Field, unit: Unit) -> usize {
@@ -609,19 +759,49 @@ impl Model {
     /// Adds an effect; its parameters are appended to the parameter list.
     ///
     /// # Errors
-    /// [`CalibError::MissingJoint`] when the effect names no row of the table.
+    /// [`CalibError::MissingJoint`] when the effect names no row of the model;
+    /// [`CalibError::BadOption`] for a tilt effect on a row without a tilt (see
+    /// [`Model::tilt_rows`]) or one that already estimates it, and for a second device scale.
     pub fn add_effect(&mut self, effect: Arc<dyn Effect>) -> Result<Range<usize>, CalibError> {
-        let row = self
-            .nominal
-            .rows
-            .iter()
-            .position(|r| r.name == effect.joint())
-            .ok_or_else(|| CalibError::MissingJoint {
-                joint: effect.joint().into(),
-            })?;
-        let op = match effect.field() {
-            EffectField::Theta => self.rows[row].theta,
-            EffectField::D => self.rows[row].d,
+        let op = if effect.field() == EffectField::Scale {
+            if self.scale_param.is_some() {
+                return Err(CalibError::BadOption {
+                    what: "effects".into(),
+                    reason: "expected at most one device scale, found two".into(),
+                });
+            }
+            None
+        } else {
+            let row =
+                self.tree
+                    .row_index(effect.joint())
+                    .ok_or_else(|| CalibError::MissingJoint {
+                        joint: effect.joint().into(),
+                    })?;
+            let ops = self.rows[row];
+            Some(match effect.field() {
+                EffectField::Theta => ops.theta,
+                EffectField::D => ops.d,
+                EffectField::Alpha => ops.alpha,
+                EffectField::Beta => match ops.beta {
+                    Some(o) if self.ops[o].param.is_none() => o,
+                    Some(_) => {
+                        return Err(CalibError::BadOption {
+                            what: format!("effect on '{}'", effect.joint()),
+                            reason: "expected a row whose tilt is not estimated already, found \
+                                     a Hayati-Mirmirani row"
+                                .into(),
+                        })
+                    }
+                    None => {
+                        return Err(CalibError::BadOption {
+                            what: format!("effect on '{}'", effect.joint()),
+                            reason: "expected a row of a near-parallel pair, found none".into(),
+                        })
+                    }
+                },
+                EffectField::Scale => ops.theta,
+            })
         };
         let e = self.effects.len();
         let start = self.parameters.len();
@@ -629,6 +809,9 @@ impl Model {
             self.push_param(name, Block::Effect(e), Field::Effect(k), Unit::Other);
         }
         let params = start..self.parameters.len();
+        if op.is_none() {
+            self.scale_param = Some(start);
+        }
         self.effects.push(EffectSlot {
             effect,
             params: params.clone(),
@@ -637,10 +820,41 @@ impl Model {
         Ok(params)
     }
 
+    /// The effects added, in order, with their parameter ranges.
+    pub fn effects(&self) -> Vec<(Arc<dyn Effect>, Range<usize>)> {
+        self.effects
+            .iter()
+            .map(|s| (s.effect.clone(), s.params.clone()))
+            .collect()
+    }
+
+    /// The tree the model was built from (a trunk only for a serial robot).
+    pub fn tree(&self) -> &DhTree {
+        &self.tree
+    }
+
+    /// Rows (tree joint order) with a zero tilt about `y` that an [`EffectField::Beta`] effect
+    /// can free: the rows that would carry `beta` of a pair within [`NEAR_PARALLEL`] of
+    /// parallel that does not use Hayati-Mirmirani.
+    pub fn tilt_rows(&self) -> Vec<usize> {
+        self.rows
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.beta.is_some_and(|o| self.ops[o].param.is_none()))
+            .map(|(i, _)| i)
+            .collect()
+    }
+
+    /// The chain target `k` rides on.
+    pub fn target_chain(&self, k: usize) -> usize {
+        self.target_chain.get(k).copied().unwrap_or(0)
+    }
+
     /// The parameters, in the order of `x`: device (6), base (6), per row in chain order
     /// (standard: `theta`, `d`, `a`, `alpha`, `beta`; modified: `alpha`, `a`, `beta`, `theta`,
     /// `d`; `d` absent when dropped, `beta` only for Hayati rows), tool (6), targets (3 each),
-    /// effects.
+    /// effects. For a tree: device, base, the trunk's rows, then per branch its mount (6) and
+    /// rows, then targets and effects.
     pub fn parameters(&self) -> &[Parameter] {
         &self.parameters
     }
@@ -662,7 +876,8 @@ impl Model {
             .collect()
     }
 
-    /// The nominal table the model was built from.
+    /// The nominal table the model was built from; for a tree, [`DhTree::joint_table`] (every
+    /// row in joint order, the trunk's base and tool), which is not a kinematic chain.
     pub fn nominal(&self) -> &DhTable {
         &self.nominal
     }
@@ -701,14 +916,14 @@ impl Model {
         s
     }
 
-    /// Priorities for [`crate::fit::identifiability`] (lower is fixed first): base and tool
-    /// (always aliased with the device frame and the targets) 0, effects 1, DH rows 2, targets
+    /// Priorities for [`crate::fit::identifiability`] (lower is fixed first): base, tool and
+    /// mounts (always aliased with the device frame, the targets or the rows next to them) 0, effects 1, DH rows 2, targets
     /// 3, device 4 (the device frame and the targets are what every step estimates).
     pub fn priorities(&self) -> Vec<u32> {
         self.parameters
             .iter()
             .map(|p| match p.block {
-                Block::Base | Block::Tool => 0,
+                Block::Base | Block::Tool | Block::Mount(_) => 0,
                 Block::Effect(_) => 1,
                 Block::Joint(_) => 2,
                 Block::Target(_) => 3,
@@ -805,81 +1020,132 @@ impl Model {
                 + o.joint.and_then(|j| q.get(j)).copied().unwrap_or(0.0)
         }));
         for slot in &self.effects {
-            let params = x.get(slot.params.clone()).unwrap_or(&[]);
-            out[slot.op] += slot.effect.delta(q, params);
+            if let Some(op) = slot.op {
+                let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                if params.iter().any(|p| *p != 0.0) {
+                    out[op] += slot.effect.delta(q, params);
+                }
+            }
         }
     }
 
-    /// Tip frame in the device frame; `before[i]` receives the frame before op `i`.
+    /// `1 + s` of the device scale at `x` and `q` (1 without one).
+    fn scale_factor(&self, x: &[f64], q: &[f64]) -> f64 {
+        match self.effects.iter().find(|s| s.op.is_none()) {
+            Some(slot) => {
+                let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                1.0 + slot.effect.delta(q, params)
+            }
+            None => 1.0,
+        }
+    }
+
+    /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before
+    /// op `i` for the ops visited, and `on[i]` whether op `i` was visited.
     fn chain(
         &self,
         values: &[f64],
-        mut before: Option<&mut Vec<Frame>>,
-        ops: Range<usize>,
+        mut before: Option<(&mut Vec<Frame>, &mut Vec<bool>)>,
+        ops: &[usize],
     ) -> Frame {
         let mut f = Frame::IDENTITY;
-        if let Some(b) = before.as_deref_mut() {
+        if let Some((b, on)) = before.as_mut() {
             b.clear();
+            b.resize(self.ops.len(), Frame::IDENTITY);
+            on.clear();
+            on.resize(self.ops.len(), false);
         }
-        for i in ops {
+        for &i in ops {
             let o = &self.ops[i];
-            if let Some(b) = before.as_deref_mut() {
-                b.push(f);
+            if let Some((b, on)) = before.as_mut() {
+                b[i] = f;
+                on[i] = true;
             }
             f.apply(o.kind, values[i], &o.fixed);
         }
         f
     }
 
+    fn chain_ops(&self, chain: usize) -> &[usize] {
+        self.chains
+            .get(chain)
+            .or_else(|| self.chains.first())
+            .map_or(&[], |c| c.as_slice())
+    }
+
     /// Where target `k` is in the device frame at parameters `x` and joint values `q` (one per
-    /// row), metres.
+    /// row), metres (the device scale applied).
     pub fn point(&self, x: &[f64], q: &[f64], target: usize) -> Vector3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, q, &mut v);
-        let f = self.chain(&v, None, 0..self.tool_end);
-        f.t + f.r * self.target_at(x, target)
+        let f = self.chain(&v, None, self.chain_ops(self.target_chain(target)));
+        (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q)
     }
 
-    /// The tip frame's pose in the device frame at `x` and `q`.
+    /// The first chain's tip frame in the device frame at `x` and `q` (its position scaled by
+    /// the device scale).
     pub fn tip(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
-        let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &mut v);
-        self.chain(&v, None, 0..self.tool_end).to_iso()
+        self.tip_of(x, q, 0)
     }
 
-    /// The robot's own forward kinematics at `x` and `q` (tip in the base link frame, without
-    /// the device frame).
-    pub fn robot_fk(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
+    /// Chain `chain`'s tip frame in the device frame at `x` and `q` (its position scaled by the
+    /// device scale).
+    pub fn tip_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, q, &mut v);
-        // Ops 0..7 are the device block.
-        self.chain(&v, None, 7..self.tool_end).to_iso()
+        let mut f = self.chain(&v, None, self.chain_ops(chain));
+        f.t *= self.scale_factor(x, q);
+        f.to_iso()
+    }
+
+    /// The robot's own forward kinematics at `x` and `q` (the first chain's tip in the base
+    /// link frame, without the device frame).
+    pub fn robot_fk(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
+        self.robot_fk_of(x, q, 0)
+    }
+
+    /// Chain `chain`'s tip in the base link frame at `x` and `q` (without the device frame).
+    pub fn robot_fk_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &mut v);
+        let ops = self.chain_ops(chain);
+        self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]))
+            .to_iso()
     }
 
     /// Residuals of one observation (model minus measured) into `out` (3 or 6 values).
     pub fn residuals(&self, x: &[f64], obs: &Observed, out: &mut [f64]) {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, &obs.q, &mut v);
-        let f = self.chain(&v, None, 0..self.tool_end);
-        self.write_residuals(x, &f, obs, out);
+        let f = self.chain(&v, None, self.chain_ops(self.observation_chain(obs)));
+        let s = self.scale_factor(x, &obs.q);
+        self.write_residuals(x, &f, s, obs, out);
+    }
+
+    fn observation_chain(&self, obs: &Observed) -> usize {
+        match &obs.observation {
+            Observation::Point { target, .. } => self.target_chain(*target),
+            Observation::Pose(_) => 0,
+        }
     }
 
     fn write_residuals(
         &self,
         x: &[f64],
         f: &Frame,
+        scale: f64,
         obs: &Observed,
         out: &mut [f64],
     ) -> Vector3<f64> {
         match &obs.observation {
             Observation::Point { target, point } => {
-                let p = f.t + f.r * self.target_at(x, *target);
+                let p = (f.t + f.r * self.target_at(x, *target)) * scale;
                 let r = p - point;
                 out[..3].copy_from_slice(r.as_slice());
                 Vector3::zeros()
             }
             Observation::Pose(m) => {
-                let r = f.t - m.translation.vector;
+                let r = f.t * scale - m.translation.vector;
                 out[..3].copy_from_slice(r.as_slice());
                 let rel = Rotation3::from_matrix_unchecked(
                     f.r * m.rotation.to_rotation_matrix().matrix().transpose(),
@@ -912,8 +1178,11 @@ impl Model {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, &obs.q, &mut v);
         let mut before = Vec::with_capacity(self.ops.len());
-        let f = self.chain(&v, Some(&mut before), 0..self.tool_end);
-        let phi = self.write_residuals(x, &f, obs, residuals);
+        let mut on = Vec::with_capacity(self.ops.len());
+        let ops = self.chain_ops(self.observation_chain(obs));
+        let f = self.chain(&v, Some((&mut before, &mut on)), ops);
+        let scale = self.scale_factor(x, &obs.q);
+        let phi = self.write_residuals(x, &f, scale, obs, residuals);
         let (point, target, pose) = match &obs.observation {
             Observation::Point { target, .. } => {
                 (f.t + f.r * self.target_at(x, *target), Some(*target), false)
@@ -932,6 +1201,10 @@ impl Model {
             let mut dp = Vector3::zeros();
             let mut dw = Vector3::zeros();
             let op_motion = |o: usize, g: f64, dp: &mut Vector3<f64>, dw: &mut Vector3<f64>| {
+                if !on[o] {
+                    // Not on this observation's chain (the other arm of a tree).
+                    return;
+                }
                 let fr = &before[o];
                 match self.ops[o].kind {
                     OpKind::Trans(a) => *dp += fr.r.column(a as usize) * g,
@@ -955,7 +1228,12 @@ impl Model {
                     let params = x.get(slot.params.clone()).unwrap_or(&[]);
                     slot.effect.gradient(&obs.q, params, &mut grad);
                     let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
-                    op_motion(slot.op, g, &mut dp, &mut dw);
+                    match slot.op {
+                        Some(op) => op_motion(op, g, &mut dp, &mut dw),
+                        // Device scale: the unscaled position, undoing the factor below.
+                        None if scale != 0.0 => dp = point * (g / scale),
+                        None => {}
+                    }
                 }
                 Some(_) => {
                     if let Some(o) = self.param_op[c] {
@@ -965,7 +1243,7 @@ impl Model {
                 None => {}
             }
             for i in 0..3 {
-                jacobian[i * nc + k] = dp[i];
+                jacobian[i * nc + k] = dp[i] * scale;
             }
             if rows == 6 {
                 let dr = jl_inv * dw;
@@ -991,63 +1269,92 @@ impl Model {
     /// and it is the form vendors' calibration files use. When the check fails (tilts so small
     /// that the digits are lost) the tilts are left out of the table and listed in
     /// [`FoldedTable::unfolded`]. Effects cannot be expressed in DH and are never in the table.
+    ///
+    /// For a tree this is the trunk (its tool the nominal branch point); see
+    /// [`Model::tree_at`] for the whole tree.
     pub fn table_at(&self, x: &[f64]) -> FoldedTable {
-        let mut table = self.nominal.clone();
-        table.base = self.pose_at(x, Block::Base);
-        table.tool = self.pose_at(x, Block::Tool);
+        let (tree, unfolded) = self.tree_at(x);
+        FoldedTable {
+            table: tree.trunk().clone(),
+            unfolded,
+        }
+    }
+
+    /// The calibrated tree at `x`, folded as [`Model::table_at`] describes, with the tilts that
+    /// could not be folded (name, radians). Branch mounts carry their small motions.
+    pub fn tree_at(&self, x: &[f64]) -> (DhTree, Vec<(String, f64)>) {
+        let mut trunk = self.tree.trunk().clone();
+        trunk.base = self.pose_at(x, Block::Base);
+        if self.tree.branches().is_empty() {
+            trunk.tool = self.pose_at(x, Block::Tool);
+        }
+        let mut branches: Vec<Branch> = self.tree.branches().to_vec();
+        for (b, br) in branches.iter_mut().enumerate() {
+            br.table.base = self.pose_at(x, Block::Mount(b));
+        }
         let mut betas = Vec::new();
         for (c, p) in self.parameters.iter().enumerate() {
             let v = x.get(c).copied().unwrap_or(0.0);
-            if let Block::Joint(i) = p.block {
+            if let Block::Joint(g) = p.block {
+                let (t, i) = self.tree.place(g);
+                let table = match t {
+                    None => &mut trunk,
+                    Some(b) => &mut branches[b].table,
+                };
                 let row = &mut table.rows[i];
                 match p.field {
                     Field::A => row.a += v,
                     Field::Alpha => row.alpha += v,
                     Field::D => row.d += v,
                     Field::Theta => row.theta += v,
-                    Field::Beta if v != 0.0 => betas.push((i, p.name.clone(), v)),
+                    Field::Beta if v != 0.0 => betas.push((t, i, p.name.clone(), v)),
                     _ => {}
                 }
             }
         }
+        let build = |trunk: DhTable, branches: Vec<Branch>| {
+            if branches.is_empty() {
+                Some(DhTree::serial(&trunk))
+            } else {
+                DhTree::new(trunk, branches).ok()
+            }
+        };
+        let approx = build(trunk.clone(), branches.clone()).unwrap_or_else(|| self.tree.clone());
         if betas.is_empty() {
-            return FoldedTable {
-                table,
-                unfolded: vec![],
-            };
+            return (approx, vec![]);
         }
-        let unfolded: Vec<(String, f64)> = betas.iter().map(|(_, n, v)| (n.clone(), *v)).collect();
-        let approx = table.clone();
-        let mut folded = table;
+        let unfolded: Vec<(String, f64)> =
+            betas.iter().map(|(_, _, n, v)| (n.clone(), *v)).collect();
         let mut ok = true;
-        for (i, _, beta) in &betas {
-            if !fold_beta(&mut folded, *i, *beta) {
+        for (t, i, _, beta) in &betas {
+            let table = match t {
+                None => &mut trunk,
+                Some(b) => &mut branches[*b].table,
+            };
+            if !fold_beta(table, *i, *beta) {
                 ok = false;
             }
         }
-        if ok && self.matches(&folded, x) {
-            FoldedTable {
-                table: folded,
-                unfolded: vec![],
-            }
-        } else {
-            FoldedTable {
-                table: approx,
-                unfolded,
-            }
+        match build(trunk, branches) {
+            Some(folded) if ok && self.matches(&folded, x) => (folded, vec![]),
+            _ => (approx, unfolded),
         }
     }
 
-    fn matches(&self, table: &DhTable, x: &[f64]) -> bool {
-        let mut sampler = JointSampler::new(&table.rows, table.size(), 0x5eed);
+    fn matches(&self, tree: &DhTree, x: &[f64]) -> bool {
+        let mut sampler = JointSampler::new(tree.rows(), tree.size(), 0x5eed);
         let mut q = Vec::new();
         for _ in 0..8 {
             sampler.next_into(&mut q);
-            let Ok(a) = table.fk(&q) else { return false };
-            let b = self.robot_fk(x, &q);
-            let (dp, dr) = dh_core::pose::pose_error(&a, &b);
-            if !(dp <= FOLD_TOLERANCE && dr <= FOLD_TOLERANCE) {
+            let Ok(frames) = tree.frames(&q) else {
                 return false;
+            };
+            for (c, a) in frames.tips.iter().enumerate() {
+                let b = self.robot_fk_of(x, &q, c);
+                let (dp, dr) = dh_core::pose::pose_error(a, &b);
+                if !(dp <= FOLD_TOLERANCE && dr <= FOLD_TOLERANCE) {
+                    return false;
+                }
             }
         }
         true

@@ -1,0 +1,1168 @@
+//! Automatic diagnosis: trace the residual of a geometric calibration to the effect the model
+//! lacks, add it, and report the error before and after.
+//!
+//! # Procedure
+//! 1. **Is anything left?** After the `nominal` and `geometric` steps of
+//!    [`crate::calibrate`], the geometric residual is compared with the noise: with a known
+//!    noise (the `sigma` option or every sample's own) by the chi-square test
+//!    `Σ (r/σ)² ~ χ²(m − p)`; with repeated poses (samples sharing `config`) by the
+//!    lack-of-fit F test against the pure error (N. R. Draper, H. Smith, *Applied Regression
+//!    Analysis*, 3rd ed., 1998, §2.1); without either there is no independent noise estimate
+//!    and the held-out comparison below decides alone. A test that finds nothing left (at
+//!    [`DiagnoseOptions::alpha`]) stops the automatic selection.
+//! 2. **Which effect explains it?** Every candidate's Jacobian columns `C` are projected onto
+//!    the orthogonal complement of the columns `J` of the parameters already estimated
+//!    (`C⊥ = (I − Q Qᵀ) C` with `J = Q R`, all columns scaled to metres as in [`crate::fit`]);
+//!    its **score** is the reduction of the residual sum of squares that adding it would give
+//!    to first order, `‖P_{C⊥} r‖²` (m²): what the candidate explains that the geometric
+//!    parameters cannot. Its **held-out RMS** is the validation (or cross-validation) RMS after
+//!    the same linearised (one Gauss-Newton step) refit with it added.
+//! 3. **Aliasing**: a candidate whose projected columns keep less than [`ALIAS_SINE`] of their
+//!    length (the sine of the angle between its column space and the estimated one) is
+//!    mimicked by the geometric parameters (a device scale when every length is free); it is
+//!    reported as aliased and never selected.
+//! 4. **Selection rule** (automatic mode): candidates are ranked by score minus the BIC
+//!    penalty `k σ̂² ln m` (`k` parameters, `m` residuals); the best ones are refitted in
+//!    full (nonlinear) in turn, and the first one that passes all of
+//!    - (a) the F-to-enter test `F = (ΔSSR / k) / (SSR / (m − p))` at `alpha / K`
+//!      (Bonferroni over the `K` eligible candidates of the round),
+//!    - (b) a lower BIC `m ln(SSR/m) + p ln m` on the calibration data,
+//!    - (c) a significant held-out improvement: the one-sided paired t test at `alpha` over
+//!      pose groups of `Σ (d_before² − d_after²)` on the validation samples, or on the
+//!      cross-validation predictions when there is no validation split (skipped when there is
+//!      neither),
+//!
+//!    is added; then the loop repeats. It stops when none of the
+//!    [`DiagnoseOptions::trials`] best candidates passes, or after
+//!    [`DiagnoseOptions::max_effects`]. With explicit labels every non-aliased, identifiable
+//!    candidate is added in the order of its score, without tests.
+//! 5. **Structure that no candidate explains**: the final residuals are regressed on
+//!    `1, sin q_j, cos q_j, sin 2q_j, cos 2q_j` for every joint `j` (F or chi-square test against
+//!    the noise estimate) and tested for correlation between consecutive poses (pose order,
+//!    i.e. time: the self-normalised lag-1 statistic `Σ a_i / sqrt(Σ a_i²)`,
+//!    `a_i = r̄_i · r̄_{i+1}` over pose-mean residuals), each at `alpha / (joints + 1)`. What is
+//!    significant is reported with binned residuals rather than fitted.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use dh_core::{DhTable, JointKind};
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use crate::calibrate::{CalibrationOptions, Prepared, Report, Session, StepReport, Validation};
+use crate::data::Measurements;
+use crate::effects::{self, EffectContext};
+use crate::fit::{CalibError, FitOutcome};
+use crate::gravity::{GravityModel, Inertials};
+use crate::model::{Effect, Model, Observation, Observed};
+use crate::stats;
+use crate::tree::DhTree;
+
+/// A candidate whose projected columns keep less than this fraction of their length is aliased
+/// with the parameters already estimated (0.1 %).
+pub const ALIAS_SINE: f64 = 1e-3;
+
+/// The selection rule, as reported in [`Diagnosis::rule`].
+pub const RULE: &str = "rank candidates by score (first-order SSR reduction beyond the estimated \
+parameters) minus k*sigma^2*ln(m); refit the best in turn and add the first that passes (a) F-to-enter \
+at alpha/K (Bonferroni over the K eligible candidates), (b) lower BIC on calibration data, (c) a \
+one-sided paired t test at alpha over pose groups of the held-out squared errors (validation split, \
+else cross-validation); stop when none of the tried candidates passes; aliased candidates (sine < 1e-3) \
+are never selected";
+
+/// Which effects to consider.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum EffectSelection {
+    /// Every applicable candidate ([`effects::candidates`]), selected by the rule.
+    #[default]
+    Auto,
+    /// None: stop after the geometric step.
+    None,
+    /// These labels, each added unless aliased or unidentifiable.
+    Labels(Vec<String>),
+}
+
+/// Options of [`diagnose`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Which effects.
+    pub effects: EffectSelection,
+    /// Link masses for the gravity effects; `None` skips them (and says so).
+    pub inertials: Option<Inertials>,
+    /// Gravity in the base link frame (m/s²). Default `(0, 0, -9.80665)`.
+    pub gravity: Vector3<f64>,
+    /// Significance level of every test. Default 0.01.
+    pub alpha: f64,
+    /// Most effects added. Default 8.
+    pub max_effects: usize,
+    /// Candidates refitted per round before giving up. Default 3.
+    pub trials: usize,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        Self {
+            effects: EffectSelection::Auto,
+            inertials: None,
+            gravity: GravityModel::default_gravity(),
+            alpha: 0.01,
+            max_effects: 8,
+            trials: 3,
+        }
+    }
+}
+
+/// What became of a candidate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CandidateStatus {
+    /// Added to the model.
+    Selected,
+    /// Mimicked by the parameters already estimated; never selected.
+    Aliased,
+    /// Refitted and rejected by the rule (see the round's trials).
+    Rejected,
+    /// Not added (score too small, not tried, or selection stopped).
+    NotSelected,
+    /// Its columns are zero on these data (e.g. a coupling to a joint that never moves).
+    Inert,
+}
+
+impl CandidateStatus {
+    /// Lowercase name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Selected => "selected",
+            Self::Aliased => "aliased",
+            Self::Rejected => "rejected",
+            Self::NotSelected => "not selected",
+            Self::Inert => "inert",
+        }
+    }
+}
+
+/// One row of the candidate table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CandidateReport {
+    /// The effect's label.
+    pub label: String,
+    /// Number of parameters.
+    pub parameters: usize,
+    /// First-order reduction of the calibration sum of squares (m²) beyond the parameters
+    /// estimated when it was scored.
+    pub score: f64,
+    /// Sine of the angle between its columns and the estimated ones (1: independent).
+    pub independence: f64,
+    /// Held-out RMS (metres) with it added, linearised; `None` without validation.
+    pub val_rms: Option<f64>,
+    /// What became of it.
+    pub status: CandidateStatus,
+}
+
+/// One full refit of a candidate and the tests of the rule.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trial {
+    /// The candidate.
+    pub label: String,
+    /// Calibration RMS after the refit (metres).
+    pub rms: f64,
+    /// Held-out RMS after the refit (metres).
+    pub val_rms: Option<f64>,
+    /// F-to-enter and its p-value.
+    pub f: f64,
+    /// p-value of `f`.
+    pub f_p: f64,
+    /// The Bonferroni threshold it was compared with (`alpha / K`).
+    pub f_threshold: f64,
+    /// BIC before and after.
+    pub bic: (f64, f64),
+    /// Paired t statistic of the held-out improvement and its one-sided p-value.
+    pub held_out_t: Option<(f64, f64)>,
+    /// Whether it was added.
+    pub accepted: bool,
+    /// Why not, when not.
+    pub reason: String,
+}
+
+/// One round of scoring.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Round {
+    /// Calibration RMS at the start of the round (metres).
+    pub rms: f64,
+    /// Held-out RMS at the start, linearised as the candidates' (metres).
+    pub val_rms: Option<f64>,
+    /// Every candidate scored, best score first.
+    pub candidates: Vec<CandidateReport>,
+    /// The candidates refitted, in order.
+    pub trials: Vec<Trial>,
+}
+
+/// Where the noise estimate of the residual test comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseTest {
+    /// Known per-axis standard deviations: chi-square.
+    KnownSigma,
+    /// Repeated poses: lack-of-fit F test against the pure error.
+    PureError,
+    /// Neither: no test.
+    None,
+}
+
+/// Step 1: is anything left after the geometric step?
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResidualTest {
+    /// Which test.
+    pub kind: NoiseTest,
+    /// The statistic (chi-square or F); `None` without a test.
+    pub statistic: Option<f64>,
+    /// Its degrees of freedom (one or two).
+    pub dof: (f64, f64),
+    /// Its p-value.
+    pub p_value: Option<f64>,
+    /// RMS 3-D noise implied by the estimate (metres), when there is one.
+    pub noise_rms: Option<f64>,
+    /// Whether something is left (true without a test).
+    pub significant: bool,
+    /// One line for the user.
+    pub summary: String,
+}
+
+/// Step 5: residual structure against one variable.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StructureCheck {
+    /// `pose order` or a joint name.
+    pub variable: String,
+    /// The statistic (F, chi-square or z).
+    pub statistic: f64,
+    /// Its p-value.
+    pub p_value: f64,
+    /// Significant at `alpha / (joints + 1)`.
+    pub significant: bool,
+    /// Binned residuals: `(bin centre, RMS of the residual, length of the mean residual
+    /// vector)` in the variable's unit (radians, metres, or pose index) and metres.
+    pub bins: Vec<(f64, f64, f64)>,
+}
+
+/// An estimated effect parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffectEstimate {
+    /// Parameter name.
+    pub name: String,
+    /// Estimate.
+    pub value: f64,
+    /// Standard error.
+    pub std_error: Option<f64>,
+    /// Unit.
+    pub unit: String,
+    /// For a compliance: the stiffness `1 / c` with its standard error (`σ_c / c²`) and unit.
+    pub stiffness: Option<(f64, Option<f64>, String)>,
+}
+
+/// What the diagnosis found (the report's `diagnosis`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diagnosis {
+    /// The selection rule ([`RULE`]).
+    pub rule: String,
+    /// Significance level.
+    pub alpha: f64,
+    /// Step 1.
+    pub residual_test: ResidualTest,
+    /// Each round of scoring.
+    pub rounds: Vec<Round>,
+    /// Selected effects' parameters.
+    pub effect_parameters: Vec<EffectEstimate>,
+    /// Step 5.
+    pub structure: Vec<StructureCheck>,
+    /// Remarks (skipped candidates, unexplained structure).
+    pub notes: Vec<String>,
+}
+
+/// [`diagnose_tree`] for a serial robot.
+///
+/// # Errors
+/// As [`diagnose_tree`].
+pub fn diagnose(
+    nominal: &DhTable,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+) -> Result<Report, CalibError> {
+    diagnose_tree(&DhTree::serial(nominal), data, options, diag)
+}
+
+/// Calibrates `tree` against `data` as [`crate::calibrate::calibrate_tree`] does, then
+/// diagnoses and adds the effects the geometric model lacks (see the module docs). The report
+/// has the steps `nominal`, `geometric` and one `+<label>` per effect added, the candidate
+/// table of the first round, the selected effects and the [`Diagnosis`].
+/// `options.effects` is ignored: [`DiagnoseOptions::effects`] says which effects.
+///
+/// # Errors
+/// Those of [`crate::calibrate::calibrate_tree`]; [`CalibError::BadOption`] /
+/// [`CalibError::MissingJoint`] for a bad label, bad inertials or a bad `alpha`.
+pub fn diagnose_tree(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+) -> Result<Report, CalibError> {
+    if !(diag.alpha > 0.0 && diag.alpha < 1.0) {
+        return Err(CalibError::BadOption {
+            what: "alpha".into(),
+            reason: format!("expected a level in (0, 1), found {}", diag.alpha),
+        });
+    }
+    let gravity = match &diag.inertials {
+        Some(i) => Some(Arc::new(GravityModel::new(tree, i, diag.gravity)?)),
+        None => None,
+    };
+    let ctx = EffectContext {
+        tree: tree.clone(),
+        gravity,
+    };
+    let mut notes = Vec::new();
+    // Which candidates the model can carry.
+    let probe = Model::new_tree(tree, &[], &options.model)?;
+    let (pool, forced) = match &diag.effects {
+        EffectSelection::None => (vec![], false),
+        EffectSelection::Auto => {
+            let c = effects::candidates(&ctx, &probe.tilt_rows());
+            notes.extend(c.skipped);
+            (c.effects, false)
+        }
+        EffectSelection::Labels(labels) => {
+            let mut v = Vec::new();
+            for l in labels {
+                let e = effects::parse_label_in(l, &ctx)?;
+                probe.clone().add_effect(e.clone())?;
+                v.push(e);
+            }
+            (v, true)
+        }
+    };
+    let mut session = Session::new(tree, data, options, &pool)?;
+    let geo = session.geometric()?;
+    let mut steps = geo.steps;
+    let mut last = geo.last.outcome;
+    let mut held = geo.last.held_out;
+    let mut free = geo.free;
+    let mut fixed = geo.fixed;
+    let all_effects: Vec<usize> = (0..pool.len()).collect();
+
+    let residual_test = residual_test(&session, &last, diag.alpha);
+    let mut rounds: Vec<Round> = Vec::new();
+    let mut selected: Vec<usize> = Vec::new();
+    let mut first_table: Vec<CandidateReport> = Vec::new();
+    let mut rejected: Vec<usize> = Vec::new();
+    let mut aliased: Vec<usize> = Vec::new();
+    if !pool.is_empty() {
+        if !forced && !residual_test.significant {
+            notes.push(format!(
+                "nothing significant is left after the geometric step ({}); no effect is selected",
+                residual_test.summary
+            ));
+        }
+        loop {
+            let remaining: Vec<usize> = all_effects
+                .iter()
+                .copied()
+                .filter(|e| !selected.contains(e))
+                .collect();
+            if remaining.is_empty() {
+                break;
+            }
+            let scored = score(&session, &last.x, &free, &remaining)?;
+            let mut table: Vec<(usize, CandidateReport)> = scored.candidates;
+            table.sort_by(|a, b| b.1.score.total_cmp(&a.1.score));
+            for (e, c) in &table {
+                if c.status == CandidateStatus::Aliased && !aliased.contains(e) {
+                    aliased.push(*e);
+                }
+            }
+            let mut round = Round {
+                rms: steps.last().map_or(0.0, |s| s.rms),
+                val_rms: scored.baseline_val,
+                candidates: table.iter().map(|(_, c)| c.clone()).collect(),
+                trials: vec![],
+            };
+            let stop_here =
+                (!forced && !residual_test.significant) || selected.len() >= diag.max_effects;
+            if rounds.is_empty() {
+                first_table = round.candidates.clone();
+            }
+            if stop_here {
+                rounds.push(round);
+                break;
+            }
+            let m = scored.residuals as f64;
+            let p = free.len() as f64;
+            let sigma2 = last.ssr / (m - p).max(1.0);
+            let mut eligible: Vec<(usize, f64, usize)> = table
+                .iter()
+                .filter(|(e, c)| c.status == CandidateStatus::NotSelected && !rejected.contains(e))
+                .map(|(e, c)| {
+                    let gain = c.score - c.parameters as f64 * sigma2 * m.ln();
+                    (*e, gain, c.parameters)
+                })
+                .filter(|(_, gain, _)| forced || *gain > 0.0)
+                .collect();
+            eligible.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let k_count = eligible.len().max(1);
+            let mut accepted = None;
+            let tries = if forced { 1 } else { diag.trials.max(1) };
+            for &(e, _, k) in eligible.iter().take(tries) {
+                let label = pool[e].label();
+                let cols: Vec<usize> = session
+                    .model
+                    .effects()
+                    .get(e)
+                    .map(|(_, r)| r.clone().collect())
+                    .unwrap_or_default();
+                let mut columns = free.clone();
+                columns.extend(&cols);
+                let (trial_free, trial_fixed) = session.identify(&last.x, &columns)?;
+                if cols.iter().any(|c| !trial_free.contains(c)) {
+                    round.trials.push(Trial {
+                        label,
+                        rms: f64::NAN,
+                        val_rms: None,
+                        f: 0.0,
+                        f_p: 1.0,
+                        f_threshold: diag.alpha / k_count as f64,
+                        bic: (f64::NAN, f64::NAN),
+                        held_out_t: None,
+                        accepted: false,
+                        reason: "not identifiable with the estimated parameters".into(),
+                    });
+                    rejected.push(e);
+                    continue;
+                }
+                let step =
+                    session.step(&format!("+{label}"), &last.x, &trial_free, steps.last())?;
+                let trial = judge(
+                    &session,
+                    &last,
+                    &held,
+                    &step.outcome,
+                    &step.held_out,
+                    k,
+                    k_count,
+                    diag.alpha,
+                    forced,
+                    label,
+                    &step.report,
+                );
+                let ok = trial.accepted;
+                round.trials.push(trial);
+                if ok {
+                    accepted = Some((e, step, trial_free, trial_fixed));
+                    break;
+                }
+                rejected.push(e);
+            }
+            rounds.push(round);
+            match accepted {
+                Some((e, step, f2, fixed2)) => {
+                    selected.push(e);
+                    steps.push(step.report);
+                    last = step.outcome;
+                    held = step.held_out;
+                    free = f2;
+                    fixed = fixed2;
+                    // A rejection in one round may pass once another effect is in.
+                    rejected.clear();
+                }
+                None => break,
+            }
+        }
+    }
+    for c in &mut first_table {
+        let e = pool.iter().position(|p| p.label() == c.label);
+        c.status = match e {
+            Some(e) if selected.contains(&e) => CandidateStatus::Selected,
+            Some(e) if aliased.contains(&e) => CandidateStatus::Aliased,
+            Some(_) if c.status == CandidateStatus::Inert => CandidateStatus::Inert,
+            Some(_)
+                if rounds
+                    .iter()
+                    .any(|r| r.trials.iter().any(|t| t.label == c.label && !t.accepted)) =>
+            {
+                CandidateStatus::Rejected
+            }
+            _ => CandidateStatus::NotSelected,
+        };
+    }
+    for r in &mut rounds {
+        for c in &mut r.candidates {
+            if let Some(e) = pool.iter().position(|p| p.label() == c.label) {
+                if selected.contains(&e) {
+                    c.status = CandidateStatus::Selected;
+                } else if c.status == CandidateStatus::NotSelected
+                    && r.trials.iter().any(|t| t.label == c.label)
+                {
+                    c.status = CandidateStatus::Rejected;
+                }
+            }
+        }
+    }
+    let structure = structure_checks(&session, &last, diag.alpha);
+    for s in structure.iter().filter(|s| s.significant) {
+        notes.push(format!(
+            "structure remains that no candidate explains: the residual depends on {} \
+             (statistic {:.3}, p = {:.2e}); see its bins",
+            s.variable, s.statistic, s.p_value
+        ));
+    }
+    let effect_parameters = effect_estimates(&session.model, &last, &selected);
+    let hidden: Vec<usize> = all_effects
+        .iter()
+        .copied()
+        .filter(|e| !selected.contains(e))
+        .collect();
+    let mut report = session.report(&last, steps, fixed, &hidden);
+    report.selected_effects = selected.iter().map(|&e| pool[e].label()).collect();
+    report.candidates = first_table;
+    report.diagnosis = Some(Diagnosis {
+        rule: RULE.into(),
+        alpha: diag.alpha,
+        residual_test,
+        rounds,
+        effect_parameters,
+        structure,
+        notes,
+    });
+    Ok(report)
+}
+
+/// Stacks the scaled Jacobian of `columns` and the residuals of `obs` at `x`; returns them
+/// with the first row of each observation.
+fn dense(
+    model: &Model,
+    obs: &[Observed],
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+) -> (DMatrix<f64>, DVector<f64>, Vec<usize>) {
+    let sizes: Vec<usize> = obs
+        .iter()
+        .map(|o| match o.observation {
+            Observation::Pose(_) => 6,
+            Observation::Point { .. } => 3,
+        })
+        .collect();
+    let m: usize = sizes.iter().sum();
+    let n = columns.len();
+    let mut j = DMatrix::zeros(m, n);
+    let mut r = DVector::zeros(m);
+    let mut starts = Vec::with_capacity(obs.len());
+    let mut row = 0;
+    let mut res = [0.0; 6];
+    let mut jac = vec![0.0; 6 * n];
+    for (o, &s) in obs.iter().zip(&sizes) {
+        starts.push(row);
+        model.jacobian(x, o, columns, &mut res[..s], &mut jac[..s * n]);
+        for i in 0..s {
+            r[row + i] = res[i];
+            for (k, &c) in columns.iter().enumerate() {
+                j[(row + i, k)] = jac[i * n + k] * scales[c];
+            }
+        }
+        row += s;
+    }
+    (j, r, starts)
+}
+
+/// Least squares of `r + J_F δ_F + C δ_C` on a subset of rows, through the QR of `J_F`.
+struct Projector {
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+    qtr: DVector<f64>,
+    /// The residuals of the rows, less what `J_F` explains.
+    r_perp: DVector<f64>,
+    rows: Vec<usize>,
+    /// All rows, in order (no selection needed).
+    all: bool,
+}
+
+impl Projector {
+    fn new(jf: &DMatrix<f64>, res: &DVector<f64>, rows: Vec<usize>) -> Projector {
+        let sub = jf.select_rows(rows.iter());
+        let rr = res.select_rows(rows.iter());
+        let (q, r) = if sub.ncols() == 0 {
+            (DMatrix::zeros(rows.len(), 0), DMatrix::zeros(0, 0))
+        } else {
+            let qr = sub.qr();
+            (qr.q(), qr.r())
+        };
+        let qtr = q.transpose() * &rr;
+        let r_perp = &rr - &q * &qtr;
+        let all = rows.iter().enumerate().all(|(i, &r)| i == r) && rows.len() == res.len();
+        Projector {
+            q,
+            r,
+            qtr,
+            r_perp,
+            rows,
+            all,
+        }
+    }
+
+    /// `(δ_F, δ_C, reduction, independence)` for candidate columns `c` (all rows);
+    /// independence is NaN when the columns are zero.
+    fn solve(&self, c: &DMatrix<f64>) -> (DVector<f64>, DVector<f64>, f64, f64) {
+        let selected;
+        let cs = if self.all {
+            c
+        } else {
+            selected = c.select_rows(self.rows.iter());
+            &selected
+        };
+        let qtc = self.q.transpose() * cs;
+        let c_perp = cs - &self.q * &qtc;
+        let r_perp = &self.r_perp;
+        let k = c.ncols();
+        let mut dc = DVector::zeros(k);
+        let mut reduction = 0.0;
+        let mut independence = 1.0;
+        if k > 0 {
+            let big = (0..k).map(|j| cs.column(j).norm()).fold(0.0, f64::max);
+            let svd = c_perp.clone().svd(true, true);
+            let smin = svd.singular_values.min();
+            independence = if big > 0.0 { smin / big } else { f64::NAN };
+            if let (Some(u), Some(vt)) = (&svd.u, &svd.v_t) {
+                let smax = svd.singular_values.max();
+                for i in 0..svd.singular_values.len() {
+                    let s = svd.singular_values[i];
+                    if s > 1e-12 * smax.max(1e-300) && s > 0.0 {
+                        let coef = u.column(i).dot(r_perp);
+                        reduction += coef * coef;
+                        dc -= vt.row(i).transpose() * (coef / s);
+                    }
+                }
+            }
+        }
+        let rhs = -(&self.qtr + &qtc * &dc);
+        let df = if self.r.nrows() == 0 {
+            DVector::zeros(0)
+        } else {
+            self.r
+                .solve_upper_triangular(&rhs)
+                .unwrap_or_else(|| DVector::zeros(rhs.len()))
+        };
+        (df, dc, reduction, independence)
+    }
+}
+
+struct Scored {
+    candidates: Vec<(usize, CandidateReport)>,
+    baseline_val: Option<f64>,
+    residuals: usize,
+}
+
+fn distances_of(res: &DVector<f64>, starts: &[usize], idx: &[usize]) -> Vec<f64> {
+    idx.iter()
+        .map(|&i| {
+            let s = starts[i];
+            Vector3::new(res[s], res[s + 1], res[s + 2]).norm()
+        })
+        .collect()
+}
+
+fn rms(d: &[f64]) -> Option<f64> {
+    (!d.is_empty()).then(|| (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt())
+}
+
+/// Scores every candidate in `remaining` at `x` with `free` estimated (see the module docs).
+fn score(
+    session: &Session<'_>,
+    x: &[f64],
+    free: &[usize],
+    remaining: &[usize],
+) -> Result<Scored, CalibError> {
+    let model = &session.model;
+    let effects = model.effects();
+    let mut columns = free.to_vec();
+    let mut spans = Vec::with_capacity(remaining.len());
+    for &e in remaining {
+        let start = columns.len();
+        if let Some((_, range)) = effects.get(e) {
+            columns.extend(range.clone());
+        }
+        spans.push(start..columns.len());
+    }
+    let p = free.len();
+    let prep = &session.prep;
+    let (j, r, starts) = dense(model, &prep.cal, x, &columns, &session.scales);
+    if j.iter().chain(r.iter()).any(|v| !v.is_finite()) {
+        return Err(CalibError::NonFinite {
+            what: "candidate scoring".into(),
+        });
+    }
+    let jf = j.columns(0, p).into_owned();
+    let all_rows: Vec<usize> = (0..r.len()).collect();
+    let full = Projector::new(&jf, &r, all_rows);
+    // Held-out predictions, linearised.
+    let cal_idx: Vec<usize> = (0..prep.cal.len()).collect();
+    enum Held {
+        Split {
+            jv: DMatrix<f64>,
+            rv: DVector<f64>,
+            starts: Vec<usize>,
+        },
+        Folds(Vec<(Projector, Vec<usize>)>),
+        None,
+    }
+    let held = match &session.validation {
+        Validation::Split { .. } => {
+            let (jv, rv, sv) = dense(model, &prep.val, x, &columns, &session.scales);
+            Held::Split { jv, rv, starts: sv }
+        }
+        Validation::CrossValidation { folds, .. } => {
+            let mut v = Vec::with_capacity(*folds);
+            for f in 0..*folds {
+                let (mut train_rows, mut test) = (Vec::new(), Vec::new());
+                for (i, g) in prep.groups.iter().enumerate() {
+                    let size = if i + 1 < starts.len() {
+                        starts[i + 1] - starts[i]
+                    } else {
+                        r.len() - starts[i]
+                    };
+                    if g % folds == f {
+                        test.push(i);
+                    } else {
+                        train_rows.extend(starts[i]..starts[i] + size);
+                    }
+                }
+                v.push((Projector::new(&jf, &r, train_rows), test));
+            }
+            Held::Folds(v)
+        }
+        Validation::None => Held::None,
+    };
+    let predict = |c_span: Option<std::ops::Range<usize>>,
+                   c: &DMatrix<f64>,
+                   fit: &(DVector<f64>, DVector<f64>, f64, f64)|
+     -> Option<f64> {
+        match &held {
+            Held::Split { jv, rv, starts } => {
+                let (df, dc) = (&fit.0, &fit.1);
+                let mut pred = rv + jv.columns(0, p) * df;
+                if let Some(s) = &c_span {
+                    pred += jv.columns(s.start, s.len()) * dc;
+                }
+                let idx: Vec<usize> = (0..starts.len()).collect();
+                rms(&distances_of(&pred, starts, &idx))
+            }
+            Held::Folds(folds) => {
+                let mut d = Vec::with_capacity(cal_idx.len());
+                for (proj, test) in folds {
+                    let (df, dc, _, _) = proj.solve(c);
+                    // Only the test rows are needed.
+                    for &i in test {
+                        let s = starts[i];
+                        let mut v = r.rows(s, 3).into_owned() + jf.rows(s, 3) * &df;
+                        if c.ncols() > 0 {
+                            v += c.rows(s, 3) * &dc;
+                        }
+                        d.push(v.norm());
+                    }
+                }
+                rms(&d)
+            }
+            Held::None => None,
+        }
+    };
+    let empty = DMatrix::zeros(r.len(), 0);
+    let baseline_val = predict(None, &empty, &full.solve(&empty));
+    let mut out = Vec::with_capacity(remaining.len());
+    for (&e, span) in remaining.iter().zip(&spans) {
+        let c = j.columns(span.start, span.len()).into_owned();
+        let fit = full.solve(&c);
+        let (reduction, independence) = (fit.2, fit.3);
+        let inert = independence.is_nan();
+        let aliased = !inert && independence < ALIAS_SINE;
+        let val_rms = if aliased || inert {
+            None
+        } else {
+            predict(Some(span.clone()), &c, &fit)
+        };
+        let label = effects
+            .get(e)
+            .map(|(eff, _)| eff.label())
+            .unwrap_or_default();
+        out.push((
+            e,
+            CandidateReport {
+                label,
+                parameters: span.len(),
+                score: if aliased || inert { 0.0 } else { reduction },
+                independence: if inert { 0.0 } else { independence },
+                val_rms,
+                status: if inert {
+                    CandidateStatus::Inert
+                } else if aliased {
+                    CandidateStatus::Aliased
+                } else {
+                    CandidateStatus::NotSelected
+                },
+            },
+        ));
+    }
+    Ok(Scored {
+        candidates: out,
+        baseline_val,
+        residuals: r.len(),
+    })
+}
+
+fn bic(ssr: f64, m: f64, p: f64) -> f64 {
+    m * (ssr.max(1e-300) / m).ln() + p * m.ln()
+}
+
+/// The tests of the rule for one refit (see the module docs).
+#[allow(clippy::too_many_arguments)]
+fn judge(
+    session: &Session<'_>,
+    before: &FitOutcome,
+    held_before: &[f64],
+    after: &FitOutcome,
+    held_after: &[f64],
+    k: usize,
+    k_count: usize,
+    alpha: f64,
+    forced: bool,
+    label: String,
+    step: &StepReport,
+) -> Trial {
+    let m = after.residual_count as f64;
+    let (p0, p1) = (before.free.len() as f64, after.free.len() as f64);
+    let dof = (m - p1).max(1.0);
+    let f = ((before.ssr - after.ssr) / k as f64) / (after.ssr / dof).max(1e-300);
+    let f_p = stats::f_sf(f, k as f64, dof);
+    let f_threshold = alpha / k_count as f64;
+    let bic = (bic(before.ssr, m, p0), bic(after.ssr, m, p1));
+    let groups = match session.validation {
+        Validation::Split { .. } => Some(&session.prep.val_groups),
+        Validation::CrossValidation { .. } => Some(&session.prep.groups),
+        Validation::None => None,
+    };
+    let held_out_t = groups.and_then(|g| paired_t(held_before, held_after, g));
+    let mut reasons = Vec::new();
+    if !forced {
+        if f_p.is_nan() || f_p >= f_threshold {
+            reasons.push(format!("F-to-enter p = {f_p:.2e} >= {f_threshold:.2e}"));
+        }
+        if bic.1.is_nan() || bic.1 >= bic.0 {
+            reasons.push("BIC does not decrease".to_string());
+        }
+        match held_out_t {
+            Some((_, p)) if p < alpha => {}
+            Some((_, p)) => reasons.push(format!("held-out improvement p = {p:.2e} >= {alpha}")),
+            None if groups.is_some() => {
+                reasons.push("held-out improvement cannot be tested".to_string())
+            }
+            None => {}
+        }
+    }
+    Trial {
+        label,
+        rms: step.rms,
+        val_rms: step.val_rms,
+        f,
+        f_p,
+        f_threshold,
+        bic,
+        held_out_t,
+        accepted: reasons.is_empty(),
+        reason: reasons.join("; "),
+    }
+}
+
+/// One-sided paired t test that `after` is smaller than `before` over the groups of the
+/// samples: `(t, p)`.
+fn paired_t(before: &[f64], after: &[f64], groups: &[usize]) -> Option<(f64, f64)> {
+    if before.len() != after.len() || before.len() != groups.len() || before.is_empty() {
+        return None;
+    }
+    let mut sums: HashMap<usize, f64> = HashMap::new();
+    for ((b, a), g) in before.iter().zip(after).zip(groups) {
+        *sums.entry(*g).or_insert(0.0) += b * b - a * a;
+    }
+    let d: Vec<f64> = sums.into_values().collect();
+    let n = d.len() as f64;
+    if d.len() < 3 {
+        return None;
+    }
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    if var <= 0.0 {
+        return None;
+    }
+    let t = mean / (var / n).sqrt();
+    Some((t, stats::t_sf(t, n - 1.0)))
+}
+
+/// Pure error of repeated points: `(sum of squares, degrees of freedom)`.
+fn pure_error(prep: &Prepared) -> Option<(f64, usize)> {
+    let mut groups: HashMap<&(String, usize), Vec<Vector3<f64>>> = HashMap::new();
+    for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
+        if let (Some(k), Observation::Point { point, .. }) = (key, &o.observation) {
+            groups.entry(k).or_default().push(*point);
+        }
+    }
+    let (mut ss, mut dof) = (0.0, 0usize);
+    for pts in groups.values().filter(|v| v.len() > 1) {
+        let mean = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
+        ss += pts.iter().map(|v| (v - mean).norm_squared()).sum::<f64>();
+        dof += 3 * (pts.len() - 1);
+    }
+    (dof > 0).then_some((ss, dof))
+}
+
+/// Known per-axis noise of every calibration sample, when there is one.
+fn known_sigmas(session: &Session<'_>) -> Option<Vec<Vector3<f64>>> {
+    if let Some(s) = session.options.sigma {
+        return Some(vec![Vector3::repeat(s); session.prep.cal.len()]);
+    }
+    let v: Option<Vec<Vector3<f64>>> = session.prep.sigmas.iter().copied().collect();
+    v.filter(|v| v.iter().all(|s| s.iter().all(|x| *x > 0.0)))
+}
+
+fn residual_test(session: &Session<'_>, fit: &FitOutcome, alpha: f64) -> ResidualTest {
+    let m = fit.residual_count as f64;
+    let p = fit.free.len() as f64;
+    let dof = (m - p).max(1.0);
+    let model = &session.model;
+    if let Some(sig) = known_sigmas(session) {
+        let mut chi2 = 0.0;
+        let mut r = [0.0; 6];
+        for (o, s) in session.prep.cal.iter().zip(&sig) {
+            model.residuals(&fit.x, o, &mut r);
+            for a in 0..3 {
+                chi2 += (r[a] / s[a]).powi(2);
+            }
+        }
+        let pv = stats::chi2_sf(chi2, dof);
+        let noise = (sig.iter().map(|s| s.norm_squared()).sum::<f64>() / sig.len() as f64).sqrt();
+        return ResidualTest {
+            kind: NoiseTest::KnownSigma,
+            statistic: Some(chi2),
+            dof: (dof, 0.0),
+            p_value: Some(pv),
+            noise_rms: Some(noise),
+            significant: pv < alpha,
+            summary: format!(
+                "chi-square {chi2:.1} on {dof:.0} degrees of freedom against the known noise, p = {pv:.2e}"
+            ),
+        };
+    }
+    if let Some((ss_pe, df_pe)) = pure_error(&session.prep) {
+        let df_lof = dof - df_pe as f64;
+        let ss_lof = (fit.ssr - ss_pe).max(0.0);
+        let noise = (3.0 * ss_pe / df_pe as f64).sqrt();
+        if df_lof >= 1.0 {
+            let f = (ss_lof / df_lof) / (ss_pe / df_pe as f64).max(1e-300);
+            let pv = stats::f_sf(f, df_lof, df_pe as f64);
+            return ResidualTest {
+                kind: NoiseTest::PureError,
+                statistic: Some(f),
+                dof: (df_lof, df_pe as f64),
+                p_value: Some(pv),
+                noise_rms: Some(noise),
+                significant: pv < alpha,
+                summary: format!(
+                    "lack of fit F = {f:.1} on ({df_lof:.0}, {df_pe}) degrees of freedom against the pure error of repeats, p = {pv:.2e}"
+                ),
+            };
+        }
+    }
+    ResidualTest {
+        kind: NoiseTest::None,
+        statistic: None,
+        dof: (0.0, 0.0),
+        p_value: None,
+        noise_rms: None,
+        significant: true,
+        summary: "no independent noise estimate (no known sigma, no repeated poses): held-out \
+                  error decides"
+            .into(),
+    }
+}
+
+/// Noise variance per coordinate and its degrees of freedom (`None`: known exactly).
+fn noise_variance(session: &Session<'_>, fit: &FitOutcome) -> (f64, Option<f64>) {
+    if let Some(sig) = known_sigmas(session) {
+        let v = sig.iter().map(|s| s.norm_squared() / 3.0).sum::<f64>() / sig.len() as f64;
+        return (v, None);
+    }
+    if let Some((ss, df)) = pure_error(&session.prep) {
+        return (ss / df as f64, Some(df as f64));
+    }
+    let dof = (fit.residual_count as f64 - fit.free.len() as f64).max(1.0);
+    (fit.ssr / dof, Some(dof))
+}
+
+fn structure_checks(session: &Session<'_>, fit: &FitOutcome, alpha: f64) -> Vec<StructureCheck> {
+    let model = &session.model;
+    let prep = &session.prep;
+    let rows = model.tree().rows();
+    let mut res = Vec::with_capacity(prep.cal.len());
+    let mut r = [0.0; 6];
+    for o in &prep.cal {
+        model.residuals(&fit.x, o, &mut r);
+        res.push(Vector3::new(r[0], r[1], r[2]));
+    }
+    let (var, var_dof) = noise_variance(session, fit);
+    let joints: Vec<usize> = (0..rows.len())
+        .filter(|&j| rows[j].mimic.is_none())
+        .collect();
+    let k_tests = (joints.len() + 1) as f64;
+    let level = alpha / k_tests;
+    let mut out = Vec::new();
+    for &j in &joints {
+        let prismatic = rows[j].kind == JointKind::Prismatic;
+        let q: Vec<f64> = prep
+            .cal
+            .iter()
+            .map(|o| o.q.get(j).copied().unwrap_or(0.0))
+            .collect();
+        let basis = |v: f64| -> Vec<f64> {
+            if prismatic {
+                vec![1.0, v, v * v]
+            } else {
+                vec![1.0, v.sin(), v.cos(), (2.0 * v).sin(), (2.0 * v).cos()]
+            }
+        };
+        let nb = basis(0.0).len();
+        let x = DMatrix::from_fn(q.len(), nb, |i, c| basis(q[i])[c]);
+        let svd = x.clone().svd(true, true);
+        let Some(u) = &svd.u else { continue };
+        let smax = svd.singular_values.max();
+        let rank: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&i| svd.singular_values[i] > 1e-9 * smax)
+            .collect();
+        let mut explained = 0.0;
+        for a in 0..3 {
+            let y = DVector::from_iterator(res.len(), res.iter().map(|v| v[a]));
+            for &i in &rank {
+                explained += u.column(i).dot(&y).powi(2);
+            }
+        }
+        let d1 = (3 * rank.len()) as f64;
+        let (statistic, p) = match var_dof {
+            None => {
+                let c = explained / var.max(1e-300);
+                (c, stats::chi2_sf(c, d1))
+            }
+            Some(d2) => {
+                let f = (explained / d1) / var.max(1e-300);
+                (f, stats::f_sf(f, d1, d2))
+            }
+        };
+        out.push(StructureCheck {
+            variable: rows[j].name.clone(),
+            statistic,
+            p_value: p,
+            significant: p < level,
+            bins: bins(&q, &res, 8),
+        });
+    }
+    // Pose order: pose-mean residuals in order of first appearance.
+    let mut order: Vec<usize> = Vec::new();
+    let mut sums: HashMap<usize, (Vector3<f64>, usize)> = HashMap::new();
+    for (i, g) in prep.groups.iter().enumerate() {
+        let e = sums.entry(*g).or_insert_with(|| {
+            order.push(*g);
+            (Vector3::zeros(), 0)
+        });
+        e.0 += res[i];
+        e.1 += 1;
+    }
+    let means: Vec<Vector3<f64>> = order
+        .iter()
+        .map(|g| {
+            let (s, n) = sums[g];
+            s / n.max(1) as f64
+        })
+        .collect();
+    if means.len() >= 4 {
+        let a: Vec<f64> = means.windows(2).map(|w| w[0].dot(&w[1])).collect();
+        let num: f64 = a.iter().sum();
+        let den = a.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let z = if den > 0.0 { num / den } else { 0.0 };
+        let p = 2.0 * stats::normal_sf(z.abs());
+        let idx: Vec<f64> = (0..means.len()).map(|i| i as f64).collect();
+        out.push(StructureCheck {
+            variable: "pose order".into(),
+            statistic: z,
+            p_value: p,
+            significant: p < level,
+            bins: bins(&idx, &means, 8),
+        });
+    }
+    out
+}
+
+/// `(centre, RMS, |mean|)` of `res` in `n` equal bins of `v`.
+fn bins(v: &[f64], res: &[Vector3<f64>], n: usize) -> Vec<(f64, f64, f64)> {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !(lo.is_finite() && hi.is_finite()) {
+        return vec![];
+    }
+    let w = ((hi - lo) / n as f64).max(1e-12);
+    let mut acc = vec![(Vector3::zeros(), 0.0, 0usize); n];
+    for (x, r) in v.iter().zip(res) {
+        let b = (((x - lo) / w) as usize).min(n - 1);
+        acc[b].0 += r;
+        acc[b].1 += r.norm_squared();
+        acc[b].2 += 1;
+    }
+    acc.into_iter()
+        .enumerate()
+        .filter(|(_, a)| a.2 > 0)
+        .map(|(b, (s, ss, c))| {
+            (
+                lo + (b as f64 + 0.5) * w,
+                (ss / c as f64).sqrt(),
+                (s / c as f64).norm(),
+            )
+        })
+        .collect()
+}
+
+fn effect_estimates(model: &Model, fit: &FitOutcome, selected: &[usize]) -> Vec<EffectEstimate> {
+    let effects = model.effects();
+    let mut out = Vec::new();
+    for &e in selected {
+        let Some((eff, range)) = effects.get(e) else {
+            continue;
+        };
+        let units = eff.units();
+        let names = eff.parameter_names();
+        for (k, c) in range.clone().enumerate() {
+            let value = fit.x[c];
+            let se = fit.std_errors.get(c).copied().flatten();
+            let unit = units.get(k).cloned().unwrap_or_default();
+            let stiffness = (eff.label().starts_with("compliance:")
+                || eff.label().starts_with("lateral_compliance:"))
+            .then(|| {
+                let s = 1.0 / value;
+                let unit = if unit == "m/N" { "N/m" } else { "N m/rad" };
+                (s, se.map(|v| v / (value * value)), unit.to_string())
+            })
+            .filter(|(s, _, _)| s.is_finite());
+            out.push(EffectEstimate {
+                name: names.get(k).cloned().unwrap_or_default(),
+                value,
+                std_error: se,
+                unit,
+                stiffness,
+            });
+        }
+    }
+    out
+}
+
+/// Lists the effect labels a [`Report`] may carry, for callers that only need the names.
+pub fn effect_labels(effects: &[Arc<dyn Effect>]) -> Vec<String> {
+    effects.iter().map(|e| e.label()).collect()
+}

@@ -1,0 +1,663 @@
+//! Non-geometric effects: what a rigid DH model lacks, as [`Effect`]s with labels.
+//!
+//! # Labels
+//! Labels are part of the CLI and JSON contract (`J`, `K` are joint names):
+//!
+//! | label | change | parameters (unit) |
+//! |---|---|---|
+//! | `gear_ratio:J` | `theta_J += eps · q_J` | `gear_ratio:J` (rad/rad) |
+//! | `gear_harmonic:J` | `theta_J += A sin q_J + B cos q_J` | `gear_harmonic:J.sin`, `.cos` (rad) |
+//! | `gear_harmonic:J:2` | the same plus `A2 sin 2q_J + B2 cos 2q_J` | adds `.sin2`, `.cos2` (rad) |
+//! | `compliance:J` | `theta_J += c · tau_J(q)` (`d_J` for a prismatic joint) | `compliance:J` (rad/(N m), m/N) |
+//! | `lateral_compliance:J` | `alpha_J += c · tau⊥_J(q)` | `lateral_compliance:J` (rad/(N m)) |
+//! | `coupling:J:K` | `theta_J += k · q_K` | `coupling:J:K` (rad/rad) |
+//! | `scale` | device positions `× (1 + s)` | `scale` (1) |
+//! | `parallel_tilt:J` | the Hayati-Mirmirani `beta` of the near-parallel pair ending at `J` | `parallel_tilt:J` (rad) |
+//! | `backlash:J` | `theta_J += b · tanh(tau_J / tau_0)` | `backlash:J` (rad) |
+//!
+//! `tau_J` is the gravity torque on joint `J` and `tau⊥_J` the one about the axis of its
+//! `alpha` ([`crate::gravity`]), both computed **at the nominal geometry**: the torques of the
+//! calibrated robot differ by the relative size of its geometric errors (a 1 mm error on a 1 m
+//! arm changes a torque by 0.1 %), far below what a compliance estimate resolves, so the effect
+//! stays linear in its parameter. `tau_0` of the backlash is 5 % of the joint's typical torque:
+//! the gear flank changes over a small torque band instead of a discontinuous sign, which keeps
+//! the model differentiable. A backlash is in the list for explicit use; automatic diagnosis
+//! does not propose it (it is a rescaled compliance wherever the torque keeps its sign).
+//!
+//! `parallel_tilt:J` applies only where the model holds a tilt at zero, i.e. for a pair within
+//! [`crate::model::NEAR_PARALLEL`] of parallel that the geometric step does not already
+//! parametrise with Hayati-Mirmirani ([`crate::model::Model::tilt_rows`]).
+
+use std::sync::Arc;
+
+use dh_core::{Convention, DhTable, JointKind};
+
+use crate::fit::CalibError;
+use crate::gravity::{GravityModel, TorqueAxis};
+use crate::model::{Effect, EffectField, GearRatio};
+use crate::tree::DhTree;
+
+/// What parsing labels and enumerating candidates need: the robot (its rows give the layout
+/// of `q`) and, for the gravity effects, its masses.
+#[derive(Clone, Debug)]
+pub struct EffectContext {
+    /// The robot (a trunk only for a serial robot).
+    pub tree: DhTree,
+    /// Gravity torques; `None` when the robot has no inertials.
+    pub gravity: Option<Arc<GravityModel>>,
+}
+
+impl EffectContext {
+    /// A serial robot without inertials.
+    pub fn serial(table: &DhTable) -> Self {
+        Self {
+            tree: DhTree::serial(table),
+            gravity: None,
+        }
+    }
+}
+
+fn bad_label(label: &str, reason: impl Into<String>) -> CalibError {
+    CalibError::BadOption {
+        what: format!("effect '{label}'"),
+        reason: reason.into(),
+    }
+}
+
+/// Parses an effect label (see the module docs) for a serial `table` without inertials.
+///
+/// # Errors
+/// As [`parse_label_in`]; the gravity effects always fail (no inertials).
+pub fn parse_label(label: &str, table: &DhTable) -> Result<Arc<dyn Effect>, CalibError> {
+    parse_label_in(label, &EffectContext::serial(table))
+}
+
+/// Parses an effect label (see the module docs).
+///
+/// # Errors
+/// [`CalibError::BadOption`] for an unknown kind, a missing or extra joint, a joint of the
+/// wrong type (a gear effect on a prismatic joint), a gravity effect without inertials, or a
+/// `parallel_tilt` on a joint that ends no consecutive pair; [`CalibError::MissingJoint`] for
+/// a joint the robot does not have.
+pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect>, CalibError> {
+    let parts: Vec<&str> = label.split(':').collect();
+    let kind = parts[0];
+    let args = &parts[1..];
+    let want = |n: usize| {
+        if args.len() == n && args.iter().all(|a| !a.is_empty()) {
+            Ok(())
+        } else {
+            Err(bad_label(
+                label,
+                format!(
+                    "expected '{kind}' with {n} joint name{}, found {} argument{}",
+                    if n == 1 { "" } else { "s" },
+                    args.len(),
+                    if args.len() == 1 { "" } else { "s" }
+                ),
+            ))
+        }
+    };
+    let row = |name: &str| {
+        ctx.tree
+            .row_index(name)
+            .ok_or_else(|| CalibError::MissingJoint { joint: name.into() })
+    };
+    let revolute = |name: &str| -> Result<usize, CalibError> {
+        let r = row(name)?;
+        if ctx.tree.rows()[r].kind != JointKind::Revolute {
+            return Err(bad_label(
+                label,
+                format!("expected a revolute joint, found prismatic '{name}'"),
+            ));
+        }
+        Ok(r)
+    };
+    let gravity = || {
+        ctx.gravity.clone().ok_or_else(|| {
+            bad_label(
+                label,
+                "expected link inertials (masses and centres) to compute gravity torques, found none",
+            )
+        })
+    };
+    match kind {
+        "gear_ratio" => {
+            want(1)?;
+            revolute(args[0])?;
+            Ok(Arc::new(GearRatio::new(&ctx.tree.joint_table(), args[0])?))
+        }
+        "gear_harmonic" => {
+            let harmonics = match args {
+                [_] => 1,
+                [_, "2"] => 2,
+                _ => {
+                    return Err(bad_label(
+                        label,
+                        format!(
+                            "expected 'gear_harmonic:<joint>' or 'gear_harmonic:<joint>:2', found {} argument{}",
+                            args.len(),
+                            if args.len() == 1 { "" } else { "s" }
+                        ),
+                    ))
+                }
+            };
+            let r = revolute(args[0])?;
+            Ok(Arc::new(GearHarmonic {
+                joint: args[0].into(),
+                row: r,
+                harmonics,
+            }))
+        }
+        "compliance" | "lateral_compliance" | "backlash" => {
+            want(1)?;
+            let r = row(args[0])?;
+            let g = gravity()?;
+            let lateral = kind == "lateral_compliance";
+            let prismatic = ctx.tree.rows()[r].kind == JointKind::Prismatic;
+            if kind == "backlash" && prismatic {
+                return Err(bad_label(
+                    label,
+                    format!("expected a revolute joint, found prismatic '{}'", args[0]),
+                ));
+            }
+            if g.carried_mass(r) <= 0.0 {
+                return Err(bad_label(
+                    label,
+                    format!("joint '{}' carries no mass in the inertials", args[0]),
+                ));
+            }
+            Ok(Arc::new(Gravitational {
+                kind: match kind {
+                    "compliance" => GravityKind::Compliance,
+                    "lateral_compliance" => GravityKind::Lateral,
+                    _ => GravityKind::Backlash,
+                },
+                joint: args[0].into(),
+                row: r,
+                prismatic: prismatic && !lateral,
+                gravity: g,
+            }))
+        }
+        "coupling" => {
+            want(2)?;
+            let r = revolute(args[0])?;
+            let k = row(args[1])?;
+            if r == k {
+                return Err(bad_label(
+                    label,
+                    "expected two different joints, found the same one twice (that is gear_ratio)",
+                ));
+            }
+            Ok(Arc::new(Coupling {
+                joint: args[0].into(),
+                driver: args[1].into(),
+                row: r,
+                driver_row: k,
+            }))
+        }
+        "scale" => {
+            want(0)?;
+            Ok(Arc::new(Scale))
+        }
+        "parallel_tilt" => {
+            want(1)?;
+            let j = row(args[0])?;
+            let tilted = tilt_row(&ctx.tree, j).ok_or_else(|| {
+                bad_label(
+                    label,
+                    format!(
+                        "expected the later joint of a consecutive pair in one table, found '{}' (first of its table)",
+                        args[0]
+                    ),
+                )
+            })?;
+            Ok(Arc::new(ParallelTilt {
+                later: args[0].into(),
+                joint: ctx.tree.rows()[tilted].name.clone(),
+            }))
+        }
+        _ => Err(bad_label(
+            label,
+            format!(
+                "expected one of gear_ratio, gear_harmonic, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash; found '{kind}'"
+            ),
+        )),
+    }
+}
+
+/// The row that carries the tilt of the pair ending at row `j` (`None` when `j` is first in
+/// its table): the pair's first row in the standard convention, `j` itself in the modified.
+fn tilt_row(tree: &DhTree, j: usize) -> Option<usize> {
+    let (table, i) = tree.place(j);
+    if i == 0 {
+        return None;
+    }
+    let conv = match table {
+        None => tree.trunk().convention,
+        Some(b) => tree.branches()[b].table.convention,
+    };
+    Some(match conv {
+        Convention::Standard => j - 1,
+        Convention::Modified => j,
+    })
+}
+
+/// The label of an effect (its kind and joints, as [`parse_label_in`] reads it).
+pub fn label_of(effect: &dyn Effect) -> String {
+    effect.label()
+}
+
+/// The candidates of automatic diagnosis, and the ones left out with the reason.
+#[derive(Clone, Debug, Default)]
+pub struct Candidates {
+    /// The effects to score, in a fixed order.
+    pub effects: Vec<Arc<dyn Effect>>,
+    /// Kinds of candidates left out, with why (e.g. no inertials).
+    pub skipped: Vec<String>,
+}
+
+/// Every applicable candidate for automatic diagnosis: per revolute joint `gear_ratio`,
+/// `gear_harmonic` and, with inertials, `compliance` and `lateral_compliance` of joints that
+/// gravity loads (typical torque above 1e-6 of the largest; `compliance` also for prismatic
+/// joints); `coupling:J:K` for joints `K` within
+/// two rows of `J` on one chain; `scale`; `parallel_tilt` for the rows in `tilt_rows`
+/// ([`crate::model::Model::tilt_rows`]). Mimic rows are skipped (their driver's effects cover
+/// them).
+pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
+    let mut out = Candidates::default();
+    let rows = ctx.tree.rows();
+    let mut push = |label: String| {
+        if let Ok(e) = parse_label_in(&label, ctx) {
+            out.effects.push(e);
+        }
+    };
+    for (j, r) in rows.iter().enumerate() {
+        if r.mimic.is_some() {
+            continue;
+        }
+        if r.kind == JointKind::Revolute {
+            push(format!("gear_ratio:{}", r.name));
+            push(format!("gear_harmonic:{}", r.name));
+        }
+        if let Some(g) = &ctx.gravity {
+            let big = (0..rows.len())
+                .flat_map(|k| {
+                    [
+                        g.torque_scale(k, TorqueAxis::Joint),
+                        g.torque_scale(k, TorqueAxis::Lateral),
+                    ]
+                })
+                .fold(0.0, f64::max);
+            if g.torque_scale(j, TorqueAxis::Joint) > 1e-6 * big {
+                push(format!("compliance:{}", r.name));
+            }
+            if g.torque_scale(j, TorqueAxis::Lateral) > 1e-6 * big {
+                push(format!("lateral_compliance:{}", r.name));
+            }
+        }
+        if r.kind == JointKind::Revolute {
+            for (k, o) in rows.iter().enumerate() {
+                if k == j || o.mimic.is_some() {
+                    continue;
+                }
+                let near = (0..ctx.tree.chain_count()).any(|c| {
+                    let chain = ctx.tree.chain_rows(c);
+                    match (
+                        chain.iter().position(|&x| x == j),
+                        chain.iter().position(|&x| x == k),
+                    ) {
+                        (Some(a), Some(b)) => a.abs_diff(b) <= 2,
+                        _ => false,
+                    }
+                });
+                if near {
+                    push(format!("coupling:{}:{}", r.name, o.name));
+                }
+            }
+        }
+    }
+    push("scale".into());
+    for &t in tilt_rows {
+        // The label names the later joint of the pair.
+        let later = (0..rows.len()).find(|&j| tilt_row(&ctx.tree, j) == Some(t));
+        if let Some(j) = later {
+            push(format!("parallel_tilt:{}", rows[j].name));
+        }
+    }
+    if ctx.gravity.is_none() {
+        out.skipped.push(
+            "compliance, lateral_compliance: no link inertials (masses and centres of mass), so \
+             no gravity torques; give them to consider joint compliance"
+                .into(),
+        );
+    }
+    out
+}
+
+/// Once and twice per revolution transmission errors: `theta_J += A sin q + B cos q` (and
+/// `A2 sin 2q + B2 cos 2q`), named `gear_harmonic:J` (`gear_harmonic:J:2`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GearHarmonic {
+    joint: String,
+    row: usize,
+    harmonics: usize,
+}
+
+impl Effect for GearHarmonic {
+    fn parameter_names(&self) -> Vec<String> {
+        let l = self.label();
+        let mut v = vec![format!("{l}.sin"), format!("{l}.cos")];
+        if self.harmonics > 1 {
+            v.extend([format!("{l}.sin2"), format!("{l}.cos2")]);
+        }
+        v
+    }
+    fn label(&self) -> String {
+        if self.harmonics > 1 {
+            format!("gear_harmonic:{}:2", self.joint)
+        } else {
+            format!("gear_harmonic:{}", self.joint)
+        }
+    }
+    fn joint(&self) -> &str {
+        &self.joint
+    }
+    fn field(&self) -> EffectField {
+        EffectField::Theta
+    }
+    fn delta(&self, q: &[f64], params: &[f64]) -> f64 {
+        let mut g = [0.0; 4];
+        self.gradient(q, params, &mut g);
+        g.iter().zip(params).map(|(a, b)| a * b).sum()
+    }
+    fn gradient(&self, q: &[f64], _params: &[f64], out: &mut [f64]) {
+        let v = q.get(self.row).copied().unwrap_or(0.0);
+        let basis = [v.sin(), v.cos(), (2.0 * v).sin(), (2.0 * v).cos()];
+        for (o, b) in out.iter_mut().zip(basis.iter().take(2 * self.harmonics)) {
+            *o = *b;
+        }
+    }
+    fn scales(&self, length: f64) -> Vec<f64> {
+        vec![length; 2 * self.harmonics]
+    }
+    fn units(&self) -> Vec<String> {
+        vec!["rad".into(); 2 * self.harmonics]
+    }
+}
+
+/// `theta_J += k · q_K`, named `coupling:J:K`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coupling {
+    joint: String,
+    driver: String,
+    row: usize,
+    driver_row: usize,
+}
+
+impl Effect for Coupling {
+    fn parameter_names(&self) -> Vec<String> {
+        vec![format!("coupling:{}:{}", self.joint, self.driver)]
+    }
+    fn joint(&self) -> &str {
+        &self.joint
+    }
+    fn field(&self) -> EffectField {
+        EffectField::Theta
+    }
+    fn delta(&self, q: &[f64], params: &[f64]) -> f64 {
+        params.first().copied().unwrap_or(0.0) * q.get(self.driver_row).copied().unwrap_or(0.0)
+    }
+    fn gradient(&self, q: &[f64], _params: &[f64], out: &mut [f64]) {
+        if let Some(o) = out.first_mut() {
+            *o = q.get(self.driver_row).copied().unwrap_or(0.0);
+        }
+    }
+    fn scales(&self, length: f64) -> Vec<f64> {
+        vec![length]
+    }
+    fn units(&self) -> Vec<String> {
+        vec!["rad/rad".into()]
+    }
+}
+
+/// The measuring device's length scale, named `scale`: modelled positions `× (1 + s)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scale;
+
+impl Effect for Scale {
+    fn parameter_names(&self) -> Vec<String> {
+        vec!["scale".into()]
+    }
+    fn joint(&self) -> &str {
+        ""
+    }
+    fn field(&self) -> EffectField {
+        EffectField::Scale
+    }
+    fn delta(&self, _q: &[f64], params: &[f64]) -> f64 {
+        params.first().copied().unwrap_or(0.0)
+    }
+    fn gradient(&self, _q: &[f64], _params: &[f64], out: &mut [f64]) {
+        if let Some(o) = out.first_mut() {
+            *o = 1.0;
+        }
+    }
+    fn scales(&self, length: f64) -> Vec<f64> {
+        vec![length]
+    }
+    fn units(&self) -> Vec<String> {
+        vec!["1".into()]
+    }
+}
+
+/// The tilt about `y` of a near-parallel pair ending at joint `J`, named `parallel_tilt:J`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParallelTilt {
+    /// The later joint of the pair (the label's).
+    later: String,
+    /// The row that carries the tilt (the effect's joint).
+    joint: String,
+}
+
+impl Effect for ParallelTilt {
+    fn parameter_names(&self) -> Vec<String> {
+        vec![format!("parallel_tilt:{}", self.later)]
+    }
+    fn joint(&self) -> &str {
+        &self.joint
+    }
+    fn field(&self) -> EffectField {
+        EffectField::Beta
+    }
+    fn delta(&self, _q: &[f64], params: &[f64]) -> f64 {
+        params.first().copied().unwrap_or(0.0)
+    }
+    fn gradient(&self, _q: &[f64], _params: &[f64], out: &mut [f64]) {
+        if let Some(o) = out.first_mut() {
+            *o = 1.0;
+        }
+    }
+    fn scales(&self, length: f64) -> Vec<f64> {
+        vec![length]
+    }
+    fn units(&self) -> Vec<String> {
+        vec!["rad".into()]
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GravityKind {
+    Compliance,
+    Lateral,
+    Backlash,
+}
+
+/// Effects driven by the gravity torque: `compliance:J`, `lateral_compliance:J`,
+/// `backlash:J` (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Gravitational {
+    kind: GravityKind,
+    joint: String,
+    row: usize,
+    prismatic: bool,
+    gravity: Arc<GravityModel>,
+}
+
+impl Gravitational {
+    fn axis(&self) -> TorqueAxis {
+        if self.kind == GravityKind::Lateral {
+            TorqueAxis::Lateral
+        } else {
+            TorqueAxis::Joint
+        }
+    }
+
+    fn basis(&self, q: &[f64]) -> f64 {
+        let tau = self.gravity.torque(q, self.row, self.axis());
+        match self.kind {
+            GravityKind::Backlash => {
+                let t0 = 0.05 * self.gravity.torque_scale(self.row, TorqueAxis::Joint);
+                (tau / t0).tanh()
+            }
+            _ => tau,
+        }
+    }
+}
+
+impl Effect for Gravitational {
+    fn parameter_names(&self) -> Vec<String> {
+        vec![self.label()]
+    }
+    fn label(&self) -> String {
+        let k = match self.kind {
+            GravityKind::Compliance => "compliance",
+            GravityKind::Lateral => "lateral_compliance",
+            GravityKind::Backlash => "backlash",
+        };
+        format!("{k}:{}", self.joint)
+    }
+    fn joint(&self) -> &str {
+        &self.joint
+    }
+    fn field(&self) -> EffectField {
+        match (self.kind, self.prismatic) {
+            (GravityKind::Lateral, _) => EffectField::Alpha,
+            (_, true) => EffectField::D,
+            _ => EffectField::Theta,
+        }
+    }
+    fn delta(&self, q: &[f64], params: &[f64]) -> f64 {
+        params.first().copied().unwrap_or(0.0) * self.basis(q)
+    }
+    fn gradient(&self, q: &[f64], _params: &[f64], out: &mut [f64]) {
+        if let Some(o) = out.first_mut() {
+            *o = self.basis(q);
+        }
+    }
+    fn scales(&self, length: f64) -> Vec<f64> {
+        // A unit of the scaled parameter moves the joint as much as a unit of an angle or
+        // length column does: the compliance times a typical torque.
+        let motion = if self.prismatic { 1.0 } else { length };
+        match self.kind {
+            GravityKind::Backlash => vec![length],
+            _ => vec![motion / self.gravity.torque_scale(self.row, self.axis())],
+        }
+    }
+    fn units(&self) -> Vec<String> {
+        vec![match (self.kind, self.prismatic) {
+            (GravityKind::Backlash, _) => "rad".into(),
+            (GravityKind::Compliance, true) => "m/N".into(),
+            _ => "rad/(N m)".into(),
+        }]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gravity::{Inertial, Inertials};
+    use dh_core::DhRow;
+    use nalgebra::{Isometry3, Vector3};
+
+    fn arm() -> DhTable {
+        DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::identity(),
+            tool: Isometry3::identity(),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, std::f64::consts::FRAC_PI_2, 0.4, 0.0),
+                DhRow::revolute("j2", 0.5, 0.0, 0.0, 0.0),
+                DhRow::revolute("j3", 0.4, 0.0, 0.0, 0.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn labels_round_trip_and_bad_ones_say_why() {
+        let t = arm();
+        for l in [
+            "gear_ratio:j2",
+            "gear_harmonic:j1",
+            "gear_harmonic:j1:2",
+            "coupling:j2:j3",
+            "scale",
+            "parallel_tilt:j3",
+        ] {
+            let e = parse_label(l, &t).unwrap();
+            assert_eq!(label_of(e.as_ref()), l);
+        }
+        let err = |l: &str| parse_label(l, &t).unwrap_err().to_string();
+        assert!(err("compliance:j2").contains("inertials"));
+        assert!(err("gear_ratio").contains("1 joint name"));
+        assert!(err("warp:j1").contains("expected one of"));
+        assert!(err("coupling:j2:j2").contains("different"));
+        assert!(err("parallel_tilt:j1").contains("first of its table"));
+        assert!(matches!(
+            parse_label("gear_ratio:j9", &t),
+            Err(CalibError::MissingJoint { .. })
+        ));
+    }
+
+    #[test]
+    fn candidates_cover_every_joint_and_name_what_is_skipped() {
+        let t = arm();
+        let c = candidates(&EffectContext::serial(&t), &[1]);
+        let labels: Vec<String> = c.effects.iter().map(|e| e.label()).collect();
+        assert!(labels.contains(&"gear_ratio:j3".to_string()));
+        assert!(labels.contains(&"coupling:j1:j3".to_string()));
+        assert!(labels.contains(&"scale".to_string()));
+        assert!(labels.contains(&"parallel_tilt:j3".to_string()));
+        assert!(!labels.iter().any(|l| l.starts_with("compliance")));
+        assert_eq!(c.skipped.len(), 1);
+        let inertials = Inertials {
+            links: vec![(
+                "j3".into(),
+                Inertial {
+                    mass: 5.0,
+                    com: Vector3::new(-0.2, 0.0, 0.0),
+                },
+            )],
+            payloads: vec![],
+        };
+        let g = GravityModel::serial(&t, &inertials, GravityModel::default_gravity()).unwrap();
+        let ctx = EffectContext {
+            tree: DhTree::serial(&t),
+            gravity: Some(Arc::new(g)),
+        };
+        let c = candidates(&ctx, &[]);
+        let labels: Vec<String> = c.effects.iter().map(|e| e.label()).collect();
+        assert!(labels.contains(&"compliance:j2".to_string()));
+        assert!(c.skipped.is_empty());
+        // A compliance turns the joint by c · tau.
+        let e = parse_label_in("compliance:j2", &ctx).unwrap();
+        let q = [0.0, 0.0, 0.0];
+        let tau = ctx
+            .gravity
+            .as_ref()
+            .unwrap()
+            .torque(&q, 1, TorqueAxis::Joint);
+        assert!((e.delta(&q, &[1e-5]) - 1e-5 * tau).abs() < 1e-15);
+        assert!(tau.abs() > 1.0);
+    }
+}
