@@ -9,6 +9,7 @@ pub mod cli;
 pub mod commands;
 pub mod error;
 pub mod input;
+pub mod output;
 pub mod render;
 pub mod sheet;
 pub mod units;
