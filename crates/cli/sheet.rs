@@ -234,7 +234,9 @@ impl Sheet {
     ///
     /// # Errors
     /// Syntax errors with line and column, unknown or missing keys, non-finite numbers,
-    /// duplicate joint names, a row without joints, limits out of order, a mimic naming no row.
+    /// duplicate joint names, a row without joints, limits out of order, a joint that mimics
+    /// itself. A mimic naming no row is a warning, not an error: a URDF chain's joint may follow
+    /// one on another branch (a gripper's fingers), and `extract` writes that driver's name.
     pub fn parse(text: &str, origin: &str) -> Result<Sheet> {
         if text.trim().is_empty() {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
@@ -361,6 +363,23 @@ impl SheetDoc {
                 }
             }
         };
+        for r in &rows {
+            let Some(m) = &r.mimic else { continue };
+            if m.joint == r.name {
+                bail!(
+                    "{origin}: joint '{}': mimic: expected another joint to follow, found itself",
+                    r.name
+                );
+            }
+            if !rows.iter().any(|d| d.name == m.joint) {
+                warnings.push(format!(
+                    "{origin}: joint '{}': mimic: follows '{}', which is no joint of the sheet (joints: {}); it moves on its own here",
+                    r.name,
+                    m.joint,
+                    rows.iter().map(|d| format!("'{}'", d.name)).collect::<Vec<_>>().join(", ")
+                ));
+            }
+        }
         let table = DhTable {
             convention: self.convention.into(),
             base: pose(&self.base, "base").context("reading the base transform")?,
@@ -451,6 +470,31 @@ mod tests {
         let back = SheetDoc::from_table(&s.table, LengthUnit::Mm, AngleUnit::Deg);
         assert!((back.joints[0].a - 180.0).abs() < 1e-12);
         assert!((back.joints[0].upper.unwrap() - 155.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn mimics_of_no_row_warn_and_of_themselves_fail() {
+        let sheet = |driver: &str| {
+            format!("convention: standard\nlength_unit: m\nangle_unit: rad\njoints:\n  - {{name: a, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}}\n  - {{name: b, type: revolute, a: 0, alpha: 0, d: 0, theta: 0, mimic: {{joint: {driver}}}}}\n")
+        };
+        assert!(Sheet::parse(&sheet("a"), "s.yaml")
+            .unwrap()
+            .warnings
+            .is_empty());
+        let s = Sheet::parse(&sheet("finger_1"), "s.yaml").unwrap();
+        assert_eq!(s.warnings.len(), 1);
+        assert!(
+            s.warnings[0]
+                .contains("follows 'finger_1', which is no joint of the sheet (joints: 'a', 'b')"),
+            "{:?}",
+            s.warnings
+        );
+        let e = Sheet::parse(&sheet("b"), "s.yaml").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("joint 'b': mimic: expected another joint to follow, found itself"),
+            "{e}"
+        );
     }
 
     #[test]
