@@ -132,7 +132,9 @@ fn malformed(message: String, line: usize) -> ScanError {
 /// Shortens text quoted in a message.
 fn excerpt(s: &str) -> String {
     let t = s.trim();
-    let short: String = t.chars().take(24).collect();
+    // One line of a message: stop at the first line break.
+    let first = t.lines().next().unwrap_or("");
+    let short: String = first.chars().take(24).collect();
     if short.len() < t.len() {
         format!("{short}...")
     } else {
@@ -570,6 +572,8 @@ mod tests {
         let (m, line) = malformed_line("hello");
         assert!(m.contains("'hello'"), "{m}");
         assert_eq!(line, Some(1));
+        let (m, _) = malformed_line("joint_1: revolute\njoint_2: prismatic\n");
+        assert!(m.ends_with("'joint_1: revolute...'"), "{m}");
         assert!(malformed_line("").0.contains("empty document"));
         assert!(malformed_line("<robot a=1/>").0.contains("quoted value"));
         assert!(malformed_line("<robot a=\"1\" a=\"2\"/>")
