@@ -11,6 +11,7 @@ use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK
 use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
 use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
+use crate::commands::{calibrate, cpa, import, simulate};
 use crate::error::{Hinted, Outcome};
 use crate::render::Format;
 use crate::sheet::ConventionDoc;
@@ -37,6 +38,16 @@ enum Command {
     Convert(ConvertCli),
     /// Write a URDF whose kinematics equal a DH sheet.
     ToUrdf(ToUrdfCli),
+    /// Read a published measurement dataset as its authors left it and write the canonical
+    /// measurement CSV.
+    Import(import::ImportCli),
+    /// Fit a model to measured points: nominal, geometric and effect steps, each with its
+    /// residuals on calibration and validation data.
+    Calibrate(calibrate::CalibrateCli),
+    /// Circle-point analysis: joint axes from sweeps of one joint at a time, and their DH table.
+    Cpa(cpa::CpaCli),
+    /// Simulate measurements of a model with known errors, noise and effects.
+    Simulate(simulate::SimulateCli),
 }
 
 #[derive(Debug, Args)]
@@ -228,5 +239,9 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             out,
             err,
         ),
+        Command::Import(a) => import::import(&a.into_args(), out, err),
+        Command::Calibrate(a) => calibrate::calibrate(&a.into_args(), out, err),
+        Command::Cpa(a) => cpa::cpa(&a.into_args(), out, err),
+        Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
     }
 }

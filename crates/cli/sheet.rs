@@ -13,7 +13,8 @@
 //! `theta` is the offset added to the joint value (prismatic joints add it to `d`); `rpy` is
 //! URDF roll-pitch-yaw. Lengths in `length_unit`, angles in `angle_unit` (joint limits of
 //! prismatic joints in `length_unit`). Extraction adds `tolerances`, `pairs`, `warnings` and
-//! `verification`; a sheet may carry them and they are ignored on input.
+//! `verification`, `cpa` adds `cpa`, `calibrate --out` adds `calibration` and `simulate`'s truth
+//! file `truth`; a sheet may carry them and they are ignored on input.
 
 use anyhow::{bail, Context, Result};
 use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
@@ -175,6 +176,15 @@ pub struct SheetDoc {
     /// Self-check (extraction output).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub verification: Option<VerificationDoc>,
+    /// What circle-point analysis found (`cpa` output; ignored on input).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cpa: Option<serde_yaml::Value>,
+    /// How a calibrated sheet was fitted (`calibrate --out`; ignored on input).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<serde_yaml::Value>,
+    /// What simulated data was generated from (`simulate`'s truth file; ignored on input).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth: Option<serde_yaml::Value>,
 }
 
 /// `standard` or `modified` in a sheet.
@@ -450,6 +460,9 @@ impl SheetDoc {
             tolerances: None,
             warnings: None,
             verification: None,
+            cpa: None,
+            calibration: None,
+            truth: None,
         }
     }
 }

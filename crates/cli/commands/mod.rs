@@ -1,6 +1,10 @@
 //! One module per subcommand.
 
+pub mod calibrate;
 pub mod check;
 pub mod convert;
+pub mod cpa;
 pub mod extract;
+pub mod import;
+pub mod simulate;
 pub mod to_urdf;

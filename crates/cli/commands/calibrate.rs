@@ -1,0 +1,1234 @@
+//! `urdf-dh calibrate`: fit a model to measured points and report each step.
+//!
+//! Steps (see `dh_calib::calibrate`): `nominal` (only the device frame and the targets are
+//! estimated), `geometric` (every identifiable DH, base, tool, device and target parameter),
+//! then the effects, when asked for. Each step reports the RMS, mean and largest 3-D distance
+//! between modelled and measured points on the calibration data and on validation data (the
+//! `--validate` file or the file's own validation split, else k-fold cross-validation over
+//! poses). Without `--model` the start is the circle-point analysis of the data.
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::Path;
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use dh_calib::calibrate::Validation;
+use dh_calib::calibrate::{calibrate as run_calibration, CalibrationOptions, NoiseSource, Report};
+use dh_calib::cpa::{analyse, CpaOptions};
+use dh_calib::data::{Measurements, Split};
+use dh_calib::effects::label_of;
+use dh_calib::model::{Effect, Model, ModelOptions};
+use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
+use dh_core::{Convention, DhTable};
+use nalgebra::{Isometry3, Vector3};
+use serde::Serialize;
+
+use crate::commands::to_urdf::urdf_of;
+use crate::error::{hinted, Outcome};
+use crate::input::display_name;
+use crate::measured::{
+    header_joints, load_model, parse_effect, read_measurements, DataUnits, LoadedModel,
+};
+use crate::output::write_atomically;
+use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
+use crate::sheet::{ConventionDoc, SheetDoc};
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Which non-geometric effects to estimate after the geometric step.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum EffectsChoice {
+    /// None: the report ends with `geometric`.
+    None,
+    /// Let the diagnosis choose (see [`auto_effects`]).
+    Auto,
+    /// These labels (`gear_ratio:<joint>`, ...).
+    List(Vec<String>),
+}
+
+impl std::str::FromStr for EffectsChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "none" | "" => Ok(EffectsChoice::None),
+            "auto" => Ok(EffectsChoice::Auto),
+            list => Ok(EffectsChoice::List(
+                list.split(',')
+                    .map(|l| l.trim().to_string())
+                    .filter(|l| !l.is_empty())
+                    .collect(),
+            )),
+        }
+    }
+}
+
+/// Output format of `calibrate`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
+pub enum CalibrateFormat {
+    /// A readable report.
+    #[default]
+    Text,
+    /// JSON, metres and radians.
+    Json,
+}
+
+/// Everything `calibrate` needs.
+#[derive(Clone, Debug)]
+pub struct CalibrateArgs {
+    /// The model (URDF or DH sheet); `None` starts from circle-point analysis of the data.
+    pub model: Option<String>,
+    /// Base link of a URDF chain.
+    pub base: Option<String>,
+    /// Tip link of a URDF chain.
+    pub tip: Option<String>,
+    /// DH convention for a URDF model or the CPA start.
+    pub convention: Convention,
+    /// The measurement file.
+    pub data: String,
+    /// A separate validation file.
+    pub validate: Option<String>,
+    /// Units of the measurement files (and of `sigma`); reports are in metres and radians.
+    pub units: DataUnits,
+    /// Effects to estimate.
+    pub effects: EffectsChoice,
+    /// Keep only these targets (all when empty).
+    pub targets: Vec<String>,
+    /// Known per-axis noise (metres).
+    pub sigma: Option<f64>,
+    /// Folds of cross-validation.
+    pub folds: usize,
+    /// Output format.
+    pub format: CalibrateFormat,
+    /// Where to write the calibrated model (`.urdf` for a URDF, `.json` for a JSON sheet,
+    /// otherwise a YAML sheet).
+    pub out: Option<String>,
+    /// Where to write the residual chart (SVG).
+    pub plot: Option<String>,
+}
+
+/// The hook for `--effects auto`: calibrate with the effects the diagnosis of `dh-calib`
+/// selects (`dh_calib::diagnose`), returning its report (steps `nominal`, `geometric`, then
+/// one `+<label>` per effect added) and the effects it selected (for the residual chart).
+///
+/// # Errors
+/// Always, until the diagnosis is wired in here: the message names the alternative.
+pub fn auto_report(
+    _table: &DhTable,
+    _data: &Measurements,
+    _options: &CalibrationOptions,
+) -> Result<(Report, Vec<Arc<dyn Effect>>)> {
+    Err(hinted(
+        "--effects auto: the automatic diagnosis of effects is not wired into the CLI yet",
+        "name the effects to estimate, e.g. --effects gear_ratio:joint_2,gear_ratio:joint_3, or use --effects none",
+    ))
+}
+
+/// A step as reported (metres).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepDoc {
+    /// `nominal`, `geometric`, `effects`.
+    pub label: String,
+    /// Free parameters.
+    pub free: usize,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Calibration RMS.
+    pub rms: f64,
+    /// Calibration mean.
+    pub mean: f64,
+    /// Calibration max.
+    pub max: f64,
+    /// Validation RMS.
+    pub val_rms: Option<f64>,
+    /// Validation mean.
+    pub val_mean: Option<f64>,
+    /// Validation max.
+    pub val_max: Option<f64>,
+}
+
+/// One parameter as reported.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParameterDoc {
+    /// Name (`<joint>.a`, `base.x`, `device.rz`, `target.<name>.x`, effect names).
+    pub name: String,
+    /// `m`, `rad` or `1`.
+    pub unit: &'static str,
+    /// Nominal value (for device and targets: the `nominal` step's estimate).
+    pub nominal: f64,
+    /// Estimate.
+    pub estimate: f64,
+    /// Standard error; `None` when held fixed.
+    pub std_error: Option<f64>,
+    /// Estimated (`false`: held at nominal).
+    pub free: bool,
+}
+
+/// A parameter held at nominal.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FixedDoc {
+    /// Its name.
+    pub name: String,
+    /// The free parameters that absorb it.
+    pub aliases: Vec<String>,
+}
+
+/// How validation was done.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ValidationDoc {
+    /// `split`, `k-fold` or `none`.
+    pub method: &'static str,
+    /// Validation samples (split).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples: Option<usize>,
+    /// Folds (k-fold).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
+    /// Pose groups (k-fold).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub groups: Option<usize>,
+}
+
+/// Where the noise level comes from.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NoiseDoc {
+    /// Per-axis standard deviation (metres).
+    pub sigma: f64,
+    /// `given`, `samples` or `repeats`.
+    pub source: &'static str,
+}
+
+/// A position with a name.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TargetDoc {
+    /// Target name.
+    pub name: String,
+    /// Position in the tip frame (metres).
+    pub xyz: [f64; 3],
+}
+
+/// A pose, metres and radians (URDF roll-pitch-yaw).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseSi {
+    /// Translation (metres).
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (radians).
+    pub rpy: [f64; 3],
+}
+
+impl PoseSi {
+    /// The pose of `p`.
+    pub fn of(p: &Isometry3<f64>) -> Self {
+        let (xyz, rpy) = to_xyz_rpy(p);
+        Self { xyz, rpy }
+    }
+}
+
+/// The JSON report; every length in metres, every angle in radians.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CalibrationDoc {
+    /// Model file, or `cpa of <data>`.
+    pub model: String,
+    /// Data file.
+    pub data: String,
+    /// Validation file.
+    pub validate: Option<String>,
+    /// Convention of the model.
+    pub convention: ConventionDoc,
+    /// Always `{length: m, angle: rad}`.
+    pub units: UnitsDoc,
+    /// Calibration samples.
+    pub samples: usize,
+    /// Validation samples (split).
+    pub validation_samples: usize,
+    /// How validation was done.
+    pub validation: ValidationDoc,
+    /// The steps, in order.
+    pub steps: Vec<StepDoc>,
+    /// Calibration RMS of `nominal`.
+    pub rms_before: f64,
+    /// Calibration RMS of the last step.
+    pub rms_after: f64,
+    /// Validation RMS of `nominal`.
+    pub val_rms_before: Option<f64>,
+    /// Validation RMS of the last step.
+    pub val_rms_after: Option<f64>,
+    /// RMS 3-D residual noise alone would leave (metres), when the noise is known.
+    pub noise_floor: Option<f64>,
+    /// The noise level behind it.
+    pub noise: Option<NoiseDoc>,
+    /// Condition number of the scaled Jacobian of the free parameters.
+    pub condition_number: f64,
+    /// Free parameters of the last step.
+    pub rank: usize,
+    /// Residual standard deviation per coordinate (metres).
+    pub sigma_hat: Option<f64>,
+    /// Every parameter.
+    pub parameters: Vec<ParameterDoc>,
+    /// The parameters held at nominal.
+    pub fixed: Vec<FixedDoc>,
+    /// Labels of the effects estimated in the last step.
+    pub selected_effects: Vec<String>,
+    /// Estimated robot base in the device frame.
+    pub device: PoseSi,
+    /// Estimated targets in the tip frame.
+    pub targets: Vec<TargetDoc>,
+    /// Hayati tilts that could not be folded into the calibrated table (name, radians).
+    pub unfolded: Vec<(String, f64)>,
+    /// Remarks.
+    pub notes: Vec<String>,
+}
+
+/// Units of the JSON report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct UnitsDoc {
+    /// `m`.
+    pub length: &'static str,
+    /// `rad`.
+    pub angle: &'static str,
+}
+
+/// The unit of a parameter, from its name (see `dh_calib::model`).
+pub fn unit_of(name: &str) -> &'static str {
+    if name.contains(':') {
+        return "1";
+    }
+    match name.rsplit('.').next() {
+        Some("a" | "d" | "x" | "y" | "z") => "m",
+        Some("alpha" | "theta" | "beta" | "rx" | "ry" | "rz") => "rad",
+        _ => "1",
+    }
+}
+
+/// The model to start from, the data and the targets kept.
+struct Inputs {
+    table: DhTable,
+    model_name: String,
+    robot: Option<String>,
+    units: (LengthUnit, AngleUnit),
+    links: (String, String),
+    data: Measurements,
+    cpa: bool,
+}
+
+/// Appends `extra`'s samples to `data` as validation samples, targets matched by name.
+fn merge_validation(data: &mut Measurements, extra: Measurements) {
+    let mut index: HashMap<String, usize> = data
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (t.clone(), i))
+        .collect();
+    for mut s in extra.samples {
+        let name = extra.targets.get(s.target).cloned().unwrap_or_default();
+        let next = data.targets.len();
+        let k = *index.entry(name.clone()).or_insert_with(|| {
+            data.targets.push(name);
+            next
+        });
+        s.target = k;
+        s.split = Split::Validation;
+        data.samples.push(s);
+    }
+}
+
+/// Keeps the samples of `keep` (by name) and renumbers the targets.
+fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Result<()> {
+    for k in keep {
+        if !data.targets.contains(k) {
+            return Err(hinted(
+                format!("{origin}: --targets names '{k}', which the data does not have"),
+                format!("the data's targets: {}", data.targets.join(", ")),
+            ));
+        }
+    }
+    let old = std::mem::take(&mut data.targets);
+    let mut map = vec![None; old.len()];
+    for (i, t) in old.iter().enumerate() {
+        if keep.contains(t) {
+            map[i] = Some(data.targets.len());
+            data.targets.push(t.clone());
+        }
+    }
+    data.samples
+        .retain_mut(|s| match map.get(s.target).copied().flatten() {
+            Some(k) => {
+                s.target = k;
+                true
+            }
+            None => false,
+        });
+    Ok(())
+}
+
+fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
+    let data_name = display_name(&args.data);
+    let (model, joints, prismatic) = match &args.model {
+        Some(m) => {
+            let model = load_model(
+                m,
+                args.base.as_deref(),
+                args.tip.as_deref(),
+                args.convention,
+            )?;
+            for w in &model.warnings {
+                writeln!(err, "urdf-dh: warning: {w}")?;
+            }
+            let (j, p) = (model.measured_joints(), model.prismatic());
+            (Some(model), j, p)
+        }
+        None => (None, header_joints(&args.data)?, Vec::new()),
+    };
+    let mut data = read_measurements(&args.data, &joints, &prismatic, args.units)?;
+    if let Some(v) = &args.validate {
+        let extra = read_measurements(v, &joints, &prismatic, args.units)?;
+        merge_validation(&mut data, extra);
+    }
+    if !args.targets.is_empty() {
+        keep_targets(&mut data, &args.targets, &data_name)?;
+    }
+    Ok(match model {
+        Some(LoadedModel {
+            table,
+            origin,
+            robot,
+            units,
+            links,
+            ..
+        }) => Inputs {
+            table,
+            model_name: origin,
+            robot,
+            units,
+            links,
+            data,
+            cpa: false,
+        },
+        None => {
+            let opts = CpaOptions {
+                convention: args.convention,
+                ..CpaOptions::default()
+            };
+            let cpa = analyse(&data, &opts).map_err(|e| {
+                hinted(
+                    format!("{data_name}: circle-point analysis failed: {e}"),
+                    "without --model the start is the circle-point analysis of the data, which needs one sweep per joint; give a model with --model",
+                )
+            })?;
+            Inputs {
+                table: cpa.extraction.table,
+                model_name: format!("circle-point analysis of {data_name}"),
+                robot: None,
+                units: (LengthUnit::M, AngleUnit::Rad),
+                links: ("base_link".into(), "tool0".into()),
+                data,
+                cpa: true,
+            }
+        }
+    })
+}
+
+/// Runs `calibrate`.
+///
+/// # Errors
+/// Bad model or data files (naming the file, line and column), unknown effects, a calibration
+/// that cannot start (too few samples, collinear points), failed writes.
+pub fn calibrate(
+    args: &CalibrateArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<Outcome> {
+    let inputs = load_inputs(args, err)?;
+    let effects: Vec<Arc<dyn Effect>> = match &args.effects {
+        EffectsChoice::List(labels) => labels
+            .iter()
+            .map(|l| parse_effect(l, &inputs.table))
+            .collect::<Result<_>>()?,
+        EffectsChoice::None | EffectsChoice::Auto => Vec::new(),
+    };
+    if let Some(s) = args.sigma {
+        if !(s.is_finite() && s > 0.0) {
+            anyhow::bail!("--sigma: expected a positive length, found {s}");
+        }
+    }
+    let options = CalibrationOptions {
+        folds: args.folds,
+        sigma: args.sigma.map(|s| s * args.units.length.metres()),
+        effects: effects.clone(),
+        // The CPA table is already in the device frame: its base is DH frame 0 there.
+        device_guess: inputs.cpa.then(Isometry3::identity),
+        ..CalibrationOptions::default()
+    };
+    let cal = inputs
+        .data
+        .samples
+        .iter()
+        .filter(|s| s.split == Split::Calibration)
+        .count();
+    // A rough size of the work: samples times folds times steps.
+    if cal * (args.folds + 1) * (2 + usize::from(!effects.is_empty())) > 200_000 {
+        writeln!(
+            err,
+            "urdf-dh: calibrating {} ({} samples, {} targets, {}-fold cross-validation unless there is a validation split); this may take a while",
+            inputs.model_name,
+            cal,
+            inputs.data.targets.len(),
+            args.folds
+        )?;
+    }
+    let failed = |e: dh_calib::CalibError| {
+        anyhow::anyhow!("{}: calibration failed: {e}", display_name(&args.data))
+    };
+    let (report, effects) = match &args.effects {
+        EffectsChoice::Auto => auto_report(&inputs.table, &inputs.data, &options)?,
+        EffectsChoice::None | EffectsChoice::List(_) => (
+            run_calibration(&inputs.table, &inputs.data, &options).map_err(failed)?,
+            effects,
+        ),
+    };
+    let doc = document(args, &inputs, &report);
+    match args.format {
+        CalibrateFormat::Json => {
+            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+        }
+        CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
+    }
+    if let Some(path) = &args.out {
+        write_model(path, &inputs, &report, &doc)?;
+    }
+    if let Some(path) = &args.plot {
+        // Residuals are millimetres or less on any arm: the chart reads best in mm whatever
+        // the report's unit.
+        let chart = chart(
+            &display_name(&args.data),
+            &inputs,
+            &report,
+            &effects,
+            LengthUnit::Mm,
+        )?;
+        write_atomically(Path::new(path), residuals_svg(&chart).as_bytes())?;
+    }
+    Ok(Outcome::Pass)
+}
+
+fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> CalibrationDoc {
+    let validation = match &report.validation {
+        Validation::Split { samples } => ValidationDoc {
+            method: "split",
+            samples: Some(*samples),
+            folds: None,
+            groups: None,
+        },
+        Validation::CrossValidation { folds, groups } => ValidationDoc {
+            method: "k-fold",
+            samples: None,
+            folds: Some(*folds),
+            groups: Some(*groups),
+        },
+        Validation::None => ValidationDoc {
+            method: "none",
+            samples: None,
+            folds: None,
+            groups: None,
+        },
+    };
+    let val_count = inputs
+        .data
+        .samples
+        .iter()
+        .filter(|s| s.split == Split::Validation)
+        .count();
+    CalibrationDoc {
+        model: inputs.model_name.clone(),
+        data: display_name(&args.data),
+        validate: args.validate.as_deref().map(display_name),
+        convention: inputs.table.convention.into(),
+        units: UnitsDoc {
+            length: "m",
+            angle: "rad",
+        },
+        samples: inputs.data.samples.len() - val_count,
+        validation_samples: val_count,
+        validation,
+        steps: report
+            .steps
+            .iter()
+            .map(|s| StepDoc {
+                label: s.label.clone(),
+                free: s.free,
+                iterations: s.iterations,
+                rms: s.rms,
+                mean: s.mean,
+                max: s.max,
+                val_rms: s.val_rms,
+                val_mean: s.val_mean,
+                val_max: s.val_max,
+            })
+            .collect(),
+        rms_before: report.rms_before,
+        rms_after: report.rms_after,
+        val_rms_before: report.val_rms_before,
+        val_rms_after: report.val_rms_after,
+        noise_floor: report.noise_floor.as_ref().map(|n| n.rms),
+        noise: report.noise_floor.as_ref().map(|n| NoiseDoc {
+            sigma: n.sigma,
+            source: match n.source {
+                NoiseSource::Given => "given",
+                NoiseSource::Samples => "samples",
+                NoiseSource::Repeats { .. } => "repeats",
+            },
+        }),
+        condition_number: report.condition_number,
+        rank: report.rank,
+        sigma_hat: report.sigma_hat,
+        parameters: report
+            .parameters
+            .iter()
+            .map(|p| ParameterDoc {
+                name: p.name.clone(),
+                unit: unit_of(&p.name),
+                nominal: p.nominal,
+                estimate: p.estimate,
+                std_error: p.std_error,
+                free: p.free,
+            })
+            .collect(),
+        fixed: report
+            .fixed
+            .iter()
+            .map(|f| FixedDoc {
+                name: f.name.clone(),
+                aliases: f.aliases.clone(),
+            })
+            .collect(),
+        selected_effects: report.selected_effects.clone(),
+        device: PoseSi::of(&report.device),
+        targets: report
+            .targets
+            .iter()
+            .map(|(n, p)| TargetDoc {
+                name: n.clone(),
+                xyz: [p.x, p.y, p.z],
+            })
+            .collect(),
+        unfolded: report.unfolded.clone(),
+        notes: report.notes.clone(),
+    }
+}
+
+/// A length in the report's unit with micrometre resolution.
+fn len(v: f64, unit: LengthUnit) -> String {
+    let v = v / unit.metres();
+    let s = match unit {
+        LengthUnit::M => format!("{v:.6}"),
+        LengthUnit::Mm => format!("{v:.3}"),
+    };
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s
+    }
+}
+
+/// A parameter value in its unit (lengths and angles in the report's units).
+fn value(v: f64, unit: &str, units: DataUnits) -> String {
+    let s = match unit {
+        "m" => return len(v, units.length),
+        "rad" => match units.angle {
+            AngleUnit::Rad => format!("{v:.7}"),
+            AngleUnit::Deg => format!("{:.5}", v.to_degrees()),
+        },
+        _ => format!("{v:.4e}"),
+    };
+    if s.trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        s.trim_start_matches('-').to_string()
+    } else {
+        s
+    }
+}
+
+fn unit_label(unit: &str, units: DataUnits) -> &'static str {
+    match unit {
+        "m" => units.length.symbol(),
+        "rad" => units.angle.symbol(),
+        _ => "1",
+    }
+}
+
+/// The readable report: metres and radians, like the JSON (the unit options say what the
+/// measurement files hold, not how to print).
+fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
+    let units = DataUnits::default();
+    let lu = units.length;
+    let l = |v: f64| len(v, lu);
+    let o = |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| len(v, lu));
+    let mut s = String::new();
+    let robot = inputs
+        .robot
+        .as_deref()
+        .map(|r| format!("{r}, "))
+        .unwrap_or_default();
+    let _ = writeln!(
+        s,
+        "calibration of {robot}{} ({} DH, {} joints) against {}",
+        doc.model,
+        inputs.table.convention,
+        inputs.table.rows.len(),
+        doc.data
+    );
+    let validation = match doc.validation.method {
+        "split" => format!(
+            "validation on {} held-out samples{}",
+            doc.validation_samples,
+            doc.validate
+                .as_deref()
+                .map(|v| format!(" ({v})"))
+                .unwrap_or_default()
+        ),
+        "k-fold" => format!(
+            "{}-fold cross-validation over {} poses",
+            doc.validation.folds.unwrap_or(0),
+            doc.validation.groups.unwrap_or(0)
+        ),
+        _ => "no validation (fewer than 2 poses)".to_string(),
+    };
+    let _ = writeln!(
+        s,
+        "data: {} calibration samples of {} target(s) ({}); {validation}",
+        doc.samples,
+        doc.targets.len(),
+        doc.targets
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    match (&doc.noise, doc.noise_floor) {
+        (Some(n), Some(f)) => {
+            let _ = writeln!(
+                s,
+                "noise: {} {} per axis ({}); noise floor {} {} RMS",
+                l(n.sigma),
+                lu.symbol(),
+                match n.source {
+                    "given" => "given with --sigma",
+                    "samples" => "the samples' sigma",
+                    _ => "pure error of repeated poses",
+                },
+                l(f),
+                lu.symbol()
+            );
+        }
+        _ => {
+            let _ = writeln!(
+                s,
+                "noise: unknown (no sigma column, no repeated poses, no --sigma)"
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "{:<12} {:>5} {:>5} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}  [{}]",
+        "step",
+        "free",
+        "iter",
+        "rms",
+        "mean",
+        "max",
+        "val_rms",
+        "val_mean",
+        "val_max",
+        lu.symbol()
+    );
+    for st in &doc.steps {
+        let _ = writeln!(
+            s,
+            "{:<12} {:>5} {:>5} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}",
+            st.label,
+            st.free,
+            st.iterations,
+            l(st.rms),
+            l(st.mean),
+            l(st.max),
+            o(st.val_rms),
+            o(st.val_mean),
+            o(st.val_max)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "identifiability: {} free parameters, condition number {:.3e}{}",
+        doc.rank,
+        doc.condition_number,
+        doc.sigma_hat
+            .map(|v| format!(", residual sigma {} {} per coordinate", l(v), lu.symbol()))
+            .unwrap_or_default()
+    );
+    if doc.fixed.is_empty() {
+        let _ = writeln!(s, "fixed at nominal: none");
+    } else {
+        let _ = writeln!(
+            s,
+            "fixed at nominal ({}; not identifiable from this data):",
+            doc.fixed.len()
+        );
+        for f in &doc.fixed {
+            let aliases = if f.aliases.is_empty() {
+                "no effect on the data".to_string()
+            } else {
+                format!("absorbed by {}", f.aliases.join(", "))
+            };
+            let _ = writeln!(s, "  {:<28} {aliases}", f.name);
+        }
+    }
+    let _ = writeln!(
+        s,
+        "estimated parameters (nominal -> estimate +- standard error):"
+    );
+    let width = doc
+        .parameters
+        .iter()
+        .map(|p| p.name.len())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    for p in doc
+        .parameters
+        .iter()
+        .filter(|p| p.free && !p.name.starts_with("device.") && !p.name.starts_with("target."))
+    {
+        let _ = writeln!(
+            s,
+            "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
+            p.name,
+            unit_label(p.unit, units),
+            value(p.nominal, p.unit, units),
+            value(p.estimate, p.unit, units),
+            p.std_error
+                .map_or_else(|| "-".into(), |e| value(e, p.unit, units))
+        );
+    }
+    let rpy = |r: [f64; 3]| {
+        r.map(|v| value(v, "rad", units))
+            .into_iter()
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let xyz = |p: [f64; 3]| p.map(l).into_iter().collect::<Vec<_>>().join(" ");
+    let _ = writeln!(
+        s,
+        "device frame (robot base in the device frame): xyz [{}] {}  rpy [{}] {}",
+        lu.symbol(),
+        xyz(doc.device.xyz),
+        units.angle.symbol(),
+        rpy(doc.device.rpy)
+    );
+    for t in &doc.targets {
+        let _ = writeln!(
+            s,
+            "target {} (tip frame): xyz [{}] {}",
+            t.name,
+            lu.symbol(),
+            xyz(t.xyz)
+        );
+    }
+    if !doc.selected_effects.is_empty() {
+        let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
+    }
+    if !doc.unfolded.is_empty() {
+        let _ = writeln!(
+            s,
+            "tilts not folded into the written DH table: {}",
+            doc.unfolded
+                .iter()
+                .map(|(n, v)| format!("{n} = {} rad", value(*v, "rad", DataUnits::default())))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    for n in &doc.notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    let _ = writeln!(
+        s,
+        "result: RMS {} -> {} {}{}",
+        l(doc.rms_before),
+        l(doc.rms_after),
+        lu.symbol(),
+        match (doc.val_rms_before, doc.val_rms_after) {
+            (Some(b), Some(a)) => format!(" (validation {} -> {} {})", l(b), l(a), lu.symbol()),
+            _ => String::new(),
+        }
+    );
+    s
+}
+
+/// Writes the calibrated model: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
+fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDoc) -> Result<()> {
+    let lower = path.to_ascii_lowercase();
+    let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
+    let bytes = if lower.ends_with(".urdf") {
+        urdf_of(&report.calibrated, &robot, &inputs.links.0, &inputs.links.1)
+    } else {
+        let (lu, au) = inputs.units;
+        let mut sheet = SheetDoc::from_table(&report.calibrated, lu, au);
+        sheet.robot = inputs.robot.clone();
+        sheet.source = Some(format!(
+            "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
+            doc.model, doc.data, doc.rms_before, doc.rms_after
+        ));
+        let calibration = CalibrationSection {
+            data: doc.data.clone(),
+            rms_before: doc.rms_before,
+            rms_after: doc.rms_after,
+            val_rms_before: doc.val_rms_before,
+            val_rms_after: doc.val_rms_after,
+            device: doc.device.clone(),
+            targets: doc.targets.clone(),
+            effects: doc
+                .parameters
+                .iter()
+                .filter(|p| p.free && p.unit == "1")
+                .map(|p| (p.name.clone(), p.estimate))
+                .collect(),
+        };
+        sheet.calibration = Some(serde_yaml::to_value(&calibration)?);
+        if lower.ends_with(".json") {
+            serde_json::to_string_pretty(&sheet)? + "\n"
+        } else {
+            serde_yaml::to_string(&sheet)?
+        }
+    };
+    write_atomically(Path::new(path), bytes.as_bytes())
+        .with_context(|| format!("writing the calibrated model to {}", display_name(path)))
+}
+
+/// The `calibration` section of a calibrated sheet (metres, radians): what the table was
+/// fitted with, and the frames it needs to predict the measured points.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+struct CalibrationSection {
+    data: String,
+    rms_before: f64,
+    rms_after: f64,
+    val_rms_before: Option<f64>,
+    val_rms_after: Option<f64>,
+    device: PoseSi,
+    targets: Vec<TargetDoc>,
+    effects: Vec<(String, f64)>,
+}
+
+/// Joint values of every sample in `table`'s row order (mimic rows follow their drivers).
+fn row_values(table: &DhTable, data: &Measurements) -> Result<Vec<Vec<f64>>> {
+    let column = |name: &str| data.joint_names.iter().position(|n| n == name);
+    let mut sources = Vec::with_capacity(table.rows.len());
+    for r in &table.rows {
+        let s = match (column(&r.name), &r.mimic) {
+            (Some(c), _) => (c, 1.0, 0.0),
+            (None, Some(m)) => (
+                column(&m.joint).with_context(|| format!("no column for joint '{}'", m.joint))?,
+                m.multiplier,
+                m.offset,
+            ),
+            (None, None) => anyhow::bail!("no column for joint '{}'", r.name),
+        };
+        sources.push(s);
+    }
+    Ok(data
+        .samples
+        .iter()
+        .map(|s| {
+            sources
+                .iter()
+                .map(|&(c, m, o)| m * s.q.get(c).copied().unwrap_or(0.0) + o)
+                .collect()
+        })
+        .collect())
+}
+
+/// Pose index of every sample: samples sharing `config` (or else joint values) are one pose,
+/// numbered in order of first appearance; and the number of poses.
+fn pose_indices(data: &Measurements) -> (Vec<usize>, usize) {
+    let mut ids: HashMap<String, usize> = HashMap::new();
+    let v = data
+        .samples
+        .iter()
+        .map(|s| {
+            let key = match &s.config {
+                Some(c) => format!("c{c}"),
+                None => format!("q{:?}", s.q.iter().map(|v| v.to_bits()).collect::<Vec<_>>()),
+            };
+            let next = ids.len();
+            *ids.entry(key).or_insert(next)
+        })
+        .collect();
+    (v, ids.len())
+}
+
+/// Distances between the points `table` (with `effects` at `values`, the device frame and
+/// the targets) predicts and the measured ones, per sample.
+fn distances(
+    table: &DhTable,
+    effects: &[(Arc<dyn Effect>, Vec<f64>)],
+    device: &Isometry3<f64>,
+    targets: &[Vector3<f64>],
+    data: &Measurements,
+) -> Result<Vec<f64>> {
+    let mut model = Model::new(table, &data.targets, &ModelOptions::default())?;
+    let mut x_effects = Vec::new();
+    for (e, v) in effects {
+        let range = model.add_effect(e.clone())?;
+        x_effects.push((range, v.clone()));
+    }
+    model.set_device(device);
+    for (k, t) in targets.iter().enumerate() {
+        model.set_target(k, *t);
+    }
+    let mut x = vec![0.0; model.parameter_count()];
+    for (range, v) in x_effects {
+        for (i, val) in range.zip(v) {
+            if let Some(slot) = x.get_mut(i) {
+                *slot = val;
+            }
+        }
+    }
+    let q = row_values(table, data)?;
+    Ok(data
+        .samples
+        .iter()
+        .zip(&q)
+        .map(|(s, q)| (model.point(&x, q, s.target) - s.point).norm())
+        .collect())
+}
+
+/// The nominal-step device frame and targets, from the report's `nominal` column.
+fn nominal_frames(report: &Report, targets: &[String]) -> (Isometry3<f64>, Vec<Vector3<f64>>) {
+    let get = |name: &str| {
+        report
+            .parameters
+            .iter()
+            .find(|p| p.name == name)
+            .map_or(0.0, |p| p.nominal)
+    };
+    let device = from_xyz_rpy(
+        [get("device.x"), get("device.y"), get("device.z")],
+        [get("device.rx"), get("device.ry"), get("device.rz")],
+    );
+    let t = targets
+        .iter()
+        .map(|n| {
+            Vector3::new(
+                get(&format!("target.{n}.x")),
+                get(&format!("target.{n}.y")),
+                get(&format!("target.{n}.z")),
+            )
+        })
+        .collect();
+    (device, t)
+}
+
+/// The residual chart: the `nominal` step's model and the final one.
+fn chart(
+    data_name: &str,
+    inputs: &Inputs,
+    report: &Report,
+    effects: &[Arc<dyn Effect>],
+    unit: LengthUnit,
+) -> Result<ResidualChart> {
+    let data = &inputs.data;
+    let (poses, count) = pose_indices(data);
+    let (device0, targets0) = nominal_frames(report, &data.targets);
+    let before = distances(&inputs.table, &[], &device0, &targets0, data)?;
+    // The effects of the last step, with their estimates.
+    let estimates: Vec<(Arc<dyn Effect>, Vec<f64>)> = effects
+        .iter()
+        .filter(|e| report.selected_effects.contains(&label_of(e.as_ref())))
+        .map(|e| {
+            let v = e
+                .parameter_names()
+                .iter()
+                .map(|n| {
+                    report
+                        .parameters
+                        .iter()
+                        .find(|p| &p.name == n)
+                        .map_or(0.0, |p| p.estimate)
+                })
+                .collect();
+            (e.clone(), v)
+        })
+        .collect();
+    let targets1: Vec<Vector3<f64>> = data
+        .targets
+        .iter()
+        .map(|n| {
+            report
+                .targets
+                .iter()
+                .find(|(t, _)| t == n)
+                .map_or_else(Vector3::zeros, |(_, p)| *p)
+        })
+        .collect();
+    let after = distances(
+        &report.calibrated,
+        &estimates,
+        &report.device,
+        &targets1,
+        data,
+    )?;
+    let panel = |label: String, d: Vec<f64>, rms: f64, floor: Option<f64>| Panel {
+        label,
+        residuals: d
+            .into_iter()
+            .zip(&poses)
+            .zip(&data.samples)
+            .map(|((distance, &pose), s)| Residual {
+                pose,
+                distance,
+                validation: s.split == Split::Validation,
+            })
+            .collect(),
+        rms: Some(rms),
+        floor,
+    };
+    let last = report
+        .steps
+        .last()
+        .map_or("geometric", |s| s.label.as_str());
+    Ok(ResidualChart {
+        title: format!(
+            "residuals per pose: {} against {} ({} samples of {} target(s))",
+            inputs.model_name,
+            data_name,
+            data.samples.len(),
+            data.targets.len()
+        ),
+        unit,
+        poses: count,
+        panels: vec![
+            panel(
+                "before: nominal model (device frame and targets fitted)".into(),
+                before,
+                report.rms_before,
+                None,
+            ),
+            panel(
+                format!("after: {last}"),
+                after,
+                report.rms_after,
+                report.noise_floor.as_ref().map(|n| n.rms),
+            ),
+        ],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn effects_choice_parses() {
+        assert_eq!("none".parse(), Ok(EffectsChoice::None));
+        assert_eq!("auto".parse(), Ok(EffectsChoice::Auto));
+        assert_eq!(
+            "gear_ratio:j2, gear_ratio:j3".parse(),
+            Ok(EffectsChoice::List(vec![
+                "gear_ratio:j2".into(),
+                "gear_ratio:j3".into()
+            ]))
+        );
+    }
+
+    #[test]
+    fn units_of_parameters() {
+        assert_eq!(unit_of("joint_2.a"), "m");
+        assert_eq!(unit_of("joint_2.beta"), "rad");
+        assert_eq!(unit_of("target.SMR1.z"), "m");
+        assert_eq!(unit_of("device.rz"), "rad");
+        assert_eq!(unit_of("gear_ratio:joint_2"), "1");
+    }
+}
+
+/// Command-line arguments of `calibrate`.
+#[derive(Debug, clap::Args)]
+pub struct CalibrateCli {
+    /// The nominal model: a URDF (with --base/--tip) or a DH sheet [default: circle-point
+    /// analysis of the data].
+    #[arg(long, value_name = "MODEL")]
+    model: Option<String>,
+    /// Base link of a URDF chain [default: the root link].
+    #[arg(long)]
+    base: Option<String>,
+    /// Tip link of a URDF chain [default: the only leaf].
+    #[arg(long)]
+    tip: Option<String>,
+    /// DH convention for a URDF model or the CPA start.
+    #[arg(long, value_enum, default_value_t = ConventionDoc::Standard)]
+    convention: ConventionDoc,
+    /// The measurements (canonical CSV; see `urdf-dh import` for published layouts).
+    #[arg(long, value_name = "D.csv")]
+    data: String,
+    /// Held-out measurements to validate on [default: the data's own `set` column, else
+    /// k-fold cross-validation over poses].
+    #[arg(long, value_name = "V.csv")]
+    validate: Option<String>,
+    /// Effects to estimate after the geometric step: none, auto, or labels such as
+    /// gear_ratio:joint_2,gear_ratio:joint_3.
+    #[arg(long, value_name = "none|auto|LIST", default_value = "none")]
+    effects: EffectsChoice,
+    /// Use only these targets of the data (comma-separated names) [default: all].
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    targets: Vec<String>,
+    /// Known measurement noise per axis, in the length unit [default: the data's sigma column
+    /// or the scatter of repeated poses].
+    #[arg(long, value_name = "SIGMA")]
+    sigma: Option<f64>,
+    /// Folds of the cross-validation.
+    #[arg(long, value_name = "K", default_value_t = 5)]
+    folds: usize,
+    /// Length unit of the measurement files and --sigma (reports are in metres).
+    #[arg(long, value_enum, default_value_t = LengthUnit::M)]
+    length_unit: LengthUnit,
+    /// Angle unit of the measurement files (reports are in radians).
+    #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
+    angle_unit: AngleUnit,
+    /// Output format (JSON: metres and radians).
+    #[arg(long, value_enum, default_value_t = CalibrateFormat::Text)]
+    format: CalibrateFormat,
+    /// Write the calibrated model here: a DH sheet (.yaml, .json) or a URDF (.urdf).
+    #[arg(long, value_name = "FILE")]
+    out: Option<String>,
+    /// Write an SVG chart of the residuals per pose, before and after.
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<String>,
+}
+
+impl CalibrateCli {
+    /// The arguments of [`calibrate`].
+    pub fn into_args(self) -> CalibrateArgs {
+        CalibrateArgs {
+            model: self.model,
+            base: self.base,
+            tip: self.tip,
+            convention: self.convention.into(),
+            data: self.data,
+            validate: self.validate,
+            units: DataUnits {
+                length: self.length_unit,
+                angle: self.angle_unit,
+            },
+            effects: self.effects,
+            targets: self.targets,
+            sigma: self.sigma,
+            folds: self.folds,
+            format: self.format,
+            out: self.out,
+            plot: self.plot,
+        }
+    }
+}

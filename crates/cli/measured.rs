@@ -1,0 +1,342 @@
+//! What the measured-data commands (`import`, `calibrate`, `cpa`, `simulate`) share: the model
+//! (`--model`: a URDF chain or a DH sheet), measurement files in the canonical CSV layout, and
+//! effect labels.
+
+use std::sync::Arc;
+
+use anyhow::{Context, Result};
+use dh_calib::csv::{parse_measurements, CsvOptions};
+use dh_calib::data::Measurements;
+use dh_calib::model::Effect;
+use dh_core::{Convention, DhTable, JointKind, Tolerance};
+
+use crate::commands::extract::load_chain;
+use crate::error::hinted;
+use crate::input::{display_name, read_text};
+use crate::sheet::Sheet;
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Columns of the canonical CSV that are not joints.
+pub const RESERVED_COLUMNS: [&str; 10] = [
+    "x", "y", "z", "target", "config", "sigma", "sx", "sy", "sz", "set",
+];
+
+/// A robot model given with `--model`.
+#[derive(Clone, Debug)]
+pub struct LoadedModel {
+    /// The table (metres, radians) with base and tool.
+    pub table: DhTable,
+    /// The file name (no directories).
+    pub origin: String,
+    /// Robot name, when the file gives one.
+    pub robot: Option<String>,
+    /// Units a written-back sheet should use: the sheet's own, metres and radians for a URDF.
+    pub units: (LengthUnit, AngleUnit),
+    /// Warnings about the model (snapped axes, suspicious units).
+    pub warnings: Vec<String>,
+    /// Base and tip link names: the URDF chain's, `base_link` and `tool0` for a sheet.
+    pub links: (String, String),
+}
+
+impl LoadedModel {
+    /// Names of the rows that take a column in a measurement file: every row but the mimic
+    /// ones (which follow their driver).
+    pub fn measured_joints(&self) -> Vec<String> {
+        measured_joints(&self.table)
+    }
+
+    /// Names of the prismatic rows.
+    pub fn prismatic(&self) -> Vec<String> {
+        prismatic(&self.table)
+    }
+}
+
+/// Rows of `table` that take a column in a measurement file (mimic rows follow their driver).
+pub fn measured_joints(table: &DhTable) -> Vec<String> {
+    table
+        .rows
+        .iter()
+        .filter(|r| r.mimic.is_none())
+        .map(|r| r.name.clone())
+        .collect()
+}
+
+/// Names of the prismatic rows of `table`.
+pub fn prismatic(table: &DhTable) -> Vec<String> {
+    table
+        .rows
+        .iter()
+        .filter(|r| r.kind == JointKind::Prismatic)
+        .map(|r| r.name.clone())
+        .collect()
+}
+
+/// Whether `path` names a URDF rather than a sheet: by extension, else by the first character
+/// of `text` (`<` for XML).
+fn is_urdf(path: &str, text: &str) -> bool {
+    let lower = path.to_ascii_lowercase();
+    if lower.ends_with(".urdf") || lower.ends_with(".xacro") || lower.ends_with(".xml") {
+        return true;
+    }
+    if lower.ends_with(".yaml") || lower.ends_with(".yml") || lower.ends_with(".json") {
+        return false;
+    }
+    text.trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with('<')
+}
+
+/// Loads `--model`: a URDF (chain from `base` to `tip`, extracted in `convention` and verified
+/// as `extract` does) or a DH sheet (YAML or JSON; `base`, `tip` and `convention` do not apply).
+///
+/// # Errors
+/// Unreadable or invalid file, a chain that cannot be chosen or extracted, a URDF whose
+/// extraction fails its own verification.
+pub fn load_model(
+    path: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+    convention: Convention,
+) -> Result<LoadedModel> {
+    let origin = display_name(path);
+    // A .xacro file is expanded by load_chain; anything else is read once here.
+    let text = if path.to_ascii_lowercase().ends_with(".xacro") {
+        None
+    } else {
+        Some(read_text(path)?)
+    };
+    let urdf = text.as_deref().is_none_or(|t| is_urdf(path, t));
+    if urdf && path == "-" {
+        return Err(hinted(
+            "<stdin>: a URDF model must be given as a file",
+            "save it to a file, or extract a sheet first: urdf-dh extract - --format yaml > model.yaml",
+        ));
+    }
+    if !urdf {
+        if base.is_some() || tip.is_some() {
+            return Err(hinted(
+                format!("{origin}: --base and --tip choose a chain of a URDF, but the model is a DH sheet"),
+                "drop --base/--tip, or give the URDF as --model",
+            ));
+        }
+        let sheet = Sheet::parse(text.as_deref().unwrap_or_default(), &origin)?;
+        return Ok(LoadedModel {
+            table: sheet.table,
+            origin,
+            robot: sheet.robot,
+            units: (sheet.length_unit, sheet.angle_unit),
+            warnings: sheet.warnings,
+            links: ("base_link".into(), "tool0".into()),
+        });
+    }
+    let (urdf_model, chain) = load_chain(path, base, tip)?;
+    let extraction = dh_core::extract(
+        chain.axes(),
+        &chain.tip_pose(),
+        Tolerance::default(),
+        convention,
+    )
+    .with_context(|| format!("{origin}: extraction failed"))?;
+    let deviation = dh_core::compare(&extraction.table, |q| chain.fk(q), 1000, 0)?;
+    if deviation.max_position_error > extraction.bound.position
+        || deviation.max_orientation_error > extraction.bound.orientation
+    {
+        anyhow::bail!(
+            "{origin}: the DH table extracted from the URDF fails its own verification; run 'urdf-dh extract {path}' for details"
+        );
+    }
+    Ok(LoadedModel {
+        table: extraction.table,
+        origin,
+        robot: Some(urdf_model.robot_name().to_string()),
+        units: (LengthUnit::M, AngleUnit::Rad),
+        warnings: extraction.warnings.iter().map(|w| w.to_string()).collect(),
+        links: (chain.base().to_string(), chain.tip().to_string()),
+    })
+}
+
+/// Units of a measurement file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct DataUnits {
+    /// Unit of `x`, `y`, `z`, `sigma` and prismatic joints.
+    pub length: LengthUnit,
+    /// Unit of revolute joints.
+    pub angle: AngleUnit,
+}
+
+impl DataUnits {
+    fn csv_options(self, prismatic: &[String]) -> CsvOptions {
+        CsvOptions {
+            length_unit: match self.length {
+                LengthUnit::M => dh_calib::csv::LengthUnit::Metre,
+                LengthUnit::Mm => dh_calib::csv::LengthUnit::Millimetre,
+            },
+            angle_unit: match self.angle {
+                AngleUnit::Rad => dh_calib::csv::AngleUnit::Radian,
+                AngleUnit::Deg => dh_calib::csv::AngleUnit::Degree,
+            },
+            prismatic: prismatic.to_vec(),
+        }
+    }
+}
+
+/// Reads a measurement file (or `-`) in the canonical CSV layout with columns for `joints`.
+///
+/// # Errors
+/// Unreadable file; any [`dh_calib::csv::DataError`], prefixed with the file name (the error
+/// names the line and column).
+pub fn read_measurements(
+    path: &str,
+    joints: &[String],
+    prismatic: &[String],
+    units: DataUnits,
+) -> Result<Measurements> {
+    let name = display_name(path);
+    let text = read_text(path)?;
+    parse_measurements(&text, joints, &units.csv_options(prismatic)).map_err(|e| {
+        let hint = match &e {
+            dh_calib::csv::DataError::MissingJoints { .. } => Some(
+                "the joint columns must be named as the model's joints (see README, 'Measurement files')",
+            ),
+            _ => None,
+        };
+        match hint {
+            Some(h) => hinted(format!("{name}: {e}"), h),
+            None => anyhow::anyhow!("{name}: {e}"),
+        }
+    })
+}
+
+/// The joint columns of a measurement file without a model: every header column that is not
+/// one of [`RESERVED_COLUMNS`], in order.
+///
+/// # Errors
+/// Unreadable file, no header line, no joint column.
+pub fn header_joints(path: &str) -> Result<Vec<String>> {
+    let name = display_name(path);
+    let text = read_text(path)?;
+    let header = text
+        .trim_start_matches('\u{feff}')
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .with_context(|| format!("{name}: expected a header line, found an empty file"))?;
+    let joints: Vec<String> = split_header(header)
+        .into_iter()
+        .filter(|c| !RESERVED_COLUMNS.contains(&c.as_str()))
+        .collect();
+    if joints.is_empty() {
+        return Err(hinted(
+            format!("{name}: line 1: expected joint columns besides x, y, z, found none"),
+            "a measurement file has one column per joint, named as the model's joints",
+        ));
+    }
+    Ok(joints)
+}
+
+/// Header cells: comma separated, trimmed, double quotes removed.
+fn split_header(line: &str) -> Vec<String> {
+    let mut cells = vec![String::new()];
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                chars.next();
+                if let Some(s) = cells.last_mut() {
+                    s.push('"');
+                }
+            }
+            '"' => quoted = !quoted,
+            ',' if !quoted => cells.push(String::new()),
+            c => {
+                if let Some(s) = cells.last_mut() {
+                    s.push(c);
+                }
+            }
+        }
+    }
+    cells.into_iter().map(|s| s.trim().to_string()).collect()
+}
+
+/// Effect kinds `dh-calib` understands (see `dh_calib::effects`): `<kind>:<joint>`, except
+/// `coupling:<joint>:<driver>`, `gear_harmonic:<joint>[:2]` and `scale`.
+pub const EFFECT_KINDS: [&str; 8] = [
+    "gear_ratio",
+    "gear_harmonic",
+    "compliance",
+    "lateral_compliance",
+    "coupling",
+    "scale",
+    "parallel_tilt",
+    "backlash",
+];
+
+/// The effect a label names, for the rows of `table` (`dh_calib::effects::parse_label`). The
+/// gravity effects (`compliance`, `lateral_compliance`, `backlash`) need link inertials, which
+/// a DH table does not carry.
+///
+/// # Errors
+/// An unknown kind, a wrong number of joints, a joint the table does not have.
+pub fn parse_effect(label: &str, table: &DhTable) -> Result<Arc<dyn Effect>> {
+    dh_calib::effects::parse_label(label, table).map_err(|e| {
+        hinted(
+            format!("{e}"),
+            format!(
+                "effects are named <kind>:<joint> (coupling:<joint>:<driver>, scale), kinds: {}; joints: {}",
+                EFFECT_KINDS.join(", "),
+                table
+                    .rows
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_cells_are_split_unquoted_and_trimmed() {
+        assert_eq!(
+            split_header(" j1 ,\"j,2\", x,y,z,\"a\"\"b\""),
+            ["j1", "j,2", "x", "y", "z", "a\"b"]
+        );
+    }
+
+    #[test]
+    fn urdf_or_sheet_by_extension_then_content() {
+        assert!(is_urdf("r.urdf", "convention: standard"));
+        assert!(!is_urdf("r.yaml", "<robot/>"));
+        assert!(is_urdf("r.txt", "  <?xml version='1.0'?><robot/>"));
+        assert!(!is_urdf("-", "convention: standard"));
+    }
+
+    #[test]
+    fn effect_labels() {
+        let table = DhTable {
+            convention: Convention::Standard,
+            base: nalgebra::Isometry3::identity(),
+            tool: nalgebra::Isometry3::identity(),
+            rows: vec![dh_core::DhRow::revolute("j1", 0.3, 0.0, 0.0, 0.0)],
+        };
+        assert_eq!(
+            parse_effect("gear_ratio:j1", &table)
+                .unwrap()
+                .parameter_names(),
+            ["gear_ratio:j1"]
+        );
+        for (label, says) in [
+            ("gear_ratio", "found 0 arguments"),
+            ("gear_ratio:j9", "j9"),
+            ("wobble:j1", "found 'wobble'"),
+        ] {
+            let e = parse_effect(label, &table).err().unwrap();
+            assert!(e.to_string().contains(says), "{e}");
+        }
+    }
+}
