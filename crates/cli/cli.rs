@@ -137,6 +137,18 @@ struct ExtractCli {
     /// Seed of the self-check's sampler.
     #[arg(long, value_name = "S", default_value_t = 0)]
     seed: u64,
+    /// Also draw the DH frames (isometric and side view) into this SVG file.
+    #[arg(long, value_name = "FILE")]
+    svg: Option<String>,
+    /// Joint values for the drawing, comma-separated, radians (metres for prismatic joints)
+    /// [default: all zero].
+    #[arg(
+        long,
+        value_name = "Q1,Q2,...",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    q: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Args)]
@@ -203,6 +215,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 tolerance: a.tol.tolerance()?,
                 samples: a.samples,
                 seed: a.seed,
+                svg: a.svg,
+                q: a.q,
             };
             extract(&args, out, err)
         }

@@ -14,4 +14,5 @@ pub mod output;
 pub mod plot;
 pub mod render;
 pub mod sheet;
+pub mod svg;
 pub mod units;

@@ -202,3 +202,64 @@ fn same(a: &serde_json::Value, b: &serde_json::Value) -> bool {
         _ => a == b,
     }
 }
+
+/// The frame picture is well-formed SVG with every frame label, both views and every joint.
+#[test]
+fn svg_shows_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    for (id, q) in [
+        ("kuka_kr5_arc", None),
+        ("scara_prismatic", Some("0.3,-0.5,0.1,1.0")),
+    ] {
+        let path = dir.path().join(format!("{id}.svg"));
+        let mut args = vec![
+            "extract".to_string(),
+            format!("fixtures/robots/{id}/robot.urdf"),
+            "--svg".into(),
+            path.to_string_lossy().into_owned(),
+        ];
+        if let Some(q) = q {
+            args.push("--q".into());
+            args.push(q.into());
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        assert_eq!(exit_code(&args), 0, "{id}");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let doc = roxmltree::Document::parse(&text).expect("well-formed SVG");
+        assert_eq!(doc.root_element().tag_name().name(), "svg");
+        let texts: Vec<&str> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .filter_map(|n| n.text())
+            .collect();
+        let n = if id == "scara_prismatic" { 4 } else { 6 };
+        for label in (0..=n)
+            .map(|i| format!("F{i}"))
+            .chain(["tool".to_string(), "isometric".to_string()])
+        {
+            assert!(
+                texts.iter().filter(|t| t.starts_with(&label)).count() >= 1,
+                "{id}: no label {label}"
+            );
+        }
+        // Every frame is drawn in both views, three axes each.
+        let lines = doc.descendants().filter(|n| n.has_tag_name("line")).count();
+        assert!(lines >= 2 * (3 * (n + 2) + 2 * n), "{id}: {lines} lines");
+    }
+    let code = exit_code(&[
+        "extract",
+        "fixtures/robots/ur5/robot.urdf",
+        "--svg",
+        "/nonexistent-dir/x.svg",
+    ]);
+    assert_eq!(code, 2);
+    let code = exit_code(&[
+        "extract",
+        "fixtures/robots/ur5/robot.urdf",
+        "--svg",
+        "/tmp/x.svg",
+        "--q",
+        "1,2",
+    ]);
+    assert_eq!(code, 2);
+}

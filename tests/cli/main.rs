@@ -1,5 +1,6 @@
 //! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
+mod check;
 mod common;
 mod corpus;
 mod extract;

@@ -33,6 +33,10 @@ pub struct ExtractArgs {
     pub samples: usize,
     /// Seed of the sampler.
     pub seed: u64,
+    /// Write a drawing of the DH frames here.
+    pub svg: Option<String>,
+    /// Joint values of the drawing (radians or metres; default all zero).
+    pub q: Option<Vec<f64>>,
 }
 
 /// The result of an extraction and its verification, ready to print.
@@ -132,6 +136,32 @@ pub fn extract(
     let ex = run_extract(args)?;
     for w in &ex.extraction.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
+    }
+    if let Some(path) = &args.svg {
+        let n = ex.extraction.table.rows.len();
+        let q = args.q.clone().unwrap_or_else(|| vec![0.0; n]);
+        if q.len() != n {
+            anyhow::bail!(
+                "--q: expected {n} joint values (one per row: {}), found {}",
+                ex.extraction
+                    .table
+                    .rows
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                q.len()
+            );
+        }
+        let title = format!(
+            "{} ({} -> {})",
+            ex.sheet.robot.as_deref().unwrap_or("robot"),
+            ex.chain.base(),
+            ex.chain.tip()
+        );
+        let svg = crate::svg::frames_svg(&ex.extraction.table, &q, &title)
+            .ok_or_else(|| anyhow::anyhow!("--q: the joint values do not fit the table"))?;
+        crate::output::write_atomically(std::path::Path::new(path), svg.as_bytes())?;
     }
     out.write_all(render_sheet(&ex.sheet, args.format)?.as_bytes())?;
     if ex.passed {

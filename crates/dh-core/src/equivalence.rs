@@ -249,6 +249,12 @@ fn solve_row(
     // descriptions, to be told apart by the rows after); with none, the best fit is.
     let good = (tol.linear.max(scale * tol.angular)).powi(2);
     let mut holding: Vec<RowFit> = Vec::new();
+    // The sheet's own theta first: where the row leaves x free (coincident axes) the cost is
+    // flat and its minima are rounding noise.
+    let own = eval(s.theta);
+    if own.cost <= good {
+        holding.push(own);
+    }
     for f in minima.iter().filter(|f| f.cost <= good) {
         if !holding.iter().any(|h| wrap(h.psi - f.psi).abs() < 1e-6) {
             holding.push(*f);
@@ -346,23 +352,6 @@ pub fn compare_tables(
         next.truncate(BEAM);
         beam = next;
     }
-    if !freedom.tool_free && n > 0 {
-        for st in &mut beam {
-            // Reference tip = F_ref,n · tool_ref = F_sheet,n · C_n · tool_ref.
-            let want = st.c.iso() * reference.tool;
-            let (dp, dr) = pose_error(&want, &std.tool);
-            if dp > tol.linear || dr > tol.angular {
-                st.differences.push(Difference {
-                    row: None,
-                    parameter: Parameter::Tool,
-                    reference: dp,
-                    sheet: 0.0,
-                    aliases: vec![],
-                });
-            }
-        }
-        beam.sort_by(|a, b| a.rank().total_cmp(&b.rank()));
-    }
     match beam.into_iter().next() {
         Some(st) => Equivalence {
             differences: st.differences,
@@ -427,6 +416,9 @@ fn step(
     let first_free = i == 0 && freedom.base_free;
     let last_free = i + 1 == n && freedom.tool_free;
     let prismatic = srow.kind == JointKind::Prismatic;
+    if i + 1 == n && !freedom.tool_free {
+        return vec![last_with_tool(st, i, &x, reference, std, first_free, tol)];
+    }
     let mut out = Vec::new();
     for fit in solve_row(&x, &s, parallel, scale, tol) {
         let mut next = st.clone();
@@ -513,6 +505,78 @@ fn step(
         out.push(next);
     }
     out
+}
+
+/// The last row when the sheet gives the tool: the row's link and the tool are one rigid body,
+/// so only the joint's zero pose (`theta`), its shift along the axis (`d`) and the tool as a
+/// whole are compared. With `P = C·A_ref,n(0)·tool_ref` and `Q = A_sheet,n(0)·tool_sheet`,
+/// `P·Q⁻¹` must be `Rz(o) Tz(delta)`; whatever else it holds is a tool difference.
+fn last_with_tool(
+    st: &State,
+    i: usize,
+    x: &Isometry3<f64>,
+    reference: &DhTable,
+    std: &DhTable,
+    first_free: bool,
+    tol: Tolerance,
+) -> State {
+    let srow = &std.rows[i];
+    let p = x * reference.tool;
+    let q = srow.transform(Convention::Standard, 0.0) * std.tool;
+    let z = p * q.inverse();
+    let (motion, tilt, off) = AxisMotion::project(&z);
+    let sign = if st.c.flip { -1.0 } else { 1.0 };
+    let mut next = st.clone();
+    next.signs.push(sign);
+    let (offset, delta) = (wrap(motion.phi), motion.t);
+    let prismatic = srow.kind == JointKind::Prismatic;
+    next.offsets.push(if prismatic { delta } else { offset });
+    if sign < 0.0 {
+        next.differences.push(Difference {
+            row: Some(i),
+            parameter: Parameter::Direction,
+            reference: -1.0,
+            sheet: 1.0,
+            aliases: vec![],
+        });
+    }
+    if !first_free {
+        if offset.abs() > tol.angular {
+            next.differences.push(Difference {
+                row: Some(i),
+                parameter: Parameter::Theta,
+                reference: srow.theta + offset,
+                sheet: srow.theta,
+                aliases: vec![],
+            });
+        }
+        if delta.abs() > tol.linear {
+            next.differences.push(Difference {
+                row: Some(i),
+                parameter: Parameter::D,
+                reference: srow.d + delta,
+                sheet: srow.d,
+                aliases: st
+                    .parallel_run
+                    .iter()
+                    .copied()
+                    .filter(|&r| r != i)
+                    .collect(),
+            });
+        }
+    }
+    if motion.flip || tilt > tol.angular || off > tol.linear {
+        let (dp, _) = pose_error(&p, &(rot_z(offset) * trans_z(delta) * q));
+        next.differences.push(Difference {
+            row: None,
+            parameter: Parameter::Tool,
+            reference: dp,
+            sheet: 0.0,
+            aliases: vec![],
+        });
+    }
+    next.c = motion;
+    next
 }
 
 /// Helper for tests and callers: a pose from a translation and unit quaternion.
