@@ -192,6 +192,9 @@ pub struct Extraction {
     pub bound: Bound,
 }
 
+/// Pairs farther than this from parallel (radians, about 6°) are never ill-conditioned.
+const ILL_CONDITIONED_ANGLE: f64 = 0.1;
+
 /// Relative rounding allowance per transform in a chain, in units of machine epsilon.
 const ROUNDING_ULPS: f64 = 64.0;
 
@@ -282,7 +285,12 @@ pub fn extract(
             }
             let from_parallel = step.geometry.angle.min(PI - step.geometry.angle);
             let offset = row.d.abs().max(row.a.abs());
-            if step.snap.is_none() && offset > 100.0 * input_scale {
+            // Only a nearly parallel pair puts its common normal far away; a large offset after
+            // such a pair merely cancels the previous one's and is not warned about again.
+            if step.snap.is_none()
+                && from_parallel < ILL_CONDITIONED_ANGLE
+                && offset > 100.0 * input_scale
+            {
                 warnings.push(Warning::IllConditioned {
                     first: ax.name.clone(),
                     second: next.name.clone(),
