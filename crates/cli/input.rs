@@ -46,6 +46,9 @@ pub fn read_robot(path: &str) -> Result<Vec<u8>> {
     if !path.ends_with(".xacro") {
         return read_bytes(path);
     }
+    if !Path::new(path).is_file() {
+        anyhow::bail!("{path}: cannot read the file: no such file");
+    }
     let pipe = format!("xacro {path} | urdf-dh extract -");
     let out = match Command::new("xacro").arg(path).output() {
         Ok(out) => out,

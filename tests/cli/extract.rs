@@ -181,9 +181,20 @@ fn bad_input_exits_2_with_a_message() {
             None
         )
     );
+    // Without xacro on PATH a .xacro file is refused with the pipe to use instead.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(["extract", "fixtures/xacro/two_link.urdf.xacro"])
+        .current_dir(crate::common::root())
+        .env("PATH", "/nonexistent")
+        .output()
+        .unwrap();
     insta::assert_snapshot!(
         "xacro_without_xacro",
-        run(&["extract", "robot.urdf.xacro"], None)
+        format!(
+            "exit: {}\n--- stderr\n{}",
+            out.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&out.stderr)
+        )
     );
 }
 
@@ -262,4 +273,27 @@ fn svg_shows_every_frame() {
         "1,2",
     ]);
     assert_eq!(code, 2);
+}
+
+/// A .xacro file is expanded by the `xacro` command (PyPI package `xacro`) when it is on PATH.
+#[test]
+fn xacro_input_is_expanded() {
+    if std::process::Command::new("xacro")
+        .arg("--help")
+        .output()
+        .is_err()
+    {
+        println!("xacro_input_is_expanded: skipped: the xacro command is not on PATH (pip install xacro)");
+        return;
+    }
+    let _snap = settings().bind_to_scope();
+    insta::assert_snapshot!(run(
+        &[
+            "extract",
+            "fixtures/xacro/two_link.urdf.xacro",
+            "--format",
+            "yaml"
+        ],
+        None
+    ));
 }
