@@ -255,7 +255,7 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
         ),
         Command::Import(a) => import::import(&a.into_args(), out, err),
         Command::Calibrate(a) => calibrate::calibrate(&a.into_args(), out, err),
-        Command::Cpa(a) => cpa::cpa(&a.into_args(), out, err),
+        Command::Cpa(a) => cpa::cpa(&a.into_args()?, out, err),
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
     }
 }

@@ -36,18 +36,135 @@ pub struct LoadedModel {
     pub warnings: Vec<String>,
     /// Base and tip link names: the URDF chain's, `base_link` and `tool0` for a sheet.
     pub links: (String, String),
+    /// Coupled joints of a sheet (`coupled`): `(joint, [(driver, coefficient)])`.
+    pub coupled: Vec<(String, Vec<(String, f64)>)>,
 }
 
 impl LoadedModel {
-    /// Names of the rows that take a column in a measurement file: every row but the mimic
-    /// ones (which follow their driver).
+    /// The columns a measurement file needs, in row order: every row but the mimic ones (which
+    /// follow their driver) and the coupled ones, plus the drivers of both (a mimic's driver
+    /// may be a joint off the chain, such as a telescopic column's own joint).
     pub fn measured_joints(&self) -> Vec<String> {
-        measured_joints(&self.table)
+        let mut out: Vec<String> = Vec::new();
+        let mut push = |n: &str| {
+            if !out.iter().any(|o| o == n) {
+                out.push(n.to_string());
+            }
+        };
+        for r in &self.table.rows {
+            let coupled = self.coupled.iter().find(|(j, _)| j == &r.name);
+            match (&r.mimic, coupled) {
+                (Some(m), _) => push(&m.joint),
+                (None, Some((_, terms))) => terms.iter().for_each(|(d, _)| push(d)),
+                (None, None) => push(&r.name),
+            }
+        }
+        out
     }
 
-    /// Names of the prismatic rows.
+    /// Names of the prismatic joints among the rows and the drivers of prismatic mimic rows.
     pub fn prismatic(&self) -> Vec<String> {
-        prismatic(&self.table)
+        let mut p = prismatic(&self.table);
+        for r in &self.table.rows {
+            if let (JointKind::Prismatic, Some(m)) = (r.kind, &r.mimic) {
+                if !p.contains(&m.joint) {
+                    p.push(m.joint.clone());
+                }
+            }
+        }
+        p
+    }
+
+    /// Replaces (or adds) the coupled joints' values in `data`: value = Σ coefficient × driver,
+    /// from the values as read.
+    ///
+    /// # Errors
+    /// A driver without a column.
+    pub fn couple(&self, data: &mut Measurements) -> Result<()> {
+        if self.coupled.is_empty() {
+            return Ok(());
+        }
+        let mut terms = Vec::new();
+        for (joint, t) in &self.coupled {
+            let cols = t
+                .iter()
+                .map(|(d, c)| {
+                    data.joint_names
+                        .iter()
+                        .position(|n| n == d)
+                        .map(|i| (i, *c))
+                        .with_context(|| {
+                            format!("coupled joint '{joint}': the data has no column '{d}'")
+                        })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            terms.push((joint.clone(), cols));
+        }
+        let mut targets = Vec::new();
+        for (joint, _) in &terms {
+            let at = match data.joint_names.iter().position(|n| n == joint) {
+                Some(i) => i,
+                None => {
+                    data.joint_names.push(joint.clone());
+                    data.joint_names.len() - 1
+                }
+            };
+            targets.push(at);
+        }
+        for s in &mut data.samples {
+            let read = s.q.clone();
+            s.q.resize(data.joint_names.len(), 0.0);
+            for ((_, cols), &at) in terms.iter().zip(&targets) {
+                s.q[at] = cols
+                    .iter()
+                    .map(|&(i, c)| c * read.get(i).copied().unwrap_or(0.0))
+                    .sum();
+            }
+        }
+        Ok(())
+    }
+
+    /// The inverse of [`LoadedModel::couple`] for simulated data, whose values are the rows'
+    /// (serial) ones: each coupled joint's column becomes the value its controller reports,
+    /// `(serial − Σ other terms) / own coefficient`, in row order.
+    ///
+    /// # Errors
+    /// A coupled joint without a term of its own (its value follows from the others, which
+    /// random poses do not respect), a zero own coefficient, or a driver coupled later in the
+    /// chain.
+    pub fn uncouple(&self, data: &mut Measurements) -> Result<()> {
+        let col = |n: &str| data.joint_names.iter().position(|j| j == n);
+        let mut done: Vec<&str> = Vec::new();
+        let mut plan = Vec::new();
+        for (joint, terms) in &self.coupled {
+            let own = terms.iter().find(|(d, _)| d == joint).map(|(_, c)| *c);
+            let own = match own {
+                Some(c) if c != 0.0 => c,
+                _ => {
+                    return Err(hinted(
+                        format!("coupled joint '{joint}' has no term of its own, so random joint values cannot respect its coupling"),
+                        "simulate a model without this coupling (drop its 'coupled' entry)",
+                    ))
+                }
+            };
+            let at = col(joint).with_context(|| format!("no column '{joint}'"))?;
+            let mut others = Vec::new();
+            for (d, c) in terms.iter().filter(|(d, _)| d != joint) {
+                if self.coupled.iter().any(|(j, _)| j == d) && !done.contains(&d.as_str()) {
+                    anyhow::bail!("coupled joint '{joint}': driver '{d}' is coupled later in the chain; cannot invert");
+                }
+                others.push((col(d).with_context(|| format!("no column '{d}'"))?, *c));
+            }
+            plan.push((at, own, others));
+            done.push(joint);
+        }
+        for s in &mut data.samples {
+            for (at, own, others) in &plan {
+                let rest: f64 = others.iter().map(|&(i, c)| c * s.q[i]).sum();
+                s.q[*at] = (s.q[*at] - rest) / own;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -127,6 +244,7 @@ pub fn load_model(
             units: (sheet.length_unit, sheet.angle_unit),
             warnings: sheet.warnings,
             links: ("base_link".into(), "tool0".into()),
+            coupled: sheet.coupled,
         });
     }
     let (urdf_model, chain) = load_chain(path, base, tip)?;
@@ -152,6 +270,7 @@ pub fn load_model(
         units: (LengthUnit::M, AngleUnit::Rad),
         warnings: extraction.warnings.iter().map(|w| w.to_string()).collect(),
         links: (chain.base().to_string(), chain.tip().to_string()),
+        coupled: Vec::new(),
     })
 }
 
@@ -259,19 +378,6 @@ fn split_header(line: &str) -> Vec<String> {
     cells.into_iter().map(|s| s.trim().to_string()).collect()
 }
 
-/// Effect kinds `dh-calib` understands (see `dh_calib::effects`): `<kind>:<joint>`, except
-/// `coupling:<joint>:<driver>`, `gear_harmonic:<joint>[:2]` and `scale`.
-pub const EFFECT_KINDS: [&str; 8] = [
-    "gear_ratio",
-    "gear_harmonic",
-    "compliance",
-    "lateral_compliance",
-    "coupling",
-    "scale",
-    "parallel_tilt",
-    "backlash",
-];
-
 /// The effect a label names, for the rows of `table` (`dh_calib::effects::parse_label`). The
 /// gravity effects (`compliance`, `lateral_compliance`, `backlash`) need link inertials, which
 /// a DH table does not carry.
@@ -283,8 +389,7 @@ pub fn parse_effect(label: &str, table: &DhTable) -> Result<Arc<dyn Effect>> {
         hinted(
             format!("{e}"),
             format!(
-                "effects are named <kind>:<joint> (coupling:<joint>:<driver>, scale), kinds: {}; joints: {}",
-                EFFECT_KINDS.join(", "),
+                "effects are named <kind>:<joint> (coupling:<joint>:<driver>; scale alone); the model's joints: {}",
                 table
                     .rows
                     .iter()

@@ -164,6 +164,14 @@ pub struct SheetDoc {
     pub tool: Option<PoseDoc>,
     /// Rows, base to tip.
     pub joints: Vec<JointDoc>,
+    /// Joints whose DH value is a sum over measured joint values: `{joint: {driver: coefficient,
+    /// ...}}`, value = Σ coefficient × driver (the driver may be the joint's own column). For
+    /// controllers that report other joint variables than the serial chain's, e.g. FANUC's J3
+    /// measured from the horizontal: `joint_3: {joint_3: 1, joint_2: 1}`. Used when measurement
+    /// files are read; a joint without its own term needs no column.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coupled:
+        Option<std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>>,
     /// Consecutive axis pairs (extraction output).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pairs: Option<Vec<PairDoc>>,
@@ -234,6 +242,9 @@ pub struct Sheet {
     pub angle_unit: AngleUnit,
     /// Warnings about suspicious values (not errors).
     pub warnings: Vec<String>,
+    /// Coupled joints (see [`SheetDoc::coupled`]): `(joint, [(driver, coefficient)])`, in row
+    /// order.
+    pub coupled: Vec<(String, Vec<(String, f64)>)>,
 }
 
 /// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
@@ -396,7 +407,36 @@ impl SheetDoc {
             tool: pose(&self.tool, "tool").context("reading the tool transform")?,
             rows,
         };
+        let mut coupled = Vec::new();
+        for (joint, terms) in self.coupled.iter().flatten() {
+            let row = table.rows.iter().find(|r| &r.name == joint);
+            match row {
+                None => bail!("{origin}: coupled: '{joint}' is no joint of the sheet"),
+                Some(r) if r.mimic.is_some() => {
+                    bail!("{origin}: coupled: joint '{joint}' also has a mimic; give one of them")
+                }
+                Some(_) => {}
+            }
+            if terms.is_empty() {
+                bail!("{origin}: coupled: joint '{joint}': expected at least one driver");
+            }
+            for (driver, c) in terms {
+                if !c.is_finite() {
+                    bail!("{origin}: coupled: joint '{joint}': coefficient of '{driver}' must be finite, found {c}");
+                }
+                if driver != joint && !table.rows.iter().any(|r| &r.name == driver) {
+                    bail!("{origin}: coupled: joint '{joint}': driver '{driver}' is no joint of the sheet");
+                }
+            }
+            coupled.push((
+                joint.clone(),
+                terms.iter().map(|(d, c)| (d.clone(), *c)).collect(),
+            ));
+        }
+        let order = |j: &str| table.rows.iter().position(|r| r.name == j);
+        coupled.sort_by_key(|(j, _)| order(j));
         Ok(Sheet {
+            coupled,
             table,
             has_base: self.base.is_some(),
             has_tool: self.tool.is_some(),
@@ -456,6 +496,7 @@ impl SheetDoc {
             base: Some(pose(&table.base)),
             tool: Some(pose(&table.tool)),
             joints,
+            coupled: None,
             pairs: None,
             tolerances: None,
             warnings: None,

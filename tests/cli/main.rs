@@ -1,6 +1,9 @@
 //! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
+mod calibrate;
 mod check;
 mod common;
 mod corpus;
+mod cpa;
 mod extract;
+mod measured;

@@ -21,10 +21,11 @@ use dh_calib::data::{Measurements, Split};
 use dh_calib::effects::label_of;
 use dh_calib::model::{Effect, Model, ModelOptions};
 use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
-use dh_core::{Convention, DhTable};
+use dh_core::{Convention, DhTable, Tolerance};
 use nalgebra::{Isometry3, Vector3};
 use serde::Serialize;
 
+use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
 use crate::commands::to_urdf::urdf_of;
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
@@ -307,6 +308,7 @@ struct Inputs {
     robot: Option<String>,
     units: (LengthUnit, AngleUnit),
     links: (String, String),
+    coupled: Vec<(String, Vec<(String, f64)>)>,
     data: Measurements,
     cpa: bool,
 }
@@ -384,6 +386,10 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
         let extra = read_measurements(v, &joints, &prismatic, args.units)?;
         merge_validation(&mut data, extra);
     }
+    if let Some(m) = &model {
+        m.couple(&mut data)
+            .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
+    }
     if !args.targets.is_empty() {
         keep_targets(&mut data, &args.targets, &data_name)?;
     }
@@ -394,6 +400,7 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
             robot,
             units,
             links,
+            coupled,
             ..
         }) => Inputs {
             table,
@@ -401,12 +408,15 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
             robot,
             units,
             links,
+            coupled,
             data,
             cpa: false,
         },
         None => {
             let opts = CpaOptions {
                 convention: args.convention,
+                tolerance: Tolerance::new(CPA_LINEAR, CPA_ANGULAR)
+                    .map_err(|e| anyhow::anyhow!("{e}"))?,
                 ..CpaOptions::default()
             };
             let cpa = analyse(&data, &opts).map_err(|e| {
@@ -421,6 +431,7 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
                 robot: None,
                 units: (LengthUnit::M, AngleUnit::Rad),
                 links: ("base_link".into(), "tool0".into()),
+                coupled: Vec::new(),
                 data,
                 cpa: true,
             }
@@ -879,6 +890,15 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
         let (lu, au) = inputs.units;
         let mut sheet = SheetDoc::from_table(&report.calibrated, lu, au);
         sheet.robot = inputs.robot.clone();
+        if !inputs.coupled.is_empty() {
+            sheet.coupled = Some(
+                inputs
+                    .coupled
+                    .iter()
+                    .map(|(j, t)| (j.clone(), t.iter().cloned().collect()))
+                    .collect(),
+            );
+        }
         sheet.source = Some(format!(
             "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
             doc.model, doc.data, doc.rms_before, doc.rms_after
@@ -1229,6 +1249,91 @@ impl CalibrateCli {
             format: self.format,
             out: self.out,
             plot: self.plot,
+        }
+    }
+}
+
+#[cfg(test)]
+mod chart_tests {
+    use super::*;
+    use dh_calib::simulate::{simulate, Errors, SimulationOptions};
+    use dh_core::DhRow;
+
+    fn arm() -> DhTable {
+        let h = std::f64::consts::FRAC_PI_2;
+        DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::identity(),
+            tool: Isometry3::identity(),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, h, 0.4, 0.0),
+                DhRow::revolute("j2", 0.5, 0.0, 0.0, 0.0),
+                DhRow::revolute("j3", 0.1, h, 0.0, 0.0),
+                DhRow::revolute("j4", 0.0, -h, 0.45, 0.0),
+                DhRow::revolute("j5", 0.0, h, 0.0, 0.0),
+                DhRow::revolute("j6", 0.0, 0.0, 0.1, 0.0),
+            ],
+        }
+    }
+
+    /// The chart recomputes every residual from the report (nominal-step frames, calibrated
+    /// table, effect estimates): its RMS must be the report's, or the chart shows another fit.
+    #[test]
+    fn chart_residuals_reproduce_the_reported_rms() {
+        let table = arm();
+        let (data, _) = simulate(
+            &table,
+            &SimulationOptions {
+                poses: 60,
+                sigma: 2e-5,
+                target_count: 2,
+                errors: Errors::Explicit(vec![("j2.a".into(), 4e-4), ("j3.theta".into(), 1e-3)]),
+                ..SimulationOptions::default()
+            },
+        )
+        .unwrap();
+        let effects: Vec<Arc<dyn Effect>> =
+            vec![dh_calib::effects::parse_label("gear_ratio:j2", &table).unwrap()];
+        for with_effects in [false, true] {
+            let options = CalibrationOptions {
+                effects: if with_effects {
+                    effects.clone()
+                } else {
+                    vec![]
+                },
+                ..CalibrationOptions::default()
+            };
+            let report = run_calibration(&table, &data, &options).unwrap();
+            let inputs = Inputs {
+                table: table.clone(),
+                model_name: "arm".into(),
+                robot: None,
+                units: (LengthUnit::M, AngleUnit::Rad),
+                links: ("base_link".into(), "tool0".into()),
+                coupled: vec![],
+                data: data.clone(),
+                cpa: false,
+            };
+            let chart = chart("d.csv", &inputs, &report, &effects, LengthUnit::Mm).unwrap();
+            let rms = |p: &Panel| {
+                let d: Vec<f64> = p.residuals.iter().map(|r| r.distance).collect();
+                (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
+            };
+            assert!(
+                (rms(&chart.panels[0]) - report.rms_before).abs() < 1e-9,
+                "before {} {}",
+                rms(&chart.panels[0]),
+                report.rms_before
+            );
+            assert!(
+                // The calibrated table folds Hayati tilts into DH values to within
+                // dh_calib::model::FOLD_TOLERANCE (1e-9 m, 1e-9 rad).
+                (rms(&chart.panels[1]) - report.rms_after).abs() < 1e-8,
+                "after {} {}",
+                rms(&chart.panels[1]),
+                report.rms_after
+            );
+            assert_eq!(chart.poses, 60);
         }
     }
 }

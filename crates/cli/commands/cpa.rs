@@ -8,6 +8,7 @@ use std::io::Write;
 
 use anyhow::Result;
 use dh_calib::cpa::{analyse, CpaOptions, CpaResult, JointCpa};
+use dh_calib::model::NEAR_PARALLEL;
 use dh_core::{classify, Convention, DhTable, JointKind, Line, Tolerance};
 use serde::Serialize;
 
@@ -17,6 +18,15 @@ use crate::measured::{header_joints, load_model, read_measurements, DataUnits};
 use crate::render::{render_sheet, Format};
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
+
+/// Default linear tolerance of the extraction from measured axes: 0.1 mm. Measured axes never
+/// intersect exactly; a laser tracker's axis lines scatter by tens of micrometres.
+pub const CPA_LINEAR: f64 = 1e-4;
+/// Default angular tolerance of the extraction from measured axes: 1 mrad (0.057 degrees).
+/// Measured axes are never exactly parallel; without snapping, a pair a fraction of a milliradian
+/// from parallel gives a common normal kilometres away. The snap's cost is in the warnings, and
+/// `calibrate` estimates the remaining tilt (Hayati-Mirmirani).
+pub const CPA_ANGULAR: f64 = 1e-3;
 
 /// Output format of `cpa`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -43,6 +53,8 @@ pub struct CpaArgs {
     pub tip: Option<String>,
     /// Convention of the extracted table (without a sheet model).
     pub convention: Convention,
+    /// Tolerance of the DH extraction from the measured axes.
+    pub tolerance: Tolerance,
     /// Units of the measurement file; the output is in metres and radians.
     pub units: DataUnits,
     /// Output format.
@@ -158,9 +170,10 @@ pub struct PairComparisonDoc {
     pub nominal_angle: f64,
     /// Angle between the measured axes (radians).
     pub measured_angle: f64,
-    /// Common-normal length of the nominal axes (metres).
+    /// Common-normal length of the nominal axes (metres); for a pair within 5 degrees of
+    /// parallel the offset between the axes instead.
     pub nominal_distance: f64,
-    /// Common-normal length of the measured axes (metres).
+    /// The same for the measured axes (metres).
     pub measured_distance: f64,
 }
 
@@ -251,26 +264,71 @@ fn nominal_axes(table: &DhTable) -> Result<Vec<Line>> {
         .collect()
 }
 
-fn pair_comparison(nominal: &DhTable, cpa: &CpaResult) -> Result<Vec<PairComparisonDoc>> {
-    let axes = nominal_axes(nominal)?;
-    let tol = Tolerance::default();
-    let measured: Vec<&Line> = cpa.axes.iter().map(|a| &a.line).collect();
-    Ok((1..axes.len().min(measured.len()))
-        .map(|i| {
-            let n = classify(&axes[i - 1], &axes[i], tol);
-            let m = classify(measured[i - 1], measured[i], tol);
-            PairComparisonDoc {
-                joints: [
-                    nominal.rows[i - 1].name.clone(),
-                    nominal.rows[i].name.clone(),
-                ],
-                nominal_angle: n.angle,
-                measured_angle: m.angle,
-                nominal_distance: n.distance,
-                measured_distance: m.distance,
+/// Whether two axes at `angle` (radians, `[0, pi]`) are within 5 degrees of parallel.
+fn near_parallel(angle: f64) -> bool {
+    angle.min(std::f64::consts::PI - angle) < NEAR_PARALLEL
+}
+
+/// Per axis, the point where a DH frame would sit on it: on the first, the point nearest the
+/// origin; on a later one, the foot of the common normal with the previous axis, or for a
+/// (nearly) parallel pair the foot of the previous axis's point. Offsets of parallel axes are
+/// measured there, where the arm is, rather than near a far-away origin.
+fn anchors(axes: &[&Line]) -> Vec<nalgebra::Vector3<f64>> {
+    let mut out: Vec<nalgebra::Vector3<f64>> = Vec::with_capacity(axes.len());
+    for (i, a) in axes.iter().enumerate() {
+        let p = match (i, out.last()) {
+            (0, _) | (_, None) => a.point(),
+            (_, Some(prev)) => {
+                let b = axes[i - 1];
+                if near_parallel(b.angle_to(a)) {
+                    a.foot_of(prev)
+                } else {
+                    b.closest_points(a)
+                        .map_or_else(|| a.foot_of(prev), |(_, q)| q)
+                }
             }
-        })
-        .collect())
+        };
+        out.push(p);
+    }
+    out
+}
+
+fn pair_comparison(nominal: &DhTable, cpa: &CpaResult) -> Result<Vec<PairComparisonDoc>> {
+    let tol = Tolerance::default();
+    let nominal_axes = nominal_axes(nominal)?;
+    // The rows the data measured, in chain order, nominal and measured side by side.
+    let mut both: Vec<(&str, &Line, &Line)> = Vec::new();
+    for (row, n) in nominal.rows.iter().zip(&nominal_axes) {
+        if let Some(m) = cpa.axes.iter().find(|a| a.name == row.name) {
+            both.push((&row.name, n, &m.line));
+        }
+    }
+    let n_axes: Vec<&Line> = both.iter().map(|b| b.1).collect();
+    let m_axes: Vec<&Line> = both.iter().map(|b| b.2).collect();
+    let (n_at, m_at) = (anchors(&n_axes), anchors(&m_axes));
+    let mut out = Vec::new();
+    for i in 1..both.len() {
+        let n = classify(n_axes[i - 1], n_axes[i], tol);
+        let m = classify(m_axes[i - 1], m_axes[i], tol);
+        // The common normal of nearly parallel measured axes lies anywhere along them; their
+        // offset at the arm is what can be compared.
+        let (nd, md) = if near_parallel(n.angle) && near_parallel(m.angle) {
+            (
+                n_axes[i].distance_to_point(&n_at[i - 1]),
+                m_axes[i].distance_to_point(&m_at[i - 1]),
+            )
+        } else {
+            (n.distance, m.distance)
+        };
+        out.push(PairComparisonDoc {
+            joints: [both[i - 1].0.to_string(), both[i].0.to_string()],
+            nominal_angle: n.angle,
+            measured_angle: m.angle,
+            nominal_distance: nd,
+            measured_distance: md,
+        });
+    }
+    Ok(out)
 }
 
 /// Runs `cpa`.
@@ -303,6 +361,7 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     let options = CpaOptions {
         prismatic,
         convention,
+        tolerance: args.tolerance,
         ..CpaOptions::default()
     };
     let result = analyse(&data, &options).map_err(|e| {
@@ -553,6 +612,12 @@ pub struct CpaCli {
     /// DH convention of the extracted table (a sheet model brings its own).
     #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
     convention: crate::sheet::ConventionDoc,
+    /// Measured axes whose common normal is shorter than this intersect (metres).
+    #[arg(long, value_name = "M", default_value_t = CPA_LINEAR)]
+    linear_tol: f64,
+    /// Measured axes this close to parallel are parallel (radians).
+    #[arg(long, value_name = "RAD", default_value_t = CPA_ANGULAR)]
+    angular_tol: f64,
     /// Length unit of the measurement file (the output is in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
     length_unit: LengthUnit,
@@ -566,8 +631,13 @@ pub struct CpaCli {
 
 impl CpaCli {
     /// The arguments of [`cpa`].
-    pub fn into_args(self) -> CpaArgs {
-        CpaArgs {
+    ///
+    /// # Errors
+    /// A tolerance that is negative or not finite.
+    pub fn into_args(self) -> Result<CpaArgs> {
+        Ok(CpaArgs {
+            tolerance: Tolerance::new(self.linear_tol, self.angular_tol)
+                .map_err(|e| anyhow::anyhow!("{e}"))?,
             data: self.data,
             model: self.model,
             base: self.base,
@@ -578,6 +648,6 @@ impl CpaCli {
                 angle: self.angle_unit,
             },
             format: self.format,
-        }
+        })
     }
 }

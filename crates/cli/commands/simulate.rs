@@ -264,6 +264,14 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
         }
     })?;
     let applied = apply_effects(table, &mut data, &truth, &effects, &options.model)?;
+    // The simulator draws the rows' (serial) values; the file holds what the controller reports.
+    model.uncouple(&mut data)?;
+    if args.noise == 0.0 {
+        // Exact points: no standard deviation rather than a zero one (which no file may hold).
+        for s in &mut data.samples {
+            s.sigma = None;
+        }
+    }
 
     let out_name = display_name(&args.out);
     let truth_path = args.truth.clone().unwrap_or_else(|| truth_path(&args.out));

@@ -1,0 +1,150 @@
+//! `urdf-dh cpa` on simulated sweeps: the measured axes reproduce the true robot's geometry.
+
+use std::process::Command;
+
+use serde_json::Value;
+
+use crate::common::root;
+
+fn ok(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run urdf-dh");
+    assert!(
+        out.status.success(),
+        "urdf-dh {}: exit {:?}\n{}",
+        args.join(" "),
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("utf-8")
+}
+
+#[test]
+fn sweeps_of_a_simulated_arm_give_its_axes_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("sweeps.csv").to_string_lossy().into_owned();
+    let truth = dir
+        .path()
+        .join("sweeps.truth.yaml")
+        .to_string_lossy()
+        .into_owned();
+    ok(&[
+        "simulate",
+        "--model",
+        "fixtures/robots/ur5/vendor.yaml",
+        "--cpa",
+        "--poses",
+        "7",
+        "--noise",
+        "1e-5",
+        "--targets",
+        "3",
+        "--error",
+        "elbow_joint.a=0.002",
+        "--error",
+        "wrist_1_joint.alpha=0.003",
+        "--seed",
+        "9",
+        "--out",
+        &data,
+    ]);
+    // Compared with the truth (the simulated robot, errors included).
+    let doc: Value =
+        serde_json::from_str(&ok(&["cpa", &data, "--model", &truth, "--format", "json"])).unwrap();
+    let cpa = &doc["cpa"];
+    assert_eq!(cpa["joints"].as_array().unwrap().len(), 6);
+    assert_eq!(cpa["sweeps"].as_array().unwrap().len(), 6);
+    for j in cpa["joints"].as_array().unwrap() {
+        assert_eq!(j["poses"], 7, "{}", j["name"]);
+        // Noise of 10 um: the points sit on their circles to about that.
+        assert!(j["circle_rms"].as_f64().unwrap() < 3e-5, "{j}");
+        assert!(j["plane_rms"].as_f64().unwrap() < 3e-5, "{j}");
+        // Commanded and measured motion agree: no transmission error was simulated.
+        assert!(j["motion"]["rms"].as_f64().unwrap() < 1e-3, "{j}");
+    }
+    let pairs = cpa["pairs"].as_array().unwrap();
+    assert_eq!(pairs.len(), 5);
+    for p in pairs {
+        let da =
+            (p["measured_angle"].as_f64().unwrap() - p["nominal_angle"].as_f64().unwrap()).abs();
+        let dd = (p["measured_distance"].as_f64().unwrap()
+            - p["nominal_distance"].as_f64().unwrap())
+        .abs();
+        // 10 um of noise on circles of 0.1 m (the wrist) over a quarter turn: axis directions to
+        // a few 1e-4 rad, positions to tens of micrometres.
+        assert!(da < 5e-4 && dd < 1e-4, "{p}");
+    }
+    // The planted 2 mm on the elbow's link length is seen in the axis spacing.
+    let elbow = pairs
+        .iter()
+        .find(|p| p["joints"][0] == "elbow_joint")
+        .unwrap();
+    assert!(
+        (elbow["measured_distance"].as_f64().unwrap() - 0.39025).abs() < 2e-4,
+        "{elbow}"
+    );
+    // The sheet part reads back as a model.
+    let yaml = ok(&["cpa", &data, "--format", "yaml"]);
+    let sheet = dir.path().join("cpa.yaml");
+    std::fs::write(&sheet, yaml).unwrap();
+    ok(&["convert", &sheet.to_string_lossy(), "--to", "modified"]);
+}
+
+#[test]
+fn text_output_names_sweeps_and_joints() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("s.csv").to_string_lossy().into_owned();
+    ok(&[
+        "simulate",
+        "--model",
+        "fixtures/robots/puma560/vendor.yaml",
+        "--cpa",
+        "--poses",
+        "6",
+        "--noise",
+        "1e-5",
+        "--targets",
+        "2",
+        "--seed",
+        "1",
+        "--out",
+        &data,
+    ]);
+    let text = ok(&["cpa", &data]);
+    assert!(
+        text.starts_with("circle-point analysis of s.csv: 72 samples of 2 target(s)"),
+        "{text}"
+    );
+    assert!(text.contains("extracted DH table"), "{text}");
+    assert_eq!(text.matches(", 6 poses, span").count(), 6, "{text}");
+}
+
+#[test]
+fn data_without_sweeps_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("random.csv").to_string_lossy().into_owned();
+    ok(&[
+        "simulate",
+        "--model",
+        "fixtures/robots/ur5/vendor.yaml",
+        "--poses",
+        "30",
+        "--out",
+        &data,
+    ]);
+    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(["cpa", &data])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("urdf-dh: error: random.csv: circle-point analysis failed"),
+        "{err}"
+    );
+    assert!(err.contains("hint: "), "{err}");
+}
