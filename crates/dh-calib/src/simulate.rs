@@ -274,7 +274,9 @@ pub fn simulate(
                     q: q.clone(),
                     target: k,
                     point: p + noise,
-                    sigma: Some(Vector3::repeat(o.sigma)),
+                    // Noise-free data has no standard deviation to state (a sigma of 0 is
+                    // refused by the CSV reader: it would weight the point infinitely).
+                    sigma: (o.sigma > 0.0).then(|| Vector3::repeat(o.sigma)),
                     config: Some(config.clone()),
                     split,
                     line: 0,

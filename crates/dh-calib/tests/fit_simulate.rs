@@ -181,3 +181,23 @@ fn bad_options_are_errors() {
     };
     assert!(simulate(&t, &no_targets).is_err());
 }
+
+#[test]
+fn noise_free_data_writes_and_reads_back() {
+    // Found by the invalid-input corpus: `simulate` without noise wrote `sigma` 0, which the
+    // reader (rightly) refuses, so simulate | calibrate failed at the default noise.
+    let t = fit_support::ur5();
+    let (data, _) = simulate(
+        &t,
+        &SimulationOptions {
+            poses: 5,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(data.samples.iter().all(|s| s.sigma.is_none()));
+    let text = dh_calib::csv::write_measurements(&data);
+    let back =
+        dh_calib::csv::parse_measurements(&text, &data.joint_names, &Default::default()).unwrap();
+    assert_eq!(back.samples.len(), 5);
+}
