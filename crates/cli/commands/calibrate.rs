@@ -18,8 +18,11 @@ use dh_calib::calibrate::Validation;
 use dh_calib::calibrate::{calibrate as run_calibration, CalibrationOptions, NoiseSource, Report};
 use dh_calib::cpa::{analyse, CpaOptions};
 use dh_calib::data::{Measurements, Split};
-use dh_calib::effects::label_of;
+use dh_calib::diagnose::{diagnose, DiagnoseOptions};
+use dh_calib::effects::{label_of, parse_label_in, EffectContext};
+use dh_calib::gravity::{GravityModel, Inertial, Inertials};
 use dh_calib::model::{Effect, Model, ModelOptions};
+use dh_calib::tree::DhTree;
 use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
 use dh_core::{Convention, DhTable, Tolerance};
 use nalgebra::{Isometry3, Vector3};
@@ -106,23 +109,187 @@ pub struct CalibrateArgs {
     pub out: Option<String>,
     /// Where to write the residual chart (SVG).
     pub plot: Option<String>,
+    /// Link masses for the gravity effects (YAML); `None` takes a URDF model's inertials.
+    pub inertials: Option<String>,
+    /// Gravity in the base link frame (m/s²), three values.
+    pub gravity: Option<Vec<f64>>,
+    /// A payload at the tip: mass (kg) and centre in the tip frame (m), four values.
+    pub payload: Option<Vec<f64>>,
 }
 
-/// The hook for `--effects auto`: calibrate with the effects the diagnosis of `dh-calib`
-/// selects (`dh_calib::diagnose`), returning its report (steps `nominal`, `geometric`, then
-/// one `+<label>` per effect added) and the effects it selected (for the residual chart).
+/// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
+/// `com_frame: base_at_zero` (base link frame, every joint at zero; the default) or `dh` (the
+/// row's DH frame), optional `payloads: [{mass, com}]` (tip frame) and `gravity: [x, y, z]`.
+fn read_inertials(path: &str, table: &DhTable) -> Result<(Inertials, Option<Vector3<f64>>)> {
+    let origin = display_name(path);
+    let text = std::fs::read_to_string(path).with_context(|| format!("{origin}: cannot read"))?;
+    let doc: serde_yaml::Value =
+        serde_yaml::from_str(&text).with_context(|| format!("{origin}: not YAML"))?;
+    let num = |v: &serde_yaml::Value, what: &str| -> Result<f64> {
+        v.as_f64()
+            .ok_or_else(|| anyhow::anyhow!("{origin}: {what}: expected a number, found {v:?}"))
+    };
+    let vec3 = |v: &serde_yaml::Value, what: &str| -> Result<Vector3<f64>> {
+        match v.as_sequence().map(|s| s.as_slice()) {
+            Some([x, y, z]) => Ok(Vector3::new(num(x, what)?, num(y, what)?, num(z, what)?)),
+            _ => anyhow::bail!("{origin}: {what}: expected [x, y, z], found {v:?}"),
+        }
+    };
+    let mut links = Vec::new();
+    for l in doc["links"]
+        .as_sequence()
+        .map(|s| s.as_slice())
+        .unwrap_or_default()
+    {
+        let joint = l["joint"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("{origin}: a link without 'joint'"))?;
+        links.push((
+            joint.to_string(),
+            num(&l["mass"], &format!("{joint} mass"))?,
+            vec3(&l["com"], &format!("{joint} com"))?,
+        ));
+    }
+    let mut payloads = Vec::new();
+    for p in doc["payloads"]
+        .as_sequence()
+        .map(|s| s.as_slice())
+        .unwrap_or_default()
+    {
+        payloads.push((
+            0,
+            Inertial {
+                mass: num(&p["mass"], "payload mass")?,
+                com: vec3(&p["com"], "payload com")?,
+            },
+        ));
+    }
+    let tree = DhTree::serial(table);
+    let inertials = if doc["com_frame"].as_str() == Some("dh") {
+        Inertials {
+            links: links
+                .into_iter()
+                .map(|(j, mass, com)| (j, Inertial { mass, com }))
+                .collect(),
+            payloads,
+        }
+    } else {
+        Inertials::from_zero_pose(&tree, &links, payloads)
+            .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?
+    };
+    let gravity = if doc["gravity"].is_null() {
+        None
+    } else {
+        Some(vec3(&doc["gravity"], "gravity")?)
+    };
+    Ok((inertials, gravity))
+}
+
+/// What the gravity effects need: `--inertials`, else a URDF model's `<inertial>` masses
+/// (rows named like its joints), with `--payload` and `--gravity`. `None` when there are no
+/// masses at all.
+fn gravity_inputs(
+    args: &CalibrateArgs,
+    table: &DhTable,
+) -> Result<(Option<Inertials>, Vector3<f64>)> {
+    let mut gravity = GravityModel::default_gravity();
+    let mut inertials = match (&args.inertials, &args.model) {
+        (Some(path), _) => {
+            let (i, g) = read_inertials(path, table)?;
+            if let Some(g) = g {
+                gravity = g;
+            }
+            Some(i)
+        }
+        (None, Some(model)) if model.to_ascii_lowercase().ends_with(".urdf") => {
+            let urdf = std::fs::read_to_string(model)
+                .ok()
+                .and_then(|t| urdf_axes::UrdfModel::parse(&t).ok());
+            let bodies = urdf.as_ref().and_then(|u| {
+                let chain = u.chain(args.base.as_deref(), args.tip.as_deref()).ok()?;
+                urdf_axes::inertia::joint_inertials(u, &chain).ok()
+            });
+            match bodies {
+                Some(b) if b.iter().any(|j| j.mass > 0.0) => {
+                    let links: Vec<(String, f64, Vector3<f64>)> = b
+                        .into_iter()
+                        .filter(|j| j.mass > 0.0)
+                        .map(|j| (j.joint, j.mass, j.com_at_zero))
+                        .collect();
+                    Inertials::from_zero_pose(&DhTree::serial(table), &links, vec![]).ok()
+                }
+                _ => None,
+            }
+        }
+        _ => None,
+    };
+    if let Some(g) = &args.gravity {
+        match g.as_slice() {
+            [x, y, z] if g.iter().all(|v| v.is_finite()) => gravity = Vector3::new(*x, *y, *z),
+            _ => {
+                anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
+            }
+        }
+    }
+    if let Some(p) = &args.payload {
+        match p.as_slice() {
+            [m, x, y, z] if p.iter().all(|v| v.is_finite()) && *m >= 0.0 => {
+                inertials
+                    .get_or_insert_with(Inertials::default)
+                    .payloads
+                    .push((
+                        0,
+                        Inertial {
+                            mass: *m,
+                            com: Vector3::new(*x, *y, *z),
+                        },
+                    ));
+            }
+            _ => anyhow::bail!(
+                "--payload: expected MASS,X,Y,Z (kg, then metres in the tip frame), found {p:?}"
+            ),
+        }
+    }
+    Ok((inertials, gravity))
+}
+
+/// `--effects auto`: calibrate with the effects the diagnosis of `dh-calib` selects
+/// (`dh_calib::diagnose`), returning its report (steps `nominal`, `geometric`, then one
+/// `+<label>` per effect added, and the candidate table) and the effects it selected (for the
+/// residual chart).
 ///
 /// # Errors
-/// Always, until the diagnosis is wired in here: the message names the alternative.
+/// A calibration or diagnosis that fails (bad inertials, too few samples).
 pub fn auto_report(
-    _table: &DhTable,
-    _data: &Measurements,
-    _options: &CalibrationOptions,
+    table: &DhTable,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+    ctx: &EffectContext,
 ) -> Result<(Report, Vec<Arc<dyn Effect>>)> {
-    Err(hinted(
-        "--effects auto: the automatic diagnosis of effects is not wired into the CLI yet",
-        "name the effects to estimate, e.g. --effects gear_ratio:joint_2,gear_ratio:joint_3, or use --effects none",
-    ))
+    let report = diagnose(table, data, options, diag)
+        .map_err(|e| anyhow::anyhow!("calibration failed: {e}"))?;
+    let effects = report
+        .selected_effects
+        .iter()
+        .map(|l| parse_label_in(l, ctx).map_err(|e| anyhow::anyhow!("{e}")))
+        .collect::<Result<_>>()?;
+    Ok((report, effects))
+}
+
+/// One row of the candidate table (JSON `candidates`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CandidateDoc {
+    /// The effect's label.
+    pub label: String,
+    /// First-order reduction of the calibration sum of squares beyond the geometric fit (m²).
+    pub score: f64,
+    /// Held-out RMS with it added, linearised (metres).
+    pub val_rms: Option<f64>,
+    /// Sine between its columns and the geometric ones (below 1e-3: aliased).
+    pub independence: f64,
+    /// selected, aliased, rejected, not selected, inert.
+    pub status: &'static str,
 }
 
 /// A step as reported (metres).
@@ -270,6 +437,8 @@ pub struct CalibrationDoc {
     pub fixed: Vec<FixedDoc>,
     /// Labels of the effects estimated in the last step.
     pub selected_effects: Vec<String>,
+    /// The candidate table of `--effects auto` (empty otherwise).
+    pub candidates: Vec<CandidateDoc>,
     /// Estimated robot base in the device frame.
     pub device: PoseSi,
     /// Estimated targets in the tip frame.
@@ -450,10 +619,25 @@ pub fn calibrate(
     err: &mut dyn Write,
 ) -> Result<Outcome> {
     let inputs = load_inputs(args, err)?;
+    let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
+    let ctx = EffectContext {
+        tree: DhTree::serial(&inputs.table),
+        gravity: match &inertials {
+            Some(i) => Some(Arc::new(
+                GravityModel::serial(&inputs.table, i, gravity)
+                    .map_err(|e| anyhow::anyhow!("inertials: {e}"))?,
+            )),
+            None => None,
+        },
+    };
     let effects: Vec<Arc<dyn Effect>> = match &args.effects {
         EffectsChoice::List(labels) => labels
             .iter()
-            .map(|l| parse_effect(l, &inputs.table))
+            .map(|l| match parse_label_in(l, &ctx) {
+                Ok(e) => Ok(e),
+                // The CLI's message names the kinds and joints.
+                Err(_) => parse_effect(l, &inputs.table),
+            })
             .collect::<Result<_>>()?,
         EffectsChoice::None | EffectsChoice::Auto => Vec::new(),
     };
@@ -491,7 +675,14 @@ pub fn calibrate(
         anyhow::anyhow!("{}: calibration failed: {e}", display_name(&args.data))
     };
     let (report, effects) = match &args.effects {
-        EffectsChoice::Auto => auto_report(&inputs.table, &inputs.data, &options)?,
+        EffectsChoice::Auto => {
+            let diag = DiagnoseOptions {
+                inertials,
+                gravity,
+                ..DiagnoseOptions::default()
+            };
+            auto_report(&inputs.table, &inputs.data, &options, &diag, &ctx)?
+        }
         EffectsChoice::None | EffectsChoice::List(_) => (
             run_calibration(&inputs.table, &inputs.data, &options).map_err(failed)?,
             effects,
@@ -613,6 +804,17 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
             })
             .collect(),
         selected_effects: report.selected_effects.clone(),
+        candidates: report
+            .candidates
+            .iter()
+            .map(|c| CandidateDoc {
+                label: c.label.clone(),
+                score: c.score,
+                val_rms: c.val_rms,
+                independence: c.independence,
+                status: c.status.name(),
+            })
+            .collect(),
         device: PoseSi::of(&report.device),
         targets: report
             .targets
@@ -848,6 +1050,39 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             lu.symbol(),
             xyz(t.xyz)
         );
+    }
+    if !doc.candidates.is_empty() {
+        let _ = writeln!(
+            s,
+            "effect candidates (first round, best score first; score = SSR reduction beyond the geometric fit, held-out RMS linearised):"
+        );
+        let _ = writeln!(
+            s,
+            "  {:<32} {:>12} {:>12} {:>12}  status",
+            "label",
+            format!("score [{}²]", lu.symbol()),
+            "independence",
+            format!("val_rms [{}]", lu.symbol())
+        );
+        let scale = lu.metres();
+        for c in doc.candidates.iter().take(15) {
+            let _ = writeln!(
+                s,
+                "  {:<32} {:>12.4e} {:>12.4} {:>12}  {}",
+                c.label,
+                c.score / (scale * scale),
+                c.independence,
+                o(c.val_rms),
+                c.status
+            );
+        }
+        if doc.candidates.len() > 15 {
+            let _ = writeln!(
+                s,
+                "  ... {} more (see --format json)",
+                doc.candidates.len() - 15
+            );
+        }
     }
     if !doc.selected_effects.is_empty() {
         let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
@@ -1226,6 +1461,27 @@ pub struct CalibrateCli {
     /// Write an SVG chart of the residuals per pose, before and after.
     #[arg(long, value_name = "FILE.svg")]
     plot: Option<String>,
+    /// Link masses for the compliance effects: YAML with `links: [{joint, mass, com}]` (kg,
+    /// m; `com_frame: base_at_zero` or `dh`) and optional `payloads`, `gravity` [default: a
+    /// URDF model's inertials; none for a sheet, and compliance is skipped].
+    #[arg(long, value_name = "FILE")]
+    inertials: Option<String>,
+    /// Gravity in the robot's base link frame, m/s² [default: 0,0,-9.80665].
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    gravity: Option<Vec<f64>>,
+    /// A payload at the tip: mass in kg, then its centre in the tip frame in metres.
+    #[arg(
+        long,
+        value_name = "M,X,Y,Z",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    payload: Option<Vec<f64>>,
 }
 
 impl CalibrateCli {
@@ -1249,6 +1505,9 @@ impl CalibrateCli {
             format: self.format,
             out: self.out,
             plot: self.plot,
+            inertials: self.inertials,
+            gravity: self.gravity,
+            payload: self.payload,
         }
     }
 }

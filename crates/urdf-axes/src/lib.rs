@@ -26,6 +26,7 @@
 
 mod chain;
 mod error;
+pub mod inertia;
 mod locate;
 mod model;
 mod scan;
