@@ -229,7 +229,8 @@ pub enum UrdfError {
         role: &'static str,
         /// The name asked for.
         link: String,
-        /// Close names (or every link, when there are few).
+        /// Close names (or every link, when there are few; with many links and none close,
+        /// the leaves for a tip and the root for a base).
         candidates: Vec<String>,
     },
     /// No tip was given and the base has several leaf links below it.
@@ -338,17 +339,32 @@ fn first(line: &Option<usize>) -> First {
     First(*line)
 }
 
-/// Formats names as `'a', 'b', 'c'`.
+/// Names shown in one message at most; a URDF with thousands of leaves or stray links must not
+/// produce a message of thousands of names.
+const SHOWN: usize = 8;
+
+/// Formats names as `'a', 'b', 'c'`, the first [`SHOWN`] and how many more.
 pub(crate) fn list(names: &[String]) -> String {
-    names
+    let mut s = names
         .iter()
+        .take(SHOWN)
         .map(|n| format!("'{n}'"))
         .collect::<Vec<_>>()
-        .join(", ")
+        .join(", ");
+    if names.len() > SHOWN {
+        s.push_str(&format!(" and {} more", names.len() - SHOWN));
+    }
+    s
 }
 
+/// Formats a cycle as `a -> b -> a`; a long one as its start, `...`, its end and its length.
 fn cycle(links: &[String]) -> String {
-    links.join(" -> ")
+    if links.len() <= SHOWN + 1 {
+        return links.join(" -> ");
+    }
+    let head = links.get(..SHOWN - 2).unwrap_or(&[]).join(" -> ");
+    let tail = links.get(links.len() - 2..).unwrap_or(&[]).join(" -> ");
+    format!("{head} -> ... -> {tail} ({} links)", links.len() - 1)
 }
 
 fn suggest(candidates: &[String]) -> String {
@@ -379,5 +395,32 @@ mod tests {
             line: None,
         };
         assert_eq!(e.to_string(), "urdf parse error: expected x, found y");
+    }
+
+    #[test]
+    fn long_lists_and_cycles_are_cut() {
+        let names: Vec<String> = (0..10_000).map(|i| format!("l{i}")).collect();
+        let e = UrdfError::SeveralLeaves {
+            base: "b".into(),
+            leaves: names.clone(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "expected one leaf link below 'b' to use as the tip, found 10000: 'l0', 'l1', 'l2', \
+             'l3', 'l4', 'l5', 'l6', 'l7' and 9992 more (choose one as the tip)"
+        );
+        let mut links = names;
+        links.push("l0".into());
+        let e = UrdfError::NoRoot { links };
+        assert!(
+            e.to_string().ends_with(
+                "cycle l0 -> l1 -> l2 -> l3 -> l4 -> l5 -> ... -> l9999 -> l0 (10000 links)"
+            ),
+            "{e}"
+        );
+        let short: Vec<String> = ["a", "b", "a"].map(String::from).to_vec();
+        assert!(UrdfError::NoRoot { links: short }
+            .to_string()
+            .ends_with("cycle a -> b -> a"));
     }
 }

@@ -368,14 +368,27 @@ impl UrdfModel {
     }
 
     fn find_link(&self, name: &str, role: &'static str) -> Result<usize, UrdfError> {
-        self.link_index
-            .get(name)
-            .copied()
-            .ok_or_else(|| UrdfError::UnknownLink {
+        self.link_index.get(name).copied().ok_or_else(|| {
+            let mut candidates = candidates(name, &self.links());
+            // No close name among many links: offer what the role usually is, the leaves
+            // for a tip, the root for a base, rather than nothing.
+            if candidates.is_empty() {
+                candidates = match role {
+                    "tip" => self
+                        .leaves()
+                        .into_iter()
+                        .take(8)
+                        .map(str::to_owned)
+                        .collect(),
+                    _ => vec![self.root_link().to_owned()],
+                };
+            }
+            UrdfError::UnknownLink {
                 role,
                 link: name.to_owned(),
-                candidates: candidates(name, &self.links()),
-            })
+                candidates,
+            }
+        })
     }
 
     fn only_leaf_below(&self, base: usize) -> Result<usize, UrdfError> {

@@ -510,6 +510,11 @@ fn unknown_base_or_tip() {
         candidates.len() <= 5 && candidates.contains(&"link_0".to_owned()),
         "{candidates:?}"
     );
+    // Nothing close: the leaves for a tip, the root for a base.
+    let e = m.chain(None, Some("gripper")).unwrap_err();
+    assert_message(&e, &["tip link 'gripper'", "candidates: 'link_29'"]);
+    let e = m.chain(Some("world"), None).unwrap_err();
+    assert_message(&e, &["base link 'world'", "candidates: 'link_0'"]);
 }
 
 #[test]
