@@ -112,6 +112,15 @@ pub enum Warning {
         /// An angular tolerance that would treat the pair as parallel (radians).
         suggested_tolerance: f64,
     },
+    /// A joint whose lower and upper limits are equal cannot move (a URDF `<limit>` that leaves
+    /// out `lower` and `upper` means 0 and 0). Verification moves it all the same
+    /// ([`crate::JointSampler`]), so the table is proved for every value.
+    FrozenJoint {
+        /// The joint.
+        joint: String,
+        /// Its one allowed value (radians or metres).
+        value: f64,
+    },
 }
 
 impl fmt::Display for Warning {
@@ -161,6 +170,12 @@ impl fmt::Display for Warning {
                  rad from parallel, beyond the angular tolerance, so their common normal lies \
                  {offset:.3e} m away and the row is exact but meaningless to a reader; if the \
                  axes are meant to be parallel, pass --angular-tol {suggested_tolerance:.1e}"
+            ),
+            Warning::FrozenJoint { joint, value } => write!(
+                f,
+                "joint '{joint}' cannot move: its lower and upper limits are both {value} (a \
+                 URDF <limit> without lower and upper means 0); verification moves it over a \
+                 full range all the same"
             ),
         }
     }
@@ -251,7 +266,16 @@ pub fn extract(
     let mut rows = Vec::with_capacity(n);
     let mut pairs = Vec::with_capacity(n.saturating_sub(1));
     let mut snaps = Vec::new();
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<Warning> = axes
+        .iter()
+        .filter_map(|ax| {
+            let l = ax.limits?;
+            (l.lower == l.upper).then(|| Warning::FrozenJoint {
+                joint: ax.name.clone(),
+                value: l.lower,
+            })
+        })
+        .collect();
     let mut last_standard_frame = frame;
     for i in 0..n {
         let ax = &axes[i];

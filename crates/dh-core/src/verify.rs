@@ -35,7 +35,8 @@ enum Draw {
 }
 
 /// Draws joint values for a table's rows: uniform within each joint's limits (continuous
-/// joints over `[−pi, pi]`, unlimited prismatic joints over `±size` of the chain), mimic rows
+/// joints, and joints whose limits are equal, over `[−pi, pi]`; unlimited prismatic joints over
+/// `±size` of the chain), mimic rows
 /// from their driver (`q = m q_driver + offset`) when the driver is a row too, else within their
 /// own limits. Deterministic for a given seed.
 #[derive(Clone, Debug)]
@@ -48,7 +49,9 @@ pub struct JointSampler {
 impl JointSampler {
     /// A sampler for `rows` with `seed`; `size` (metres) bounds unlimited prismatic joints.
     pub fn new(rows: &[DhRow], size: f64, seed: u64) -> Self {
-        let own = |r: &DhRow| match (r.limits, r.kind) {
+        // A joint whose limits allow no motion is drawn as if unlimited: the table must be
+        // right at every value, and a frozen joint would leave its row unchecked.
+        let own = |r: &DhRow| match (r.limits.filter(|l| l.lower != l.upper), r.kind) {
             (Some(l), _) => Draw::Uniform {
                 lower: l.lower.min(l.upper),
                 upper: l.upper.max(l.lower),
@@ -198,6 +201,23 @@ mod tests {
             assert!((q[1] - (-2.0 * q[0] + 0.5)).abs() < 1e-15);
             assert!(q[0].abs() <= std::f64::consts::PI);
         }
+    }
+
+    #[test]
+    fn a_frozen_joint_is_moved_all_the_same() {
+        let mut rows = vec![DhRow::revolute("a", 0.1, 0.0, 0.0, 0.0)];
+        rows[0].limits = Some(crate::Limits {
+            lower: 0.0,
+            upper: 0.0,
+        });
+        let mut s = JointSampler::new(&rows, 1.0, 3);
+        let mut q = Vec::new();
+        let mut largest: f64 = 0.0;
+        for _ in 0..50 {
+            s.next_into(&mut q);
+            largest = largest.max(q[0].abs());
+        }
+        assert!(largest > 1.0, "{largest}");
     }
 
     #[test]
