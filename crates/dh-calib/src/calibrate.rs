@@ -763,6 +763,7 @@ impl<'a> Session<'a> {
         self.targets_nominal = self.model.targets().iter().map(|t| t.1).collect();
         let geometric: Vec<usize> = self.model.indices(|b| !matches!(b, Block::Effect(_)));
         let (free, fixed) = self.identify(&x, &geometric)?;
+        self.enough_for(&x, &geometric, free.len())?;
         let step = self.step("geometric", &x, &free, steps.last())?;
         steps.push(step.report.clone());
         Ok(Geometric {
@@ -770,6 +771,69 @@ impl<'a> Session<'a> {
             last: step,
             free,
             fixed,
+        })
+    }
+
+    /// Refuses data that leaves no residual degree of freedom for `columns`: as many free
+    /// parameters (`free`, the data's rank) as measured coordinates, so the fit reproduces the
+    /// data exactly and learns nothing. The error says how many samples the model needs: one
+    /// more than a third of its generic rank, found at the same targets and random joint values.
+    fn enough_for(&self, x: &[f64], columns: &[usize], free: usize) -> Result<(), CalibError> {
+        let cal = &self.prep.cal;
+        let equations: usize = cal
+            .iter()
+            .map(|o| match o.observation {
+                Observation::Point { .. } => 3,
+                Observation::Pose(_) => 6,
+            })
+            .sum();
+        if free < equations {
+            return Ok(());
+        }
+        let per_sample = equations.div_ceil(cal.len().max(1)).max(1);
+        let mut generic = free;
+        let points_only = cal
+            .iter()
+            .all(|o| matches!(o.observation, Observation::Point { .. }));
+        if let (true, Some(first)) = (points_only, cal.first()) {
+            use rand::{Rng, SeedableRng};
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+            let targets: Vec<usize> = (0..self.measured.len())
+                .filter(|&k| self.measured[k])
+                .collect();
+            let mut synthetic = Vec::new();
+            for _ in 0..columns.len().max(1) {
+                let q: Vec<f64> = (0..first.q.len())
+                    .map(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
+                    .collect();
+                for &k in &targets {
+                    synthetic.push(Observed {
+                        q: q.clone(),
+                        observation: Observation::Point {
+                            target: k,
+                            point: self.model.point(x, &q, k),
+                        },
+                    });
+                }
+            }
+            if let Ok((f, _)) = identify(
+                &self.model,
+                &synthetic,
+                x,
+                columns,
+                &self.scales,
+                self.options,
+            ) {
+                generic = generic.max(f.len());
+            }
+        }
+        Err(CalibError::TooFewSamples {
+            what: format!(
+                "geometric calibration ({generic} identifiable parameters, {per_sample} \
+                 coordinates per sample; {free} would fit the data exactly)"
+            ),
+            needed: generic / per_sample + 1,
+            found: cal.len(),
         })
     }
 

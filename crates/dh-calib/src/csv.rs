@@ -555,6 +555,14 @@ pub fn parse_measurements(
         samples: Vec::with_capacity(rows.len()),
     };
     let expected = header.fields.len();
+    // Largest magnitude accepted so far per column: a value far beyond it that is also beyond
+    // the unit's plausible range means the file mixes units (an earlier row in the other one).
+    let mut largest = vec![0.0f64; expected];
+    let mixed = |largest: &[f64], col: usize, value: f64, ratio: f64| {
+        largest
+            .get(col)
+            .is_some_and(|&m| m > 0.0 && value.abs() > ratio * m)
+    };
     for row in rows {
         let line = row.line;
         if row.fields.len() != expected {
@@ -579,8 +587,17 @@ pub fn parse_measurements(
                     column: name(col).into(),
                     value,
                     unit: "rad",
-                    hint: "looks like degrees; pass --angle-unit deg",
+                    // Degrees are 57 times radians.
+                    hint: if mixed(&largest, col, value, 20.0) {
+                        "looks like degrees, but the rows above look like radians: the file \
+                         mixes units"
+                    } else {
+                        "looks like degrees; pass --angle-unit deg"
+                    },
                 });
+            }
+            if let Some(m) = largest.get_mut(col) {
+                *m = m.max(value.abs());
             }
             q.push(if revolute {
                 opts.angle_unit.to_radians(value)
@@ -598,8 +615,16 @@ pub fn parse_measurements(
                     column: name(col).into(),
                     value,
                     unit: "m",
-                    hint: "looks like millimetres; pass --length-unit mm",
+                    hint: if mixed(&largest, col, value, 100.0) {
+                        "looks like millimetres, but the rows above look like metres: the file \
+                         mixes units"
+                    } else {
+                        "looks like millimetres; pass --length-unit mm"
+                    },
                 });
+            }
+            if let Some(m) = largest.get_mut(col) {
+                *m = m.max(value.abs());
             }
             point[k] = length(value);
         }
@@ -907,6 +932,22 @@ j1, j2 ,x,y,z,target,config,sigma,set
             ..CsvOptions::default()
         };
         assert!(parse_measurements("j,x,y,z\n90,0,0,0\n", &names(&["j"]), &opts).is_ok());
+        // Rows in one unit, then rows in the other: the file mixes units.
+        assert_eq!(
+            err("j,x,y,z\n0,0,0.8,0\n0,0,1.2,0\n0,0,1250.5,0\n", &["j"]),
+            "line 4, column 'y': 1250.5 m looks like millimetres, but the rows above look like \
+             metres: the file mixes units"
+        );
+        assert_eq!(
+            err("j,x,y,z\n1.5,0,0,0\n90,0,0,0\n", &["j"]),
+            "line 3, column 'j': 90 rad looks like degrees, but the rows above look like \
+             radians: the file mixes units"
+        );
+        // A home pose of zeros first says nothing about the unit.
+        assert_eq!(
+            err("j,x,y,z\n0,0,0,0\n90,0,0,0\n", &["j"]),
+            "line 3, column 'j': 90 rad looks like degrees; pass --angle-unit deg"
+        );
     }
 
     #[test]

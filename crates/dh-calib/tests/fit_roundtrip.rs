@@ -427,3 +427,32 @@ fn bad_input_is_an_error() {
         Err(CalibError::TooFewSamples { .. })
     ));
 }
+
+/// Found by the invalid-input corpus: four poses of a UR5 (12 coordinates) were "calibrated"
+/// to RMS 0 by freeing 12 parameters. Data that leaves no residual degree of freedom is refused,
+/// saying how many samples the model's identifiable parameters need.
+#[test]
+fn too_few_samples_for_the_geometric_model_say_how_many() {
+    let table = fit_support::ur5();
+    let data = |poses| {
+        simulate(
+            &table,
+            &SimulationOptions {
+                poses,
+                sigma: 1e-5,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+        .0
+    };
+    let e = calibrate(&table, &data(4), &CalibrationOptions::default()).unwrap_err();
+    let CalibError::TooFewSamples { needed, found, .. } = &e else {
+        panic!("{e}")
+    };
+    assert_eq!(*found, 4);
+    // 6 device + 3 target + the arm's identifiable DH parameters, 3 coordinates per sample.
+    assert!((8..=12).contains(needed), "{e}");
+    assert!(e.to_string().contains("identifiable parameters"), "{e}");
+    assert!(calibrate(&table, &data(*needed + 5), &CalibrationOptions::default()).is_ok());
+}
