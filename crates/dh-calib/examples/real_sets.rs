@@ -578,6 +578,30 @@ fn innopolis() -> Result<(), Error> {
             mm(f.sigma)
         );
     }
+    // How far down the data lets the best candidates go, declared rather than selected.
+    let best: Vec<String> = r
+        .candidates
+        .iter()
+        .filter(|c| c.status != CandidateStatus::Aliased)
+        .take(3)
+        .map(|c| c.label.clone())
+        .collect();
+    for n in 1..=best.len() {
+        let labels = best[..n].to_vec();
+        let e = diagnose_tree(
+            &robot.tree,
+            &data,
+            &options,
+            &diag_options(&robot, EffectSelection::Labels(labels.clone())),
+        )?;
+        println!(
+            "Declared (not selected) {}: RMS {} mm, leave-one-pose-out RMS {} mm.",
+            labels.join(" + "),
+            mm(e.rms_after),
+            opt_mm(e.val_rms_after)
+        );
+    }
+    println!();
     Ok(())
 }
 
@@ -620,8 +644,8 @@ fn boby() -> Result<(), Error> {
         .map(|p| (p.name.clone(), p.estimate))
         .collect();
     println!("Joint angle residual (CPA: angle measured on the fitted circle minus commanded, mean removed), before and after subtracting what the selected effects predict for that joint:\n");
-    println!("| joint | poses | span [deg] | RMS before [arcsec] | max before [arcsec] | RMS after [arcsec] | max after [arcsec] |");
-    println!("|---|---|---|---|---|---|---|");
+    println!("| joint | poses | span [deg] | RMS before [arcsec] | max before [arcsec] | RMS after [arcsec] | max after [arcsec] | CPA: linear slope / RMS after the line [arcsec] |");
+    println!("|---|---|---|---|---|---|---|---|");
     let arcsec = 180.0 * 3600.0 / std::f64::consts::PI;
     for j in &cpa.joints {
         let sweep = &cpa.sweeps[j.sweep];
@@ -665,14 +689,19 @@ fn boby() -> Result<(), Error> {
             .collect();
         let amax = |v: &[f64]| v.iter().map(|x| x.abs()).fold(0.0, f64::max);
         println!(
-            "| {} | {} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} |",
+            "| {} | {} | {:.0} | {:.1} | {:.1} | {:.1} | {:.1} | {} |",
             j.name,
             qs.len(),
             j.span.to_degrees(),
             rms(&b),
             amax(&b),
             rms(&a),
-            amax(&a)
+            amax(&a),
+            j.motion.linear.as_ref().map_or("-".into(), |l| format!(
+                "{:.2e} / {:.1}",
+                l.slope,
+                l.rms * arcsec
+            ))
         );
     }
     println!();
@@ -717,9 +746,19 @@ fn liaowu() -> Result<(), Error> {
     let ctx = context(&robot)?;
     let targets: Vec<(String, usize)> = cal.targets.iter().map(|t| (t.clone(), 0)).collect();
     let zero = dh_calib::import::liaowu::TARGETS_AT_ZERO;
+    let geometric = diagnose_tree(
+        &robot.tree,
+        &cal,
+        &options,
+        &diag_options(&robot, EffectSelection::None),
+    )?;
     let mut rows = Vec::new();
-    for (label, nominal) in [("nominal step", true), ("final", false)] {
-        let (model, x) = rebuild(&r, &robot, &ctx, nominal, &targets)?;
+    for (label, nominal, report) in [
+        ("nominal step", true, &r),
+        ("geometric", false, &geometric),
+        ("geometric + selected effects", false, &r),
+    ] {
+        let (model, x) = rebuild(report, &robot, &ctx, nominal, &targets)?;
         let q0 = vec![0.0; 6];
         let tip0 = model.tip(&x, &q0);
         let mut per_set = Vec::new();
