@@ -299,20 +299,41 @@ impl DataUnits {
     }
 }
 
-/// Reads a measurement file (or `-`) in the canonical CSV layout with columns for `joints`.
+/// A measurement file's text, read once (standard input cannot be read twice).
+#[derive(Clone, Debug)]
+pub struct DataFile {
+    /// The file name (no directories; `<stdin>` for `-`).
+    pub name: String,
+    /// Its text.
+    pub text: String,
+}
+
+impl DataFile {
+    /// Reads `path`, or standard input for `-`.
+    ///
+    /// # Errors
+    /// Unreadable file or not UTF-8.
+    pub fn read(path: &str) -> Result<DataFile> {
+        Ok(DataFile {
+            name: display_name(path),
+            text: read_text(path)?,
+        })
+    }
+}
+
+/// Parses a measurement file in the canonical CSV layout with columns for `joints`.
 ///
 /// # Errors
-/// Unreadable file; any [`dh_calib::csv::DataError`], prefixed with the file name (the error
-/// names the line and column).
+/// Any [`dh_calib::csv::DataError`], prefixed with the file name (the error names the line and
+/// column).
 pub fn read_measurements(
-    path: &str,
+    file: &DataFile,
     joints: &[String],
     prismatic: &[String],
     units: DataUnits,
 ) -> Result<Measurements> {
-    let name = display_name(path);
-    let text = read_text(path)?;
-    parse_measurements(&text, joints, &units.csv_options(prismatic)).map_err(|e| {
+    let name = &file.name;
+    parse_measurements(&file.text, joints, &units.csv_options(prismatic)).map_err(|e| {
         let hint = match &e {
             dh_calib::csv::DataError::MissingJoints { .. } => Some(
                 "the joint columns must be named as the model's joints (see README, 'Measurement files')",
@@ -330,15 +351,16 @@ pub fn read_measurements(
 /// one of [`RESERVED_COLUMNS`], in order.
 ///
 /// # Errors
-/// Unreadable file, no header line, no joint column.
-pub fn header_joints(path: &str) -> Result<Vec<String>> {
-    let name = display_name(path);
-    let text = read_text(path)?;
-    let header = text
+/// No header line, no joint column.
+pub fn header_joints(file: &DataFile) -> Result<Vec<String>> {
+    let name = &file.name;
+    let (line, header) = file
+        .text
         .trim_start_matches('\u{feff}')
         .lines()
-        .map(str::trim)
-        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .find(|(_, l)| !l.is_empty() && !l.starts_with('#'))
         .with_context(|| format!("{name}: expected a header line, found an empty file"))?;
     let joints: Vec<String> = split_header(header)
         .into_iter()
@@ -346,7 +368,7 @@ pub fn header_joints(path: &str) -> Result<Vec<String>> {
         .collect();
     if joints.is_empty() {
         return Err(hinted(
-            format!("{name}: line 1: expected joint columns besides x, y, z, found none"),
+            format!("{name}: line {line}: expected joint columns besides x, y, z, found none"),
             "a measurement file has one column per joint, named as the model's joints",
         ));
     }

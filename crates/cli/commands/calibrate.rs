@@ -33,7 +33,7 @@ use crate::commands::to_urdf::urdf_of;
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{
-    header_joints, load_model, parse_effect, read_measurements, DataUnits, LoadedModel,
+    header_joints, load_model, parse_effect, read_measurements, DataFile, DataUnits, LoadedModel,
 };
 use crate::output::write_atomically;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
@@ -534,6 +534,7 @@ fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Resul
 
 fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
     let data_name = display_name(&args.data);
+    let file = DataFile::read(&args.data)?;
     let (model, joints, prismatic) = match &args.model {
         Some(m) => {
             let model = load_model(
@@ -548,11 +549,11 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
             let (j, p) = (model.measured_joints(), model.prismatic());
             (Some(model), j, p)
         }
-        None => (None, header_joints(&args.data)?, Vec::new()),
+        None => (None, header_joints(&file)?, Vec::new()),
     };
-    let mut data = read_measurements(&args.data, &joints, &prismatic, args.units)?;
+    let mut data = read_measurements(&file, &joints, &prismatic, args.units)?;
     if let Some(v) = &args.validate {
-        let extra = read_measurements(v, &joints, &prismatic, args.units)?;
+        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units)?;
         merge_validation(&mut data, extra);
     }
     if let Some(m) = &model {

@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
-use crate::measured::{header_joints, load_model, read_measurements, DataUnits};
+use crate::measured::{header_joints, load_model, read_measurements, DataFile, DataUnits};
 use crate::render::{render_sheet, Format};
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -353,11 +353,12 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         }
         None => None,
     };
+    let file = DataFile::read(&args.data)?;
     let (joints, prismatic, convention) = match &model {
         Some(m) => (m.measured_joints(), m.prismatic(), m.table.convention),
-        None => (header_joints(&args.data)?, Vec::new(), args.convention),
+        None => (header_joints(&file)?, Vec::new(), args.convention),
     };
-    let data = read_measurements(&args.data, &joints, &prismatic, args.units)?;
+    let data = read_measurements(&file, &joints, &prismatic, args.units)?;
     let options = CpaOptions {
         prismatic,
         convention,
