@@ -12,7 +12,7 @@ use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
 use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
 use crate::commands::{calibrate, cpa, import, simulate};
-use crate::error::{Hinted, Outcome};
+use crate::error::Outcome;
 use crate::render::Format;
 use crate::sheet::ConventionDoc;
 use crate::units::{AngleUnit, LengthUnit};
@@ -181,7 +181,12 @@ where
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
-            let text = e.render().ansi().to_string();
+            // Plain text: output may be a pipe or a log, and snapshots must not hold escape
+            // codes. Usage errors start like every other error.
+            let mut text = e.render().to_string();
+            if let Some(rest) = text.strip_prefix("error: ") {
+                text = format!("urdf-dh: error: {rest}");
+            }
             let code = e.exit_code();
             let sink: &mut dyn Write = if code == 0 { out } else { err };
             let _ = sink.write_all(text.as_bytes());
@@ -193,8 +198,8 @@ where
         Ok(Outcome::Differs) => 1,
         Err(e) => {
             let _ = writeln!(err, "urdf-dh: error: {e:#}");
-            if let Some(h) = e.chain().find_map(|c| c.downcast_ref::<Hinted>()) {
-                let _ = writeln!(err, "hint: {}", h.hint);
+            if let Some(h) = crate::error::hint_for(&e) {
+                let _ = writeln!(err, "hint: {h}");
             }
             2
         }

@@ -32,8 +32,11 @@ pub fn read_text(path: &str) -> Result<String> {
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        anyhow::anyhow!(
-            "{path}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})"
+        hinted(
+            format!(
+                "{path}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})"
+            ),
+            "convert the file to UTF-8, e.g. iconv -f latin1 -t utf-8 FILE > FILE.utf8",
         )
     })
 }

@@ -263,11 +263,19 @@ impl Sheet {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
         }
         let doc: SheetDoc = serde_yaml::from_str(text).map_err(|e| {
-            let at = e
-                .location()
-                .map(|l| format!(" (line {}, column {})", l.line(), l.column()))
-                .unwrap_or_default();
-            anyhow::anyhow!("{origin}{at}: {e}")
+            let mut message = e.to_string();
+            let at = match e.location() {
+                Some(l) => {
+                    // serde_yaml repeats the position in its message; say it once, up front.
+                    let said = format!(" at line {} column {}", l.line(), l.column());
+                    if let Some(k) = message.find(&said) {
+                        message.replace_range(k..k + said.len(), "");
+                    }
+                    format!(" (line {}, column {})", l.line(), l.column())
+                }
+                None => String::new(),
+            };
+            anyhow::anyhow!("{origin}{at}: {message}")
         })?;
         doc.into_sheet(origin)
     }

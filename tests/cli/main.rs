@@ -6,4 +6,5 @@ mod common;
 mod corpus;
 mod cpa;
 mod extract;
+mod invalid;
 mod measured;

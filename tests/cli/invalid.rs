@@ -1,0 +1,414 @@
+//! The bad-input corpus of `fixtures/invalid/` (see its README.md): every case is one run of
+//! the binary, snapshotted as exit code + stdout + stderr. Errors exit 2 with nothing on stdout
+//! and one `urdf-dh: error:` line naming the file, line or joint (and a `hint:` line where one
+//! helps); suspicious but readable input is a `urdf-dh: warning:`. Nothing panics.
+
+use std::collections::BTreeSet;
+use std::time::{Duration, Instant};
+
+use crate::common::{root, run, settings};
+
+/// A case: its snapshot name, the arguments, and the exit code it must give.
+struct Case {
+    name: &'static str,
+    args: &'static [&'static str],
+    exit: i32,
+}
+
+const fn case(name: &'static str, args: &'static [&'static str]) -> Case {
+    Case {
+        name,
+        args,
+        exit: 2,
+    }
+}
+
+const fn warns(name: &'static str, args: &'static [&'static str], exit: i32) -> Case {
+    Case { name, args, exit }
+}
+
+macro_rules! urdf {
+    ($name:literal) => {
+        case(
+            concat!("urdf_", $name),
+            &["extract", concat!("fixtures/invalid/urdf/", $name, ".urdf")],
+        )
+    };
+}
+
+macro_rules! sheet {
+    ($name:literal, $file:literal) => {
+        case(
+            concat!("sheet_", $name),
+            &[
+                "check",
+                "fixtures/invalid/urdf/valid_arm.urdf",
+                "--sheet",
+                concat!("fixtures/invalid/sheet/", $file),
+            ],
+        )
+    };
+}
+
+macro_rules! csv {
+    ($name:literal) => {
+        case(
+            concat!("csv_", $name),
+            &[
+                "calibrate",
+                "--model",
+                "fixtures/invalid/urdf/valid_arm.urdf",
+                "--data",
+                concat!("fixtures/invalid/csv/", $name, ".csv"),
+            ],
+        )
+    };
+}
+
+const VALID_ARM: &str = "fixtures/invalid/urdf/valid_arm.urdf";
+
+const CASES: &[Case] = &[
+    // Not a URDF at all.
+    urdf!("empty"),
+    urdf!("not_xml"),
+    urdf!("truncated"),
+    urdf!("not_utf8"),
+    urdf!("comment_with_double_dash"),
+    urdf!("mismatched_tag"),
+    urdf!("wrong_root"),
+    urdf!("deep_nesting"),
+    urdf!("entity_bomb"),
+    // Not one tree of uniquely named links.
+    urdf!("no_links"),
+    urdf!("duplicate_link"),
+    urdf!("duplicate_joint"),
+    urdf!("two_parents"),
+    urdf!("cycle"),
+    urdf!("cycle_without_root"),
+    urdf!("several_roots"),
+    urdf!("missing_link"),
+    urdf!("missing_parent_element"),
+    // Numbers.
+    urdf!("bad_number"),
+    urdf!("zero_axis"),
+    urdf!("nan_axis"),
+    urdf!("infinite_origin"),
+    urdf!("nan_rpy"),
+    urdf!("nan_limit"),
+    urdf!("infinite_limit"),
+    urdf!("reversed_limits"),
+    urdf!("missing_limit"),
+    urdf!("overflowing_origins"),
+    // Joints.
+    urdf!("spherical_joint"),
+    urdf!("unknown_joint_type"),
+    urdf!("mimic_missing_joint"),
+    urdf!("floating_joint"),
+    urdf!("planar_joint"),
+    urdf!("no_moving_joint"),
+    // Choosing the chain.
+    urdf!("several_leaves"),
+    urdf!("many_leaves"),
+    case("arg_unknown_tip", &["extract", VALID_ARM, "--tip", "tool"]),
+    case(
+        "arg_unknown_base",
+        &["extract", VALID_ARM, "--base", "world"],
+    ),
+    case(
+        "arg_unknown_tip_among_many_links",
+        &[
+            "extract",
+            "fixtures/invalid/urdf/many_leaves.urdf",
+            "--tip",
+            "gripper",
+        ],
+    ),
+    case(
+        "arg_tip_above_base",
+        &["extract", VALID_ARM, "--base", "link_2", "--tip", "link_1"],
+    ),
+    case(
+        "arg_tip_on_another_branch",
+        &[
+            "extract",
+            "fixtures/invalid/urdf/several_leaves.urdf",
+            "--base",
+            "link_2",
+            "--tip",
+            "camera_link",
+        ],
+    ),
+    case(
+        "arg_base_is_tip",
+        &["extract", VALID_ARM, "--base", "tool0", "--tip", "tool0"],
+    ),
+    case(
+        "arg_missing_file",
+        &["extract", "fixtures/invalid/urdf/no_such_file.urdf"],
+    ),
+    // Sheets, read by `check` against the valid arm.
+    sheet!("empty", "empty.yaml"),
+    sheet!("not_yaml", "not_yaml.yaml"),
+    sheet!("truncated_json", "truncated.json"),
+    sheet!("not_utf8", "not_utf8.yaml"),
+    sheet!("not_a_mapping", "not_a_mapping.yaml"),
+    sheet!("missing_field", "missing_field.yaml"),
+    sheet!("missing_convention", "missing_convention.yaml"),
+    sheet!("unknown_convention", "unknown_convention.yaml"),
+    sheet!("wrong_length_unit", "wrong_length_unit.yaml"),
+    sheet!("wrong_angle_unit", "wrong_angle_unit.yaml"),
+    sheet!("unknown_key", "unknown_key.yaml"),
+    sheet!("duplicate_key", "duplicate_key.yaml"),
+    sheet!("nan_value", "nan_value.yaml"),
+    sheet!("infinite_value", "infinite_value.yaml"),
+    sheet!("text_value", "text_value.yaml"),
+    sheet!("duplicate_joint", "duplicate_joint.yaml"),
+    sheet!("reversed_limits", "reversed_limits.yaml"),
+    sheet!("half_limits", "half_limits.yaml"),
+    sheet!("no_joints", "no_joints.yaml"),
+    sheet!("spherical_joint", "spherical_joint.yaml"),
+    sheet!("short_pose", "short_pose.yaml"),
+    sheet!("mimic_itself", "mimic_itself.yaml"),
+    sheet!("alias_bomb", "alias_bomb.yaml"),
+    sheet!("deep_nesting", "deep_nesting.yaml"),
+    sheet!("missing_file", "no_such_sheet.yaml"),
+    // Measurement CSVs, read by `calibrate` with the valid arm as the model.
+    csv!("empty"),
+    csv!("only_header"),
+    csv!("not_utf8"),
+    csv!("missing_joint_column"),
+    csv!("missing_coordinate"),
+    csv!("duplicate_column"),
+    csv!("sigma_conflict"),
+    csv!("short_row"),
+    csv!("unterminated_quote"),
+    csv!("non_numeric_cell"),
+    csv!("nan_cell"),
+    csv!("infinite_cell"),
+    csv!("negative_sigma"),
+    csv!("unknown_set"),
+    csv!("mm_as_m"),
+    csv!("deg_as_rad"),
+    csv!("mixed_units"),
+    csv!("too_few_poses"),
+    case(
+        "csv_missing_file",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/no_such_data.csv",
+        ],
+    ),
+    case(
+        "csv_unknown_target",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/valid_arm.csv",
+            "--targets",
+            "t2",
+        ],
+    ),
+    // Usage errors.
+    case(
+        "arg_unknown_option",
+        &["extract", VALID_ARM, "--tpi", "tool0"],
+    ),
+    case(
+        "arg_not_a_number",
+        &["extract", VALID_ARM, "--samples", "many"],
+    ),
+    case(
+        "arg_nan_tolerance",
+        &["extract", VALID_ARM, "--linear-tol", "nan"],
+    ),
+    // Readable but suspicious: a warning, and the comparison's own verdict.
+    warns(
+        "sheet_mm_as_m",
+        &[
+            "check",
+            VALID_ARM,
+            "--sheet",
+            "fixtures/invalid/sheet/mm_as_m.yaml",
+        ],
+        1,
+    ),
+    warns(
+        "sheet_deg_as_rad",
+        &[
+            "check",
+            VALID_ARM,
+            "--sheet",
+            "fixtures/invalid/sheet/deg_as_rad.yaml",
+        ],
+        1,
+    ),
+    warns(
+        "sheet_mimic_missing_joint",
+        &[
+            "convert",
+            "fixtures/invalid/sheet/mimic_missing_joint.yaml",
+            "--to",
+            "modified",
+        ],
+        0,
+    ),
+    warns(
+        "csv_valid_arm",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/valid_arm.csv",
+        ],
+        0,
+    ),
+    warns(
+        "urdf_zero_limits",
+        &["extract", "fixtures/invalid/urdf/zero_limits.urdf"],
+        0,
+    ),
+    // The control: the valid pair matches.
+    warns(
+        "sheet_valid_arm",
+        &[
+            "check",
+            VALID_ARM,
+            "--sheet",
+            "fixtures/invalid/sheet/valid_arm.yaml",
+        ],
+        0,
+    ),
+];
+
+#[test]
+fn every_bad_input_gets_a_clear_error() {
+    let _snap = settings().bind_to_scope();
+    let mut names = BTreeSet::new();
+    for c in CASES {
+        assert!(names.insert(c.name), "case {} twice", c.name);
+        let start = Instant::now();
+        let out = run(c.args, None);
+        let took = start.elapsed();
+        insta::assert_snapshot!(c.name, out);
+        let code: i32 = out
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("exit: "))
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(-1);
+        assert_eq!(code, c.exit, "{}: {out}", c.name);
+        let (stdout, stderr) = out
+            .split_once("--- stderr\n")
+            .map(|(o, e)| (o.split_once("--- stdout\n").map_or("", |(_, o)| o), e))
+            .unwrap_or(("", ""));
+        assert!(!stderr.contains("panicked"), "{}: {stderr}", c.name);
+        if c.exit == 2 {
+            assert!(
+                stdout.is_empty(),
+                "{}: an error writes nothing to stdout",
+                c.name
+            );
+            assert!(
+                stderr.starts_with("urdf-dh: error: "),
+                "{}: {stderr}",
+                c.name
+            );
+            // Usage errors are clap's, with its possible values, tips and usage line.
+            let usage = stderr.contains("For more information, try '--help'.");
+            let lines: Vec<&str> = stderr.lines().collect();
+            assert!(
+                usage || lines.len() == 1 || lines.len() == 2 && lines[1].starts_with("hint: "),
+                "{}: one error line and at most a hint: {stderr}",
+                c.name
+            );
+        }
+        // Bombs are refused in one linear scan, not expanded.
+        assert!(took < Duration::from_secs(20), "{}: {took:?}", c.name);
+    }
+}
+
+/// Every file of the corpus is some case's input (no untested case, no stale file).
+#[test]
+fn every_corpus_file_is_a_case() {
+    let used: BTreeSet<String> = CASES
+        .iter()
+        .flat_map(|c| c.args.iter())
+        .filter(|a| a.starts_with("fixtures/invalid/"))
+        .map(|a| a.to_string())
+        .collect();
+    let mut files = Vec::new();
+    for dir in ["urdf", "sheet", "csv"] {
+        for e in std::fs::read_dir(root().join("fixtures/invalid").join(dir)).unwrap() {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            files.push(format!("fixtures/invalid/{dir}/{name}"));
+        }
+    }
+    files.sort();
+    let unused: Vec<&String> = files.iter().filter(|f| !used.contains(*f)).collect();
+    assert!(unused.is_empty(), "corpus files no case reads: {unused:?}");
+    assert!(CASES.len() >= 40, "{} cases", CASES.len());
+}
+
+/// A serial chain of `n` revolute joints turning about z, y, x in turn, 1 mm apart.
+fn long_chain(n: usize) -> String {
+    let mut s = String::from("<robot name=\"long\">\n<link name=\"l0\"/>\n");
+    for i in 1..=n {
+        s.push_str(&format!("<link name=\"l{i}\"/>\n"));
+    }
+    let axes = ["0 0 1", "0 1 0", "1 0 0"];
+    for i in 1..=n {
+        s.push_str(&format!(
+            "<joint name=\"j{i}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{i}\"/>\
+             <origin xyz=\"0 0 0.001\" rpy=\"0 0 0\"/><axis xyz=\"{}\"/>\
+             <limit lower=\"-0.001\" upper=\"0.001\" effort=\"1\" velocity=\"1\"/></joint>\n",
+            i - 1,
+            axes[i % 3]
+        ));
+    }
+    s.push_str("</robot>\n");
+    s
+}
+
+fn timed_extract(urdf: &str) -> (Duration, String) {
+    let start = Instant::now();
+    let out = run(
+        &["extract", "-", "--format", "csv", "--samples", "10"],
+        Some(urdf.as_bytes()),
+    );
+    (start.elapsed(), out)
+}
+
+/// 10 000 joints extract and verify, in time linear in the chain's length.
+#[test]
+fn a_ten_thousand_joint_chain_works_in_linear_time() {
+    let (small, out) = timed_extract(&long_chain(2_000));
+    assert!(
+        out.starts_with("exit: 0\n"),
+        "{}",
+        &out[..out.len().min(2000)]
+    );
+    let (large, out) = timed_extract(&long_chain(10_000));
+    assert!(
+        out.starts_with("exit: 0\n"),
+        "{}",
+        &out[..out.len().min(2000)]
+    );
+    let rows = out
+        .lines()
+        .filter(|l| l.starts_with('j') && l.contains(",revolute,"))
+        .count();
+    assert_eq!(rows, 10_000, "one csv row per joint");
+    assert!(out.contains("j10000"));
+    // Five times the joints: about five times the time (a quadratic step would take 25).
+    let ratio = large.as_secs_f64() / small.as_secs_f64().max(1e-3);
+    assert!(
+        ratio < 12.0,
+        "2000 joints {small:?}, 10000 joints {large:?}: ratio {ratio:.1}"
+    );
+}
