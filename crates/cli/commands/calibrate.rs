@@ -45,7 +45,7 @@ use crate::units::{AngleUnit, LengthUnit};
 pub enum EffectsChoice {
     /// None: the report ends with `geometric`.
     None,
-    /// Let the diagnosis choose (see [`auto_effects`]).
+    /// Let the diagnosis of `dh_calib::diagnose` choose.
     Auto,
     /// These labels (`gear_ratio:<joint>`, ...).
     List(Vec<String>),
