@@ -1150,7 +1150,9 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
             effects: doc
                 .parameters
                 .iter()
-                .filter(|p| p.free && p.unit == "1")
+                // Effect parameters are named `<kind>:<joints>` or `scale`
+                // (`dh_calib::effects`), whatever their unit.
+                .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
                 .map(|p| (p.name.clone(), p.estimate))
                 .collect(),
         };
