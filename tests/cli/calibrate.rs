@@ -159,6 +159,7 @@ fn planted_geometric_errors_come_back_and_the_fit_reaches_the_noise_floor() {
 fn a_planted_gear_ratio_is_found_by_the_effect_step() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "gear.csv");
+    let out = path(dir.path(), "gear.yaml");
     ok(&[
         "simulate",
         "--model",
@@ -186,8 +187,17 @@ fn a_planted_gear_ratio_is_found_by_the_effect_step() {
         "json",
         "--effects",
         "gear_ratio:elbow_joint",
+        "--out",
+        &out,
     ]))
     .unwrap();
+    // The written sheet keeps the effect beside the table (effects are no DH parameters).
+    let sheet: serde_yaml::Value =
+        serde_yaml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let effects = sheet["calibration"]["effects"].as_sequence().unwrap();
+    assert_eq!(effects.len(), 1);
+    assert_eq!(effects[0][0].as_str(), Some("gear_ratio:elbow_joint"));
+    assert!((effects[0][1].as_f64().unwrap() - 0.002).abs() < 1e-4);
     let steps: Vec<&str> = report["steps"]
         .as_array()
         .unwrap()
