@@ -301,6 +301,10 @@ pub struct StepDoc {
     pub free: usize,
     /// Solver iterations.
     pub iterations: usize,
+    /// Calibration RMS before the step (the previous step's), `None` for the first.
+    pub rms_before: Option<f64>,
+    /// Validation RMS before the step.
+    pub val_rms_before: Option<f64>,
     /// Calibration RMS.
     pub rms: f64,
     /// Calibration mean.
@@ -460,8 +464,14 @@ pub struct UnitsDoc {
 
 /// The unit of a parameter, from its name (see `dh_calib::model`).
 pub fn unit_of(name: &str) -> &'static str {
-    if name.contains(':') {
-        return "1";
+    if name.contains(':') || name == "scale" {
+        // Effect parameters (see `dh_calib::effects`).
+        return match name.split(':').next() {
+            Some("compliance" | "lateral_compliance") => "rad/(N m)",
+            Some("gear_harmonic" | "parallel_tilt" | "backlash") => "rad",
+            Some("gear_ratio" | "coupling") => "rad/rad",
+            _ => "1",
+        };
     }
     match name.rsplit('.').next() {
         Some("a" | "d" | "x" | "y" | "z") => "m",
@@ -760,6 +770,8 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
                 label: s.label.clone(),
                 free: s.free,
                 iterations: s.iterations,
+                rms_before: s.rms_before,
+                val_rms_before: s.val_rms_before,
                 rms: s.rms,
                 mean: s.mean,
                 max: s.max,
@@ -1087,6 +1099,32 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
     }
     if !doc.selected_effects.is_empty() {
         let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
+        for p in doc
+            .parameters
+            .iter()
+            .filter(|p| p.name.contains(':') || p.name == "scale")
+        {
+            let stiffness = (p.unit == "rad/(N m)" && p.estimate != 0.0).then(|| {
+                format!(
+                    "  (stiffness {:.4e}{} N m/rad)",
+                    1.0 / p.estimate,
+                    p.std_error
+                        .map(|e| format!(" +- {:.1e}", e / (p.estimate * p.estimate)))
+                        .unwrap_or_default()
+                )
+            });
+            let _ = writeln!(
+                s,
+                "  {} = {:.6e}{} {}{}",
+                p.name,
+                p.estimate,
+                p.std_error
+                    .map(|e| format!(" +- {e:.1e}"))
+                    .unwrap_or_default(),
+                p.unit,
+                stiffness.unwrap_or_default()
+            );
+        }
     }
     if !doc.unfolded.is_empty() {
         let _ = writeln!(
