@@ -262,6 +262,7 @@ impl Sheet {
         if text.trim().is_empty() {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
         }
+        check_nesting(text, origin)?;
         let doc: SheetDoc = serde_yaml::from_str(text).map_err(|e| {
             let mut message = e.to_string();
             let at = match e.location() {
@@ -279,6 +280,49 @@ impl Sheet {
         })?;
         doc.into_sheet(origin)
     }
+}
+
+/// Flow collections (`[`, `{`) nested deeper than this are refused before YAML parsing: a sheet
+/// needs three levels, and libyaml's scanner takes time quadratic in the depth (found by
+/// fuzzing: 8 KiB of `[` took over 10 s).
+const MAX_FLOW_DEPTH: usize = 64;
+
+/// Refuses flow collections nested deeper than [`MAX_FLOW_DEPTH`], in one linear pass that
+/// skips quoted strings and comments.
+fn check_nesting(text: &str, origin: &str) -> Result<()> {
+    let (mut depth, mut line) = (0usize, 1usize);
+    let mut quote: Option<char> = None;
+    let mut comment = false;
+    let mut previous = '\n';
+    for c in text.chars() {
+        if c == '\n' {
+            line += 1;
+            comment = false;
+        } else if comment {
+        } else if let Some(q) = quote {
+            if c == q {
+                quote = None;
+            }
+        } else {
+            match c {
+                '"' | '\'' => quote = Some(c),
+                '#' if previous.is_whitespace() => comment = true,
+                '[' | '{' => {
+                    depth += 1;
+                    if depth > MAX_FLOW_DEPTH {
+                        bail!(
+                            "{origin} (line {line}): expected lists and maps nested at most \
+                             {MAX_FLOW_DEPTH} deep, found deeper"
+                        );
+                    }
+                }
+                ']' | '}' => depth = depth.saturating_sub(1),
+                _ => {}
+            }
+        }
+        previous = c;
+    }
+    Ok(())
 }
 
 impl SheetDoc {
@@ -557,6 +601,27 @@ mod tests {
                 .contains("joint 'b': mimic: expected another joint to follow, found itself"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn deep_nesting_is_refused_at_once() {
+        // Found by fuzzing: libyaml scans unclosed flow collections in quadratic time.
+        let text = format!("convention: standard\njoints: {}", "[".repeat(8000));
+        let start = std::time::Instant::now();
+        let e = Sheet::parse(&text, "s.yaml").unwrap_err();
+        assert!(start.elapsed() < std::time::Duration::from_secs(1));
+        assert!(
+            e.to_string()
+                .contains("s.yaml (line 2): expected lists and maps nested at most 64 deep"),
+            "{e}"
+        );
+        // Brackets in quotes and comments do not count.
+        let text = format!(
+            "# {}\nconvention: standard\nlength_unit: m\nangle_unit: rad\nrobot: '{}'\njoints: [{{name: a, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}}]\n",
+            "[".repeat(100),
+            "{".repeat(100)
+        );
+        assert!(Sheet::parse(&text, "s.yaml").is_ok());
     }
 
     #[test]

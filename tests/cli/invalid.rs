@@ -103,6 +103,7 @@ const CASES: &[Case] = &[
     urdf!("spherical_joint"),
     urdf!("unknown_joint_type"),
     urdf!("mimic_missing_joint"),
+    urdf!("mimic_itself"),
     urdf!("floating_joint"),
     urdf!("planar_joint"),
     urdf!("no_moving_joint"),
@@ -171,6 +172,7 @@ const CASES: &[Case] = &[
     sheet!("mimic_itself", "mimic_itself.yaml"),
     sheet!("alias_bomb", "alias_bomb.yaml"),
     sheet!("deep_nesting", "deep_nesting.yaml"),
+    sheet!("unclosed_nesting", "unclosed_nesting.yaml"),
     sheet!("missing_file", "no_such_sheet.yaml"),
     // Measurement CSVs, read by `calibrate` with the valid arm as the model.
     csv!("empty"),

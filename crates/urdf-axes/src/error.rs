@@ -219,6 +219,18 @@ pub enum UrdfError {
         /// Line of the `<mimic>` element.
         line: Option<usize>,
     },
+    /// A `<mimic>` that names its own joint (found by fuzzing: extract wrote it, and the sheet
+    /// reader refuses it).
+    #[error(
+        "joint '{joint}'{}: mimic: expected another joint to follow, found itself",
+        at(.line)
+    )]
+    MimicItself {
+        /// The joint.
+        joint: String,
+        /// Line of the `<mimic>` element.
+        line: Option<usize>,
+    },
     /// A base or tip link name that the URDF does not define.
     #[error(
         "{role} link '{link}': expected a link of the urdf, found no such link{}",

@@ -102,7 +102,8 @@ impl UrdfModel {
     ///   [`UrdfError::NoRoot`], [`UrdfError::SeveralRoots`] when the links are not one tree;
     /// - [`UrdfError::UnsupportedJointType`] for a type that is not URDF (`spherical`, `ball`);
     /// - [`UrdfError::NonFinite`], [`UrdfError::ZeroAxis`], [`UrdfError::MissingLimit`],
-    ///   [`UrdfError::LimitsReversed`], [`UrdfError::UnknownMimicJoint`] for a joint's numbers.
+    ///   [`UrdfError::LimitsReversed`], [`UrdfError::UnknownMimicJoint`],
+    ///   [`UrdfError::MimicItself`] for a joint's numbers.
     pub fn parse(text: &str) -> Result<UrdfModel, UrdfError> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let doc = scan::scan(text).map_err(|e| match e {
@@ -611,6 +612,12 @@ fn check_joint(
             if let Some(v) = v {
                 finite(what, v, src.mimic_line)?;
             }
+        }
+        if m.joint == joint.name {
+            return Err(UrdfError::MimicItself {
+                joint: name(),
+                line: src.mimic_line.or(src.line),
+            });
         }
         if !joint_index.contains_key(&m.joint) {
             return Err(UrdfError::UnknownMimicJoint {

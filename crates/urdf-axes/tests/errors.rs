@@ -455,6 +455,17 @@ fn mimic_of_an_undefined_joint() {
         }
     );
     assert_message(&e, &["joint 'j'", "'nobody'", "mimic", "line 6"]);
+    // Found by fuzzing: a joint following itself was accepted, and extract wrote a sheet that
+    // the sheet reader refuses.
+    let e = parse_err(&one_joint("", "continuous", &["<mimic joint=\"j\"/>"]));
+    assert_eq!(
+        e,
+        UrdfError::MimicItself {
+            joint: "j".into(),
+            line: Some(6)
+        }
+    );
+    assert_message(&e, &["joint 'j'", "itself", "line 6"]);
 }
 
 /// A tree: root `base` with an arm `base -> upper -> hand` and a branch `base -> camera`.
