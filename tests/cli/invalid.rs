@@ -414,3 +414,53 @@ fn a_ten_thousand_joint_chain_works_in_linear_time() {
         "2000 joints {small:?}, 10000 joints {large:?}: ratio {ratio:.1}"
     );
 }
+
+/// A run that fails leaves the output file it was asked to write as it was (written through a
+/// temporary file and a rename), and no temporary beside it.
+#[test]
+fn a_failed_run_leaves_its_output_file_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("calibrated.yaml");
+    std::fs::write(&out, "previous result\n").unwrap();
+    let out_arg = out.to_string_lossy().into_owned();
+    for data in [
+        "fixtures/invalid/csv/mixed_units.csv",
+        "fixtures/invalid/csv/too_few_poses.csv",
+    ] {
+        let r = run(
+            &[
+                "calibrate",
+                "--model",
+                VALID_ARM,
+                "--data",
+                data,
+                "--out",
+                &out_arg,
+            ],
+            None,
+        );
+        assert!(r.starts_with("exit: 2\n"), "{r}");
+        assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous result\n");
+    }
+    // A successful run replaces it whole.
+    let r = run(
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/valid_arm.csv",
+            "--out",
+            &out_arg,
+        ],
+        None,
+    );
+    assert!(r.starts_with("exit: 0\n"), "{r}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert!(text.contains("joints:"), "{text}");
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, ["calibrated.yaml"]);
+}
