@@ -296,7 +296,8 @@ pub fn diagnose(
 /// Calibrates `tree` against `data` as [`crate::calibrate::calibrate_tree`] does, then
 /// diagnoses and adds the effects the geometric model lacks (see the module docs). The report
 /// has the steps `nominal`, `geometric` and one `+<label>` per effect added, the candidate
-/// table of the first round, the selected effects and the [`Diagnosis`].
+/// table of the first round, the selected effects and the [`Diagnosis`], whose notes (and the
+/// residual test's summary) are also appended to the report's notes.
 /// `options.effects` is ignored: [`DiagnoseOptions::effects`] says which effects.
 ///
 /// # Errors
@@ -530,6 +531,14 @@ pub fn diagnose_tree(
     let mut report = session.report(&last, steps, fixed, &hidden);
     report.selected_effects = selected.iter().map(|&e| pool[e].label()).collect();
     report.candidates = first_table;
+    // The report's notes carry the diagnosis's findings too, for readers of the report alone.
+    if !pool.is_empty() {
+        report.notes.push(format!(
+            "residual after the geometric step: {}",
+            residual_test.summary
+        ));
+    }
+    report.notes.extend(notes.iter().cloned());
     report.diagnosis = Some(Diagnosis {
         rule: RULE.into(),
         alpha: diag.alpha,
