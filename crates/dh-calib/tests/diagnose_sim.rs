@@ -1,6 +1,6 @@
 //! Automatic diagnosis on simulated data: one undeclared effect, 15-30 times the noise, on top
 //! of random geometric errors, 150 calibration + 100 validation poses; on a large industrial
-//! arm and a UR-sized arm, `DIAGNOSE_SEEDS` seeds each (default 1, every case with its own seed;
+//! arm and a UR-sized arm, `DIAGNOSE_SEEDS` seeds each (default 3, every case with its own seeds;
 //! `DIAGNOSE_SEEDS=20` is the full run).
 //!
 //! "Noise floor" here is the RMS that the fit of the true model structure leaves on these very

@@ -21,12 +21,12 @@ mod fit_support;
 
 pub use fit_support::{kr_like, ur5};
 
-/// Seeds per case: `DIAGNOSE_SEEDS` (default 1; each case uses its own seeds).
+/// Seeds per case: `DIAGNOSE_SEEDS` (default 3; each case uses its own seeds).
 pub fn seeds() -> u64 {
     std::env::var("DIAGNOSE_SEEDS")
         .ok()
         .and_then(|s| s.parse().ok())
-        .unwrap_or(1)
+        .unwrap_or(3)
 }
 
 /// Link masses for a test arm: each body's centre half-way between its frame and the previous
