@@ -1446,7 +1446,7 @@ mod tests {
         assert_eq!(unit_of("joint_2.beta"), "rad");
         assert_eq!(unit_of("target.SMR1.z"), "m");
         assert_eq!(unit_of("device.rz"), "rad");
-        assert_eq!(unit_of("gear_ratio:joint_2"), "1");
+        assert_eq!(unit_of("gear_ratio:joint_2"), "rad/rad");
     }
 }
 
