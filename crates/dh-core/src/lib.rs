@@ -3,7 +3,7 @@
 //! Implements "Automatic Extraction of DH Parameters of Serial Manipulators using Line
 //! Geometry" (Rajeevlochana, Saha, Kumar) with the corrections of its errata: Plücker lines
 //! ([`Line`], eq. 1), the dual line product (eq. 3), classification of consecutive joint axes
-//! ([`classify`]), and the recursive DH frame construction of §3.1 ([`extract`]) generalised to
+//! ([`classify`]), and the recursive DH frame construction of §3.1 ([`extract()`]) generalised to
 //! real robots (base and tool transforms, prismatic and mimic joints, both conventions).
 //!
 //! No file, no XML, no printing: the same core serves URDFs, vendor sheets and measured axes.

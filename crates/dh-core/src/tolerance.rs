@@ -8,7 +8,7 @@ use crate::CoreError;
 /// Two consecutive axes whose angle is within `angular` of 0 or pi are treated as parallel
 /// (antiparallel); two axes whose common normal is shorter than `linear` are treated as
 /// intersecting (coincident when also parallel). Every such snap changes the kinematics by a
-/// bounded amount, which [`crate::extract`] reports and [`crate::verify`] measures.
+/// bounded amount, which [`crate::extract()`] reports and [`crate::verify`] measures.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
     /// Length tolerance in metres.
