@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use dh_calib::calibrate::{calibrate, CalibrationOptions, Report};
+use dh_calib::calibrate::{CalibrationOptions, Report};
 use dh_calib::data::{Measurements, Sample, Split};
 use dh_calib::diagnose::{diagnose, DiagnoseOptions};
 use dh_calib::effects::{parse_label_in, EffectContext};
@@ -224,16 +224,6 @@ pub fn run(arm: &Arm, sim: &Simulated) -> Report {
         ..DiagnoseOptions::default()
     };
     diagnose(&arm.table, &sim.data, &options, &diag).unwrap()
-}
-
-/// The calibration with the planted effect declared: the best the model family does on these
-/// very samples, i.e. the noise floor of this realisation.
-pub fn oracle(arm: &Arm, sim: &Simulated) -> Report {
-    let options = CalibrationOptions {
-        effects: sim.effect.iter().cloned().collect(),
-        ..CalibrationOptions::default()
-    };
-    calibrate(&arm.table, &sim.data, &options).unwrap()
 }
 
 /// Expected RMS 3-D residual of pure noise on validation points after fitting `p` parameters
