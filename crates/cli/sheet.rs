@@ -247,6 +247,11 @@ pub struct Sheet {
     pub coupled: Vec<(String, Vec<(String, f64)>)>,
 }
 
+/// Largest magnitude of a sheet value in its own unit: beyond any robot, and far from
+/// overflow when converted to other units (found by fuzzing the URDF path: a finite 1e306 m
+/// became infinite in millimetres).
+const MAX_MAGNITUDE: f64 = 1e9;
+
 /// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
 const SUSPICIOUS_METRES: f64 = 20.0;
 
@@ -358,6 +363,12 @@ impl SheetDoc {
                         j.name
                     );
                 }
+                if v.abs() > MAX_MAGNITUDE {
+                    bail!(
+                        "{origin}: joint '{}': {field}: expected a magnitude of at most 1e9, found {v:e}",
+                        j.name
+                    );
+                }
             }
             let kind = match j.kind {
                 JointType::Revolute => JointKind::Revolute,
@@ -400,9 +411,13 @@ impl SheetDoc {
             }
             let mimic = match &j.mimic {
                 Some(m) => {
-                    if !m.multiplier.is_finite() || !m.offset.is_finite() {
+                    if !m.multiplier.is_finite()
+                        || !m.offset.is_finite()
+                        || m.multiplier.abs() > MAX_MAGNITUDE
+                        || m.offset.abs() > MAX_MAGNITUDE
+                    {
                         bail!(
-                            "{origin}: joint '{}': mimic multiplier and offset must be finite",
+                            "{origin}: joint '{}': mimic multiplier and offset must be finite, of magnitude at most 1e9",
                             j.name
                         );
                     }
@@ -431,6 +446,9 @@ impl SheetDoc {
                 Some(p) => {
                     if p.xyz.iter().chain(&p.rpy).any(|v| !v.is_finite()) {
                         bail!("{origin}: {what}: xyz and rpy must be finite numbers");
+                    }
+                    if let Some(v) = p.xyz.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
+                        bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e9, found {v:e}");
                     }
                     Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
                 }
@@ -599,6 +617,20 @@ mod tests {
         assert!(
             e.to_string()
                 .contains("joint 'b': mimic: expected another joint to follow, found itself"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn magnitudes_beyond_any_robot_are_refused() {
+        let e = Sheet::parse(
+            "convention: standard\nlength_unit: m\nangle_unit: rad\njoints:\n  - {name: a, type: revolute, a: 0, alpha: 0, d: 1e306, theta: 0}\n",
+            "s.yaml",
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("joint 'a': d: expected a magnitude of at most 1e9, found 1e306"),
             "{e}"
         );
     }

@@ -99,6 +99,7 @@ const CASES: &[Case] = &[
     urdf!("reversed_limits"),
     urdf!("missing_limit"),
     urdf!("overflowing_origins"),
+    urdf!("huge_origin"),
     // Joints.
     urdf!("spherical_joint"),
     urdf!("unknown_joint_type"),
@@ -162,6 +163,7 @@ const CASES: &[Case] = &[
     sheet!("duplicate_key", "duplicate_key.yaml"),
     sheet!("nan_value", "nan_value.yaml"),
     sheet!("infinite_value", "infinite_value.yaml"),
+    sheet!("huge_value", "huge_value.yaml"),
     sheet!("text_value", "text_value.yaml"),
     sheet!("duplicate_joint", "duplicate_joint.yaml"),
     sheet!("reversed_limits", "reversed_limits.yaml"),

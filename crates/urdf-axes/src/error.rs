@@ -146,6 +146,22 @@ pub enum UrdfError {
         /// Line of the element holding it.
         line: Option<usize>,
     },
+    /// A finite origin coordinate, limit or mimic number beyond ±1e9 (metres or radians): no
+    /// robot's, and its table in millimetres or degrees would overflow.
+    #[error(
+        "joint '{joint}'{}: {what}: expected a magnitude of at most 1e9, found {value:e}",
+        at(.line)
+    )]
+    OutOfRange {
+        /// The joint.
+        joint: String,
+        /// Which number, as in [`UrdfError::NonFinite`].
+        what: &'static str,
+        /// The value.
+        value: f64,
+        /// Line of the element holding it.
+        line: Option<usize>,
+    },
     /// A moving joint's axis has zero length.
     #[error(
         "joint '{joint}'{}: axis xyz: expected a non-zero direction, found {} {} {}",

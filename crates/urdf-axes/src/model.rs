@@ -519,6 +519,11 @@ fn find_cycle(n: usize, parent: impl Fn(usize) -> Option<usize>) -> Option<Vec<u
     None
 }
 
+/// Largest magnitude of an origin coordinate (metres), a limit (radians or metres) or a mimic
+/// number: far beyond any robot, and far enough from overflow that every unit conversion and
+/// composition stays finite.
+pub(crate) const MAX_MAGNITUDE: f64 = 1e9;
+
 /// Checks one joint's type, numbers, limits and mimic.
 fn check_joint(
     joint: &urdf_rs::Joint,
@@ -559,6 +564,41 @@ fn check_joint(
     ] {
         for x in v {
             finite(what, x, line)?;
+        }
+    }
+    // Found by fuzzing: an origin of 1e306 m is finite, but its table printed in millimetres is
+    // not. No robot needs lengths or limits beyond MAX_MAGNITUDE.
+    let limits = [
+        ("limit lower", joint.limit.lower),
+        ("limit upper", joint.limit.upper),
+    ];
+    let mimic = joint.mimic.as_ref().map_or([None, None], |m| {
+        [
+            m.multiplier.map(|v| ("mimic multiplier", v)),
+            m.offset.map(|v| ("mimic offset", v)),
+        ]
+    });
+    for (what, v, line) in joint
+        .origin
+        .xyz
+        .0
+        .iter()
+        .map(|&v| ("origin xyz", v, src.origin_line))
+        .chain(limits.into_iter().map(|(w, v)| (w, v, src.limit_line)))
+        .chain(
+            mimic
+                .into_iter()
+                .flatten()
+                .map(|(w, v)| (w, v, src.mimic_line)),
+        )
+    {
+        if v.is_finite() && v.abs() > MAX_MAGNITUDE {
+            return Err(UrdfError::OutOfRange {
+                joint: name(),
+                what,
+                value: v,
+                line: line.or(src.line),
+            });
         }
     }
     for (what, raw, line) in &src.raw_vectors {

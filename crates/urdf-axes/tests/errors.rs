@@ -373,6 +373,32 @@ fn non_finite_numbers_anywhere() {
 }
 
 #[test]
+fn magnitudes_beyond_any_robot() {
+    // Found by fuzzing: a finite origin of 1e306 m gave a table whose millimetres overflow.
+    let e = parse_err(&one_joint(
+        "",
+        "continuous",
+        &["<origin xyz=\"0 0 1e306\"/>"],
+    ));
+    assert_eq!(
+        e,
+        UrdfError::OutOfRange {
+            joint: "j".into(),
+            what: "origin xyz",
+            value: 1e306,
+            line: Some(6)
+        }
+    );
+    assert_message(&e, &["joint 'j'", "origin xyz", "1e9", "1e306", "line 6"]);
+    let e = parse_err(&one_joint(
+        "",
+        "prismatic",
+        &["<limit lower=\"0\" upper=\"2e9\" effort=\"1\" velocity=\"1\"/>"],
+    ));
+    assert_message(&e, &["limit upper", "2e9", "line 6"]);
+}
+
+#[test]
 fn zero_axis() {
     let e = parse_err(&one_joint(
         "",
@@ -632,13 +658,11 @@ fn overflow_while_composing() {
         "  <joint name=\"farther\" type=\"continuous\"><parent link=\"b\"/><child link=\"c\"/><origin xyz=\"1e308 0 0\"/></joint>",
         "</robot>",
     ]);
-    let e = UrdfModel::parse(&text)
-        .unwrap()
-        .chain(None, None)
-        .unwrap_err();
+    // Finite origins whose sum overflows are refused as out of range before any composing.
+    let e = parse_err(&text);
     assert!(
-        matches!(&e, UrdfError::Geometry { joint, .. } if joint == "farther"),
+        matches!(&e, UrdfError::OutOfRange { joint, .. } if joint == "far"),
         "{e:?}"
     );
-    assert_message(&e, &["joint 'farther'", "finite"]);
+    assert_message(&e, &["joint 'far'", "origin xyz", "1e308", "line 3"]);
 }
