@@ -247,10 +247,11 @@ pub struct Sheet {
     pub coupled: Vec<(String, Vec<(String, f64)>)>,
 }
 
-/// Largest magnitude of a sheet value in its own unit: beyond any robot, and far from
-/// overflow when converted to other units (found by fuzzing the URDF path: a finite 1e306 m
-/// became infinite in millimetres).
-const MAX_MAGNITUDE: f64 = 1e9;
+/// Largest magnitude of a sheet value, in its own unit: an overflow guard (found by fuzzing the
+/// URDF path: a finite 1e306 m became infinite in millimetres). Far beyond anything `extract`
+/// writes (an ill-conditioned common normal of URDF axes within 1e9 m stays below 1e25 m, 1e28
+/// mm), and far from overflow in any unit conversion or forward kinematics.
+const MAX_MAGNITUDE: f64 = 1e30;
 
 /// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
 const SUSPICIOUS_METRES: f64 = 20.0;
@@ -365,7 +366,7 @@ impl SheetDoc {
                 }
                 if v.abs() > MAX_MAGNITUDE {
                     bail!(
-                        "{origin}: joint '{}': {field}: expected a magnitude of at most 1e9, found {v:e}",
+                        "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30, found {v:e}",
                         j.name
                     );
                 }
@@ -417,7 +418,7 @@ impl SheetDoc {
                         || m.offset.abs() > MAX_MAGNITUDE
                     {
                         bail!(
-                            "{origin}: joint '{}': mimic multiplier and offset must be finite, of magnitude at most 1e9",
+                            "{origin}: joint '{}': mimic multiplier and offset must be finite, of magnitude at most 1e30",
                             j.name
                         );
                     }
@@ -448,7 +449,7 @@ impl SheetDoc {
                         bail!("{origin}: {what}: xyz and rpy must be finite numbers");
                     }
                     if let Some(v) = p.xyz.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
-                        bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e9, found {v:e}");
+                        bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30, found {v:e}");
                     }
                     Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
                 }
@@ -630,7 +631,7 @@ mod tests {
         .unwrap_err();
         assert!(
             e.to_string()
-                .contains("joint 'a': d: expected a magnitude of at most 1e9, found 1e306"),
+                .contains("joint 'a': d: expected a magnitude of at most 1e30, found 1e306"),
             "{e}"
         );
     }
