@@ -634,6 +634,13 @@ mod tests {
                 .contains("joint 'a': d: expected a magnitude of at most 1e30, found 1e306"),
             "{e}"
         );
+        // Found by fuzzing: extract writes ill-conditioned rows kilometres long, and they
+        // must read back (here 7.9e9 mm, from a mutated KUKA URDF).
+        assert!(Sheet::parse(
+            "convention: standard\nlength_unit: mm\nangle_unit: deg\njoints:\n  - {name: a, type: revolute, a: 7.948966e9, alpha: 0, d: 0, theta: 0}\n",
+            "s.yaml",
+        )
+        .is_ok());
     }
 
     #[test]
