@@ -17,8 +17,21 @@ use crate::sheet::Sheet;
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Columns of the canonical CSV that are not joints.
-pub const RESERVED_COLUMNS: [&str; 10] = [
-    "x", "y", "z", "target", "config", "sigma", "sx", "sy", "sz", "set",
+pub const RESERVED_COLUMNS: [&str; 14] = [
+    "x",
+    "y",
+    "z",
+    "target",
+    "config",
+    "sigma",
+    "sx",
+    "sy",
+    "sz",
+    "set",
+    "socket",
+    "partner",
+    "distance",
+    "distance_sigma",
 ];
 
 /// A robot model given with `--model`.

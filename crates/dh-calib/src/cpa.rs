@@ -1538,6 +1538,7 @@ mod tests {
                     config: None,
                     split: crate::data::Split::Calibration,
                     line: i + 1,
+                    socket: None,
                 })
                 .collect(),
         }

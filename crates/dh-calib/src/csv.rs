@@ -22,7 +22,12 @@
 //! - optional `sigma` (isotropic) or `sx`, `sy`, `sz` (per axis): the point's standard deviation
 //!   in the length unit (an empty cell means unknown);
 //! - optional `set`: `train`/`calibration` or `test`/`validation` (an empty cell or no column
-//!   means calibration).
+//!   means calibration);
+//! - optional `socket`: a contact sample (see [`crate::socket`]): the target sat in the unknown
+//!   fixed point of this name, and the row's `x`, `y`, `z` cells are empty (the columns may be
+//!   absent when every row is a contact); with it, optional `partner`, `distance` and
+//!   `distance_sigma`: another socket at a known centre-to-centre distance from this one and
+//!   its standard deviation, in the length unit (both needed when `partner` is given).
 //!
 //! Other columns are ignored. Cells may be double-quoted (`""` inside quotes is one quote).
 //! Column names and cells are trimmed of surrounding spaces.
@@ -33,7 +38,7 @@ use std::str::FromStr;
 use nalgebra::Vector3;
 use thiserror::Error;
 
-use crate::data::{Measurements, Sample, Split};
+use crate::data::{Measurements, Sample, Socket, SocketDistance, Split};
 
 /// Name of the single target of a file without a `target` column.
 pub const DEFAULT_TARGET: &str = "tip";
@@ -430,7 +435,10 @@ pub(crate) fn number(text: &str, line: usize, column: &str) -> Result<f64, DataE
 /// Column indices of the canonical header.
 struct Columns {
     joints: Vec<usize>,
-    xyz: [usize; 3],
+    /// Absent only when there is a `socket` column.
+    xyz: Option<[usize; 3]>,
+    socket: Option<usize>,
+    partner: Option<[usize; 3]>,
     target: Option<usize>,
     config: Option<usize>,
     sigma: Sigma,
@@ -468,14 +476,36 @@ fn header_columns(header: &Record, joint_names: &[String]) -> Result<Columns, Da
         });
     }
     let joints = joint_names.iter().filter_map(|j| find(j)).collect();
-    let mut xyz = [0; 3];
-    for (slot, column) in xyz.iter_mut().zip(["x", "y", "z"]) {
-        *slot = find(column).ok_or_else(|| DataError::MissingCoordinate {
-            line,
-            column,
-            found: names.clone(),
-        })?;
-    }
+    let socket = find("socket");
+    // A file of contacts only may leave out the point columns.
+    let any_xyz = ["x", "y", "z"].iter().any(|c| find(c).is_some());
+    let xyz = if socket.is_none() || any_xyz {
+        let mut xyz = [0; 3];
+        for (slot, column) in xyz.iter_mut().zip(["x", "y", "z"]) {
+            *slot = find(column).ok_or_else(|| DataError::MissingCoordinate {
+                line,
+                column,
+                found: names.clone(),
+            })?;
+        }
+        Some(xyz)
+    } else {
+        None
+    };
+    let partner = match (socket, find("partner")) {
+        (Some(_), Some(p)) => {
+            let mut cols = [p, 0, 0];
+            for (slot, column) in cols[1..].iter_mut().zip(["distance", "distance_sigma"]) {
+                *slot = find(column).ok_or_else(|| DataError::MissingCoordinate {
+                    line,
+                    column,
+                    found: names.clone(),
+                })?;
+            }
+            Some(cols)
+        }
+        _ => None,
+    };
     let per_axis = [find("sx"), find("sy"), find("sz")];
     let sigma = match (find("sigma"), per_axis) {
         (None, [None, None, None]) => Sigma::None,
@@ -509,6 +539,8 @@ fn header_columns(header: &Record, joint_names: &[String]) -> Result<Columns, Da
     Ok(Columns {
         joints,
         xyz,
+        socket,
+        partner,
         target: find("target"),
         config: find("config"),
         sigma,
@@ -606,8 +638,60 @@ pub fn parse_measurements(
             });
         }
 
+        let socket = match cols.socket.map(cell).filter(|c| !c.is_empty()) {
+            None => None,
+            Some(socket) => {
+                let partner = match cols.partner {
+                    Some([p, d, ds]) if !cell(p).is_empty() => {
+                        let distance = length(number(cell(d), line, name(d))?);
+                        let sigma = length(number(cell(ds), line, name(ds))?);
+                        if !(distance > 0.0 && sigma > 0.0) {
+                            return Err(DataError::Format {
+                                line,
+                                expected: "a distance and its standard deviation > 0".into(),
+                                found: format!("{} and {}", cell(d), cell(ds)),
+                            });
+                        }
+                        Some(SocketDistance {
+                            socket: cell(p).to_string(),
+                            distance,
+                            sigma,
+                        })
+                    }
+                    _ => None,
+                };
+                Some(Socket {
+                    name: socket.to_string(),
+                    partner,
+                })
+            }
+        };
         let mut point = Vector3::zeros();
-        for (k, &col) in cols.xyz.iter().enumerate() {
+        let xyz_cols = match (cols.xyz, &socket) {
+            (Some(c), None) => c.to_vec(),
+            (Some(c), Some(_)) => {
+                if let Some(&col) = c.iter().find(|&&col| !cell(col).is_empty()) {
+                    return Err(DataError::Format {
+                        line,
+                        expected: format!(
+                            "an empty '{}' in a contact row (socket given)",
+                            name(col)
+                        ),
+                        found: format!("'{}'", cell(col)),
+                    });
+                }
+                Vec::new()
+            }
+            (None, None) => {
+                return Err(DataError::Format {
+                    line,
+                    expected: "a socket name (the file has no x, y, z columns)".into(),
+                    found: "an empty 'socket' cell".into(),
+                })
+            }
+            (None, Some(_)) => Vec::new(),
+        };
+        for (k, &col) in xyz_cols.iter().enumerate() {
             let value = number(cell(col), line, name(col))?;
             if opts.length_unit == LengthUnit::Metre && value.abs() > MAX_PLAUSIBLE_METRES {
                 return Err(DataError::SuspiciousUnit {
@@ -688,6 +772,7 @@ pub fn parse_measurements(
             config,
             split,
             line,
+            socket,
         });
     }
     Ok(m)
@@ -708,7 +793,8 @@ fn parse_split(text: &str) -> Option<Split> {
 ///
 /// Columns: the joints, `x,y,z`, `target`; `config` when any sample has one; `sigma` when every
 /// known standard deviation is isotropic, else `sx,sy,sz`; `set` when any sample is for
-/// validation. Targets are written by name, so a target that no sample uses is not kept, and the
+/// validation; `socket` when any sample is a contact, with `partner,distance,distance_sigma`
+/// when any socket has a partner (contact rows leave `x,y,z` empty). Targets are written by name, so a target that no sample uses is not kept, and the
 /// targets come back numbered in order of first use.
 pub fn write_measurements(m: &Measurements) -> String {
     let any_config = m.samples.iter().any(|s| s.config.is_some());
@@ -716,6 +802,11 @@ pub fn write_measurements(m: &Measurements) -> String {
     let any_sigma = !sigmas.is_empty();
     let isotropic = sigmas.iter().all(|s| s.x == s.y && s.y == s.z);
     let any_validation = m.samples.iter().any(|s| s.split == Split::Validation);
+    let any_socket = m.samples.iter().any(|s| s.socket.is_some());
+    let any_partner = m
+        .samples
+        .iter()
+        .any(|s| s.socket.as_ref().is_some_and(|c| c.partner.is_some()));
 
     let mut out = String::from(
         "# urdf-dh measurements: joints in rad (m for prismatic), x,y,z in m in the device frame\n",
@@ -735,12 +826,21 @@ pub fn write_measurements(m: &Measurements) -> String {
     if any_validation {
         header.push("set".into());
     }
+    if any_socket {
+        header.push("socket".into());
+    }
+    if any_partner {
+        header.extend(["partner", "distance", "distance_sigma"].map(String::from));
+    }
     out.push_str(&header.join(","));
     out.push('\n');
 
     for s in &m.samples {
         let mut cells: Vec<String> = s.q.iter().map(|v| format!("{v:?}")).collect();
-        cells.extend(s.point.iter().map(|v| format!("{v:?}")));
+        match s.socket {
+            Some(_) => cells.extend([String::new(), String::new(), String::new()]),
+            None => cells.extend(s.point.iter().map(|v| format!("{v:?}"))),
+        }
         let target = m
             .targets
             .get(s.target)
@@ -765,6 +865,24 @@ pub fn write_measurements(m: &Measurements) -> String {
                 }
                 .into(),
             );
+        }
+        if any_socket {
+            cells.push(
+                s.socket
+                    .as_ref()
+                    .map(|c| quote(&c.name))
+                    .unwrap_or_default(),
+            );
+        }
+        if any_partner {
+            match s.socket.as_ref().and_then(|c| c.partner.as_ref()) {
+                Some(p) => cells.extend([
+                    quote(&p.socket),
+                    format!("{:?}", p.distance),
+                    format!("{:?}", p.sigma),
+                ]),
+                None => cells.extend([String::new(), String::new(), String::new()]),
+            }
         }
         out.push_str(&cells.join(","));
         out.push('\n');
@@ -960,6 +1078,7 @@ j1, j2 ,x,y,z,target,config,sigma,set
             config: config.map(String::from),
             split,
             line: 0,
+            socket: None,
         };
         let m = Measurements {
             joint_names: names(&["joint 1", "a,b"]),

@@ -31,6 +31,30 @@ pub struct Sample {
     pub split: Split,
     /// 1-based line in the source file (0 when generated).
     pub line: usize,
+    /// `Some` for a contact sample (see [`crate::socket`]): the target sat in this unknown
+    /// fixed point, `point` is not a measurement and is ignored.
+    pub socket: Option<Socket>,
+}
+
+/// An unknown fixed point that a target was placed in (a ball in a socket): every sample naming
+/// it puts the target at the same place, wherever that is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Socket {
+    /// The point's name; samples with the same name touch the same point.
+    pub name: String,
+    /// Another socket at a known distance from this one (the scale of the set), when known.
+    pub partner: Option<SocketDistance>,
+}
+
+/// A known distance between two sockets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SocketDistance {
+    /// The other socket's name.
+    pub socket: String,
+    /// Centre-to-centre distance (metres).
+    pub distance: f64,
+    /// Its standard deviation (metres).
+    pub sigma: f64,
 }
 
 /// A measurement set.

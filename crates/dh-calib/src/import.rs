@@ -11,6 +11,7 @@
 //! | [`Layout::Dlr`] | `measurements.csv` | `torso_1..3`, `right_1..7`, `left_1..7`, `head_1..2` | `right`, `left` | 2 per record |
 //! | [`Layout::Liaowu`] | `CaliJointAngles.csv`, `CaliPosition.csv`, test files | `joint_1..joint_6` | `point1..3`, `test1`, `test2` | 1 per position row |
 //! | [`Layout::Hilti`] | one of the `*.yaml` stationing files | from the file | `prism` | 1 per waypoint |
+//! | [`Layout::Mukca`] | `hole_0.csv`, `hole_1.csv` (or `<placement>/hole_*.csv`) | `joint_1..joint_n` | `ball` | 1 contact per row |
 //!
 //! Joint names must match the model's joint names when the set is fitted; the robots' names are
 //! `joint_1..joint_n` unless the dataset names its joints itself (Hilti). Each layout's own module
@@ -27,6 +28,7 @@ pub mod dlr;
 pub mod hilti;
 pub mod innopolis;
 pub mod liaowu;
+pub mod mukca;
 mod table;
 
 /// A published dataset's file layout.
@@ -47,6 +49,9 @@ pub enum Layout {
     /// Hilti construction robot (lifting column + Doosan arm) under a total station: see
     /// [`hilti`].
     Hilti,
+    /// Ball-in-socket contacts of a Panda, iiwa or Gen3 lite (MUKCa, TU Delft), no measuring
+    /// device: see [`mukca`].
+    Mukca,
 }
 
 /// One file a layout reads.
@@ -58,7 +63,8 @@ pub struct FileSpec {
     pub required: bool,
 }
 
-/// The text of one file of a dataset, under its file name (no directory).
+/// The text of one file of a dataset, under its file name (no directory; [`Layout::Mukca`]
+/// takes `<placement>/<file>` to tell placements apart).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Source<'a> {
     /// File name, as in [`FileSpec::name`].
@@ -69,12 +75,13 @@ pub struct Source<'a> {
 
 impl Layout {
     /// Every layout.
-    pub const ALL: [Layout; 5] = [
+    pub const ALL: [Layout; 6] = [
         Layout::Innopolis,
         Layout::Boby,
         Layout::Dlr,
         Layout::Liaowu,
         Layout::Hilti,
+        Layout::Mukca,
     ];
 
     /// The layout's name on the command line.
@@ -85,6 +92,7 @@ impl Layout {
             Layout::Dlr => "dlr",
             Layout::Liaowu => "liaowu",
             Layout::Hilti => "hilti",
+            Layout::Mukca => "mukca",
         }
     }
 
@@ -115,17 +123,20 @@ impl Layout {
             opt(liaowu::TEST_POSITIONS[1]),
         ];
         const HILTI: &[FileSpec] = &[req("*.yaml")];
+        const MUKCA: &[FileSpec] = &[req(mukca::HOLE_0), req(mukca::HOLE_1)];
         match self {
             Layout::Innopolis => INNOPOLIS,
             Layout::Boby => BOBY,
             Layout::Dlr => DLR,
             Layout::Liaowu => LIAOWU,
             Layout::Hilti => HILTI,
+            Layout::Mukca => MUKCA,
         }
     }
 
-    /// The layout whose required files are all among `names` (file names, no directory), the
-    /// first in [`Layout::ALL`] order; `None` when no layout fits.
+    /// The layout whose required files are all among `names` (file names; a name
+    /// `<directory>/<file>` counts as `<file>`), the first in [`Layout::ALL`] order; `None`
+    /// when no layout fits.
     pub fn detect(names: &[&str]) -> Option<Layout> {
         Layout::ALL.into_iter().find(|layout| {
             layout
@@ -134,7 +145,9 @@ impl Layout {
                 .filter(|f| f.required)
                 .all(|f| match f.name.strip_prefix('*') {
                     Some(ext) => names.iter().any(|n| n.ends_with(ext)),
-                    None => names.contains(&f.name),
+                    None => names
+                        .iter()
+                        .any(|n| n.rsplit('/').next().is_some_and(|base| base == f.name)),
                 })
         })
     }
@@ -176,6 +189,7 @@ pub fn import(layout: Layout, sources: &[Source<'_>]) -> Result<Measurements, Da
         Layout::Dlr => files.single(dlr::parse),
         Layout::Hilti => files.single(hilti::parse),
         Layout::Liaowu => liaowu::parse(&files),
+        Layout::Mukca => mukca::parse(sources),
     }
 }
 
@@ -254,7 +268,7 @@ mod tests {
         }
         assert_eq!(
             "fanuc".parse::<Layout>().unwrap_err(),
-            "expected one of innopolis, boby, dlr, liaowu, hilti, found 'fanuc'"
+            "expected one of innopolis, boby, dlr, liaowu, hilti, mukca, found 'fanuc'"
         );
     }
 
@@ -270,6 +284,10 @@ mod tests {
         );
         assert_eq!(Layout::detect(&["flat.yaml"]), Some(Layout::Hilti));
         assert_eq!(Layout::detect(&["CaliPosition.csv"]), None);
+        assert_eq!(
+            Layout::detect(&["front/hole_0.csv", "front/hole_1.csv", "SOURCE.md"]),
+            Some(Layout::Mukca)
+        );
     }
 
     #[test]

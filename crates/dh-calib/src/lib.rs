@@ -22,6 +22,7 @@ pub mod gravity;
 pub mod import;
 pub mod model;
 pub mod simulate;
+pub mod socket;
 mod stats;
 pub mod tree;
 

@@ -280,6 +280,7 @@ pub fn simulate(
                     config: Some(config.clone()),
                     split,
                     line: 0,
+                    socket: None,
                 });
             }
         }

@@ -76,6 +76,7 @@ impl Rig {
                     config: Some(i.to_string()),
                     split: Split::Calibration,
                     line: 0,
+                    socket: None,
                 });
             }
         }

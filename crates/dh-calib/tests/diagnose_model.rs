@@ -283,6 +283,7 @@ fn simulate_tree(
                     Split::Validation
                 },
                 line: 0,
+                socket: None,
             });
         }
     }

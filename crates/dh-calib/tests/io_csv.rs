@@ -62,6 +62,7 @@ fn sample(joints: usize, targets: usize) -> impl Strategy<Value = Sample> {
             config,
             split,
             line: 0,
+            socket: None,
         })
 }
 

@@ -58,6 +58,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 config: Some((index + 1).to_string()),
                 split: Split::Calibration,
                 line: row.line,
+                socket: None,
             });
         }
     }

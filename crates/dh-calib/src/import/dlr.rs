@@ -100,6 +100,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 config: Some(index.clone()),
                 split: Split::Calibration,
                 line,
+                socket: None,
             });
         }
     }

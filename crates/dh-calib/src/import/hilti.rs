@@ -119,6 +119,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                         config: Some(format!("h{height}/s{space}/{id}")),
                         split,
                         line: 0,
+                        socket: None,
                     });
                 }
             }

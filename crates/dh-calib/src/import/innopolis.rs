@@ -92,6 +92,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 config: Some(config.clone()),
                 split: Split::Calibration,
                 line,
+                socket: None,
             });
         }
     }

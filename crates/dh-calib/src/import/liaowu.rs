@@ -126,6 +126,7 @@ fn sample(q: &Row, p: &Row, target: usize, config: String, split: Split) -> Samp
         config: Some(config),
         split,
         line: p.line,
+        socket: None,
     }
 }
 

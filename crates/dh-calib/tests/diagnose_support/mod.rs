@@ -200,6 +200,7 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
                 Split::Validation
             },
             line: 0,
+            socket: None,
         });
     }
     let floor = floor(&m, &x, &poses, &noises, 150);
