@@ -127,6 +127,26 @@ impl AngleUnit {
     }
 }
 
+/// A bound for printing: `x` rounded *up* to two significant digits, so that the printed
+/// figure is still a bound and does not carry the last bits of floating-point rounding.
+pub fn bound_for_print(x: f64) -> f64 {
+    if !x.is_finite() || x <= 0.0 {
+        return x;
+    }
+    let text = format!("{x:.1e}");
+    let shown: f64 = text.parse().unwrap_or(x);
+    if shown >= x {
+        return shown;
+    }
+    // One unit up in the second digit: 1.2e-13 -> 1.3e-13, 9.9e-13 -> 1.0e-12.
+    let exponent = x.log10().floor();
+    let step = 10f64.powf(exponent - 1.0);
+    match format!("{:.1e}", shown + step).parse() {
+        Ok(up) if up >= x => up,
+        _ => x,
+    }
+}
+
 /// `x` rounded to `decimals` decimal places (through decimal text, so the result is the double
 /// nearest the rounded decimal and prints in its shortest form).
 pub fn round_decimals(x: f64, decimals: usize) -> f64 {
@@ -134,4 +154,22 @@ pub fn round_decimals(x: f64, decimals: usize) -> f64 {
         return x;
     }
     format!("{x:.decimals$}").parse().unwrap_or(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bound_for_print;
+
+    #[test]
+    fn bounds_round_up_to_two_digits() {
+        assert_eq!(bound_for_print(1.0159893229154544e-13), 1.1e-13);
+        assert_eq!(bound_for_print(1.0182097689647047e-13), 1.1e-13);
+        assert_eq!(bound_for_print(9.96e-13), 1.0e-12);
+        assert_eq!(bound_for_print(9.94e-13), 1.0e-12);
+        assert_eq!(bound_for_print(2.5e-6), 2.5e-6);
+        assert_eq!(bound_for_print(0.0), 0.0);
+        for x in [3.3333e-9, 7.77e-14, 1.000001e-5, 4.4e-300] {
+            assert!(bound_for_print(x) >= x, "{x}");
+        }
+    }
 }

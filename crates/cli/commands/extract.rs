@@ -112,8 +112,8 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
         seed: args.seed,
         max_position_error: deviation.max_position_error,
         max_orientation_error: deviation.max_orientation_error,
-        position_bound: extraction.bound.position,
-        orientation_bound: extraction.bound.orientation,
+        position_bound: crate::units::bound_for_print(extraction.bound.position),
+        orientation_bound: crate::units::bound_for_print(extraction.bound.orientation),
         passed,
     });
     Ok(Extracted {

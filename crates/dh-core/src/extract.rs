@@ -405,8 +405,9 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
                 Relation::Coincident { .. } => (0.0, 0.0),
                 _ => {
                     let radial = foot.xy().norm();
-                    let (x, a) = orient(Vector3::new(foot.x, foot.y, 0.0) / radial, radial, tol);
-                    (x.y.atan2(x.x), a)
+                    let (_, theta, a) =
+                        orient(Vector3::new(foot.x, foot.y, 0.0) / radial, radial, tol);
+                    (theta, a)
                 }
             };
             let origin = Vector3::new(a * theta.cos(), a * theta.sin(), 0.0);
@@ -426,18 +427,20 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
                 .unwrap_or((Vector3::zeros(), next.point()));
             let s = (u.x * u.x + u.y * u.y).sqrt();
             let n = Vector3::new(-u.y / s, u.x / s, 0.0);
-            let (x, a, snap) = if geometry.relation == Relation::Skew {
-                let (x, a) = orient(n, (f2 - f1).dot(&n), tol);
-                (x, a, None)
+            let (x, theta, a, snap) = if geometry.relation == Relation::Skew {
+                let (x, theta, a) = orient(n, (f2 - f1).dot(&n), tol);
+                (x, theta, a, None)
             } else {
-                let (x, _) = orient(n, 0.0, tol);
-                (x, 0.0, Some((0.0, geometry.distance)))
+                let (x, theta, _) = orient(n, 0.0, tol);
+                (x, theta, 0.0, Some((0.0, geometry.distance)))
             };
-            // eq. (24): alpha = atan2((z_i × z_{i+1}) · x_{i+1}, z_i · z_{i+1}).
-            let alpha = (-u.y * x.x + u.x * x.y).atan2(u.z);
+            // eq. (24): alpha = atan2((z_i × z_{i+1}) · x_{i+1}, z_i · z_{i+1}). With x_{i+1} the
+            // unit common normal, |(z_i × z_{i+1}) · x_{i+1}| = sin(angle), so alpha is the
+            // pair's angle (from `classify`, in (0, π)) with the sign of that triple product.
+            let alpha = geometry.angle.copysign(-u.y * x.x + u.x * x.y);
             Step {
                 // eq. (22) with x_i = (1, 0, 0) in the current frame.
-                theta: x.y.atan2(x.x),
+                theta,
                 // eq. (21): the foot on the current axis.
                 d: f1.z,
                 a,
@@ -485,8 +488,8 @@ fn last_step(tip: &Isometry3<f64>, tol: Tolerance) -> Step {
 /// link length `a` measured along it, so that `theta = atan2(x.y, x.x)` lies within 90° of the
 /// current x axis: the table then reads like a vendor sheet (zero offsets where the zero pose
 /// allows, a negative `a` rather than a 180° offset). At exactly ±90° (within the angular
-/// tolerance) `a ≥ 0` wins, and for `a = 0` the +90° side.
-fn orient(x: Vector3<f64>, a: f64, tol: Tolerance) -> (Vector3<f64>, f64) {
+/// tolerance) `a ≥ 0` wins, and for `a = 0` the +90° side. Returns `(x, theta, a)`.
+fn orient(x: Vector3<f64>, a: f64, tol: Tolerance) -> (Vector3<f64>, f64, f64) {
     let theta = x.y.atan2(x.x);
     let boundary = (theta.abs() - FRAC_PI_2).abs() <= tol.angular;
     let flip = if boundary {
@@ -495,9 +498,11 @@ fn orient(x: Vector3<f64>, a: f64, tol: Tolerance) -> (Vector3<f64>, f64) {
         theta.abs() > FRAC_PI_2
     };
     if flip {
-        (-x, -a)
+        // atan2 of the reversed vector, without a second atan2: theta ∓ π lands in (−π, π].
+        let flipped = if theta > 0.0 { theta - PI } else { theta + PI };
+        (-x, flipped, -a)
     } else {
-        (x, a)
+        (x, theta, a)
     }
 }
 

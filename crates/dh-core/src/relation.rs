@@ -58,7 +58,9 @@ pub struct PairGeometry {
 /// parallel from not, the dual part `−d sin(beta)` tells intersecting from skew. Angles are
 /// compared with the angular tolerance and lengths with the linear one, never squared norms.
 pub fn classify(l1: &Line, l2: &Line, tol: Tolerance) -> PairGeometry {
-    let angle = l1.angle_to(l2);
+    // sin and cos of the angle between the directions, and the angle itself (one atan2).
+    let sin = l1.direction().cross(&l2.direction()).norm();
+    let angle = sin.atan2(l1.direction().dot(&l2.direction()));
     let from_parallel = angle.min(std::f64::consts::PI - angle);
     let anti = angle > std::f64::consts::FRAC_PI_2;
     if from_parallel <= tol.angular {
@@ -77,7 +79,7 @@ pub fn classify(l1: &Line, l2: &Line, tol: Tolerance) -> PairGeometry {
         };
     }
     let dual = l1.dual_dot(l2);
-    let distance = (dual.dual / angle.sin()).abs();
+    let distance = (dual.dual / sin).abs();
     if distance <= tol.linear {
         PairGeometry {
             relation: Relation::Intersecting,
