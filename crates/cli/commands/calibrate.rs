@@ -317,6 +317,9 @@ pub struct StepDoc {
     pub val_mean: Option<f64>,
     /// Validation max.
     pub val_max: Option<f64>,
+    /// Parameters the step would estimate but held at their start, not identifiable from the
+    /// data (in `nominal`: device or target coordinates), with what absorbs them.
+    pub fixed: Vec<FixedDoc>,
 }
 
 /// One parameter as reported.
@@ -778,6 +781,14 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
                 val_rms: s.val_rms,
                 val_mean: s.val_mean,
                 val_max: s.val_max,
+                fixed: s
+                    .fixed
+                    .iter()
+                    .map(|f| FixedDoc {
+                        name: f.name.clone(),
+                        aliases: f.aliases.clone(),
+                    })
+                    .collect(),
             })
             .collect(),
         rms_before: report.rms_before,
@@ -987,6 +998,19 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             o(st.val_max)
         );
     }
+    // What the nominal step could not estimate (targets seen at one tool orientation only,
+    // aliased with the device frame) stayed at the closed-form start.
+    if let Some(first) = doc.steps.first().filter(|st| !st.fixed.is_empty()) {
+        let _ = writeln!(
+            s,
+            "{} step: held at the start ({}; not identifiable from this data):",
+            first.label,
+            first.fixed.len()
+        );
+        for f in &first.fixed {
+            let _ = writeln!(s, "  {:<28} {}", f.name, absorbed(&f.aliases));
+        }
+    }
     let _ = writeln!(
         s,
         "identifiability: {} free parameters, condition number {:.3e}{}",
@@ -1005,12 +1029,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             doc.fixed.len()
         );
         for f in &doc.fixed {
-            let aliases = if f.aliases.is_empty() {
-                "no effect on the data".to_string()
-            } else {
-                format!("absorbed by {}", f.aliases.join(", "))
-            };
-            let _ = writeln!(s, "  {:<28} {aliases}", f.name);
+            let _ = writeln!(s, "  {:<28} {}", f.name, absorbed(&f.aliases));
         }
     }
     let _ = writeln!(
@@ -1152,6 +1171,15 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         }
     );
     s
+}
+
+/// How a fixed parameter's error shows in the data: the free parameters that absorb it.
+fn absorbed(aliases: &[String]) -> String {
+    if aliases.is_empty() {
+        "no effect on the data".to_string()
+    } else {
+        format!("absorbed by {}", aliases.join(", "))
+    }
 }
 
 /// Writes the calibrated model: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.

@@ -130,6 +130,11 @@ pub struct StepReport {
     pub iterations: usize,
     /// Why the solver stopped.
     pub termination: Termination,
+    /// Parameters this step would estimate but held at their start because the data cannot
+    /// identify them, with the free parameters that absorb them: in `nominal`, device or target
+    /// coordinates (targets seen at one tool orientation only alias with the device frame); in
+    /// later steps the same list as [`Report::fixed`].
+    pub fixed: Vec<FixedParameter>,
 }
 
 /// How validation figures were obtained.
@@ -720,6 +725,7 @@ impl<'a> Session<'a> {
             free: free.len(),
             iterations: outcome.iterations,
             termination: outcome.termination,
+            fixed: Vec::new(),
         };
         Ok(StepResult {
             outcome,
@@ -744,18 +750,35 @@ impl<'a> Session<'a> {
         )
     }
 
-    /// The `nominal` step (device and targets), then the `geometric` one (every identifiable
-    /// geometric parameter). Returns the steps, the geometric fit and its free and fixed
-    /// parameters.
+    /// Names of `fixed` parameters and their aliases, for a report.
+    pub(crate) fn named(&self, fixed: &[fit::Fixed]) -> Vec<FixedParameter> {
+        let params = self.model.parameters();
+        let name = |i: usize| params.get(i).map_or_else(String::new, |p| p.name.clone());
+        fixed
+            .iter()
+            .map(|f| FixedParameter {
+                name: name(f.index),
+                aliases: f.aliases.iter().map(|&a| name(a)).collect(),
+            })
+            .collect()
+    }
+
+    /// The `nominal` step (the identifiable device and target coordinates; the others stay at
+    /// the closed-form start), then the `geometric` one (every identifiable geometric
+    /// parameter). Returns the steps, the geometric fit and its free and fixed parameters.
     pub(crate) fn geometric(&mut self) -> Result<Geometric, CalibError> {
         let mut x = vec![0.0; self.model.parameter_count()];
         let measured = self.measured.clone();
-        let nominal_free = self.model.indices(|b| match b {
+        let nominal_columns = self.model.indices(|b| match b {
             Block::Device => true,
             Block::Target(k) => measured[k],
             _ => false,
         });
-        let step = self.step("nominal", &x, &nominal_free, None)?;
+        // The nominal step steps only where the data can tell device and targets apart (see
+        // `fit::MIN_SENSITIVITY`): what it cannot stays at the closed-form start.
+        let (nominal_free, nominal_fixed) = self.identify(&x, &nominal_columns)?;
+        let mut step = self.step("nominal", &x, &nominal_free, None)?;
+        step.report.fixed = self.named(&nominal_fixed);
         x = step.outcome.x.clone();
         let mut steps = vec![step.report];
         self.model.rebase(&mut x);
@@ -764,7 +787,8 @@ impl<'a> Session<'a> {
         let geometric: Vec<usize> = self.model.indices(|b| !matches!(b, Block::Effect(_)));
         let (free, fixed) = self.identify(&x, &geometric)?;
         self.enough_for(&x, &geometric, free.len())?;
-        let step = self.step("geometric", &x, &free, steps.last())?;
+        let mut step = self.step("geometric", &x, &free, steps.last())?;
+        step.report.fixed = self.named(&fixed);
         steps.push(step.report.clone());
         Ok(Geometric {
             steps,
@@ -1015,7 +1039,8 @@ pub fn calibrate_tree(
         let all: Vec<usize> = (0..session.model.parameter_count()).collect();
         let (free, fixed2) = session.identify(&last.x, &all)?;
         fixed = fixed2;
-        let step = session.step("effects", &last.x, &free, steps.last())?;
+        let mut step = session.step("effects", &last.x, &free, steps.last())?;
+        step.report.fixed = session.named(&fixed);
         last = step.outcome;
         steps.push(step.report);
     }
@@ -1029,7 +1054,9 @@ pub fn calibrate_tree(
 }
 
 /// Identifiability of `columns` at `x`; returns the free parameter indices and the fixed ones
-/// (indices into the model's parameters).
+/// (indices into the model's parameters). A combination is identifiable when its singular value
+/// of the scaled Jacobian is above `rank_tolerance` times the largest and moves the points by at
+/// least [`FitOptions::min_sensitivity`] RMS per unit of scaled parameter.
 pub(crate) fn identify(
     model: &Model,
     cal: &[Observed],
@@ -1045,11 +1072,15 @@ pub(crate) fn identify(
     let f = fit::factor(&problem, x, columns, scales)?;
     let prio_all = model.priorities();
     let prio: Vec<u32> = columns.iter().map(|&c| prio_all[c]).collect();
-    let id = fit::identifiability(
+    // The sensitivity floor is an RMS over points: the factor's singular values are sums in
+    // quadrature over all rows, three per point.
+    let floor = options.fit.min_sensitivity * (f.rows as f64 / 3.0).sqrt();
+    let id = fit::identifiability_above(
         &f.r,
         &vec![1.0; columns.len()],
         &prio,
         options.fit.rank_tolerance,
+        floor,
     )?;
     let free = id.free.iter().map(|&i| columns[i]).collect();
     let fixed = id

@@ -471,8 +471,9 @@ pub fn diagnose_tree(
             }
             rounds.push(round);
             match accepted {
-                Some((e, step, f2, fixed2)) => {
+                Some((e, mut step, f2, fixed2)) => {
                     selected.push(e);
+                    step.report.fixed = session.named(&fixed2);
                     steps.push(step.report);
                     last = step.outcome;
                     held = step.held_out;

@@ -158,7 +158,28 @@ pub struct FitOptions {
     /// Initial damping as a fraction of the largest squared singular value. Default 1e-6
     /// (almost Gauss-Newton: the callers start close to the optimum).
     pub initial_damping: f64,
+    /// Smallest sensitivity of an identifiable combination of parameters, in metres of RMS
+    /// point displacement per metre of scaled parameter (an angle counts as metres at the
+    /// column's scale, the robot's characteristic length). Used by the calibration's
+    /// identifiability test ([`crate::calibrate`]), not by [`solve`]: a singular direction of
+    /// the scaled Jacobian whose singular value is below `min_sensitivity · sqrt(rows / 3)`
+    /// moves the measured points by less than that RMS and is held fixed, however far it is
+    /// from rounding. Default [`MIN_SENSITIVITY`].
+    pub min_sensitivity: f64,
 }
+
+/// Default [`FitOptions::min_sensitivity`]: 1e-3 m/m, a combination that moves the measured
+/// points by less than one micrometre RMS per millimetre of change is not identifiable.
+///
+/// Why not the relative `rank_tolerance` alone: a combination can be far above rounding and
+/// still be left to the noise. Targets measured with one tool orientation only (the poses of a
+/// total station's stationing, all with the same commanded tool attitude) alias with the device
+/// translation up to the joints' few-millidegree orientation differences: their singular values
+/// are 1e-5 of the largest, their standard errors metres with a millimetre of noise, and a fit
+/// that steps along them puts the target metres away, which poses with other tool orientations
+/// then see. A micrometre per millimetre is below what any coordinate measuring device resolves
+/// over a millimetre's change and far above rounding.
+pub const MIN_SENSITIVITY: f64 = 1e-3;
 
 impl Default for FitOptions {
     fn default() -> Self {
@@ -168,6 +189,7 @@ impl Default for FitOptions {
             cost_tolerance: 1e-14,
             step_tolerance: 1e-12,
             initial_damping: 1e-6,
+            min_sensitivity: MIN_SENSITIVITY,
         }
     }
 }
@@ -634,6 +656,25 @@ pub fn identifiability(
     priorities: &[u32],
     rank_tolerance: f64,
 ) -> Result<Identifiability, CalibError> {
+    identifiability_above(jacobian, scales, priorities, rank_tolerance, 0.0)
+}
+
+/// [`identifiability`] with an absolute floor as well: singular values of the scaled Jacobian
+/// at or below `floor` (the scaled Jacobian's unit: metres of residual per metre of scaled
+/// parameter, summed in quadrature over the rows) count as zero too, so that a combination the
+/// data determines only to many times the noise is held fixed and named with its aliases
+/// instead of being estimated. The calibration passes
+/// `FitOptions::min_sensitivity · sqrt(rows / 3)` (see [`MIN_SENSITIVITY`]).
+///
+/// # Errors
+/// As [`identifiability`].
+pub fn identifiability_above(
+    jacobian: &DMatrix<f64>,
+    scales: &[f64],
+    priorities: &[u32],
+    rank_tolerance: f64,
+    floor: f64,
+) -> Result<Identifiability, CalibError> {
     let n = jacobian.ncols();
     for (what, len) in [("scales", scales.len()), ("priorities", priorities.len())] {
         if len != n {
@@ -666,9 +707,14 @@ pub fn identifiability(
     let dec = svd(js.clone(), "identifiability")?;
     let s: Vec<f64> = dec.singular_values.iter().copied().collect();
     let smax = s.first().copied().unwrap_or(0.0);
+    let floor = if floor.is_finite() {
+        floor.max(0.0)
+    } else {
+        0.0
+    };
     let rank = s
         .iter()
-        .filter(|&&v| v > rank_tolerance * smax && v > 0.0)
+        .filter(|&&v| v > rank_tolerance * smax && v > floor && v > 0.0)
         .count();
     let Some(vt) = &dec.v_t else {
         return Err(CalibError::NoConvergence {
