@@ -261,7 +261,7 @@ impl Sheet {
     ///
     /// # Errors
     /// Syntax errors with line and column, unknown or missing keys, non-finite numbers,
-    /// duplicate joint names, a row without joints, limits out of order, a joint that mimics
+    /// duplicate joint names, control characters in a name, a row without joints, limits out of order, a joint that mimics
     /// itself. A mimic naming no row is a warning, not an error: a URDF chain's joint may follow
     /// one on another branch (a gripper's fingers), and `extract` writes that driver's name.
     pub fn parse(text: &str, origin: &str) -> Result<Sheet> {
@@ -347,6 +347,16 @@ impl SheetDoc {
         for j in &self.joints {
             if !seen.insert(j.name.as_str()) {
                 bail!("{origin}: joint '{}' appears twice", j.name);
+            }
+            if let Some((k, c)) = j.name.chars().enumerate().find(|(_, c)| c.is_control()) {
+                // As the URDF reader: such a name corrupts tables, CSV and terminals.
+                bail!(
+                    "{origin}: joint '{}': expected a name without control characters, found \
+                     U+{:04X} at character {}",
+                    j.name.escape_debug(),
+                    u32::from(c),
+                    k + 1
+                );
             }
             for (field, v) in [
                 ("a", j.a),

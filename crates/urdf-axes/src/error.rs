@@ -57,6 +57,25 @@ pub enum UrdfError {
         /// Line of the first definition.
         first_line: Option<usize>,
     },
+    /// A link or joint name holds a control character (C0, DEL or C1): it would corrupt every
+    /// table, CSV and terminal line the name is written to, and YAML cannot carry some of them
+    /// unescaped.
+    #[error(
+        "{kind} '{name}'{}: expected a name without control characters, found {code} at character {position}",
+        at(.line)
+    )]
+    ControlCharacterInName {
+        /// `link` or `joint`.
+        kind: &'static str,
+        /// The name, as Rust debug text (control characters escaped).
+        name: String,
+        /// The character, as `U+XXXX`.
+        code: String,
+        /// Its position in the name (1-based, in characters).
+        position: usize,
+        /// Line of the element.
+        line: Option<usize>,
+    },
     /// Two joints share a name.
     #[error(
         "joint '{joint}'{}: expected unique joint names, found '{joint}' defined again{}",

@@ -159,6 +159,7 @@ impl UrdfModel {
         }
         let mut link_index: HashMap<String, usize> = HashMap::with_capacity(robot.links.len());
         for (i, link) in robot.links.iter().enumerate() {
+            check_name("link", &link.name, line_at(&link_lines, i))?;
             if let Some(&first) = link_index.get(&link.name) {
                 return Err(UrdfError::DuplicateLink {
                     link: link.name.clone(),
@@ -170,6 +171,11 @@ impl UrdfModel {
         }
         let mut joint_index: HashMap<String, usize> = HashMap::with_capacity(robot.joints.len());
         for (k, joint) in robot.joints.iter().enumerate() {
+            check_name(
+                "joint",
+                &joint.name,
+                joint_sources.get(k).and_then(|s| s.line),
+            )?;
             if let Some(&first) = joint_index.get(&joint.name) {
                 return Err(UrdfError::DuplicateJoint {
                     joint: joint.name.clone(),
@@ -458,6 +464,21 @@ impl UrdfModel {
         }
         path.reverse();
         Ok(path)
+    }
+}
+
+/// Refuses a link or joint name holding a control character (see
+/// [`UrdfError::ControlCharacterInName`]).
+fn check_name(kind: &'static str, name: &str, line: Option<usize>) -> Result<(), UrdfError> {
+    match name.chars().enumerate().find(|(_, c)| c.is_control()) {
+        Some((k, c)) => Err(UrdfError::ControlCharacterInName {
+            kind,
+            name: format!("{name:?}").trim_matches('"').to_owned(),
+            code: format!("U+{:04X}", u32::from(c)),
+            position: k + 1,
+            line,
+        }),
+        None => Ok(()),
     }
 }
 
