@@ -875,7 +875,9 @@ const MUKCA_TEST: &[&str] = &["left", "right"];
 
 /// The contacts of `placements` of `robot`, marked `split`.
 fn mukca_load(robot: &str, placements: &[&str], split: Split) -> Result<Measurements, Error> {
-    let dir = shared("mukca_ball_socket_panda_iiwa").join("data").join(robot);
+    let dir = shared("mukca_ball_socket_panda_iiwa")
+        .join("data")
+        .join(robot);
     let mut texts = Vec::new();
     for p in placements {
         for f in ["hole_0.csv", "hole_1.csv"] {
