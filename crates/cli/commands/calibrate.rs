@@ -633,6 +633,15 @@ pub fn calibrate(
     err: &mut dyn Write,
 ) -> Result<Outcome> {
     let inputs = load_inputs(args, err)?;
+    if inputs.data.samples.iter().any(|s| s.socket.is_some()) {
+        return crate::commands::sockets::calibrate_contacts(
+            args,
+            &inputs.table,
+            &inputs.model_name,
+            &inputs.data,
+            out,
+        );
+    }
     let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
     let ctx = EffectContext {
         tree: DhTree::serial(&inputs.table),

@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use dh_calib::csv::write_measurements;
 use dh_calib::data::Split;
-use dh_calib::import::{import as import_layout, Layout, Source};
+use dh_calib::import::{import as import_layout, mukca, Layout, Source};
 
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_text};
@@ -24,14 +24,58 @@ pub struct ImportArgs {
     pub out: Option<String>,
 }
 
+/// The ball-in-socket files of a MUKCa placement directory.
+const PLACEMENT_FILES: [&str; 2] = [mukca::HOLE_0, mukca::HOLE_1];
+
+/// The MUKCa placement files in `dir` (named `<dir name>/<file>`), or in its subdirectories when
+/// it is a robot's directory (named `<subdirectory>/<file>`); empty when it is neither.
+fn placements(dir: &Path) -> Result<Vec<(String, String)>> {
+    let base = |d: &Path| d.file_name().map(|n| n.to_string_lossy().into_owned());
+    let files_of = |d: &Path| -> Result<Vec<(String, String)>> {
+        let mut out = Vec::new();
+        if PLACEMENT_FILES.iter().all(|f| d.join(f).is_file()) {
+            let name = base(d).unwrap_or_else(|| mukca::PLACEMENT.into());
+            for f in PLACEMENT_FILES {
+                let path = d.join(f).to_string_lossy().into_owned();
+                out.push((format!("{name}/{f}"), read_text(&path)?));
+            }
+        }
+        Ok(out)
+    };
+    let own = files_of(dir)?;
+    if !own.is_empty() {
+        return Ok(own);
+    }
+    let mut subdirs: Vec<_> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot read the directory", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    subdirs.sort();
+    let mut out = Vec::new();
+    for d in subdirs {
+        out.extend(files_of(&d)?);
+    }
+    Ok(out)
+}
+
 /// The files named by `args`: directories expanded to their files (sorted), each with its file
 /// name and text. Files that are not UTF-8 text inside a directory are skipped (datasets ship
-/// images and archives beside their data).
+/// images and archives beside their data). A MUKCa placement directory (with `hole_0.csv` and
+/// `hole_1.csv`), or a robot directory of them, gives its placement files named
+/// `<placement>/<file>`.
 fn gather(args: &[String]) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
     for a in args {
         let p = Path::new(a);
-        if p.is_dir() {
+        let mukca = if p.is_dir() {
+            placements(p)?
+        } else {
+            Vec::new()
+        };
+        if !mukca.is_empty() {
+            out.extend(mukca);
+        } else if p.is_dir() {
             let mut entries: Vec<_> = std::fs::read_dir(p)
                 .with_context(|| format!("{a}: cannot read the directory"))?
                 .filter_map(|e| e.ok().map(|e| e.path()))
@@ -135,8 +179,8 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
 /// Command-line arguments of `import`.
 #[derive(Debug, clap::Args)]
 pub struct ImportCli {
-    /// The dataset's layout: innopolis, boby, dlr, liaowu, hilti [default: detected from the
-    /// file names].
+    /// The dataset's layout: innopolis, boby, dlr, liaowu, hilti, mukca [default: detected from
+    /// the file names].
     #[arg(long, value_parser = parse_layout)]
     layout: Option<Layout>,
     /// The dataset's files as published (a directory stands for all its files).

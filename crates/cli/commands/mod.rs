@@ -7,4 +7,5 @@ pub mod cpa;
 pub mod extract;
 pub mod import;
 pub mod simulate;
+pub mod sockets;
 pub mod to_urdf;
