@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use dh_calib::calibrate::{calibrate, CalibrationOptions, NoiseSource, Report, Validation};
 use dh_calib::data::Measurements;
-use dh_calib::fit::CalibError;
+use dh_calib::fit::{CalibError, FitOptions};
 use dh_calib::model::{Block, GearRatio, Model, ModelOptions};
 use dh_calib::simulate::{simulate, Errors, SimulationOptions};
 use dh_core::{Convention, DhTable};
@@ -225,12 +225,23 @@ fn near_parallel_axes_are_better_conditioned_with_hayati() {
         },
     )
     .unwrap();
-    let hayati = calibrate(&table, &data, &CalibrationOptions::default()).unwrap();
+    // The conditioning of the parametrisations themselves: without the sensitivity floor,
+    // which would hold the classic d (see the end).
+    let raw = FitOptions {
+        min_sensitivity: 0.0,
+        ..Default::default()
+    };
+    let hayati_opts = CalibrationOptions {
+        fit: raw,
+        ..Default::default()
+    };
+    let hayati = calibrate(&table, &data, &hayati_opts).unwrap();
     let classic_opts = CalibrationOptions {
         model: ModelOptions {
             hayati_threshold: 0.0,
             ..Default::default()
         },
+        fit: raw,
         ..Default::default()
     };
     let classic = calibrate(&table, &data, &classic_opts).unwrap();
@@ -255,6 +266,25 @@ fn near_parallel_axes_are_better_conditioned_with_hayati() {
         .find(|p| p.name == "j2.d")
         .unwrap();
     assert!(!d2.free || d2.std_error.unwrap() > 1e-3);
+    // With the default floor the classic d's combination, which moves the points by less than
+    // 1 µm per mm, is held: one more parameter fixed, and the rest as well conditioned as
+    // Hayati's.
+    let floored = calibrate(
+        &table,
+        &data,
+        &CalibrationOptions {
+            fit: FitOptions::default(),
+            ..classic_opts
+        },
+    )
+    .unwrap();
+    assert_eq!(floored.fixed.len(), classic.fixed.len() + 1);
+    assert!(
+        floored.condition_number < 2.0 * hayati.condition_number,
+        "floored {} hayati {}",
+        floored.condition_number,
+        hayati.condition_number
+    );
 }
 
 #[test]
