@@ -174,7 +174,10 @@ const CASES: &[Case] = &[
     sheet!("short_pose", "short_pose.yaml"),
     sheet!("mimic_itself", "mimic_itself.yaml"),
     sheet!("alias_bomb", "alias_bomb.yaml"),
-    sheet!("control_character_in_name", "control_character_in_name.yaml"),
+    sheet!(
+        "control_character_in_name",
+        "control_character_in_name.yaml"
+    ),
     sheet!("deep_nesting", "deep_nesting.yaml"),
     sheet!("unclosed_nesting", "unclosed_nesting.yaml"),
     sheet!("missing_file", "no_such_sheet.yaml"),
