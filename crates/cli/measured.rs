@@ -16,23 +16,8 @@ use crate::input::{display_name, read_text};
 use crate::sheet::Sheet;
 use crate::units::{AngleUnit, LengthUnit};
 
-/// Columns of the canonical CSV that are not joints.
-pub const RESERVED_COLUMNS: [&str; 14] = [
-    "x",
-    "y",
-    "z",
-    "target",
-    "config",
-    "sigma",
-    "sx",
-    "sy",
-    "sz",
-    "set",
-    "socket",
-    "partner",
-    "distance",
-    "distance_sigma",
-];
+/// Columns of the canonical CSV that are not joints (the format's own list).
+pub use dh_calib::csv::RESERVED_COLUMNS;
 
 /// A robot model given with `--model`.
 #[derive(Clone, Debug)]

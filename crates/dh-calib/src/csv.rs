@@ -83,6 +83,18 @@ pub enum DataError {
         /// The columns the header has.
         found: Vec<String>,
     },
+    /// A joint of the model has the name of a column the format reserves (`x`, `socket`, ...):
+    /// its column could not be told from that one.
+    #[error(
+        "line {line}: joint '{joint}' has the name of a reserved column ({}); rename the joint in the model",
+        RESERVED_COLUMNS.join(", ")
+    )]
+    ReservedJointName {
+        /// Header line.
+        line: usize,
+        /// The joint.
+        joint: String,
+    },
     /// Two header columns share a name.
     #[error("line {line}: duplicate column '{column}'")]
     DuplicateColumn {
@@ -432,6 +444,24 @@ pub(crate) fn number(text: &str, line: usize, column: &str) -> Result<f64, DataE
     Ok(value)
 }
 
+/// Columns of the canonical CSV that are not joints: a model's joint may not take these names.
+pub const RESERVED_COLUMNS: [&str; 14] = [
+    "x",
+    "y",
+    "z",
+    "target",
+    "config",
+    "sigma",
+    "sx",
+    "sy",
+    "sz",
+    "set",
+    "socket",
+    "partner",
+    "distance",
+    "distance_sigma",
+];
+
 /// Column indices of the canonical header.
 struct Columns {
     joints: Vec<usize>,
@@ -454,6 +484,15 @@ enum Sigma {
 fn header_columns(header: &Record, joint_names: &[String]) -> Result<Columns, DataError> {
     let line = header.line;
     let names = &header.fields;
+    if let Some(joint) = joint_names
+        .iter()
+        .find(|j| RESERVED_COLUMNS.contains(&j.as_str()))
+    {
+        return Err(DataError::ReservedJointName {
+            line,
+            joint: joint.clone(),
+        });
+    }
     for (i, name) in names.iter().enumerate() {
         if names[..i].contains(name) {
             return Err(DataError::DuplicateColumn {
@@ -908,6 +947,22 @@ mod tests {
 
     fn names(n: &[&str]) -> Vec<String> {
         n.iter().map(|s| s.to_string()).collect()
+    }
+
+    /// Fuzzing find: a model joint named `socket` was read from the socket column and the file
+    /// written back had that column twice.
+    #[test]
+    fn a_joint_named_like_a_reserved_column_is_refused() {
+        for joint in RESERVED_COLUMNS {
+            let text = format!("{joint},x,y,z\n0.0,1,2,3\n");
+            let err = parse_measurements(&text, &names(&[joint]), &CsvOptions::default())
+                .expect_err(joint);
+            assert!(
+                matches!(&err, DataError::ReservedJointName { line: 1, joint: j } if j == joint),
+                "{err}"
+            );
+            assert!(err.to_string().contains("rename the joint"), "{err}");
+        }
     }
 
     #[test]
