@@ -833,7 +833,8 @@ fn score(
     })
 }
 
-fn bic(ssr: f64, m: f64, p: f64) -> f64 {
+/// BIC of a least-squares fit: `m ln(SSR/m) + p ln m` (`m` residuals, `p` parameters).
+pub(crate) fn bic(ssr: f64, m: f64, p: f64) -> f64 {
     m * (ssr.max(1e-300) / m).ln() + p * m.ln()
 }
 
@@ -902,7 +903,7 @@ fn judge(
 /// comparisons by ranking methods", Biometrics Bulletin 1(6), 1945). Returns `(z, p)`;
 /// `None` with fewer than 6 non-zero differences. Ranks rather than a t test because a few
 /// poses that an effect fixes dominate the squared errors and make a t statistic erratic.
-fn paired_wilcoxon(before: &[f64], after: &[f64], groups: &[usize]) -> Option<(f64, f64)> {
+pub(crate) fn paired_wilcoxon(before: &[f64], after: &[f64], groups: &[usize]) -> Option<(f64, f64)> {
     if before.len() != after.len() || before.len() != groups.len() || before.is_empty() {
         return None;
     }

@@ -38,7 +38,9 @@
 //!   points;
 //! - `nominal`: the targets and sockets;
 //! - `geometric`: every identifiable DH, base, tool and target parameter with the sockets;
-//! - `effects`: with the given effects, when there are any.
+//! - `effects`: with the given effects, when there are any;
+//! - or, with [`diagnose_sockets`] in automatic mode, one `+<label>` step per effect the rule
+//!   selects (see there).
 //!
 //! # Consistency
 //! [`Consistency`] is the figure MUKCa publishes (its `evaluate_model`): per placement (a pair
@@ -57,8 +59,15 @@ use dh_core::DhTable;
 
 use crate::calibrate::{prepare, CalibrationOptions, FixedParameter, ParameterEstimate, Stats};
 use crate::data::{Measurements, Split};
+use crate::diagnose::{
+    bic, paired_wilcoxon, CandidateReport, CandidateStatus, DiagnoseOptions, EffectSelection,
+    Trial, ALIAS_SINE,
+};
+use crate::effects::{self, EffectContext};
 use crate::fit::{self, CalibError, FitOutcome, Problem, Termination};
-use crate::model::{xyz_rpy, Block, Field, Model, Observation, Observed};
+use crate::gravity::GravityModel;
+use crate::model::{xyz_rpy, Block, Effect, Field, Model, Observation, Observed};
+use crate::stats;
 use crate::tree::DhTree;
 
 /// The contact noise estimate is iterated until it changes by less than this fraction.
@@ -307,6 +316,15 @@ pub struct SocketReport {
     pub constraints: Vec<SocketConstraint>,
     /// The contact noise that weighted the distances in the last step (metres per axis).
     pub sigma_point: f64,
+    /// Labels of the effects estimated in the last step (declared, or selected by
+    /// [`diagnose_sockets`]).
+    pub selected_effects: Vec<String>,
+    /// The candidate table of the first round of [`diagnose_sockets`] (empty otherwise), best
+    /// score first. `val_rms` is the held-out RMS distance to the socket means after the full
+    /// refit, for the candidates that were refitted (metres).
+    pub candidates: Vec<CandidateReport>,
+    /// Every full refit of a candidate, in order, with the tests of the rule.
+    pub trials: Vec<Trial>,
 }
 
 /// Contacts of one split with their own socket numbering.
@@ -575,17 +593,60 @@ impl Run<'_> {
         Ok((outcome, report))
     }
 
-    /// Distances of the validation contacts to their socket's mean.
-    fn held_out(&self, x: &[f64]) -> Option<Stats> {
+    /// Distances of the validation contacts to their socket's mean (metres).
+    fn held_out_distances(&self, x: &[f64]) -> Vec<f64> {
         let v = &self.val;
         let points = positions(&self.model, x, &v.contacts);
         let m = means(&points, &v.contacts, v.names.len());
-        let d: Vec<f64> = points
+        points
             .iter()
             .zip(&v.contacts)
             .map(|(p, c)| (p - m[c.socket].0).norm())
-            .collect();
-        Stats::of(&d)
+            .collect()
+    }
+
+    /// Their statistics, `None` without validation contacts.
+    fn held_out(&self, x: &[f64]) -> Option<Stats> {
+        Stats::of(&self.held_out_distances(x))
+    }
+
+    /// Scores the model's effect `e` at `x` with `free` estimated (see [`diagnose_sockets`]):
+    /// the QR factor of the scaled columns `[free, effect]` gives the first-order SSR reduction
+    /// (the effect's part of `Qᵀr`, m²) and the independence (smallest singular value of the
+    /// effect's block of `R` over its largest column norm).
+    fn score(&self, x: &[f64], free: &[usize], e: usize) -> Result<CandidateReport, CalibError> {
+        let (label, cols): (String, Vec<usize>) = match self.model.effects().get(e) {
+            Some((eff, r)) => (eff.label(), r.clone().collect()),
+            None => (String::new(), Vec::new()),
+        };
+        let p = free.len();
+        let k = cols.len();
+        let mut columns = free.to_vec();
+        columns.extend(&cols);
+        let f = fit::factor(&self.problem(self.sigma_point), x, &columns, &self.scales)?;
+        let big = (p..p + k)
+            .map(|j| f.r.column(j).norm())
+            .fold(0.0, f64::max);
+        let block = f.r.view((p, p), (k, k)).clone_owned();
+        let smin = block.singular_values().min();
+        let inert = k == 0 || big <= 0.0;
+        let independence = if inert { 0.0 } else { smin / big };
+        let aliased = !inert && independence < ALIAS_SINE;
+        let reduction: f64 = (p..p + k).map(|i| f.qtr[i] * f.qtr[i]).sum();
+        Ok(CandidateReport {
+            label,
+            parameters: k,
+            score: if aliased || inert { 0.0 } else { reduction },
+            independence,
+            val_rms: None,
+            status: if inert {
+                CandidateStatus::Inert
+            } else if aliased {
+                CandidateStatus::Aliased
+            } else {
+                CandidateStatus::NotSelected
+            },
+        })
     }
 
     fn consistency(&self, label: &str, x: &[f64]) -> Option<ConsistencyStep> {
@@ -650,7 +711,8 @@ impl Run<'_> {
 
 /// Calibrates `tree` from the contact samples of `data` (see the module docs): the samples for
 /// calibration are fitted, those marked for validation (other placements, whose sockets are
-/// never fitted) give the held-out figures. The device guess and the folds of `options` are not
+/// never fitted) give the held-out figures. The effects of `options` are estimated in one
+/// `effects` step after the geometric one. The device guess and the folds of `options` are not
 /// used (there is no device, and validation is by split only).
 ///
 /// # Errors
@@ -662,6 +724,101 @@ pub fn calibrate_sockets(
     tree: &DhTree,
     data: &Measurements,
     options: &CalibrationOptions,
+) -> Result<SocketReport, CalibError> {
+    run_sockets(tree, data, options, None)
+}
+
+/// [`calibrate_sockets`] with the effects chosen as [`crate::diagnose`] chooses them for
+/// measured points, adapted to contacts (`diag.effects`: `None` stops after the geometric step,
+/// `Labels` are all estimated in one `effects` step, `Auto` selects; `options.effects` is
+/// ignored).
+///
+/// # Automatic selection
+/// 1. **Anything left?** With a known contact noise (`options.sigma`, metres per axis) the
+///    chi-square `SSR / σ²` of the geometric step on `m − p` degrees of freedom (`m` residuals:
+///    three per contact and one per distance, `p` free parameters, sockets included); a test
+///    that finds nothing left at `diag.alpha` selects nothing. Without it the noise is
+///    estimated from the same residuals and there is no test (contacts have no repeated
+///    measured points for a pure error).
+/// 2. **Score**: for every candidate of [`effects::candidates`], the first-order reduction of
+///    the SSR (m²) by its Jacobian columns beyond those of the estimated parameters (sockets
+///    included), from the QR factor of `[J_free C]`: `‖(Qᵀr)_C‖²`; its independence is the
+///    smallest singular value of the `C` block of `R` over the largest column norm of `C`;
+///    below [`ALIAS_SINE`] it is aliased (a scale, when one distance is all that fixes the
+///    scale, is aliased only with the distances' weight) and never selected.
+/// 3. **Rule**: ranked by score minus `k σ̂² ln m`, the [`DiagnoseOptions::trials`] best are
+///    refitted in full in turn; the first that passes (a) F-to-enter at `alpha / K`, (b) a lower
+///    BIC (both with the distances weighted as before the refit) and (c) a one-sided Wilcoxon
+///    signed-rank test at `alpha` of the squared distances of the held-out contacts to their
+///    socket's modelled mean, paired per contact (skipped without held-out contacts), is added
+///    as a step `+<label>`; the loop repeats, up to [`DiagnoseOptions::max_effects`].
+///
+/// # Errors
+/// Those of [`calibrate_sockets`]; [`CalibError::BadOption`] for a bad `alpha`, label or
+/// inertials.
+pub fn diagnose_sockets(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+) -> Result<SocketReport, CalibError> {
+    if !(diag.alpha > 0.0 && diag.alpha < 1.0) {
+        return Err(CalibError::BadOption {
+            what: "alpha".into(),
+            reason: format!("expected a level in (0, 1), found {}", diag.alpha),
+        });
+    }
+    let gravity = match &diag.inertials {
+        Some(i) => Some(Arc::new(GravityModel::new(tree, i, diag.gravity)?)),
+        None => None,
+    };
+    let ctx = EffectContext {
+        tree: tree.clone(),
+        gravity,
+    };
+    let mut plain = options.clone();
+    plain.effects.clear();
+    match &diag.effects {
+        EffectSelection::None => run_sockets(tree, data, &plain, None),
+        EffectSelection::Labels(labels) => {
+            for l in labels {
+                plain.effects.push(effects::parse_label_in(l, &ctx)?);
+            }
+            run_sockets(tree, data, &plain, None)
+        }
+        EffectSelection::Auto => {
+            let probe = Model::new_tree(tree, &[], &options.model)?;
+            let c = effects::candidates(&ctx, &probe.tilt_rows());
+            let auto = Auto {
+                pool: c.effects,
+                skipped: c.skipped,
+                diag,
+            };
+            run_sockets(tree, data, &plain, Some(&auto))
+        }
+    }
+}
+
+/// The candidates of an automatic selection and its options.
+struct Auto<'a> {
+    pool: Vec<Arc<dyn Effect>>,
+    skipped: Vec<String>,
+    diag: &'a DiagnoseOptions,
+}
+
+/// What the automatic selection leaves.
+struct Selection {
+    selected: Vec<usize>,
+    candidates: Vec<CandidateReport>,
+    trials: Vec<Trial>,
+    notes: Vec<String>,
+}
+
+fn run_sockets(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    auto: Option<&Auto<'_>>,
 ) -> Result<SocketReport, CalibError> {
     let prep = prepare(tree, data)?;
     let cal = contacts_of(data, &prep.cal, Split::Calibration)?;
@@ -676,6 +833,10 @@ pub fn calibrate_sockets(
     let targets: Vec<(String, usize)> = data.targets.iter().map(|t| (t.clone(), 0)).collect();
     let mut model = Model::new_tree(tree, &targets, &options.model)?;
     for e in &options.effects {
+        model.add_effect(Arc::clone(e))?;
+    }
+    // The candidates ride along at zero (outside every step's free set) until selected.
+    for e in auto.map_or(&[][..], |a| &a.pool) {
         model.add_effect(Arc::clone(e))?;
     }
     if let Some(t) = &options.target_guesses {
@@ -743,7 +904,24 @@ pub fn calibrate_sockets(
     steps.push(report);
     consistency.extend(run.consistency("geometric", &last.x));
 
-    if !options.effects.is_empty() {
+    let mut selection = None;
+    if let Some(a) = auto {
+        let mut state = Chosen {
+            last,
+            free,
+            fixed,
+            steps,
+            consistency,
+        };
+        selection = Some(select(&mut run, a, &mut state)?);
+        Chosen {
+            last,
+            fixed,
+            steps,
+            consistency,
+            ..
+        } = state;
+    } else if !options.effects.is_empty() {
         let mut all: Vec<usize> = run
             .model
             .indices(|b| !matches!(b, Block::Target(k) if !targets_used[k]));
@@ -773,7 +951,17 @@ pub fn calibrate_sockets(
             }
         })
         .collect();
-    let mut parameters = estimates(&run.model, &x, &last, &targets_nominal);
+    // Candidates never selected are no parameters of the result.
+    let unselected = |b: Block| match (b, &selection) {
+        (Block::Effect(e), Some(sel)) => !sel.selected.contains(&e),
+        _ => false,
+    };
+    let mut parameters: Vec<ParameterEstimate> = estimates(&run.model, &x, &last, &targets_nominal)
+        .into_iter()
+        .zip(run.model.parameters())
+        .filter(|(_, p)| !unselected(p.block))
+        .map(|(e, _)| e)
+        .collect();
     for (s, est) in sockets.iter().enumerate() {
         for (axis, name) in ["x", "y", "z"].iter().enumerate() {
             parameters.push(ParameterEstimate {
@@ -805,11 +993,33 @@ pub fn calibrate_sockets(
     }
     let fixed: Vec<FixedParameter> = fixed
         .iter()
+        .filter(|f| {
+            !run.model
+                .parameters()
+                .get(f.index)
+                .is_some_and(|p| unselected(p.block))
+        })
         .map(|f| FixedParameter {
             name: run.name_of(f.index),
             aliases: f.aliases.iter().map(|&a| run.name_of(a)).collect(),
         })
         .collect();
+    let effects = run.model.effects();
+    let selected_effects: Vec<String> = match &selection {
+        Some(sel) => sel
+            .selected
+            .iter()
+            .filter_map(|&e| effects.get(e).map(|(eff, _)| eff.label()))
+            .collect(),
+        None => options.effects.iter().map(|e| e.label()).collect(),
+    };
+    let (candidates, trials) = match selection {
+        Some(sel) => {
+            notes.extend(sel.notes);
+            (sel.candidates, sel.trials)
+        }
+        None => (Vec::new(), Vec::new()),
+    };
     Ok(SocketReport {
         steps,
         parameters,
@@ -826,7 +1036,228 @@ pub fn calibrate_sockets(
         sockets,
         constraints: run.cal.constraints.clone(),
         sigma_point: run.sigma_point,
+        selected_effects,
+        candidates,
+        trials,
     })
+}
+
+/// The state the automatic selection advances: the last fit, its free and fixed parameters,
+/// the steps and consistency figures so far.
+struct Chosen {
+    last: FitOutcome,
+    free: Vec<usize>,
+    fixed: Vec<fit::Fixed>,
+    steps: Vec<SocketStep>,
+    consistency: Vec<ConsistencyStep>,
+}
+
+/// The automatic selection of [`diagnose_sockets`] on the candidates of `auto` (the model's
+/// effects, in the same order), from the geometric step in `state`.
+fn select(run: &mut Run<'_>, auto: &Auto<'_>, state: &mut Chosen) -> Result<Selection, CalibError> {
+    let diag = auto.diag;
+    let mut out = Selection {
+        selected: Vec::new(),
+        candidates: Vec::new(),
+        trials: Vec::new(),
+        notes: auto.skipped.clone(),
+    };
+    if auto.pool.is_empty() {
+        return Ok(out);
+    }
+    let residuals = 3 * run.cal.contacts.len() + run.cal.constraints.len();
+    let m = residuals as f64;
+    // Step 1: anything left?
+    let mut proceed = true;
+    match run.options.sigma {
+        Some(sigma) => {
+            let ssr = fit::sum_of_squares(&run.problem(sigma), &state.last.x).unwrap_or(f64::NAN);
+            let chi2 = ssr / (sigma * sigma);
+            let dof = (m - state.free.len() as f64).max(1.0);
+            let p = stats::chi2_sf(chi2, dof);
+            let summary = format!(
+                "chi-square {chi2:.1} on {dof:.0} degrees of freedom against the given contact \
+                 noise, p = {p:.2e}"
+            );
+            out.notes
+                .push(format!("residual after the geometric step: {summary}"));
+            if p >= diag.alpha {
+                out.notes.push(
+                    "nothing significant is left after the geometric step; no effect is selected"
+                        .into(),
+                );
+                proceed = false;
+            }
+        }
+        None => out.notes.push(
+            "residual after the geometric step: no test (the contact noise is estimated from the \
+             same residuals; give --sigma for a chi-square test)"
+                .into(),
+        ),
+    }
+    if run.val.contacts.is_empty() {
+        out.notes.push(
+            "no held-out contacts: the selection rests on the F-to-enter and BIC tests alone"
+                .into(),
+        );
+    }
+    let mut rejected: Vec<usize> = Vec::new();
+    let mut first = true;
+    loop {
+        let remaining: Vec<usize> = (0..auto.pool.len())
+            .filter(|e| !out.selected.contains(e))
+            .collect();
+        if remaining.is_empty() {
+            break;
+        }
+        let mut table: Vec<(usize, CandidateReport)> = Vec::with_capacity(remaining.len());
+        for &e in &remaining {
+            table.push((e, run.score(&state.last.x, &state.free, e)?));
+        }
+        table.sort_by(|a, b| b.1.score.total_cmp(&a.1.score));
+        if first {
+            out.candidates = table.iter().map(|(_, c)| c.clone()).collect();
+            first = false;
+        }
+        if !proceed {
+            break;
+        }
+        if out.selected.len() >= diag.max_effects {
+            out.notes.push(format!(
+                "stopped after the most effects allowed ({}); candidates may remain",
+                diag.max_effects
+            ));
+            break;
+        }
+        let sigma0 = run.sigma_point;
+        let problem = run.problem(sigma0);
+        let ssr0 = fit::sum_of_squares(&problem, &state.last.x).unwrap_or(f64::NAN);
+        let p0 = state.free.len() as f64;
+        let sigma2 = ssr0 / (m - p0).max(1.0);
+        let mut eligible: Vec<(usize, f64, usize)> = table
+            .iter()
+            .filter(|(e, c)| c.status == CandidateStatus::NotSelected && !rejected.contains(e))
+            .map(|(e, c)| {
+                let gain = c.score - c.parameters as f64 * sigma2 * m.ln();
+                (*e, gain, c.parameters)
+            })
+            .filter(|(_, gain, _)| *gain > 0.0)
+            .collect();
+        eligible.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let k_count = eligible.len().max(1);
+        let f_threshold = diag.alpha / k_count as f64;
+        let held_before = run.held_out_distances(&state.last.x);
+        let mut accepted = false;
+        for &(e, _, k) in eligible.iter().take(diag.trials.max(1)) {
+            let label = auto.pool[e].label();
+            let cols: Vec<usize> = run
+                .model
+                .effects()
+                .get(e)
+                .map(|(_, r)| r.clone().collect())
+                .unwrap_or_default();
+            let mut columns = state.free.clone();
+            columns.extend(&cols);
+            let (trial_free, trial_fixed) = run.identify(&state.last.x, &columns)?;
+            if cols.iter().any(|c| !trial_free.contains(c)) {
+                out.trials.push(Trial {
+                    label,
+                    rms: f64::NAN,
+                    val_rms: None,
+                    f: 0.0,
+                    f_p: 1.0,
+                    f_threshold,
+                    bic: (f64::NAN, f64::NAN),
+                    held_out: None,
+                    accepted: false,
+                    reason: "not identifiable with the estimated parameters".into(),
+                });
+                rejected.push(e);
+                continue;
+            }
+            let (outcome, report) =
+                run.step(&format!("+{label}"), &state.last.x, &trial_free)?;
+            // Both fits judged with the distances weighted alike.
+            let ssr1 = fit::sum_of_squares(&run.problem(sigma0), &outcome.x).unwrap_or(f64::NAN);
+            let p1 = trial_free.len() as f64;
+            let dof = (m - p1).max(1.0);
+            let f = ((ssr0 - ssr1) / k as f64) / (ssr1 / dof).max(1e-300);
+            let f_p = stats::f_sf(f, k as f64, dof);
+            let bics = (bic(ssr0, m, p0), bic(ssr1, m, p1));
+            let held_after = run.held_out_distances(&outcome.x);
+            let pairs: Vec<usize> = (0..held_after.len()).collect();
+            let held_out = paired_wilcoxon(&held_before, &held_after, &pairs);
+            let mut reasons = Vec::new();
+            if f_p.is_nan() || f_p >= f_threshold {
+                reasons.push(format!("F-to-enter p = {f_p:.2e} >= {f_threshold:.2e}"));
+            }
+            if bics.1.is_nan() || bics.1 >= bics.0 {
+                reasons.push("BIC does not decrease".to_string());
+            }
+            match held_out {
+                Some((_, p)) if p < diag.alpha => {}
+                Some((_, p)) => {
+                    reasons.push(format!(
+                        "held-out improvement p = {p:.2e} >= {}",
+                        diag.alpha
+                    ));
+                }
+                None if !held_after.is_empty() => {
+                    reasons.push("held-out improvement cannot be tested".to_string());
+                }
+                None => {}
+            }
+            let ok = reasons.is_empty();
+            out.trials.push(Trial {
+                label,
+                rms: report.rms,
+                val_rms: report.val_rms,
+                f,
+                f_p,
+                f_threshold,
+                bic: bics,
+                held_out,
+                accepted: ok,
+                reason: reasons.join("; "),
+            });
+            if let Some(c) = out
+                .candidates
+                .iter_mut()
+                .find(|c| c.label == auto.pool[e].label() && c.val_rms.is_none())
+            {
+                c.val_rms = report.val_rms;
+            }
+            if ok {
+                out.selected.push(e);
+                let label = report.label.clone();
+                state.steps.push(report);
+                state.consistency.extend(run.consistency(&label, &outcome.x));
+                state.last = outcome;
+                state.free = trial_free;
+                state.fixed = trial_fixed;
+                accepted = true;
+                // A rejection in one round may pass once another effect is in.
+                rejected.clear();
+                break;
+            }
+            run.sigma_point = sigma0;
+            rejected.push(e);
+        }
+        if !accepted {
+            break;
+        }
+    }
+    for c in &mut out.candidates {
+        let e = auto.pool.iter().position(|p| p.label() == c.label);
+        c.status = match e {
+            Some(e) if out.selected.contains(&e) => CandidateStatus::Selected,
+            _ if out.trials.iter().any(|t| t.label == c.label && !t.accepted) => {
+                CandidateStatus::Rejected
+            }
+            _ => c.status,
+        };
+    }
+    Ok(out)
 }
 
 /// Parameter estimates of the model's own parameters in the report's layout: pose blocks as
