@@ -188,7 +188,7 @@ fn read_inertials(path: &str, table: &DhTable) -> Result<(Inertials, Option<Vect
 /// What the gravity effects need: `--inertials`, else a URDF model's `<inertial>` masses
 /// (rows named like its joints), with `--payload` and `--gravity`. `None` when there are no
 /// masses at all.
-fn gravity_inputs(
+pub(crate) fn gravity_inputs(
     args: &CalibrateArgs,
     table: &DhTable,
 ) -> Result<(Option<Inertials>, Vector3<f64>)> {
@@ -484,14 +484,14 @@ pub fn unit_of(name: &str) -> &'static str {
 }
 
 /// The model to start from, the data and the targets kept.
-struct Inputs {
-    table: DhTable,
-    model_name: String,
+pub(crate) struct Inputs {
+    pub(crate) table: DhTable,
+    pub(crate) model_name: String,
     robot: Option<String>,
     units: (LengthUnit, AngleUnit),
     links: (String, String),
     coupled: Vec<(String, Vec<(String, f64)>)>,
-    data: Measurements,
+    pub(crate) data: Measurements,
     cpa: bool,
 }
 
@@ -634,13 +634,7 @@ pub fn calibrate(
 ) -> Result<Outcome> {
     let inputs = load_inputs(args, err)?;
     if inputs.data.samples.iter().any(|s| s.socket.is_some()) {
-        return crate::commands::sockets::calibrate_contacts(
-            args,
-            &inputs.table,
-            &inputs.model_name,
-            &inputs.data,
-            out,
-        );
+        return crate::commands::sockets::calibrate_contacts(args, &inputs, out);
     }
     let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
     let ctx = EffectContext {
@@ -1193,13 +1187,53 @@ fn absorbed(aliases: &[String]) -> String {
 
 /// Writes the calibrated model: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
 fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDoc) -> Result<()> {
+    let calibration = CalibrationSection {
+        data: doc.data.clone(),
+        rms_before: doc.rms_before,
+        rms_after: doc.rms_after,
+        val_rms_before: doc.val_rms_before,
+        val_rms_after: doc.val_rms_after,
+        device: doc.device.clone(),
+        targets: doc.targets.clone(),
+        effects: doc
+            .parameters
+            .iter()
+            // Effect parameters are named `<kind>:<joints>` or `scale`
+            // (`dh_calib::effects`), whatever their unit.
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+            .map(|p| (p.name.clone(), p.estimate))
+            .collect(),
+    };
+    let source = format!(
+        "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
+        doc.model, doc.data, doc.rms_before, doc.rms_after
+    );
+    write_calibrated(
+        path,
+        inputs,
+        &report.calibrated,
+        source,
+        serde_yaml::to_value(&calibration)?,
+    )
+}
+
+/// Writes `table` as the calibrated model of `inputs` (its robot name, links, units and
+/// coupled joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with
+/// `source` and the `calibration` section, atomically.
+pub(crate) fn write_calibrated(
+    path: &str,
+    inputs: &Inputs,
+    table: &DhTable,
+    source: String,
+    calibration: serde_yaml::Value,
+) -> Result<()> {
     let lower = path.to_ascii_lowercase();
     let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
     let bytes = if lower.ends_with(".urdf") {
-        urdf_of(&report.calibrated, &robot, &inputs.links.0, &inputs.links.1)
+        urdf_of(table, &robot, &inputs.links.0, &inputs.links.1)
     } else {
         let (lu, au) = inputs.units;
-        let mut sheet = SheetDoc::from_table(&report.calibrated, lu, au);
+        let mut sheet = SheetDoc::from_table(table, lu, au);
         sheet.robot = inputs.robot.clone();
         if !inputs.coupled.is_empty() {
             sheet.coupled = Some(
@@ -1210,28 +1244,8 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
                     .collect(),
             );
         }
-        sheet.source = Some(format!(
-            "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
-            doc.model, doc.data, doc.rms_before, doc.rms_after
-        ));
-        let calibration = CalibrationSection {
-            data: doc.data.clone(),
-            rms_before: doc.rms_before,
-            rms_after: doc.rms_after,
-            val_rms_before: doc.val_rms_before,
-            val_rms_after: doc.val_rms_after,
-            device: doc.device.clone(),
-            targets: doc.targets.clone(),
-            effects: doc
-                .parameters
-                .iter()
-                // Effect parameters are named `<kind>:<joints>` or `scale`
-                // (`dh_calib::effects`), whatever their unit.
-                .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
-                .map(|p| (p.name.clone(), p.estimate))
-                .collect(),
-        };
-        sheet.calibration = Some(serde_yaml::to_value(&calibration)?);
+        sheet.source = Some(source);
+        sheet.calibration = Some(calibration);
         if lower.ends_with(".json") {
             serde_json::to_string_pretty(&sheet)? + "\n"
         } else {

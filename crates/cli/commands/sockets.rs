@@ -1,20 +1,37 @@
 //! `urdf-dh calibrate` on contact data (a `socket` column, e.g. `urdf-dh import --layout
 //! mukca`): unknown socket centres instead of measured points, see `dh_calib::socket`.
+//!
+//! `--effects auto|LIST` runs `dh_calib::socket::diagnose_sockets`; `--out` writes the
+//! calibrated model as for measured points, with a single target (the ball) folded into the
+//! tool so that the written model predicts the ball centre itself; `--plot` draws each
+//! contact's distance to its socket's modelled mean, as given and after the last step.
 
 use std::fmt::Write as _;
 use std::io::Write;
+use std::path::Path;
+use std::sync::Arc;
 
 use anyhow::Result;
 use dh_calib::calibrate::CalibrationOptions;
-use dh_calib::data::Measurements;
-use dh_calib::socket::{calibrate_sockets, Consistency, SocketReport};
+use dh_calib::diagnose::{DiagnoseOptions, EffectSelection};
+use dh_calib::effects::{parse_label_in, EffectContext};
+use dh_calib::gravity::GravityModel;
+use dh_calib::socket::{diagnose_sockets, Consistency, SocketReport};
 use dh_calib::tree::DhTree;
 use dh_core::DhTable;
+use nalgebra::{Isometry3, Translation3};
 use serde::Serialize;
 
-use crate::commands::calibrate::{CalibrateArgs, CalibrateFormat, EffectsChoice};
-use crate::error::{hinted, Outcome};
+use crate::commands::calibrate::{
+    gravity_inputs, unit_of, write_calibrated, CalibrateArgs, CalibrateFormat, CandidateDoc,
+    EffectsChoice, Inputs, TargetDoc,
+};
+use crate::error::Outcome;
 use crate::input::display_name;
+use crate::measured::parse_effect;
+use crate::output::write_atomically;
+use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
+use crate::units::LengthUnit;
 
 /// Consistency figures in metres (JSON).
 #[derive(Serialize)]
@@ -71,6 +88,20 @@ struct SocketDoc {
     samples: usize,
 }
 
+/// One full refit of a candidate (JSON `trials`).
+#[derive(Serialize)]
+struct TrialDoc {
+    label: String,
+    rms: f64,
+    val_rms: Option<f64>,
+    f: f64,
+    f_p: f64,
+    f_threshold: f64,
+    held_out_p: Option<f64>,
+    accepted: bool,
+    reason: String,
+}
+
 /// The JSON report: metres and radians.
 #[derive(Serialize)]
 struct ContactDoc {
@@ -83,6 +114,9 @@ struct ContactDoc {
     sockets: Vec<SocketDoc>,
     parameters: Vec<ParameterDoc>,
     fixed: Vec<FixedDoc>,
+    selected_effects: Vec<String>,
+    candidates: Vec<CandidateDoc>,
+    trials: Vec<TrialDoc>,
     notes: Vec<String>,
 }
 
@@ -135,6 +169,33 @@ fn document(model: &str, data: &str, r: &SocketReport) -> ContactDoc {
                 aliases: f.aliases.clone(),
             })
             .collect(),
+        selected_effects: r.selected_effects.clone(),
+        candidates: r
+            .candidates
+            .iter()
+            .map(|c| CandidateDoc {
+                label: c.label.clone(),
+                score: c.score,
+                val_rms: c.val_rms,
+                independence: c.independence,
+                status: c.status.name(),
+            })
+            .collect(),
+        trials: r
+            .trials
+            .iter()
+            .map(|t| TrialDoc {
+                label: t.label.clone(),
+                rms: t.rms,
+                val_rms: t.val_rms,
+                f: t.f,
+                f_p: t.f_p,
+                f_threshold: t.f_threshold,
+                held_out_p: t.held_out.map(|h| h.1),
+                accepted: t.accepted,
+                reason: t.reason.clone(),
+            })
+            .collect(),
         notes: r.notes.clone(),
     }
 }
@@ -160,15 +221,22 @@ fn text(doc: &ContactDoc) -> String {
          then averaged (MUKCa's mean absolute error); distance error: |socket means' distance - \
          known distance|; mm"
     );
+    let w = doc
+        .steps
+        .iter()
+        .map(|st| st.label.len())
+        .max()
+        .unwrap_or(0)
+        .max(10);
     let _ = writeln!(
         s,
-        "  {:<10} {:>5} {:>9} {:>11} {:>10} {:>10} {:>10}",
+        "  {:<w$} {:>5} {:>9} {:>11} {:>10} {:>10} {:>10}",
         "step", "free", "rms", "train", "train dist", "test", "test dist"
     );
     for st in &doc.steps {
         let _ = writeln!(
             s,
-            "  {:<10} {:>5} {:>9} {:>11} {:>10} {:>10} {:>10}",
+            "  {:<w$} {:>5} {:>9} {:>11} {:>10} {:>10} {:>10}",
             st.label,
             st.free.map_or_else(|| "-".into(), |f| f.to_string()),
             opt_mm(st.rms),
@@ -210,6 +278,76 @@ fn text(doc: &ContactDoc) -> String {
     }
     let fixed: Vec<&str> = doc.fixed.iter().map(|f| f.name.as_str()).collect();
     let _ = writeln!(s, "fixed (not identifiable): {}", fixed.join(", "));
+    if !doc.candidates.is_empty() {
+        let _ = writeln!(
+            s,
+            "effect candidates (first round, best score first; score = SSR reduction beyond the \
+             geometric fit; test rms = held-out rms distance to the socket means after a full \
+             refit, for those refitted):"
+        );
+        let _ = writeln!(
+            s,
+            "  {:<32} {:>12} {:>12} {:>13}  status",
+            "label", "score [mm²]", "independence", "test rms [mm]"
+        );
+        for c in doc.candidates.iter().take(15) {
+            let _ = writeln!(
+                s,
+                "  {:<32} {:>12.4e} {:>12.4} {:>13}  {}",
+                c.label,
+                c.score * 1e6,
+                c.independence,
+                opt_mm(c.val_rms),
+                c.status
+            );
+        }
+        if doc.candidates.len() > 15 {
+            let _ = writeln!(
+                s,
+                "  ... {} more (see --format json)",
+                doc.candidates.len() - 15
+            );
+        }
+        for t in &doc.trials {
+            let _ = writeln!(
+                s,
+                "  refit {}: F p = {:.2e} (threshold {:.2e}), held-out p = {}: {}",
+                t.label,
+                t.f_p,
+                t.f_threshold,
+                t.held_out_p
+                    .map_or_else(|| "-".into(), |p| format!("{p:.2e}")),
+                if t.accepted {
+                    "selected".to_string()
+                } else {
+                    format!("rejected ({})", t.reason)
+                }
+            );
+        }
+    }
+    if doc.selected_effects.is_empty() {
+        if !doc.candidates.is_empty() {
+            let _ = writeln!(s, "effects: none selected");
+        }
+    } else {
+        let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
+        for p in doc
+            .parameters
+            .iter()
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+        {
+            let _ = writeln!(
+                s,
+                "  {} = {:.6e}{} {}",
+                p.name,
+                p.estimate,
+                p.std_error
+                    .map(|e| format!(" +- {e:.1e}"))
+                    .unwrap_or_default(),
+                unit_of(&p.name)
+            );
+        }
+    }
     for n in &doc.notes {
         let _ = writeln!(s, "note: {n}");
     }
@@ -219,39 +357,202 @@ fn text(doc: &ContactDoc) -> String {
 /// Runs `calibrate` on contact data.
 ///
 /// # Errors
-/// Options that do not apply to contacts (`--effects auto`, `--plot`, `--out`), a calibration
-/// that fails, a failed write.
-pub fn calibrate_contacts(
+/// A bad `--sigma`, effect label or inertials file, a calibration that fails, a failed write.
+pub(crate) fn calibrate_contacts(
     args: &CalibrateArgs,
-    table: &DhTable,
-    model_name: &str,
-    data: &Measurements,
+    inputs: &Inputs,
     out: &mut dyn Write,
 ) -> Result<Outcome> {
-    let unsupported = [
-        (args.effects != EffectsChoice::None, "--effects"),
-        (args.plot.is_some(), "--plot"),
-        (args.out.is_some(), "--out"),
-    ];
-    if let Some((_, opt)) = unsupported.iter().find(|(on, _)| *on) {
-        return Err(hinted(
-            format!("{opt} is not supported for contact data (a 'socket' column) yet"),
-            "run without it: the geometric steps and the consistency figures are reported",
-        ));
+    let table = &inputs.table;
+    if let Some(s) = args.sigma {
+        if !(s.is_finite() && s > 0.0) {
+            anyhow::bail!("--sigma: expected a positive length, found {s}");
+        }
     }
+    let (inertials, gravity) = gravity_inputs(args, table)?;
+    let effects = match &args.effects {
+        EffectsChoice::None => EffectSelection::None,
+        EffectsChoice::Auto => EffectSelection::Auto,
+        EffectsChoice::List(labels) => {
+            let ctx = EffectContext {
+                tree: DhTree::serial(table),
+                gravity: match &inertials {
+                    Some(i) => Some(Arc::new(
+                        GravityModel::serial(table, i, gravity)
+                            .map_err(|e| anyhow::anyhow!("inertials: {e}"))?,
+                    )),
+                    None => None,
+                },
+            };
+            for l in labels {
+                // The CLI's message names the kinds and joints.
+                if parse_label_in(l, &ctx).is_err() {
+                    parse_effect(l, table)?;
+                }
+            }
+            EffectSelection::Labels(labels.clone())
+        }
+    };
     let options = CalibrationOptions {
         sigma: args.sigma.map(|s| s * args.units.length.metres()),
         ..CalibrationOptions::default()
     };
+    let diag = DiagnoseOptions {
+        effects,
+        inertials,
+        gravity,
+        ..DiagnoseOptions::default()
+    };
     let name = display_name(&args.data);
-    let r = calibrate_sockets(&DhTree::serial(table), data, &options)
+    let r = diagnose_sockets(&DhTree::serial(table), &inputs.data, &options, &diag)
         .map_err(|e| anyhow::anyhow!("{name}: calibration failed: {e}"))?;
-    let doc = document(model_name, &name, &r);
+    let doc = document(&inputs.model_name, &name, &r);
     match args.format {
         CalibrateFormat::Json => {
             out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
         }
         CalibrateFormat::Text => out.write_all(text(&doc).as_bytes())?,
     }
+    if let Some(path) = &args.out {
+        write_contact_model(path, inputs, &r, &doc)?;
+    }
+    if let Some(path) = &args.plot {
+        let chart = chart(&inputs.model_name, &name, &r);
+        write_atomically(Path::new(path), residuals_svg(&chart).as_bytes())?;
+    }
     Ok(Outcome::Pass)
+}
+
+/// The `calibration` section of a sheet calibrated from contacts (metres): the consistency
+/// before and after, the sockets in the base link frame and the targets in the written tip
+/// frame (zero for a ball folded into the tool).
+#[derive(Serialize)]
+struct ContactCalibrationSection {
+    data: String,
+    kind: &'static str,
+    consistency_before: f64,
+    consistency_after: f64,
+    test_consistency_before: Option<f64>,
+    test_consistency_after: Option<f64>,
+    targets: Vec<TargetDoc>,
+    sockets: Vec<SocketDoc>,
+    effects: Vec<(String, f64)>,
+}
+
+/// The calibrated table to write: with one target (the ball), the target folded into the tool
+/// (`tool · Tr(t)`, `t` in the tip frame), so that the model's tip is the ball centre and the
+/// written model predicts the contacts without a target offset. Returns the table and the
+/// targets left in its tip frame.
+fn written_table(r: &SocketReport) -> (DhTable, Vec<TargetDoc>) {
+    let mut table = r.calibrated.clone();
+    match r.targets.as_slice() {
+        [(name, t)] => {
+            table.tool = table.tool * Isometry3::from_parts(Translation3::from(*t), Default::default());
+            (
+                table,
+                vec![TargetDoc {
+                    name: name.clone(),
+                    xyz: [0.0; 3],
+                }],
+            )
+        }
+        targets => (
+            table,
+            targets
+                .iter()
+                .map(|(n, p)| TargetDoc {
+                    name: n.clone(),
+                    xyz: [p.x, p.y, p.z],
+                })
+                .collect(),
+        ),
+    }
+}
+
+/// Writes the model calibrated from contacts (see [`written_table`]) as the point path does.
+fn write_contact_model(
+    path: &str,
+    inputs: &Inputs,
+    r: &SocketReport,
+    doc: &ContactDoc,
+) -> Result<()> {
+    let (table, targets) = written_table(r);
+    let first = doc.steps.first();
+    let last = doc.steps.last();
+    let section = ContactCalibrationSection {
+        data: doc.data.clone(),
+        kind: "contacts",
+        consistency_before: first.map_or(0.0, |s| s.train.mean_abs),
+        consistency_after: last.map_or(0.0, |s| s.train.mean_abs),
+        test_consistency_before: first.and_then(|s| s.test.as_ref().map(|t| t.mean_abs)),
+        test_consistency_after: last.and_then(|s| s.test.as_ref().map(|t| t.mean_abs)),
+        targets,
+        sockets: doc
+            .sockets
+            .iter()
+            .map(|k| SocketDoc {
+                name: k.name.clone(),
+                position: k.position,
+                samples: k.samples,
+            })
+            .collect(),
+        effects: doc
+            .parameters
+            .iter()
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+            .map(|p| (p.name.clone(), p.estimate))
+            .collect(),
+    };
+    let source = format!(
+        "calibrated by urdf-dh calibrate from {} against the contacts of {}: consistency {:.6} m \
+         -> {:.6} m",
+        doc.model, doc.data, section.consistency_before, section.consistency_after
+    );
+    write_calibrated(
+        path,
+        inputs,
+        &table,
+        source,
+        serde_yaml::to_value(&section)?,
+    )
+}
+
+/// The chart: each contact's distance to its socket's modelled mean (file order, so the
+/// placements follow each other), with the model as given and after the last step.
+fn chart(model: &str, data: &str, r: &SocketReport) -> ResidualChart {
+    let panel = |label: String, pick: fn(&dh_calib::socket::ContactDistance) -> f64| {
+        let residuals: Vec<Residual> = r
+            .distances
+            .iter()
+            .enumerate()
+            .map(|(i, d)| Residual {
+                pose: i,
+                distance: pick(d),
+                validation: d.validation,
+            })
+            .collect();
+        let n = residuals.len().max(1) as f64;
+        let rms = (residuals.iter().map(|v| v.distance * v.distance).sum::<f64>() / n).sqrt();
+        Panel {
+            label,
+            residuals,
+            rms: Some(rms),
+            floor: None,
+        }
+    };
+    let last = r.steps.last().map_or("geometric", |s| s.label.as_str());
+    ResidualChart {
+        title: format!(
+            "distance of each contact to its socket's modelled mean: {model} against {data} ({} \
+             contacts, {} sockets fitted)",
+            r.distances.len(),
+            r.sockets.len()
+        ),
+        unit: LengthUnit::Mm,
+        poses: r.distances.len(),
+        panels: vec![
+            panel("before: the model as given".into(), |d| d.as_given),
+            panel(format!("after: {last}"), |d| d.last),
+        ],
+    }
 }

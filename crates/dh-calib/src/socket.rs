@@ -286,6 +286,22 @@ pub struct SocketStep {
     pub termination: Termination,
 }
 
+/// One contact's distance to the mean of its socket's modelled positions (the consistency's
+/// distance, see the module docs), metres.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactDistance {
+    /// Index of the sample in the measurements.
+    pub sample: usize,
+    /// Whether it is a validation contact.
+    pub validation: bool,
+    /// Its socket's name.
+    pub socket: String,
+    /// With the model as given.
+    pub as_given: f64,
+    /// After the last step.
+    pub last: f64,
+}
+
 /// The result of [`calibrate_sockets`]. Lengths in metres, angles in radians.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SocketReport {
@@ -325,6 +341,9 @@ pub struct SocketReport {
     pub candidates: Vec<CandidateReport>,
     /// Every full refit of a candidate, in order, with the tests of the rule.
     pub trials: Vec<Trial>,
+    /// Every contact's distance to its socket's modelled mean, as given and after the last
+    /// step, in the order of the measurements.
+    pub distances: Vec<ContactDistance>,
 }
 
 /// Contacts of one split with their own socket numbering.
@@ -409,6 +428,17 @@ fn contacts_of(
         }
     }
     Ok(out)
+}
+
+/// Distances of `part`'s contacts to their socket's modelled mean at `x` (metres).
+fn distances_to_means(model: &Model, x: &[f64], part: &Split2) -> Vec<f64> {
+    let points = positions(model, x, &part.contacts);
+    let m = means(&points, &part.contacts, part.names.len());
+    points
+        .iter()
+        .zip(&part.contacts)
+        .map(|(p, c)| (p - m[c.socket].0).norm())
+        .collect()
 }
 
 /// Modelled positions of the contacts at `x` (device frame, metres).
@@ -595,14 +625,7 @@ impl Run<'_> {
 
     /// Distances of the validation contacts to their socket's mean (metres).
     fn held_out_distances(&self, x: &[f64]) -> Vec<f64> {
-        let v = &self.val;
-        let points = positions(&self.model, x, &v.contacts);
-        let m = means(&points, &v.contacts, v.names.len());
-        points
-            .iter()
-            .zip(&v.contacts)
-            .map(|(p, c)| (p - m[c.socket].0).norm())
-            .collect()
+        distances_to_means(&self.model, x, &self.val)
     }
 
     /// Their statistics, `None` without validation contacts.
@@ -875,6 +898,7 @@ fn run_sockets(
         x[n_model + 3 * s..n_model + 3 * s + 3].copy_from_slice(m.as_slice());
     }
     let sockets_given: Vec<Vector3<f64>> = start.iter().map(|m| m.0).collect();
+    let x_given = x.clone();
     let mut consistency: Vec<ConsistencyStep> =
         run.consistency("as given", &x).into_iter().collect();
 
@@ -1013,6 +1037,26 @@ fn run_sockets(
             .collect(),
         None => options.effects.iter().map(|e| e.label()).collect(),
     };
+    let mut distances = Vec::with_capacity(data.samples.len());
+    for (split, part) in [(Split::Calibration, &run.cal), (Split::Validation, &run.val)] {
+        let before = distances_to_means(&run.model, &x_given, part);
+        let after = distances_to_means(&run.model, &x, part);
+        let samples = data
+            .samples
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.split == split);
+        for (((i, _), c), (b, a)) in samples.zip(&part.contacts).zip(before.iter().zip(&after)) {
+            distances.push(ContactDistance {
+                sample: i,
+                validation: split == Split::Validation,
+                socket: part.names.get(c.socket).cloned().unwrap_or_default(),
+                as_given: *b,
+                last: *a,
+            });
+        }
+    }
+    distances.sort_by_key(|d| d.sample);
     let (candidates, trials) = match selection {
         Some(sel) => {
             notes.extend(sel.notes);
@@ -1039,6 +1083,7 @@ fn run_sockets(
         selected_effects,
         candidates,
         trials,
+        distances,
     })
 }
 
@@ -1234,7 +1279,8 @@ fn select(run: &mut Run<'_>, auto: &Auto<'_>, state: &mut Chosen) -> Result<Sele
                 state.consistency.extend(run.consistency(&label, &outcome.x));
                 state.last = outcome;
                 state.free = trial_free;
-                state.fixed = trial_fixed;
+                // What the geometric step could not identify stays fixed.
+                state.fixed.extend(trial_fixed);
                 accepted = true;
                 // A rejection in one round may pass once another effect is in.
                 rejected.clear();
