@@ -30,6 +30,6 @@ pub use error::CoreError;
 pub use extract::{extract, Bound, Extraction, JointAxis, PairReport, Warning};
 pub use line::{DualNumber, Line};
 pub use relation::{classify, PairGeometry, Relation};
-pub use table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
+pub use table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic, PreparedFk};
 pub use tolerance::Tolerance;
 pub use verify::{compare, Deviation, JointSampler};

@@ -145,9 +145,19 @@ impl DhRow {
     /// `(c_t c_a, c_t s_a, s_t s_a, s_t c_a)` with `c_t = cos(theta/2)` etc., and
     /// `Rx(alpha) Rz(theta)` is `(c_a c_t, s_a c_t, −s_a s_t, c_a s_t)`.
     pub fn transform(&self, convention: Convention, q: f64) -> Isometry3<f64> {
+        self.transform_with_twist(convention, q, (0.5 * self.alpha).sin_cos())
+    }
+
+    /// [`DhRow::transform`] given `(sin, cos)` of `alpha / 2`, which does not depend on `q`
+    /// (see [`PreparedFk`]).
+    fn transform_with_twist(
+        &self,
+        convention: Convention,
+        q: f64,
+        (sa, ca): (f64, f64),
+    ) -> Isometry3<f64> {
         let (theta, d) = self.moved(q);
         let (st, ct) = (0.5 * theta).sin_cos();
-        let (sa, ca) = (0.5 * self.alpha).sin_cos();
         match convention {
             Convention::Standard => {
                 let (cos_t, sin_t) = (ct * ct - st * st, 2.0 * st * ct);
@@ -166,6 +176,32 @@ impl DhRow {
                 )
             }
         }
+    }
+}
+
+/// A [`DhTable`] with every row's half-twist sine and cosine computed once, for verification
+/// and other loops that evaluate FK at thousands of joint vectors (made by [`DhTable::prepare`]).
+#[derive(Clone, Debug)]
+pub struct PreparedFk<'a> {
+    table: &'a DhTable,
+    /// `(sin, cos)` of `alpha / 2` per row.
+    twists: Vec<(f64, f64)>,
+}
+
+impl PreparedFk<'_> {
+    /// Pose of the tip link frame in the base link frame at joint values `q`, bit for bit as
+    /// [`DhTable::fk`].
+    ///
+    /// # Errors
+    /// [`CoreError::JointCount`] when `q` has the wrong length.
+    pub fn fk(&self, q: &[f64]) -> Result<Isometry3<f64>, CoreError> {
+        let table = self.table;
+        table.check_len(q)?;
+        let mut t = table.base;
+        for ((row, &qi), &twist) in table.rows.iter().zip(q).zip(&self.twists) {
+            t *= row.transform_with_twist(table.convention, qi, twist);
+        }
+        Ok(t * table.tool)
     }
 }
 
@@ -198,6 +234,19 @@ impl DhTable {
             t *= row.transform(self.convention, qi);
         }
         Ok(t * self.tool)
+    }
+
+    /// The table prepared for many FK evaluations (one `sin_cos` per joint instead of two);
+    /// its [`PreparedFk::fk`] gives the same bits as [`DhTable::fk`].
+    pub fn prepare(&self) -> PreparedFk<'_> {
+        PreparedFk {
+            table: self,
+            twists: self
+                .rows
+                .iter()
+                .map(|r| (0.5 * r.alpha).sin_cos())
+                .collect(),
+        }
     }
 
     /// Poses of DH frames `0..=n` in the base link frame at joint values `q`. For the modified
@@ -332,6 +381,21 @@ mod tests {
         let std = rot_z(0.4) * trans_z(-0.2 + q) * trans_x(0.3) * rot_x(0.7);
         let (dp, dr) = pose_error(&p.transform(Convention::Standard, q), &std);
         assert!(dp < 1e-15 && dr < 1e-15);
+    }
+
+    #[test]
+    fn prepared_fk_gives_the_same_bits_as_fk() {
+        let mut table = ur5();
+        table.rows[2].kind = JointKind::Prismatic;
+        for convention in [Convention::Standard, Convention::Modified] {
+            let t = table.to_convention(convention);
+            let prepared = t.prepare();
+            for k in 0..50 {
+                let q: Vec<f64> = (0..6).map(|i| ((k * 7 + i * 3) as f64).sin() * 3.0).collect();
+                assert_eq!(prepared.fk(&q).unwrap(), t.fk(&q).unwrap());
+            }
+            assert!(prepared.fk(&[0.0; 5]).is_err());
+        }
     }
 
     #[test]

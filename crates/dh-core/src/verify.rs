@@ -152,6 +152,7 @@ where
 {
     let mut sampler = JointSampler::new(&table.rows, table.size(), seed);
     let mut q = Vec::with_capacity(table.rows.len());
+    let prepared = table.prepare();
     let mut dev = Deviation {
         samples: 0,
         max_position_error: 0.0,
@@ -159,7 +160,7 @@ where
     };
     for _ in 0..samples.max(1) {
         sampler.next_into(&mut q);
-        let (dp, dr) = pose_error(&table.fk(&q)?, &oracle(&q));
+        let (dp, dr) = pose_error(&prepared.fk(&q)?, &oracle(&q));
         // NaN must never pass as "small": max() would drop it.
         dev.max_position_error = if dp.is_nan() {
             f64::INFINITY
