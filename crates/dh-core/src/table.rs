@@ -391,7 +391,9 @@ mod tests {
             let t = table.to_convention(convention);
             let prepared = t.prepare();
             for k in 0..50 {
-                let q: Vec<f64> = (0..6).map(|i| ((k * 7 + i * 3) as f64).sin() * 3.0).collect();
+                let q: Vec<f64> = (0..6)
+                    .map(|i| ((k * 7 + i * 3) as f64).sin() * 3.0)
+                    .collect();
                 assert_eq!(prepared.fk(&q).unwrap(), t.fk(&q).unwrap());
             }
             assert!(prepared.fk(&[0.0; 5]).is_err());
