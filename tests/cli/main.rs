@@ -3,6 +3,7 @@
 mod calibrate;
 mod check;
 mod common;
+mod contacts;
 mod corpus;
 mod cpa;
 mod extract;

@@ -447,7 +447,8 @@ fn written_table(r: &SocketReport) -> (DhTable, Vec<TargetDoc>) {
     let mut table = r.calibrated.clone();
     match r.targets.as_slice() {
         [(name, t)] => {
-            table.tool = table.tool * Isometry3::from_parts(Translation3::from(*t), Default::default());
+            table.tool =
+                table.tool * Isometry3::from_parts(Translation3::from(*t), Default::default());
             (
                 table,
                 vec![TargetDoc {
@@ -532,7 +533,12 @@ fn chart(model: &str, data: &str, r: &SocketReport) -> ResidualChart {
             })
             .collect();
         let n = residuals.len().max(1) as f64;
-        let rms = (residuals.iter().map(|v| v.distance * v.distance).sum::<f64>() / n).sqrt();
+        let rms = (residuals
+            .iter()
+            .map(|v| v.distance * v.distance)
+            .sum::<f64>()
+            / n)
+            .sqrt();
         Panel {
             label,
             residuals,

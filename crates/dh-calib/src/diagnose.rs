@@ -903,7 +903,11 @@ fn judge(
 /// comparisons by ranking methods", Biometrics Bulletin 1(6), 1945). Returns `(z, p)`;
 /// `None` with fewer than 6 non-zero differences. Ranks rather than a t test because a few
 /// poses that an effect fixes dominate the squared errors and make a t statistic erratic.
-pub(crate) fn paired_wilcoxon(before: &[f64], after: &[f64], groups: &[usize]) -> Option<(f64, f64)> {
+pub(crate) fn paired_wilcoxon(
+    before: &[f64],
+    after: &[f64],
+    groups: &[usize],
+) -> Option<(f64, f64)> {
     if before.len() != after.len() || before.len() != groups.len() || before.is_empty() {
         return None;
     }

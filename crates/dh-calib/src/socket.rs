@@ -647,9 +647,7 @@ impl Run<'_> {
         let mut columns = free.to_vec();
         columns.extend(&cols);
         let f = fit::factor(&self.problem(self.sigma_point), x, &columns, &self.scales)?;
-        let big = (p..p + k)
-            .map(|j| f.r.column(j).norm())
-            .fold(0.0, f64::max);
+        let big = (p..p + k).map(|j| f.r.column(j).norm()).fold(0.0, f64::max);
         let block = f.r.view((p, p), (k, k)).clone_owned();
         let smin = block.singular_values().min();
         let inert = k == 0 || big <= 0.0;
@@ -1038,7 +1036,10 @@ fn run_sockets(
         None => options.effects.iter().map(|e| e.label()).collect(),
     };
     let mut distances = Vec::with_capacity(data.samples.len());
-    for (split, part) in [(Split::Calibration, &run.cal), (Split::Validation, &run.val)] {
+    for (split, part) in [
+        (Split::Calibration, &run.cal),
+        (Split::Validation, &run.val),
+    ] {
         let before = distances_to_means(&run.model, &x_given, part);
         let after = distances_to_means(&run.model, &x, part);
         let samples = data
@@ -1220,8 +1221,7 @@ fn select(run: &mut Run<'_>, auto: &Auto<'_>, state: &mut Chosen) -> Result<Sele
                 rejected.push(e);
                 continue;
             }
-            let (outcome, report) =
-                run.step(&format!("+{label}"), &state.last.x, &trial_free)?;
+            let (outcome, report) = run.step(&format!("+{label}"), &state.last.x, &trial_free)?;
             // Both fits judged with the distances weighted alike.
             let ssr1 = fit::sum_of_squares(&run.problem(sigma0), &outcome.x).unwrap_or(f64::NAN);
             let p1 = trial_free.len() as f64;
@@ -1276,7 +1276,9 @@ fn select(run: &mut Run<'_>, auto: &Auto<'_>, state: &mut Chosen) -> Result<Sele
                 out.selected.push(e);
                 let label = report.label.clone();
                 state.steps.push(report);
-                state.consistency.extend(run.consistency(&label, &outcome.x));
+                state
+                    .consistency
+                    .extend(run.consistency(&label, &outcome.x));
                 state.last = outcome;
                 state.free = trial_free;
                 // What the geometric step could not identify stays fixed.
