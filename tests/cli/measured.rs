@@ -207,7 +207,7 @@ fn every_published_set_imports_and_calibrates() {
     let mukca = shared.join("measured/mukca_ball_socket_panda_iiwa");
     if mukca.is_dir() {
         println!(
-            "mukca: skipped: ball-in-socket constraints (joint values only), not coordinate measurements; no importer"
+            "mukca: not here: ball-in-socket contacts, not coordinate measurements (see contacts::mukca_panda_6_through_the_cli)"
         );
     }
 }
