@@ -447,8 +447,7 @@ fn written_table(r: &SocketReport) -> (DhTable, Vec<TargetDoc>) {
     let mut table = r.calibrated.clone();
     match r.targets.as_slice() {
         [(name, t)] => {
-            table.tool =
-                table.tool * Isometry3::from_parts(Translation3::from(*t), Default::default());
+            table.tool *= Isometry3::from_parts(Translation3::from(*t), Default::default());
             (
                 table,
                 vec![TargetDoc {
