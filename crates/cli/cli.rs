@@ -11,7 +11,7 @@ use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK
 use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
 use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
-use crate::commands::{calibrate, cpa, import, simulate};
+use crate::commands::{calibrate, calibrate_tree, cpa, import, simulate};
 use crate::error::Outcome;
 use crate::render::Format;
 use crate::sheet::ConventionDoc;
@@ -259,7 +259,15 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             err,
         ),
         Command::Import(a) => import::import(&a.into_args(), out, err),
-        Command::Calibrate(a) => calibrate::calibrate(&a.into_args(), out, err),
+        Command::Calibrate(a) => {
+            let args = a.into_args();
+            match calibrate_tree::tree_model(&args)? {
+                Some((tree, origin)) => {
+                    calibrate_tree::calibrate_tree(&args, &tree, &origin, out, err)
+                }
+                None => calibrate::calibrate(&args, out, err),
+            }
+        }
         Command::Cpa(a) => cpa::cpa(&a.into_args()?, out, err),
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
     }

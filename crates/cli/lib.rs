@@ -15,4 +15,5 @@ pub mod plot;
 pub mod render;
 pub mod sheet;
 pub mod svg;
+pub mod tree_sheet;
 pub mod units;

@@ -172,6 +172,13 @@ pub struct SheetDoc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coupled:
         Option<std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>>,
+    /// Branches of a kinematic tree: the sheet's own `joints` are then the trunk and its
+    /// `tool` the branch point (see [`crate::tree_sheet`]). Only `calibrate` reads trees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branches: Option<Vec<crate::tree_sheet::BranchDoc>>,
+    /// Link masses of a tree sheet (see [`crate::tree_sheet::InertialsDoc`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertials: Option<crate::tree_sheet::InertialsDoc>,
     /// Consecutive axis pairs (extraction output).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pairs: Option<Vec<PairDoc>>,
@@ -265,6 +272,17 @@ impl Sheet {
     /// itself. A mimic naming no row is a warning, not an error: a URDF chain's joint may follow
     /// one on another branch (a gripper's fingers), and `extract` writes that driver's name.
     pub fn parse(text: &str, origin: &str) -> Result<Sheet> {
+        parse_doc(text, origin)?.into_sheet(origin)
+    }
+}
+
+/// Parses the text of a sheet (serial or tree) into its document, refusing what no sheet may
+/// hold (see [`Sheet::parse`]); the numbers are checked when it is converted.
+///
+/// # Errors
+/// Syntax errors with line and column, unknown or missing keys, nesting too deep.
+pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
+    {
         if text.trim().is_empty() {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
         }
@@ -284,7 +302,7 @@ impl Sheet {
             };
             anyhow::anyhow!("{origin}{at}: {message}")
         })?;
-        doc.into_sheet(origin)
+        Ok(doc)
     }
 }
 
@@ -337,10 +355,30 @@ impl SheetDoc {
     /// # Errors
     /// As [`Sheet::parse`].
     pub fn into_sheet(self, origin: &str) -> Result<Sheet> {
-        let (lu, au) = (self.length_unit.metres(), self.angle_unit.radians());
+        if let Some(branches) = &self.branches {
+            return Err(crate::error::hinted(
+                format!(
+                    "{origin}: 'branches': a tree sheet (a trunk and {} branch(es): {}) describes no single chain; only 'calibrate' reads trees",
+                    branches.len(),
+                    branches
+                        .iter()
+                        .map(|b| format!("'{}'", b.name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                "calibrate the whole tree with: urdf-dh calibrate --model SHEET --data D.csv; for this command give one chain as a serial sheet (the trunk's joints followed by one branch's)",
+            ));
+        }
+        if self.inertials.is_some() {
+            return Err(crate::error::hinted(
+                format!("{origin}: 'inertials': only a tree sheet (with 'branches') carries its link masses"),
+                "give a serial robot's link masses to calibrate with --inertials FILE",
+            ));
+        }
         if self.joints.is_empty() {
             bail!("{origin}: 'joints' is empty; expected at least one joint");
         }
+        let (lu, au) = (self.length_unit, self.angle_unit);
         let mut warnings = Vec::new();
         let mut rows = Vec::with_capacity(self.joints.len());
         let mut seen = std::collections::HashSet::new();
@@ -348,174 +386,18 @@ impl SheetDoc {
             if !seen.insert(j.name.as_str()) {
                 bail!("{origin}: joint '{}' appears twice", j.name);
             }
-            if let Some((k, c)) = j.name.chars().enumerate().find(|(_, c)| c.is_control()) {
-                // As the URDF reader: such a name corrupts tables, CSV and terminals.
-                bail!(
-                    "{origin}: joint '{}': expected a name without control characters, found \
-                     U+{:04X} at character {}",
-                    j.name.escape_debug(),
-                    u32::from(c),
-                    k + 1
-                );
-            }
-            for (field, v) in [
-                ("a", j.a),
-                ("alpha", j.alpha),
-                ("d", j.d),
-                ("theta", j.theta),
-            ]
-            .into_iter()
-            .chain(j.lower.map(|v| ("lower", v)))
-            .chain(j.upper.map(|v| ("upper", v)))
-            {
-                if !v.is_finite() {
-                    bail!(
-                        "{origin}: joint '{}': {field} must be a finite number, found {v}",
-                        j.name
-                    );
-                }
-                if v.abs() > MAX_MAGNITUDE {
-                    bail!(
-                        "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30, found {v:e}",
-                        j.name
-                    );
-                }
-            }
-            let kind = match j.kind {
-                JointType::Revolute => JointKind::Revolute,
-                JointType::Prismatic => JointKind::Prismatic,
-            };
-            let limit_unit = if kind == JointKind::Prismatic { lu } else { au };
-            let limits = match (j.lower, j.upper) {
-                (Some(l), Some(u)) if l > u => {
-                    bail!(
-                        "{origin}: joint '{}': lower limit {l} is above upper limit {u}",
-                        j.name
-                    )
-                }
-                (Some(l), Some(u)) => Some(Limits {
-                    lower: l * limit_unit,
-                    upper: u * limit_unit,
-                }),
-                (None, None) => None,
-                _ => bail!(
-                    "{origin}: joint '{}': give both 'lower' and 'upper', or neither",
-                    j.name
-                ),
-            };
-            if self.length_unit == LengthUnit::M
-                && (j.a.abs() > SUSPICIOUS_METRES || j.d.abs() > SUSPICIOUS_METRES)
-            {
-                warnings.push(format!(
-                    "{origin}: joint '{}': a = {}, d = {} with length_unit m looks like millimetres; set length_unit: mm if so",
-                    j.name, j.a, j.d
-                ));
-            }
-            if self.angle_unit == AngleUnit::Rad
-                && (j.alpha.abs() > 2.0 * std::f64::consts::PI + 1e-9
-                    || j.theta.abs() > 2.0 * std::f64::consts::PI + 1e-9)
-            {
-                warnings.push(format!(
-                    "{origin}: joint '{}': alpha = {}, theta = {} with angle_unit rad looks like degrees; set angle_unit: deg if so",
-                    j.name, j.alpha, j.theta
-                ));
-            }
-            let mimic = match &j.mimic {
-                Some(m) => {
-                    if !m.multiplier.is_finite()
-                        || !m.offset.is_finite()
-                        || m.multiplier.abs() > MAX_MAGNITUDE
-                        || m.offset.abs() > MAX_MAGNITUDE
-                    {
-                        bail!(
-                            "{origin}: joint '{}': mimic multiplier and offset must be finite, of magnitude at most 1e30",
-                            j.name
-                        );
-                    }
-                    Some(Mimic {
-                        joint: m.joint.clone(),
-                        multiplier: m.multiplier,
-                        offset: m.offset * limit_unit,
-                    })
-                }
-                None => None,
-            };
-            rows.push(DhRow {
-                name: j.name.clone(),
-                kind,
-                a: j.a * lu,
-                alpha: j.alpha * au,
-                d: j.d * lu,
-                theta: j.theta * au,
-                limits,
-                mimic,
-            });
+            rows.push(row_of(j, lu, au, origin, &mut warnings)?);
         }
-        let pose = |p: &Option<PoseDoc>, what: &str| -> Result<Isometry3<f64>> {
-            match p {
-                None => Ok(Isometry3::identity()),
-                Some(p) => {
-                    if p.xyz.iter().chain(&p.rpy).any(|v| !v.is_finite()) {
-                        bail!("{origin}: {what}: xyz and rpy must be finite numbers");
-                    }
-                    if let Some(v) = p.xyz.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
-                        bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30, found {v:e}");
-                    }
-                    Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
-                }
-            }
-        };
-        for r in &rows {
-            let Some(m) = &r.mimic else { continue };
-            if m.joint == r.name {
-                bail!(
-                    "{origin}: joint '{}': mimic: expected another joint to follow, found itself",
-                    r.name
-                );
-            }
-            if !rows.iter().any(|d| d.name == m.joint) {
-                warnings.push(format!(
-                    "{origin}: joint '{}': mimic: follows '{}', which is no joint of the sheet (joints: {}); it moves on its own here",
-                    r.name,
-                    m.joint,
-                    rows.iter().map(|d| format!("'{}'", d.name)).collect::<Vec<_>>().join(", ")
-                ));
-            }
-        }
+        check_mimics(&rows, origin, &mut warnings)?;
         let table = DhTable {
             convention: self.convention.into(),
-            base: pose(&self.base, "base").context("reading the base transform")?,
-            tool: pose(&self.tool, "tool").context("reading the tool transform")?,
+            base: pose_of(self.base.as_ref(), lu, au, origin, "base")
+                .context("reading the base transform")?,
+            tool: pose_of(self.tool.as_ref(), lu, au, origin, "tool")
+                .context("reading the tool transform")?,
             rows,
         };
-        let mut coupled = Vec::new();
-        for (joint, terms) in self.coupled.iter().flatten() {
-            let row = table.rows.iter().find(|r| &r.name == joint);
-            match row {
-                None => bail!("{origin}: coupled: '{joint}' is no joint of the sheet"),
-                Some(r) if r.mimic.is_some() => {
-                    bail!("{origin}: coupled: joint '{joint}' also has a mimic; give one of them")
-                }
-                Some(_) => {}
-            }
-            if terms.is_empty() {
-                bail!("{origin}: coupled: joint '{joint}': expected at least one driver");
-            }
-            for (driver, c) in terms {
-                if !c.is_finite() {
-                    bail!("{origin}: coupled: joint '{joint}': coefficient of '{driver}' must be finite, found {c}");
-                }
-                if driver != joint && !table.rows.iter().any(|r| &r.name == driver) {
-                    bail!("{origin}: coupled: joint '{joint}': driver '{driver}' is no joint of the sheet");
-                }
-            }
-            coupled.push((
-                joint.clone(),
-                terms.iter().map(|(d, c)| (d.clone(), *c)).collect(),
-            ));
-        }
-        let order = |j: &str| table.rows.iter().position(|r| r.name == j);
-        coupled.sort_by_key(|(j, _)| order(j));
+        let coupled = coupled_of(self.coupled.as_ref(), &table.rows, origin)?;
         Ok(Sheet {
             coupled,
             table,
@@ -578,6 +460,8 @@ impl SheetDoc {
             tool: Some(pose(&table.tool)),
             joints,
             coupled: None,
+            branches: None,
+            inertials: None,
             pairs: None,
             tolerances: None,
             warnings: None,
@@ -587,6 +471,216 @@ impl SheetDoc {
             truth: None,
         }
     }
+}
+
+/// Row `j` of a sheet in SI units; suspicious units add to `warnings`. `origin` prefixes
+/// every message (the file, and for a tree sheet the line and branch).
+///
+/// # Errors
+/// A control character in the name, a non-finite or huge value, limits out of order or
+/// half given, a bad mimic multiplier or offset.
+pub(crate) fn row_of(
+    j: &JointDoc,
+    length_unit: LengthUnit,
+    angle_unit: AngleUnit,
+    origin: &str,
+    warnings: &mut Vec<String>,
+) -> Result<DhRow> {
+    let (lu, au) = (length_unit.metres(), angle_unit.radians());
+    if let Some((k, c)) = j.name.chars().enumerate().find(|(_, c)| c.is_control()) {
+        // As the URDF reader: such a name corrupts tables, CSV and terminals.
+        bail!(
+            "{origin}: joint '{}': expected a name without control characters, found \
+             U+{:04X} at character {}",
+            j.name.escape_debug(),
+            u32::from(c),
+            k + 1
+        );
+    }
+    for (field, v) in [
+        ("a", j.a),
+        ("alpha", j.alpha),
+        ("d", j.d),
+        ("theta", j.theta),
+    ]
+    .into_iter()
+    .chain(j.lower.map(|v| ("lower", v)))
+    .chain(j.upper.map(|v| ("upper", v)))
+    {
+        if !v.is_finite() {
+            bail!(
+                "{origin}: joint '{}': {field} must be a finite number, found {v}",
+                j.name
+            );
+        }
+        if v.abs() > MAX_MAGNITUDE {
+            bail!(
+                "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30, found {v:e}",
+                j.name
+            );
+        }
+    }
+    let kind = match j.kind {
+        JointType::Revolute => JointKind::Revolute,
+        JointType::Prismatic => JointKind::Prismatic,
+    };
+    let limit_unit = if kind == JointKind::Prismatic { lu } else { au };
+    let limits = match (j.lower, j.upper) {
+        (Some(l), Some(u)) if l > u => {
+            bail!(
+                "{origin}: joint '{}': lower limit {l} is above upper limit {u}",
+                j.name
+            )
+        }
+        (Some(l), Some(u)) => Some(Limits {
+            lower: l * limit_unit,
+            upper: u * limit_unit,
+        }),
+        (None, None) => None,
+        _ => bail!(
+            "{origin}: joint '{}': give both 'lower' and 'upper', or neither",
+            j.name
+        ),
+    };
+    if length_unit == LengthUnit::M
+        && (j.a.abs() > SUSPICIOUS_METRES || j.d.abs() > SUSPICIOUS_METRES)
+    {
+        warnings.push(format!(
+            "{origin}: joint '{}': a = {}, d = {} with length_unit m looks like millimetres; set length_unit: mm if so",
+            j.name, j.a, j.d
+        ));
+    }
+    if angle_unit == AngleUnit::Rad
+        && (j.alpha.abs() > 2.0 * std::f64::consts::PI + 1e-9
+            || j.theta.abs() > 2.0 * std::f64::consts::PI + 1e-9)
+    {
+        warnings.push(format!(
+            "{origin}: joint '{}': alpha = {}, theta = {} with angle_unit rad looks like degrees; set angle_unit: deg if so",
+            j.name, j.alpha, j.theta
+        ));
+    }
+    let mimic = match &j.mimic {
+        Some(m) => {
+            if !m.multiplier.is_finite()
+                || !m.offset.is_finite()
+                || m.multiplier.abs() > MAX_MAGNITUDE
+                || m.offset.abs() > MAX_MAGNITUDE
+            {
+                bail!(
+                    "{origin}: joint '{}': mimic multiplier and offset must be finite, of magnitude at most 1e30",
+                    j.name
+                );
+            }
+            Some(Mimic {
+                joint: m.joint.clone(),
+                multiplier: m.multiplier,
+                offset: m.offset * limit_unit,
+            })
+        }
+        None => None,
+    };
+    Ok(DhRow {
+        name: j.name.clone(),
+        kind,
+        a: j.a * lu,
+        alpha: j.alpha * au,
+        d: j.d * lu,
+        theta: j.theta * au,
+        limits,
+        mimic,
+    })
+}
+
+/// A sheet's pose in SI units (identity when absent); `what` names it in errors.
+///
+/// # Errors
+/// Non-finite or huge numbers.
+pub(crate) fn pose_of(
+    p: Option<&PoseDoc>,
+    length_unit: LengthUnit,
+    angle_unit: AngleUnit,
+    origin: &str,
+    what: &str,
+) -> Result<Isometry3<f64>> {
+    let (lu, au) = (length_unit.metres(), angle_unit.radians());
+    match p {
+        None => Ok(Isometry3::identity()),
+        Some(p) => {
+            if p.xyz.iter().chain(&p.rpy).any(|v| !v.is_finite()) {
+                bail!("{origin}: {what}: xyz and rpy must be finite numbers");
+            }
+            if let Some(v) = p.xyz.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
+                bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30, found {v:e}");
+            }
+            Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
+        }
+    }
+}
+
+/// Refuses a row that mimics itself; warns of a mimic whose driver is no row of `rows`.
+///
+/// # Errors
+/// A row that mimics itself.
+pub(crate) fn check_mimics(rows: &[DhRow], origin: &str, warnings: &mut Vec<String>) -> Result<()> {
+    for r in rows {
+        let Some(m) = &r.mimic else { continue };
+        if m.joint == r.name {
+            bail!(
+                "{origin}: joint '{}': mimic: expected another joint to follow, found itself",
+                r.name
+            );
+        }
+        if !rows.iter().any(|d| d.name == m.joint) {
+            warnings.push(format!(
+                "{origin}: joint '{}': mimic: follows '{}', which is no joint of the sheet (joints: {}); it moves on its own here",
+                r.name,
+                m.joint,
+                rows.iter().map(|d| format!("'{}'", d.name)).collect::<Vec<_>>().join(", ")
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Coupled joints (see [`SheetDoc::coupled`]) checked against `rows`, in row order.
+///
+/// # Errors
+/// A coupled joint or driver that is no row, a coupled joint with a mimic, no driver, a
+/// non-finite coefficient.
+pub(crate) fn coupled_of(
+    given: Option<&std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>>,
+    rows: &[DhRow],
+    origin: &str,
+) -> Result<Vec<(String, Vec<(String, f64)>)>> {
+    let mut coupled = Vec::new();
+    for (joint, terms) in given.into_iter().flatten() {
+        let row = rows.iter().find(|r| &r.name == joint);
+        match row {
+            None => bail!("{origin}: coupled: '{joint}' is no joint of the sheet"),
+            Some(r) if r.mimic.is_some() => {
+                bail!("{origin}: coupled: joint '{joint}' also has a mimic; give one of them")
+            }
+            Some(_) => {}
+        }
+        if terms.is_empty() {
+            bail!("{origin}: coupled: joint '{joint}': expected at least one driver");
+        }
+        for (driver, c) in terms {
+            if !c.is_finite() {
+                bail!("{origin}: coupled: joint '{joint}': coefficient of '{driver}' must be finite, found {c}");
+            }
+            if driver != joint && !rows.iter().any(|r| &r.name == driver) {
+                bail!("{origin}: coupled: joint '{joint}': driver '{driver}' is no joint of the sheet");
+            }
+        }
+        coupled.push((
+            joint.clone(),
+            terms.iter().map(|(d, c)| (d.clone(), *c)).collect(),
+        ));
+    }
+    let order = |j: &str| rows.iter().position(|r| r.name == j);
+    coupled.sort_by_key(|(j, _)| order(j));
+    Ok(coupled)
 }
 
 #[cfg(test)]

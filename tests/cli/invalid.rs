@@ -50,6 +50,23 @@ macro_rules! sheet {
     };
 }
 
+/// A tree sheet, read by `calibrate` (the only command that reads trees) with the valid
+/// arm's data.
+macro_rules! tree {
+    ($name:literal) => {
+        case(
+            concat!("sheet_", $name),
+            &[
+                "calibrate",
+                "--model",
+                concat!("fixtures/invalid/sheet/", $name, ".yaml"),
+                "--data",
+                "fixtures/invalid/csv/valid_arm.csv",
+            ],
+        )
+    };
+}
+
 macro_rules! csv {
     ($name:literal) => {
         case(
@@ -181,6 +198,15 @@ const CASES: &[Case] = &[
     sheet!("deep_nesting", "deep_nesting.yaml"),
     sheet!("unclosed_nesting", "unclosed_nesting.yaml"),
     sheet!("missing_file", "no_such_sheet.yaml"),
+    // Tree sheets: `check` refuses one; `calibrate` names the file, line, branch and joint.
+    sheet!("tree_in_check", "tree_in_check.yaml"),
+    tree!("tree_unknown_key_in_branch"),
+    tree!("tree_duplicate_joint"),
+    tree!("tree_empty_branch"),
+    tree!("tree_coupled_unknown_driver"),
+    tree!("tree_inertials_unknown_joint"),
+    tree!("tree_reversed_limits_in_branch"),
+    tree!("tree_target_on_no_branch"),
     // Measurement CSVs, read by `calibrate` with the valid arm as the model.
     csv!("empty"),
     csv!("only_header"),

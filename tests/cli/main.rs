@@ -9,3 +9,4 @@ mod cpa;
 mod extract;
 mod invalid;
 mod measured;
+mod tree;

@@ -115,6 +115,8 @@ pub struct CalibrateArgs {
     pub gravity: Option<Vec<f64>>,
     /// A payload at the tip: mass (kg) and centre in the tip frame (m), four values.
     pub payload: Option<Vec<f64>>,
+    /// Most effects `--effects auto` adds (`dh_calib::diagnose::DiagnoseOptions::max_effects`).
+    pub max_effects: usize,
 }
 
 /// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
@@ -696,6 +698,7 @@ pub fn calibrate(
             let diag = DiagnoseOptions {
                 inertials,
                 gravity,
+                max_effects: args.max_effects,
                 ..DiagnoseOptions::default()
             };
             auto_report(&inputs.table, &inputs.data, &options, &diag, &ctx)?
@@ -1574,6 +1577,10 @@ pub struct CalibrateCli {
         allow_hyphen_values = true
     )]
     payload: Option<Vec<f64>>,
+    /// Most effects --effects auto adds before it stops (a guard; the run's notes say when it
+    /// stopped the selection).
+    #[arg(long, value_name = "N", default_value_t = 12)]
+    max_effects: usize,
 }
 
 impl CalibrateCli {
@@ -1600,6 +1607,7 @@ impl CalibrateCli {
             inertials: self.inertials,
             gravity: self.gravity,
             payload: self.payload,
+            max_effects: self.max_effects,
         }
     }
 }
@@ -1687,4 +1695,57 @@ mod chart_tests {
             assert_eq!(chart.poses, 60);
         }
     }
+}
+
+// ---------------------------------------------------------------- hooks for trees
+
+/// The measurement files of `args` read for `model` as `calibrate` reads them for a serial
+/// model: the `--validate` file merged as validation samples, the coupled joints applied and
+/// `--targets` kept (`crate::commands::calibrate_tree` reads a tree's data through it).
+///
+/// # Errors
+/// As the data of [`calibrate`].
+pub(crate) fn read_data_for(args: &CalibrateArgs, model: &LoadedModel) -> Result<Measurements> {
+    let data_name = display_name(&args.data);
+    let (joints, prismatic) = (model.measured_joints(), model.prismatic());
+    let mut data = read_measurements(
+        &DataFile::read(&args.data)?,
+        &joints,
+        &prismatic,
+        args.units,
+    )?;
+    if let Some(v) = &args.validate {
+        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units)?;
+        merge_validation(&mut data, extra);
+    }
+    model
+        .couple(&mut data)
+        .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
+    if !args.targets.is_empty() {
+        keep_targets(&mut data, &args.targets, &data_name)?;
+    }
+    Ok(data)
+}
+
+/// The JSON document and the text report of `report`, a calibration of `model` (for a tree,
+/// `model.table` is its joint table) against `data`, as `calibrate` prints them.
+pub(crate) fn report_for(
+    args: &CalibrateArgs,
+    model: &LoadedModel,
+    data: &Measurements,
+    report: &Report,
+) -> (CalibrationDoc, String) {
+    let inputs = Inputs {
+        table: model.table.clone(),
+        model_name: model.origin.clone(),
+        robot: model.robot.clone(),
+        units: model.units,
+        links: model.links.clone(),
+        coupled: model.coupled.clone(),
+        data: data.clone(),
+        cpa: false,
+    };
+    let doc = document(args, &inputs, report);
+    let text = text(&doc, &inputs);
+    (doc, text)
 }

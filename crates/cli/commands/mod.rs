@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod calibrate;
+pub mod calibrate_tree;
 pub mod check;
 pub mod convert;
 pub mod cpa;

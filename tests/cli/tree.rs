@@ -1,0 +1,309 @@
+//! `urdf-dh calibrate` of tree sheets: a simulated two-branch tree whose planted errors come
+//! back through the CLI, and the DLR Agile Justin set (`../shared`) as one tree against the
+//! figures of docs/results.md.
+
+use std::path::Path;
+use std::process::Command;
+
+use nalgebra::{Isometry3, Point3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::Value;
+use urdf_dh::tree_sheet::TreeSheet;
+
+use crate::common::{root, skip_without_shared};
+
+/// Runs the binary; returns (exit code, stdout, stderr).
+fn exec(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run urdf-dh");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn ok(args: &[&str]) -> String {
+    let (code, out, err) = exec(args);
+    assert_eq!(code, 0, "urdf-dh {}:\n{err}", args.join(" "));
+    out
+}
+
+fn path(dir: &Path, name: &str) -> String {
+    dir.join(name).to_string_lossy().into_owned()
+}
+
+/// A torso of two joints carrying two arms of three; `{..}` placeholders take planted errors.
+fn tree_sheet(e: &[(&str, f64)]) -> String {
+    let v = |name: &str, nominal: f64| {
+        nominal
+            + e.iter()
+                .filter(|(n, _)| *n == name)
+                .map(|(_, d)| d)
+                .sum::<f64>()
+    };
+    // Lengths in metres, angles in degrees (planted angle errors are given in radians).
+    let deg = |name: &str, nominal: f64| nominal + (v(name, nominal) - nominal).to_degrees();
+    format!(
+        "robot: two-arm test tree\n\
+         convention: modified\nlength_unit: m\nangle_unit: deg\n\
+         base: {{xyz: [0, 0, 0.4], rpy: [0, 0, 0]}}\n\
+         tool: {{xyz: [0, 0, 0.15], rpy: [0, 0, 0]}}\n\
+         joints:\n\
+         \x20 - {{name: t1, type: revolute, a: 0, alpha: 0, d: 0.1, theta: 0}}\n\
+         \x20 - {{name: t2, type: revolute, a: {}, alpha: {}, d: 0, theta: 0}}\n\
+         branches:\n\
+         \x20 - name: r\n\
+         \x20   base: {{xyz: [0.1, -0.2, 0], rpy: [90, 0, 0]}}\n\
+         \x20   tool: {{xyz: [0, 0, 0.08], rpy: [0, 0, 0]}}\n\
+         \x20   joints:\n\
+         \x20     - {{name: r1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}}\n\
+         \x20     - {{name: r2, type: revolute, a: {}, alpha: {}, d: 0, theta: {}}}\n\
+         \x20     - {{name: r3, type: revolute, a: {}, alpha: 0, d: 0.02, theta: 0}}\n\
+         \x20 - name: l\n\
+         \x20   base: {{xyz: [0.1, 0.2, 0], rpy: [-90, 0, 0]}}\n\
+         \x20   tool: {{xyz: [0, 0, 0.08], rpy: [0, 0, 0]}}\n\
+         \x20   joints:\n\
+         \x20     - {{name: l1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}}\n\
+         \x20     - {{name: l2, type: revolute, a: {}, alpha: {}, d: 0, theta: 0}}\n\
+         \x20     - {{name: l3, type: revolute, a: 0.3, alpha: 0, d: 0, theta: {}}}\n",
+        v("t2.a", 0.05),
+        deg("t2.alpha", 90.0),
+        v("r2.a", 0.05),
+        deg("r2.alpha", -90.0),
+        deg("r2.theta", 0.0),
+        v("r3.a", 0.3),
+        v("l2.a", 0.05),
+        deg("l2.alpha", 90.0),
+        deg("l3.theta", 0.0),
+    )
+}
+
+/// Errors planted in the truth (metres, radians), each identifiable from both hands' points.
+const PLANTED: [(&str, f64); 8] = [
+    ("t2.a", 2e-3),
+    ("t2.alpha", 3e-3),
+    ("r2.a", -1.5e-3),
+    ("r2.alpha", 2e-3),
+    ("r2.theta", -2.5e-3),
+    ("r3.a", 1e-3),
+    ("l2.a", 1.2e-3),
+    ("l2.alpha", -2e-3),
+];
+
+/// Measurement noise per axis (metres).
+const NOISE: f64 = 2e-5;
+
+/// Writes `poses` poses of both hands of `truth` in the measurement CSV: target `r` on branch
+/// `r` and `l/hand` on branch `l` (the `BRANCH/NAME` rule), with Gaussian-like noise.
+fn write_data(truth: &TreeSheet, poses: usize, seed: u64, file: &str) {
+    let tree = &truth.tree;
+    let device = Isometry3::new(Vector3::new(1.2, -0.3, 0.2), Vector3::new(0.02, -0.01, 0.4));
+    let offsets = [
+        Vector3::new(0.01, 0.02, 0.03),
+        Vector3::new(-0.02, 0.01, 0.04),
+    ];
+    let names = ["r", "l/hand"];
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut text = String::from("t1,t2,r1,r2,r3,l1,l2,l3,x,y,z,target,config,sigma\n");
+    for p in 0..poses {
+        let q: Vec<f64> = (0..tree.rows().len())
+            .map(|_| rng.random_range(-1.5..1.5))
+            .collect();
+        let frames = tree.frames(&q).unwrap();
+        for b in 0..2 {
+            let point = device * frames.tips[b] * Point3::from(offsets[b]);
+            // Sum of uniforms: near Gaussian with standard deviation NOISE.
+            let mut noise = || (0..12).map(|_| rng.random_range(-0.5..0.5)).sum::<f64>() * NOISE;
+            let (x, y, z) = (point.x + noise(), point.y + noise(), point.z + noise());
+            let qs: Vec<String> = q.iter().map(|v| format!("{v:.17}")).collect();
+            text += &format!(
+                "{},{x:.17},{y:.17},{z:.17},{},p{p},{NOISE}\n",
+                qs.join(","),
+                names[b]
+            );
+        }
+    }
+    std::fs::write(file, text).unwrap();
+}
+
+#[test]
+fn a_simulated_tree_comes_back_through_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let nominal = path(dir.path(), "tree.yaml");
+    std::fs::write(&nominal, tree_sheet(&[])).unwrap();
+    let truth = TreeSheet::parse(&tree_sheet(&PLANTED), "truth.yaml").unwrap();
+    let (data, validation) = (path(dir.path(), "d.csv"), path(dir.path(), "v.csv"));
+    write_data(&truth, 60, 1, &data);
+    write_data(&truth, 20, 2, &validation);
+    let out = path(dir.path(), "calibrated.yaml");
+    let json = ok(&[
+        "calibrate",
+        "--model",
+        &nominal,
+        "--data",
+        &data,
+        "--validate",
+        &validation,
+        "--format",
+        "json",
+        "--out",
+        &out,
+    ]);
+    let report: Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(report["validation"]["method"], "split");
+    // The nominal model misses by millimetres; the geometric step reaches the noise (3-D RMS
+    // of noise NOISE per axis: about 1.7 NOISE) on both sets.
+    let steps = report["steps"].as_array().unwrap();
+    assert!(steps[0]["rms"].as_f64().unwrap() > 1e-3, "{}", steps[0]);
+    let geometric = &steps[1];
+    for key in ["rms", "val_rms"] {
+        let v = geometric[key].as_f64().unwrap();
+        assert!(v < 2.5 * NOISE, "geometric {key} {v}");
+    }
+    // Every planted error is estimated, within 4 standard errors.
+    for (name, planted) in PLANTED {
+        let p = report["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap_or_else(|| panic!("no parameter {name}"));
+        assert_eq!(p["free"], true, "{name} held: {p}");
+        let change = p["estimate"].as_f64().unwrap() - p["nominal"].as_f64().unwrap();
+        let se = p["std_error"].as_f64().unwrap();
+        assert!(
+            (change - planted).abs() < 4.0 * se && se < planted.abs() / 5.0,
+            "{name}: change {change:e}, planted {planted:e}, standard error {se:e}"
+        );
+    }
+    // The tree section: which table each parameter and target belongs to.
+    let tree = report["tree"].as_array().unwrap();
+    let names: Vec<&str> = tree.iter().map(|t| t["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["trunk", "r", "l"]);
+    assert_eq!(tree[2]["targets"], serde_json::json!(["l/hand"]));
+    assert_eq!(tree[1]["joints"], serde_json::json!(["r1", "r2", "r3"]));
+    let free = |t: &Value, n: &str| t["free"].as_array().unwrap().iter().any(|p| p == n);
+    assert!(free(&tree[0], "t2.a") && free(&tree[1], "r2.a") && free(&tree[2], "l2.alpha"));
+    assert!(free(&tree[2], "target.l/hand.x") && !free(&tree[1], "target.l/hand.x"));
+    // The calibrated tree sheet reads back with the estimates.
+    let back =
+        TreeSheet::parse(&std::fs::read_to_string(&out).unwrap(), "calibrated.yaml").unwrap();
+    let r2 = back.tree.branches()[0].table.rows[1].a;
+    let estimate = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "r2.a")
+        .and_then(|p| p["estimate"].as_f64())
+        .unwrap();
+    assert!((r2 - estimate).abs() < 1e-9, "{r2} against {estimate}");
+    // The text report names the tables.
+    let text = ok(&["calibrate", "--model", &nominal, "--data", &data]);
+    assert!(text.contains("tree: trunk and 2 branch(es)"), "{text}");
+    assert!(text.contains("  branch l: joints l1, l2, l3;"), "{text}");
+    assert!(text.contains("targets l/hand"), "{text}");
+    assert!(
+        text.contains("5-fold cross-validation over 60 poses"),
+        "{text}"
+    );
+}
+
+#[test]
+fn options_that_need_one_chain_are_refused_for_a_tree() {
+    let dir = tempfile::tempdir().unwrap();
+    let nominal = path(dir.path(), "tree.yaml");
+    std::fs::write(&nominal, tree_sheet(&[])).unwrap();
+    let data = path(dir.path(), "d.csv");
+    write_data(
+        &TreeSheet::parse(&tree_sheet(&[]), "t.yaml").unwrap(),
+        8,
+        3,
+        &data,
+    );
+    for (extra, says) in [
+        (
+            vec!["--plot", "r.svg"],
+            "--plot: the residual chart is drawn for serial models only",
+        ),
+        (
+            vec!["--payload", "1,0,0,0"],
+            "--payload: tree.yaml is a tree with one tip per branch",
+        ),
+        (
+            vec!["--out", "t.urdf"],
+            "a tree is written as a tree sheet, not a URDF",
+        ),
+        (vec!["--tip", "tool0"], "the model is a tree sheet"),
+        (vec!["--effects", "compliance:r2"], "r2"),
+    ] {
+        let mut args = vec!["calibrate", "--model", &nominal, "--data", &data];
+        args.extend(extra.iter().copied());
+        let (code, out, err) = exec(&args);
+        assert_eq!(code, 2, "{extra:?}: {err}");
+        assert!(out.is_empty() && err.contains(says), "{extra:?}: {err}");
+    }
+}
+
+/// The DLR Agile Justin set as one tree: the nominal and geometric figures of
+/// docs/results.md (10-fold cross-validation), to the printed digit.
+#[test]
+fn the_dlr_tree_calibrates_through_the_cli() {
+    let Some(shared) = skip_without_shared("the_dlr_tree_calibrates_through_the_cli") else {
+        return;
+    };
+    let file = shared.join("measured/dlr_agile_justin_vicon/measurements.csv");
+    if !file.is_file() {
+        println!(
+            "the_dlr_tree_calibrates_through_the_cli: skipped: {} is absent",
+            file.display()
+        );
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let csv = path(dir.path(), "dlr.csv");
+    ok(&[
+        "import",
+        "--layout",
+        "dlr",
+        &file.to_string_lossy(),
+        "--out",
+        &csv,
+    ]);
+    let json = ok(&[
+        "calibrate",
+        "--model",
+        "fixtures/measured/dlr_agile_justin/model.yaml",
+        "--data",
+        &csv,
+        "--folds",
+        "10",
+        "--format",
+        "json",
+    ]);
+    let report: Value = serde_json::from_str(&json).unwrap();
+    let steps = report["steps"].as_array().unwrap();
+    let mm = |s: &Value, k: &str| (s[k].as_f64().unwrap() * 1e5).round() / 1e2;
+    // docs/results.md: nominal 21.992 RMS / 19.998 mean / 22.089 10-fold; geometric 11.362 /
+    // 10.083 / 11.664 (mm), with 12 and 76 free parameters.
+    assert_eq!(steps[0]["free"], 12);
+    assert_eq!(steps[1]["free"], 76);
+    for (s, rms, mean, val) in [
+        (&steps[0], 21.99, 20.00, 22.09),
+        (&steps[1], 11.36, 10.08, 11.66),
+    ] {
+        assert_eq!(
+            (mm(s, "rms"), mm(s, "mean"), mm(s, "val_rms")),
+            (rms, mean, val),
+            "{}",
+            s["label"]
+        );
+    }
+    let tree = report["tree"].as_array().unwrap();
+    assert_eq!(tree[1]["targets"], serde_json::json!(["right"]));
+    assert_eq!(tree[2]["targets"], serde_json::json!(["left"]));
+}
