@@ -642,16 +642,22 @@ pub(crate) fn check_mimics(rows: &[DhRow], origin: &str, warnings: &mut Vec<Stri
     Ok(())
 }
 
+/// The `coupled` key of a sheet: `{joint: {driver: coefficient}}`.
+pub type CoupledDoc = std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>;
+
+/// A coupled joint and its `(driver, coefficient)` terms.
+pub type Coupled = (String, Vec<(String, f64)>);
+
 /// Coupled joints (see [`SheetDoc::coupled`]) checked against `rows`, in row order.
 ///
 /// # Errors
 /// A coupled joint or driver that is no row, a coupled joint with a mimic, no driver, a
 /// non-finite coefficient.
 pub(crate) fn coupled_of(
-    given: Option<&std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>>,
+    given: Option<&CoupledDoc>,
     rows: &[DhRow],
     origin: &str,
-) -> Result<Vec<(String, Vec<(String, f64)>)>> {
+) -> Result<Vec<Coupled>> {
     let mut coupled = Vec::new();
     for (joint, terms) in given.into_iter().flatten() {
         let row = rows.iter().find(|r| &r.name == joint);

@@ -4,19 +4,20 @@
 //!
 //! ```sh
 //! cargo run --release -p dh-calib --example real_sets            # every set
-//! cargo run --release -p dh-calib --example real_sets -- dlr     # one set
+//! cargo run --release -p dh-calib --example real_sets -- boby    # one set
 //! ```
 //!
 //! A set whose files are absent is skipped with a message on stderr. The fixture readers here
-//! are deliberately small (the CLI owns the full sheet format); the tree format of the DLR model
-//! is documented in its `model.yaml`.
+//! are deliberately small and serial (the CLI owns the full sheet format). The DLR Agile Justin
+//! set is a kinematic tree: its tree sheet is read by the CLI (`urdf_dh::tree_sheet`), and it
+//! runs there (`-- dlr` prints the commands; see docs/results.md).
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use dh_calib::calibrate::{CalibrationOptions, Report, StepReport};
+use dh_calib::calibrate::{CalibrationOptions, Report};
 use dh_calib::cpa::{analyse, CpaOptions};
 use dh_calib::data::{Measurements, Split};
 use dh_calib::diagnose::{diagnose_tree, CandidateStatus, DiagnoseOptions, EffectSelection};
@@ -24,7 +25,7 @@ use dh_calib::effects::{parse_label_in, EffectContext};
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
 use dh_calib::import::{import, Layout, Source};
 use dh_calib::model::{Effect, Model, ModelOptions};
-use dh_calib::tree::{Branch, DhTree};
+use dh_calib::tree::DhTree;
 use dh_core::pose::from_xyz_rpy;
 use dh_core::{Convention, DhRow, DhTable, JointKind, Limits};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -153,8 +154,7 @@ fn convention(doc: &Value) -> Convention {
     }
 }
 
-/// A DH sheet (serial) or the tree format of the DLR fixture; with the coupled joints and the
-/// inertials the tree file carries.
+/// A serial DH sheet, with its coupled joints and the inertials of `inertials.yaml` beside it.
 struct Robot {
     tree: DhTree,
     coupled: Vec<(String, Vec<(String, f64)>)>,
@@ -179,12 +179,8 @@ fn read_inertials(doc: &Value, tree: &DhTree) -> Result<(Inertials, Vector3<f64>
     let mut payloads = Vec::new();
     if let Some(ps) = doc["payloads"].as_sequence() {
         for p in ps {
-            let chain = match p["branch"].as_str() {
-                Some(b) => tree.branch_index(b).ok_or("payload on an unknown branch")?,
-                None => p["chain"].as_u64().unwrap_or(0) as usize,
-            };
             payloads.push((
-                chain,
+                0,
                 Inertial {
                     mass: num(&p["mass"])?,
                     com: vec3(&p["com"])?,
@@ -211,19 +207,10 @@ fn read_robot(set: &str) -> Result<Robot, Error> {
     let u = units(&doc);
     let conv = convention(&doc);
     let trunk = table(&doc, conv, &u)?;
-    let tree = match doc["branches"].as_sequence() {
-        None => DhTree::serial(&trunk),
-        Some(bs) => {
-            let mut branches = Vec::new();
-            for b in bs {
-                branches.push(Branch {
-                    name: b["name"].as_str().ok_or("branch without a name")?.into(),
-                    table: table(b, conv, &u)?,
-                });
-            }
-            DhTree::new(trunk, branches)?
-        }
-    };
+    if !doc["branches"].is_null() {
+        return Err(format!("{set}: a tree sheet; trees run through urdf-dh calibrate").into());
+    }
+    let tree = DhTree::serial(&trunk);
     let mut coupled = Vec::new();
     if let Some(map) = doc["coupled"].as_mapping() {
         for (k, v) in map {
@@ -236,15 +223,11 @@ fn read_robot(set: &str) -> Result<Robot, Error> {
             coupled.push((k.as_str().ok_or("bad coupled joint")?.to_string(), terms));
         }
     }
-    let inertial_doc = if doc["inertials"].is_null() {
-        let path = fixture(set, "inertials.yaml");
-        if path.exists() {
-            Some(serde_yaml::from_str::<Value>(&read(&path)?)?)
-        } else {
-            None
-        }
+    let path = fixture(set, "inertials.yaml");
+    let inertial_doc = if path.exists() {
+        Some(serde_yaml::from_str::<Value>(&read(&path)?)?)
     } else {
-        Some(doc["inertials"].clone())
+        None
     };
     let (inertials, gravity) = match inertial_doc {
         Some(d) => {
@@ -798,71 +781,14 @@ fn liaowu() -> Result<(), Error> {
     Ok(())
 }
 
+/// The DLR Agile Justin tree runs through the CLI, which reads its tree sheet.
 fn dlr() -> Result<(), Error> {
-    let set = "dlr_agile_justin";
-    let mut data = load(
-        Layout::Dlr,
-        &shared("dlr_agile_justin_vicon"),
-        &["measurements.csv"],
-    )?;
-    let robot = read_robot(set)?;
-    apply_coupling(&mut data, &robot.coupled)?;
-    println!("## DLR Agile Justin (500 poses, one marker per hand, two arms on one torso)\n");
-    let options = CalibrationOptions {
-        folds: 10,
-        ..CalibrationOptions::default()
-    };
-    let all_joints: Vec<String> = robot.tree.rows().iter().map(|r| r.name.clone()).collect();
-    let ctx = context(&robot)?;
-    let loaded = |label: &str| parse_label_in(label, &ctx).is_ok();
-    let compliance: Vec<String> = all_joints
-        .iter()
-        .map(|j| format!("compliance:{j}"))
-        .filter(|l| loaded(l))
-        .collect();
-    let mut lateral = compliance.clone();
-    lateral.extend(
-        all_joints
-            .iter()
-            .map(|j| format!("lateral_compliance:{j}"))
-            .filter(|l| loaded(l)),
+    eprintln!(
+        "dlr: the Agile Justin tree runs through the CLI (docs/results.md):\n  \
+         urdf-dh import --layout dlr ../shared/measured/dlr_agile_justin_vicon/measurements.csv --out dlr.csv\n  \
+         urdf-dh calibrate --model fixtures/measured/dlr_agile_justin/model.yaml --data dlr.csv \\\n    \
+         --folds 10 --effects auto --max-effects 40"
     );
-    println!(
-        "Held-out: 10-fold cross-validation over the 500 poses (both hands of a pose together).\n"
-    );
-    let published = [
-        ("nominal", "21.33 mean / 9.71 sd / 63.41 max (frames only)"),
-        ("geometric", "10.5 / 5.74 / 36.37 (full DH)"),
-    ];
-    let runs: [(&str, EffectSelection); 3] = [
-        ("automatic diagnosis", EffectSelection::Auto),
-        (
-            "joint compliance on every loaded joint (the paper's kappa_theta)",
-            EffectSelection::Labels(compliance),
-        ),
-        (
-            "joint and lateral compliance (kappa_theta + kappa_alpha)",
-            EffectSelection::Labels(lateral),
-        ),
-    ];
-    for (title, sel) in runs {
-        println!("### {title}\n");
-        let diag = DiagnoseOptions {
-            max_effects: 40,
-            ..diag_options(&robot, sel)
-        };
-        let r = diagnose_tree(&robot.tree, &data, &options, &diag)?;
-        steps_table(&r, &published);
-        let last: &StepReport = r.steps.last().ok_or("no steps")?;
-        println!(
-            "Final: mean {} mm, RMS {} mm, max {} mm on the calibration data (paper: 5.64 mean with kappa_theta, 3.12 mean with kappa_theta + kappa_alpha); cross-validated RMS {} mm.\n",
-            mm(last.mean),
-            mm(last.rms),
-            mm(last.max),
-            opt_mm(last.val_rms)
-        );
-        diagnosis(&r);
-    }
     Ok(())
 }
 
