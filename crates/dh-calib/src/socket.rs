@@ -648,9 +648,15 @@ impl Run<'_> {
         columns.extend(&cols);
         let f = fit::factor(&self.problem(self.sigma_point), x, &columns, &self.scales)?;
         let big = (p..p + k).map(|j| f.r.column(j).norm()).fold(0.0, f64::max);
-        let block = f.r.view((p, p), (k, k)).clone_owned();
-        let smin = block.singular_values().min();
         let inert = k == 0 || big <= 0.0;
+        let smin = if inert {
+            0.0
+        } else {
+            f.r.view((p, p), (k, k))
+                .clone_owned()
+                .singular_values()
+                .min()
+        };
         let independence = if inert { 0.0 } else { smin / big };
         let aliased = !inert && independence < ALIAS_SINE;
         let reduction: f64 = (p..p + k).map(|i| f.qtr[i] * f.qtr[i]).sum();
