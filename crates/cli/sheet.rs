@@ -366,7 +366,7 @@ impl SheetDoc {
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),
-                "calibrate the whole tree with: urdf-dh calibrate --model SHEET --data D.csv; for this command give one chain as a serial sheet (the trunk's joints followed by one branch's)",
+                "calibrate the whole tree with: urdf-dh calibrate --model SHEET --data D.csv (from a file, not standard input); for other commands give one chain as a serial sheet (the trunk's joints followed by one branch's)",
             ));
         }
         if self.inertials.is_some() {

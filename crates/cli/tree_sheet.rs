@@ -746,6 +746,30 @@ branches:
     }
 
     #[test]
+    fn every_prefix_and_mangling_of_a_tree_is_an_answer_not_a_panic() {
+        // Truncated files and swapped keys: each parses or is an error naming the file.
+        let mut cut = 0;
+        while cut <= TREE.len() {
+            if let Err(e) = TreeSheet::parse(&TREE[..cut], "tree.yaml") {
+                assert!(format!("{e:#}").starts_with("tree.yaml"), "{e:#}");
+            }
+            cut += 7;
+        }
+        for (from, to) in [
+            ("name: r\n", "name: ''\n"),
+            ("name: r\n", "name: 'r/x'\n"),
+            ("name: l\n", "name: r\n"),
+            ("t2", "t1"),
+            ("branches:", "branches: []\nx:"),
+            ("a: 0.25", "a: .nan"),
+            ("rpy: [90, 0, 0]", "rpy: [90, 0]"),
+        ] {
+            let e = err(&TREE.replacen(from, to, 1));
+            assert!(e.starts_with("tree.yaml"), "{from} -> {to}: {e}");
+        }
+    }
+
+    #[test]
     fn lines_are_found_for_every_spelling() {
         let t = "a:\n  - {name: j1}\n  - name: \"j1\"\n  - {\"name\": \"j10\"}\n  - {\"name\": \"j1\"}\n";
         assert_eq!(line_of(t, "name", "j1", 0), Some(2));

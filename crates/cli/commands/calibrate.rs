@@ -1507,8 +1507,9 @@ mod tests {
 /// Command-line arguments of `calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct CalibrateCli {
-    /// The nominal model: a URDF (with --base/--tip) or a DH sheet [default: circle-point
-    /// analysis of the data].
+    /// The nominal model: a URDF (with --base/--tip), a DH sheet, or a tree sheet (a sheet
+    /// with `branches`; targets ride on the branch they name) [default: circle-point analysis
+    /// of the data].
     #[arg(long, value_name = "MODEL")]
     model: Option<String>,
     /// Base link of a URDF chain [default: the root link].
@@ -1558,7 +1559,8 @@ pub struct CalibrateCli {
     plot: Option<String>,
     /// Link masses for the compliance effects: YAML with `links: [{joint, mass, com}]` (kg,
     /// m; `com_frame: base_at_zero` or `dh`) and optional `payloads`, `gravity` [default: a
-    /// URDF model's inertials; none for a sheet, and compliance is skipped].
+    /// URDF model's inertials, a tree sheet's own `inertials`; none for a sheet, and
+    /// compliance is skipped].
     #[arg(long, value_name = "FILE")]
     inertials: Option<String>,
     /// Gravity in the robot's base link frame, m/s² [default: 0,0,-9.80665].
