@@ -101,6 +101,18 @@ const NOISE: f64 = 2e-5;
 /// Writes `poses` poses of both hands of `truth` in the measurement CSV: target `r` on branch
 /// `r` and `l/hand` on branch `l` (the `BRANCH/NAME` rule), with Gaussian-like noise.
 fn write_data(truth: &TreeSheet, poses: usize, seed: u64, file: &str) {
+    write_data_with(truth, poses, seed, file, &|_| {});
+}
+
+/// [`write_data`] with the points at joint values `moved` changes (the file keeps the
+/// commanded ones): how a planted effect on the joint values shows.
+fn write_data_with(
+    truth: &TreeSheet,
+    poses: usize,
+    seed: u64,
+    file: &str,
+    moved: &dyn Fn(&mut Vec<f64>),
+) {
     let tree = &truth.tree;
     let device = Isometry3::new(Vector3::new(1.2, -0.3, 0.2), Vector3::new(0.02, -0.01, 0.4));
     let offsets = [
@@ -114,7 +126,9 @@ fn write_data(truth: &TreeSheet, poses: usize, seed: u64, file: &str) {
         let q: Vec<f64> = (0..tree.rows().len())
             .map(|_| rng.random_range(-1.5..1.5))
             .collect();
-        let frames = tree.frames(&q).unwrap();
+        let mut actual = q.clone();
+        moved(&mut actual);
+        let frames = tree.frames(&actual).unwrap();
         for b in 0..2 {
             let point = device * frames.tips[b] * Point3::from(offsets[b]);
             // Sum of uniforms: near Gaussian with standard deviation NOISE.
@@ -210,6 +224,74 @@ fn a_simulated_tree_comes_back_through_the_cli() {
     assert!(
         text.contains("5-fold cross-validation over 60 poses"),
         "{text}"
+    );
+}
+
+#[test]
+fn an_effect_on_a_branch_joint_comes_back_and_inertials_come_from_the_sheet() {
+    let dir = tempfile::tempdir().unwrap();
+    // The sheet carries its masses; compliance labels then load without --inertials.
+    let nominal = path(dir.path(), "tree.yaml");
+    std::fs::write(
+        &nominal,
+        tree_sheet(&[])
+            + "inertials:\n  com_frame: dh\n  links:\n    - {joint: r2, mass: 3.0, com: [0.15, 0, 0]}\n    - {joint: l2, mass: 3.0, com: [0.15, 0, 0]}\n  payloads:\n    - {branch: r, mass: 1.0, com: [0, 0, 0.05]}\n",
+    )
+    .unwrap();
+    let truth = TreeSheet::parse(&tree_sheet(&PLANTED), "truth.yaml").unwrap();
+    let data = path(dir.path(), "d.csv");
+    // gear_ratio:r2 (theta += eps q): the arm turns (1 + eps) times the commanded r2.
+    const EPS: f64 = 3e-3;
+    let r2 = truth.tree.row_index("r2").unwrap();
+    write_data_with(&truth, 60, 4, &data, &|q| q[r2] *= 1.0 + EPS);
+    let json = ok(&[
+        "calibrate",
+        "--model",
+        &nominal,
+        "--data",
+        &data,
+        "--effects",
+        "gear_ratio:r2,compliance:l2",
+        "--format",
+        "json",
+    ]);
+    let report: Value = serde_json::from_str(&json).unwrap();
+    let p = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "gear_ratio:r2")
+        .unwrap();
+    let (e, se) = (
+        p["estimate"].as_f64().unwrap(),
+        p["std_error"].as_f64().unwrap(),
+    );
+    assert!(
+        (e - EPS).abs() < 4.0 * se && se < EPS / 5.0,
+        "{e:e} +- {se:e}"
+    );
+    let last = report["steps"].as_array().unwrap().last().unwrap().clone();
+    assert_eq!(last["label"], "effects");
+    assert!(last["rms"].as_f64().unwrap() < 2.5 * NOISE, "{last}");
+    let tree = report["tree"].as_array().unwrap();
+    let free = |t: &Value, n: &str| t["free"].as_array().unwrap().iter().any(|p| p == n);
+    assert!(free(&tree[1], "gear_ratio:r2") && free(&tree[2], "compliance:l2"));
+    // Without masses, compliance is refused with the tree's joints in the hint.
+    let bare = path(dir.path(), "bare.yaml");
+    std::fs::write(&bare, tree_sheet(&[])).unwrap();
+    let (code, _, err) = exec(&[
+        "calibrate",
+        "--model",
+        &bare,
+        "--data",
+        &data,
+        "--effects",
+        "compliance:l2",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("hint: effects are named") && err.contains("l1, l2, l3"),
+        "{err}"
     );
 }
 
