@@ -39,7 +39,7 @@ use std::collections::HashSet;
 use anyhow::{bail, Result};
 use dh_calib::gravity::{Inertial, Inertials};
 use dh_calib::tree::{Branch, DhTree};
-use dh_core::{DhRow, DhTable, JointKind};
+use dh_core::{DhRow, DhTable};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -527,14 +527,6 @@ impl TreeSheet {
         }
         doc.inertials = inertials;
         doc
-    }
-
-    /// Whether any row of the tree is prismatic (for the data's length unit).
-    pub fn has_prismatic(&self) -> bool {
-        self.tree
-            .rows()
-            .iter()
-            .any(|r| r.kind == JointKind::Prismatic)
     }
 }
 
