@@ -6,12 +6,17 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 root=..
-mkdir -p corpus/urdf corpus/sheet corpus/csv
+mkdir -p corpus/urdf corpus/sheet corpus/csv corpus/tree
 for f in "$root"/fixtures/robots/*/robot.urdf "$root"/fixtures/invalid/urdf/*.urdf; do
   cp "$f" "corpus/urdf/$(basename "$(dirname "$f")")-$(basename "$f")"
 done
 for f in "$root"/fixtures/robots/*/vendor.yaml "$root"/fixtures/invalid/sheet/*; do
   cp "$f" "corpus/sheet/$(basename "$(dirname "$f")")-$(basename "$f")"
+done
+# Tree sheets: the DLR torso-and-arms model, the tree cases of the invalid corpus, and the serial
+# sheets (which the tree reader must refuse cleanly).
+for f in "$root"/fixtures/measured/*/model.yaml "$root"/fixtures/invalid/sheet/*.yaml; do
+  cp "$f" "corpus/tree/$(basename "$(dirname "$f")")-$(basename "$f")"
 done
 bin="$root/target/debug/urdf-dh"
 if [ -x "$bin" ]; then
@@ -28,4 +33,4 @@ for f in seeds/csv/*.csv "$root"/fixtures/invalid/csv/*.csv; do
     { printf '%s' "$mode"; cat "$f"; } > "corpus/csv/$mode-$(basename "$f")"
   done
 done
-echo "seeded: $(ls corpus/urdf | wc -l) urdf, $(ls corpus/sheet | wc -l) sheet, $(ls corpus/csv | wc -l) csv"
+echo "seeded: $(ls corpus/urdf | wc -l) urdf, $(ls corpus/sheet | wc -l) sheet, $(ls corpus/csv | wc -l) csv, $(ls corpus/tree | wc -l) tree"
