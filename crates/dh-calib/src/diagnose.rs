@@ -293,6 +293,31 @@ pub fn diagnose(
     diagnose_tree(&DhTree::serial(nominal), data, options, diag)
 }
 
+/// Checks the diagnosis options and builds what every candidate effect needs: the tree and,
+/// with inertials, its gravity model (shared by the point and the contact diagnoses).
+///
+/// # Errors
+/// [`CalibError::BadOption`] for an `alpha` outside (0, 1); those of [`GravityModel::new`].
+pub(crate) fn effect_context(
+    tree: &DhTree,
+    diag: &DiagnoseOptions,
+) -> Result<EffectContext, CalibError> {
+    if !(diag.alpha > 0.0 && diag.alpha < 1.0) {
+        return Err(CalibError::BadOption {
+            what: "alpha".into(),
+            reason: format!("expected a level in (0, 1), found {}", diag.alpha),
+        });
+    }
+    let gravity = match &diag.inertials {
+        Some(i) => Some(Arc::new(GravityModel::new(tree, i, diag.gravity)?)),
+        None => None,
+    };
+    Ok(EffectContext {
+        tree: tree.clone(),
+        gravity,
+    })
+}
+
 /// Calibrates `tree` against `data` as [`crate::calibrate::calibrate_tree`] does, then
 /// diagnoses and adds the effects the geometric model lacks (see the module docs). The report
 /// has the steps `nominal`, `geometric` and one `+<label>` per effect added, the candidate
@@ -309,20 +334,7 @@ pub fn diagnose_tree(
     options: &CalibrationOptions,
     diag: &DiagnoseOptions,
 ) -> Result<Report, CalibError> {
-    if !(diag.alpha > 0.0 && diag.alpha < 1.0) {
-        return Err(CalibError::BadOption {
-            what: "alpha".into(),
-            reason: format!("expected a level in (0, 1), found {}", diag.alpha),
-        });
-    }
-    let gravity = match &diag.inertials {
-        Some(i) => Some(Arc::new(GravityModel::new(tree, i, diag.gravity)?)),
-        None => None,
-    };
-    let ctx = EffectContext {
-        tree: tree.clone(),
-        gravity,
-    };
+    let ctx = effect_context(tree, diag)?;
     let mut notes = Vec::new();
     // Which candidates the model can carry.
     let probe = Model::new_tree(tree, &[], &options.model)?;

@@ -60,12 +60,11 @@ use dh_core::DhTable;
 use crate::calibrate::{prepare, CalibrationOptions, FixedParameter, ParameterEstimate, Stats};
 use crate::data::{Measurements, Split};
 use crate::diagnose::{
-    bic, paired_wilcoxon, CandidateReport, CandidateStatus, DiagnoseOptions, EffectSelection,
-    Trial, ALIAS_SINE,
+    bic, effect_context, paired_wilcoxon, CandidateReport, CandidateStatus, DiagnoseOptions,
+    EffectSelection, Trial, ALIAS_SINE,
 };
-use crate::effects::{self, EffectContext};
+use crate::effects;
 use crate::fit::{self, CalibError, FitOutcome, Problem, Termination};
-use crate::gravity::GravityModel;
 use crate::model::{xyz_rpy, Block, Effect, Field, Model, Observation, Observed};
 use crate::stats;
 use crate::tree::DhTree;
@@ -789,20 +788,7 @@ pub fn diagnose_sockets(
     options: &CalibrationOptions,
     diag: &DiagnoseOptions,
 ) -> Result<SocketReport, CalibError> {
-    if !(diag.alpha > 0.0 && diag.alpha < 1.0) {
-        return Err(CalibError::BadOption {
-            what: "alpha".into(),
-            reason: format!("expected a level in (0, 1), found {}", diag.alpha),
-        });
-    }
-    let gravity = match &diag.inertials {
-        Some(i) => Some(Arc::new(GravityModel::new(tree, i, diag.gravity)?)),
-        None => None,
-    };
-    let ctx = EffectContext {
-        tree: tree.clone(),
-        gravity,
-    };
+    let ctx = effect_context(tree, diag)?;
     let mut plain = options.clone();
     plain.effects.clear();
     match &diag.effects {
