@@ -462,6 +462,31 @@ pub const RESERVED_COLUMNS: [&str; 14] = [
     "distance_sigma",
 ];
 
+/// What is wrong with a list of joint names that a dataset gives itself, as the columns of the
+/// canonical CSV would have them: an empty name, a repeated one, a reserved column's name
+/// ([`RESERVED_COLUMNS`]) or a control character. `None` when the list is fine.
+pub fn joint_name_problem(names: &[String]) -> Option<String> {
+    for (i, name) in names.iter().enumerate() {
+        if name.trim().is_empty() {
+            return Some(format!("an empty name at position {}", i + 1));
+        }
+        if names[..i].contains(name) {
+            return Some(format!("'{name}' twice"));
+        }
+        if RESERVED_COLUMNS.contains(&name.as_str()) {
+            return Some(format!("'{name}', the name of a reserved column"));
+        }
+        if let Some(c) = name.chars().find(|c| c.is_control()) {
+            return Some(format!(
+                "'{}' with the control character U+{:04X}",
+                name.escape_debug(),
+                u32::from(c)
+            ));
+        }
+    }
+    None
+}
+
 /// Column indices of the canonical header.
 struct Columns {
     joints: Vec<usize>,

@@ -59,19 +59,33 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         },
         None => format("a YAML document", &e.to_string()),
     })?;
-    let joint_names: Vec<String> = field(&root, "joint_names", "the file")?
-        .as_sequence()
-        .map(|s| {
-            s.iter()
-                .filter_map(|v| v.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default();
+    let names_line = text
+        .lines()
+        .position(|l| l.trim_start().starts_with("joint_names"))
+        .map_or(1, |i| i + 1);
+    let names_error = |found: String| DataError::Format {
+        line: names_line,
+        expected: "a list of distinct joint names in 'joint_names'".into(),
+        found,
+    };
+    let joint_names: Vec<String> = match field(&root, "joint_names", "the file")?.as_sequence() {
+        Some(list) => list
+            .iter()
+            .map(|v| {
+                v.as_str()
+                    .map(String::from)
+                    .ok_or_else(|| names_error(format!("{v:?}, which is not a name")))
+            })
+            .collect::<Result<_, _>>()?,
+        None => Vec::new(),
+    };
     if joint_names.is_empty() {
-        return Err(format(
-            "a list of joint names in 'joint_names'",
-            "something else",
-        ));
+        return Err(names_error("no names".into()));
+    }
+    // The names become the columns of the canonical CSV (found by fuzzing: a repeated name was
+    // accepted and written as two columns of one name).
+    if let Some(problem) = crate::csv::joint_name_problem(&joint_names) {
+        return Err(names_error(problem));
     }
     // Measurements in document order, matched with the lines of their `- id:` entries.
     let id_lines: Vec<usize> = text
@@ -236,6 +250,29 @@ column_heights:
         assert_eq!((s[1].split, s[1].line), (Split::Validation, 13));
         assert_eq!(s[2].config.as_deref(), Some("h2.72/s3/7"));
         assert_eq!(s[2].point, Vector3::new(1.0, 2.0, 3.0));
+    }
+
+    /// Fuzzing find: a repeated joint name was accepted and written as two CSV columns of one
+    /// name, which the CSV reader refuses.
+    #[test]
+    fn joint_names_must_be_distinct_unreserved_names() {
+        for (names, found) in [
+            ("[column_prismatic_joint, a1, a1]", "'a1' twice"),
+            (
+                "[column_prismatic_joint, x, a2]",
+                "'x', the name of a reserved column",
+            ),
+            ("[column_prismatic_joint, 7, a2]", "which is not a name"),
+            ("[]", "no names"),
+        ] {
+            let text = EXCERPT.replace("[column_prismatic_joint, a1, a2]", names);
+            let err = parse(&text).unwrap_err().to_string();
+            assert!(
+                err.starts_with("line 1: expected a list of distinct joint names")
+                    && err.contains(found),
+                "{names}: {err}"
+            );
+        }
     }
 
     #[test]
