@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 root=..
-mkdir -p corpus/urdf corpus/sheet corpus/csv corpus/tree
+mkdir -p corpus/urdf corpus/sheet corpus/csv corpus/tree corpus/import
 for f in "$root"/fixtures/robots/*/robot.urdf "$root"/fixtures/invalid/urdf/*.urdf; do
   cp "$f" "corpus/urdf/$(basename "$(dirname "$f")")-$(basename "$f")"
 done
@@ -33,4 +33,29 @@ for f in seeds/csv/*.csv "$root"/fixtures/invalid/csv/*.csv; do
     { printf '%s' "$mode"; cat "$f"; } > "corpus/csv/$mode-$(basename "$f")"
   done
 done
-echo "seeded: $(ls corpus/urdf | wc -l) urdf, $(ls corpus/sheet | wc -l) sheet, $(ls corpus/csv | wc -l) csv, $(ls corpus/tree | wc -l) tree"
+# Import layouts: the head (40 lines) of each published set in ../shared/measured, where it is
+# present (local seeds only: corpus/ is not committed). One leading byte picks the layout, in
+# the order of Layout::ALL; a layout's files are joined with NUL in the order of Layout::files.
+m="$root/../shared/measured"
+seed_import() { # byte name files...
+  local byte=$1 name=$2; shift 2
+  { printf "\\$(printf '%03o' "$byte")"
+    local first=1
+    for f in "$@"; do
+      [ $first = 1 ] || printf '\0'
+      first=0
+      head -n 40 "$f"
+    done; } > "corpus/import/$name"
+}
+if [ -d "$m" ]; then
+  seed_import 0 innopolis "$m"/innopolis_fanuc_r2000ic_165f_3markers/calibration_dataset.csv
+  seed_import 1 boby "$m"/boby_klimchik_laser_tracker_cpa/N1N2N3Jval.csv
+  seed_import 2 dlr "$m"/dlr_agile_justin_vicon/measurements.csv
+  l="$m"/liaowu_abb_irb120_position
+  seed_import 3 liaowu "$l"/CaliJointAngles.csv "$l"/CaliPosition.csv "$l"/TestJointAngles.csv \
+    "$l"/TestPosition.csv "$l"/TestJointAngles2.csv "$l"/TestPosition2.csv
+  seed_import 4 hilti "$m"/hilti_trailblazer_total_station/flat.yaml
+  k="$m"/mukca_ball_socket_panda_iiwa/data/panda_6/front
+  [ -f "$k/hole_0.csv" ] && seed_import 5 mukca "$k"/hole_0.csv "$k"/hole_1.csv
+fi
+echo "seeded: $(ls corpus/urdf | wc -l) urdf, $(ls corpus/sheet | wc -l) sheet, $(ls corpus/csv | wc -l) csv, $(ls corpus/tree | wc -l) tree, $(ls corpus/import | wc -l) import"
