@@ -2,31 +2,14 @@
 //! within their standard errors and the final RMS sits on the noise floor; the report, the
 //! calibrated model and the residual chart as files.
 
+use crate::common::ok;
 use std::path::Path;
-use std::process::Command;
 
 use serde_json::Value;
 
 use crate::common::{run, settings};
 
 const UR5: &str = "fixtures/robots/ur5/vendor.yaml";
-
-/// Runs the binary, asserting exit 0; returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-        .args(args)
-        .current_dir(crate::common::root())
-        .output()
-        .expect("run urdf-dh");
-    assert!(
-        out.status.success(),
-        "urdf-dh {}: exit {:?}\n{}",
-        args.join(" "),
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
-}
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_string_lossy().into_owned()

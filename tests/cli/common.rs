@@ -91,3 +91,24 @@ pub fn settings() -> insta::Settings {
     );
     s
 }
+
+/// Runs the binary in the repository root; returns (exit code, stdout, stderr).
+pub fn exec(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run urdf-dh");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Runs the binary, asserts exit 0 (showing stderr otherwise) and returns stdout.
+pub fn ok(args: &[&str]) -> String {
+    let (code, out, err) = exec(args);
+    assert_eq!(code, 0, "urdf-dh {}: exit {code}\n{err}", args.join(" "));
+    out
+}

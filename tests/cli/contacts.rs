@@ -2,8 +2,8 @@
 //! small simulated set, the calibrated model written and read back, effects declared and
 //! selected, the chart; and the MUKCa `panda_6` set when `../shared` is there.
 
+use crate::common::ok;
 use std::path::Path;
-use std::process::Command;
 
 use dh_calib::csv::write_measurements;
 use dh_calib::data::{Measurements, Sample, Socket, SocketDistance, Split};
@@ -24,23 +24,6 @@ const PANDA: &str = "fixtures/measured/mukca_panda/model.yaml";
 /// Contact noise per axis of the simulated contacts (metres): a tenth of a millimetre, as a
 /// hand-placed ball.
 const CONTACT_SIGMA: f64 = 1e-4;
-
-/// Runs the binary, asserting exit 0; returns stdout.
-fn ok(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-        .args(args)
-        .current_dir(crate::common::root())
-        .output()
-        .expect("run urdf-dh");
-    assert!(
-        out.status.success(),
-        "urdf-dh {}: exit {:?}\n{}",
-        args.join(" "),
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
-}
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_string_lossy().into_owned()

@@ -1,26 +1,11 @@
 //! `urdf-dh cpa` on simulated sweeps: the measured axes reproduce the true robot's geometry.
 
+use crate::common::ok;
 use std::process::Command;
 
 use serde_json::Value;
 
 use crate::common::root;
-
-fn ok(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run urdf-dh");
-    assert!(
-        out.status.success(),
-        "urdf-dh {}: exit {:?}\n{}",
-        args.join(" "),
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
-}
 
 #[test]
 fn sweeps_of_a_simulated_arm_give_its_axes_back() {

@@ -1,32 +1,12 @@
 //! Measured data: `urdf-dh import` of every published set in `../shared/measured`, the `nominal`
 //! and `geometric` steps of `calibrate` on each, and bad measurement files.
 
+use crate::common::{exec, ok};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value;
 
 use crate::common::{root, run, settings, skip_without_shared};
-
-/// Runs the binary; returns (exit code, stdout, stderr).
-fn exec(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run urdf-dh");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn ok(args: &[&str]) -> String {
-    let (code, out, err) = exec(args);
-    assert_eq!(code, 0, "urdf-dh {}:\n{err}", args.join(" "));
-    out
-}
 
 /// One published set: where it is, how to import it, which model and options to fit.
 struct Set {

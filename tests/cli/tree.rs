@@ -2,8 +2,8 @@
 //! back through the CLI, and the DLR Agile Justin set (`../shared`) as one tree against the
 //! figures of docs/results.md.
 
+use crate::common::{exec, ok};
 use std::path::Path;
-use std::process::Command;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -11,27 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 use urdf_dh::tree_sheet::TreeSheet;
 
-use crate::common::{root, skip_without_shared};
-
-/// Runs the binary; returns (exit code, stdout, stderr).
-fn exec(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run urdf-dh");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn ok(args: &[&str]) -> String {
-    let (code, out, err) = exec(args);
-    assert_eq!(code, 0, "urdf-dh {}:\n{err}", args.join(" "));
-    out
-}
+use crate::common::skip_without_shared;
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_string_lossy().into_owned()

@@ -294,6 +294,18 @@ pub struct CandidateDoc {
     pub status: &'static str,
 }
 
+impl From<&dh_calib::diagnose::CandidateReport> for CandidateDoc {
+    fn from(c: &dh_calib::diagnose::CandidateReport) -> Self {
+        CandidateDoc {
+            label: c.label.clone(),
+            score: c.score,
+            val_rms: c.val_rms,
+            independence: c.independence,
+            status: c.status.name(),
+        }
+    }
+}
+
 /// A step as reported (metres).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct StepDoc {
@@ -348,6 +360,15 @@ pub struct FixedDoc {
     pub name: String,
     /// The free parameters that absorb it.
     pub aliases: Vec<String>,
+}
+
+impl From<&dh_calib::calibrate::FixedParameter> for FixedDoc {
+    fn from(f: &dh_calib::calibrate::FixedParameter) -> Self {
+        FixedDoc {
+            name: f.name.clone(),
+            aliases: f.aliases.clone(),
+        }
+    }
 }
 
 /// How validation was done.
@@ -787,14 +808,7 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
                 val_rms: s.val_rms,
                 val_mean: s.val_mean,
                 val_max: s.val_max,
-                fixed: s
-                    .fixed
-                    .iter()
-                    .map(|f| FixedDoc {
-                        name: f.name.clone(),
-                        aliases: f.aliases.clone(),
-                    })
-                    .collect(),
+                fixed: s.fixed.iter().map(FixedDoc::from).collect(),
             })
             .collect(),
         rms_before: report.rms_before,
@@ -825,26 +839,9 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
                 free: p.free,
             })
             .collect(),
-        fixed: report
-            .fixed
-            .iter()
-            .map(|f| FixedDoc {
-                name: f.name.clone(),
-                aliases: f.aliases.clone(),
-            })
-            .collect(),
+        fixed: report.fixed.iter().map(FixedDoc::from).collect(),
         selected_effects: report.selected_effects.clone(),
-        candidates: report
-            .candidates
-            .iter()
-            .map(|c| CandidateDoc {
-                label: c.label.clone(),
-                score: c.score,
-                val_rms: c.val_rms,
-                independence: c.independence,
-                status: c.status.name(),
-            })
-            .collect(),
+        candidates: report.candidates.iter().map(CandidateDoc::from).collect(),
         device: PoseSi::of(&report.device),
         targets: report
             .targets

@@ -24,7 +24,7 @@ use serde::Serialize;
 
 use crate::commands::calibrate::{
     gravity_inputs, unit_of, write_calibrated, CalibrateArgs, CalibrateFormat, CandidateDoc,
-    EffectsChoice, Inputs, TargetDoc,
+    EffectsChoice, FixedDoc, Inputs, TargetDoc,
 };
 use crate::error::Outcome;
 use crate::input::display_name;
@@ -73,12 +73,6 @@ struct ParameterDoc {
     estimate: f64,
     std_error: Option<f64>,
     free: bool,
-}
-
-#[derive(Serialize)]
-struct FixedDoc {
-    name: String,
-    aliases: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -161,26 +155,9 @@ fn document(model: &str, data: &str, r: &SocketReport) -> ContactDoc {
                 free: p.free,
             })
             .collect(),
-        fixed: r
-            .fixed
-            .iter()
-            .map(|f| FixedDoc {
-                name: f.name.clone(),
-                aliases: f.aliases.clone(),
-            })
-            .collect(),
+        fixed: r.fixed.iter().map(FixedDoc::from).collect(),
         selected_effects: r.selected_effects.clone(),
-        candidates: r
-            .candidates
-            .iter()
-            .map(|c| CandidateDoc {
-                label: c.label.clone(),
-                score: c.score,
-                val_rms: c.val_rms,
-                independence: c.independence,
-                status: c.status.name(),
-            })
-            .collect(),
+        candidates: r.candidates.iter().map(CandidateDoc::from).collect(),
         trials: r
             .trials
             .iter()
