@@ -20,6 +20,7 @@ mod error;
 pub mod extract;
 pub mod line;
 pub mod pose;
+pub mod precision;
 pub mod relation;
 pub mod table;
 pub mod tolerance;
@@ -29,6 +30,7 @@ pub use equivalence::{compare_tables, Difference, Equivalence, Freedom, Paramete
 pub use error::CoreError;
 pub use extract::{extract, Bound, Extraction, JointAxis, PairReport, Warning};
 pub use line::{DualNumber, Line};
+pub use precision::{compare_written, written_bound, Precision};
 pub use relation::{classify, PairGeometry, Relation};
 pub use table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic, PreparedFk};
 pub use tolerance::Tolerance;
