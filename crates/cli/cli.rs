@@ -66,6 +66,20 @@ struct ConvertCli {
     /// Angle unit of the output [default: the sheet's].
     #[arg(long, value_enum)]
     angle_unit: Option<AngleUnit>,
+    #[command(flatten)]
+    verify: VerifyCli,
+}
+
+/// The check of a written artefact against its source.
+#[derive(Debug, Args)]
+struct VerifyCli {
+    /// Random joint-value samples of the check of what is written (the zero pose is always the
+    /// first).
+    #[arg(long, value_name = "N", default_value_t = 1000)]
+    samples: usize,
+    /// Seed of the check's sampler.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
 }
 
 #[derive(Debug, Args)]
@@ -81,6 +95,8 @@ struct ToUrdfCli {
     /// Name of the tip link.
     #[arg(long, default_value = "tool0")]
     tip_link: String,
+    #[command(flatten)]
+    verify: VerifyCli,
 }
 
 /// Options shared by every command that reads a URDF chain.
@@ -244,6 +260,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 format: a.format,
                 length_unit: a.length_unit,
                 angle_unit: a.angle_unit,
+                samples: a.verify.samples,
+                seed: a.verify.seed,
             },
             out,
             err,
@@ -254,6 +272,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 name: a.name,
                 base_link: a.base_link,
                 tip_link: a.tip_link,
+                samples: a.verify.samples,
+                seed: a.verify.seed,
             },
             out,
             err,

@@ -11,8 +11,8 @@ use dh_core::{Bound, DhTable, Precision};
 use nalgebra::Isometry3;
 
 use crate::render::{render_sheet, Format};
-use crate::sheet::{parse_doc, ConventionDoc, JointDoc, JointType, MimicDoc, PoseDoc, SheetDoc};
 use crate::sheet::VerificationDoc;
+use crate::sheet::{parse_doc, ConventionDoc, JointDoc, JointType, MimicDoc, PoseDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit, PRINT_NOISE};
 
 /// The precision at which `format` writes values in these units: the fixed decimals of the text
@@ -21,8 +21,8 @@ use crate::units::{AngleUnit, LengthUnit, PRINT_NOISE};
 /// ([`LengthUnit::from_si`], [`AngleUnit::from_si`]), plus the float noise printed as 0.
 pub fn precision_of(format: Format, length: LengthUnit, angle: AngleUnit) -> Precision {
     let sheet_length = 0.5 * 10f64.powi(-(length.decimals() as i32)) * length.metres();
-    let sheet_angle = (0.5 * 10f64.powi(-(angle.decimals() as i32)) * angle.radians())
-        .max(10.0 * PRINT_NOISE);
+    let sheet_angle =
+        (0.5 * 10f64.powi(-(angle.decimals() as i32)) * angle.radians()).max(10.0 * PRINT_NOISE);
     let (l, a) = (sheet_length + PRINT_NOISE, sheet_angle + PRINT_NOISE);
     match format {
         Format::Yaml | Format::Json | Format::Csv => Precision::rounded(l, a),
@@ -88,7 +88,10 @@ where
     let mut problems = Vec::new();
     for (w, s) in written.rows.iter().zip(&source.table.rows) {
         if w.kind != s.kind {
-            problems.push(format!("joint '{}' is written as {:?}, not {:?}", w.name, w.kind, s.kind));
+            problems.push(format!(
+                "joint '{}' is written as {:?}, not {:?}",
+                w.name, w.kind, s.kind
+            ));
         }
     }
     let dev = dh_core::compare_written(
@@ -99,7 +102,10 @@ where
         source.seed,
     )
     .map_err(|e| anyhow!("the written table does not read back with the source's rows: {e}"))?;
-    let rounding = dh_core::written_bound(&written, precision_of(format, doc.length_unit, doc.angle_unit));
+    let rounding = dh_core::written_bound(
+        &written,
+        precision_of(format, doc.length_unit, doc.angle_unit),
+    );
     let bound = Bound {
         position: source.bound.position + rounding.position,
         orientation: source.bound.orientation + rounding.orientation,
@@ -135,7 +141,8 @@ pub struct Isometry3Pair {
 }
 
 fn table_of(text: &str, format: Format, free: &Isometry3Pair) -> Result<DhTable> {
-    let doc = read_back(text, format).with_context(|| format!("reading the {format:?} output back"))?;
+    let doc =
+        read_back(text, format).with_context(|| format!("reading the {format:?} output back"))?;
     let (has_base, has_tool) = (doc.base.is_some(), doc.tool.is_some());
     let mut table = doc.into_sheet("written output")?.table;
     if !has_base {
@@ -185,7 +192,9 @@ fn bracket_after<'a>(line: &'a str, label: &str) -> Result<&'a str> {
         .find(label)
         .ok_or_else(|| anyhow!("no '{label}' in '{line}'"))?;
     let rest = &line[at + label.len()..];
-    let end = rest.find(']').ok_or_else(|| anyhow!("no ']' after '{label}'"))?;
+    let end = rest
+        .find(']')
+        .ok_or_else(|| anyhow!("no ']' after '{label}'"))?;
     Ok(&rest[..end])
 }
 
@@ -202,7 +211,10 @@ fn three_after(line: &str, label: &str) -> Result<[f64; 3]> {
         .take(3)
         .map(|t| number(t, label))
         .collect::<Result<_>>()?;
-    ensure!(v.len() == 3, "expected 3 numbers after '{label}' in '{line}'");
+    ensure!(
+        v.len() == 3,
+        "expected 3 numbers after '{label}' in '{line}'"
+    );
     Ok([v[0], v[1], v[2]])
 }
 
@@ -253,7 +265,9 @@ fn pop_limit(tokens: &mut Vec<&str>) -> Result<Option<f64>> {
     match tokens.pop() {
         Some("-") => Ok(None),
         Some(_unit) => {
-            let v = tokens.pop().ok_or_else(|| anyhow!("a limit without a value"))?;
+            let v = tokens
+                .pop()
+                .ok_or_else(|| anyhow!("a limit without a value"))?;
             Ok(Some(number(v, "limit")?))
         }
         None => bail!("a row ends early"),
@@ -305,7 +319,14 @@ fn read_text(text: &str) -> Result<SheetDoc> {
             mimic,
         });
     }
-    Ok(doc_of(convention_of_header(header)?, length, angle, base, tool, joints))
+    Ok(doc_of(
+        convention_of_header(header)?,
+        length,
+        angle,
+        base,
+        tool,
+        joints,
+    ))
 }
 
 fn doc_of(
@@ -349,12 +370,16 @@ fn markdown_cells(line: &str) -> Vec<String> {
     while let Some(c) = chars.next() {
         match c {
             '\\' if chars.peek() == Some(&'|') => {
-                cells.last_mut().map(|s| s.push('|'));
+                if let Some(s) = cells.last_mut() {
+                    s.push('|');
+                }
                 chars.next();
             }
             '|' => cells.push(String::new()),
             c => {
-                cells.last_mut().map(|s| s.push(c));
+                if let Some(s) = cells.last_mut() {
+                    s.push(c);
+                }
             }
         }
     }
@@ -384,7 +409,11 @@ fn read_markdown(text: &str) -> Result<SheetDoc> {
         } else if line.starts_with("|---") || line.trim().is_empty() {
         } else if line.starts_with('|') {
             let c = markdown_cells(line);
-            ensure!(c.len() == 10, "expected 10 cells in a row, found {}: '{line}'", c.len());
+            ensure!(
+                c.len() == 10,
+                "expected 10 cells in a row, found {}: '{line}'",
+                c.len()
+            );
             let tokens: Vec<&str> = c[9].split_whitespace().collect();
             joints.push(JointDoc {
                 name: c[1].clone(),
@@ -409,7 +438,14 @@ fn read_markdown(text: &str) -> Result<SheetDoc> {
     }
     let (length, angle) = units.ok_or_else(|| anyhow!("no table header"))?;
     let header = header.trim_matches('*');
-    Ok(doc_of(convention_of_header(header)?, length, angle, base, tool, joints))
+    Ok(doc_of(
+        convention_of_header(header)?,
+        length,
+        angle,
+        base,
+        tool,
+        joints,
+    ))
 }
 
 /// Fields of one CSV record (RFC 4180 quoting).
@@ -420,13 +456,17 @@ fn csv_fields(line: &str) -> Vec<String> {
     while let Some(c) = chars.next() {
         match (c, quoted) {
             ('"', true) if chars.peek() == Some(&'"') => {
-                fields.last_mut().map(|s| s.push('"'));
+                if let Some(s) = fields.last_mut() {
+                    s.push('"');
+                }
                 chars.next();
             }
             ('"', _) => quoted = !quoted,
             (',', false) => fields.push(String::new()),
             (c, _) => {
-                fields.last_mut().map(|s| s.push(c));
+                if let Some(s) = fields.last_mut() {
+                    s.push(c);
+                }
             }
         }
     }
@@ -464,7 +504,10 @@ fn read_csv(text: &str) -> Result<SheetDoc> {
             .copied()
             .ok_or_else(|| anyhow!("no '{key}' in '{units}'"))
     };
-    let (length, angle) = (length_unit(after("length_unit")?)?, angle_unit(after("angle_unit")?)?);
+    let (length, angle) = (
+        length_unit(after("length_unit")?)?,
+        angle_unit(after("angle_unit")?)?,
+    );
     let (mut base, mut tool) = (None, None);
     let mut joints = Vec::new();
     for line in lines {
@@ -475,7 +518,11 @@ fn read_csv(text: &str) -> Result<SheetDoc> {
         } else if line.starts_with("joint,type,") || line.starts_with('#') {
         } else {
             let f = csv_fields(line);
-            ensure!(f.len() == 11, "expected 11 fields, found {}: '{line}'", f.len());
+            ensure!(
+                f.len() == 11,
+                "expected 11 fields, found {}: '{line}'",
+                f.len()
+            );
             let opt = |s: &str, what: &str| -> Result<Option<f64>> {
                 if s.is_empty() {
                     Ok(None)
@@ -505,4 +552,136 @@ fn read_csv(text: &str) -> Result<SheetDoc> {
         }
     }
     Ok(doc_of(convention, length, angle, base, tool, joints))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dh_core::pose::from_xyz_rpy;
+    use dh_core::{Convention, DhRow, Limits, Mimic};
+
+    /// A table with awkward names (spaces, `|`, `,`, quotes), a mimic row, a prismatic row and a
+    /// base at pitch -pi/2.
+    fn table() -> DhTable {
+        let mut rows = vec![
+            DhRow::revolute("j 1|a", 0.1, std::f64::consts::FRAC_PI_2, 0.4, 0.2),
+            DhRow::revolute("j,2\"", 0.7, 0.0, 0.0, -1.1),
+            DhRow::prismatic("j3", 0.05, -std::f64::consts::FRAC_PI_2, 0.3, 0.0),
+            DhRow::revolute("j4", 0.0, 0.9, 0.25, 0.4),
+        ];
+        rows[0].limits = Some(Limits {
+            lower: -3.0,
+            upper: 3.0,
+        });
+        rows[2].limits = Some(Limits {
+            lower: -0.2,
+            upper: 0.5,
+        });
+        rows[3].mimic = Some(Mimic {
+            joint: "j,2\"".into(),
+            multiplier: -1.5,
+            offset: 0.3,
+        });
+        DhTable {
+            convention: Convention::Modified,
+            base: from_xyz_rpy([0.1, -0.2, 0.3], [0.4, -std::f64::consts::FRAC_PI_2, -2.0]),
+            tool: from_xyz_rpy([0.0, 0.05, 0.12], [3.0, -0.3, 1.0]),
+            rows,
+        }
+    }
+
+    fn free(t: &DhTable) -> Isometry3Pair {
+        Isometry3Pair {
+            base: t.base,
+            tool: t.tool,
+        }
+    }
+
+    #[test]
+    fn every_format_reads_back_and_proves_itself() {
+        let t = table();
+        let fk = t.prepare();
+        for format in [
+            Format::Yaml,
+            Format::Json,
+            Format::Csv,
+            Format::Text,
+            Format::Markdown,
+        ] {
+            for (l, a) in [
+                (LengthUnit::M, AngleUnit::Rad),
+                (LengthUnit::Mm, AngleUnit::Deg),
+            ] {
+                let mut doc = SheetDoc::from_table(&t, l, a);
+                let (text, passed) = prove(
+                    &mut doc,
+                    format,
+                    &free(&t),
+                    Source {
+                        table: &t,
+                        bound: Bound {
+                            position: 0.0,
+                            orientation: 0.0,
+                        },
+                        oracle: |q: &[f64]| fk.fk(q).unwrap_or_default(),
+                        against: None,
+                        samples: 200,
+                        seed: 1,
+                    },
+                )
+                .unwrap_or_else(|e| panic!("{format:?} {l:?} {a:?}: {e:#}"));
+                assert!(passed, "{format:?} {l:?} {a:?}:\n{text}");
+                let back = read_back(&text, format).unwrap_or_else(|e| panic!("{e:#}"));
+                assert_eq!(back.joints.len(), 4);
+                assert_eq!(back.joints[0].name, "j 1|a", "{format:?}");
+                assert_eq!(
+                    back.joints[3].mimic.as_ref().map(|m| m.joint.as_str()),
+                    Some(back.joints[1].name.as_str()),
+                    "{format:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_wrong_source_fails_the_proof() {
+        let t = table();
+        let mut other = t.clone();
+        other.rows[1].a += 1e-4;
+        let fk = other.prepare();
+        for format in [Format::Yaml, Format::Text] {
+            let mut doc = SheetDoc::from_table(&t, LengthUnit::M, AngleUnit::Rad);
+            let (text, passed) = prove(
+                &mut doc,
+                format,
+                &free(&t),
+                Source {
+                    table: &t,
+                    bound: Bound {
+                        position: 0.0,
+                        orientation: 0.0,
+                    },
+                    oracle: |q: &[f64]| fk.fk(q).unwrap_or_default(),
+                    against: None,
+                    samples: 50,
+                    seed: 1,
+                },
+            )
+            .unwrap_or_else(|e| panic!("{e:#}"));
+            assert!(!passed, "{format:?}: {text}");
+            assert!(doc.verification.as_ref().is_some_and(|v| !v.passed));
+        }
+    }
+
+    #[test]
+    fn the_text_precision_is_its_last_decimal() {
+        let p = precision_of(Format::Text, LengthUnit::Mm, AngleUnit::Deg);
+        assert!((p.length - 0.5e-6).abs() < 1e-11, "{p:?}");
+        assert!(
+            (p.angle - 0.5e-4 * std::f64::consts::PI / 180.0).abs() < 1e-11,
+            "{p:?}"
+        );
+        let p = precision_of(Format::Yaml, LengthUnit::M, AngleUnit::Rad);
+        assert!(p.length < 1e-11 && p.angle < 1e-11, "{p:?}");
+    }
 }

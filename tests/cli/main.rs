@@ -9,4 +9,5 @@ mod cpa;
 mod extract;
 mod invalid;
 mod measured;
+mod roundtrip;
 mod tree;

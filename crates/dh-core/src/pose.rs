@@ -133,6 +133,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::approx_constant)] // the rounded values real URDFs hold, on purpose
     fn rpy_rebuilds_random_rotations_and_the_rounded_pitch_of_real_urdfs() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
@@ -147,8 +148,13 @@ mod tests {
             worst = worst.max(rebuild_error(&q.to_rotation_matrix()));
         }
         // URDF angles rounded to 1.5708, composed: the case that printed a tool 0.2 rad off.
-        for (r, p, y) in [(1.5708, 1.5708, 0.0), (0.0, 1.5708, -1.5708), (3.1416, -1.5708, 1.5708)] {
-            let rot = Rotation3::from_euler_angles(r, p, y) * Rotation3::from_euler_angles(0.3, 0.0, 0.0);
+        for (r, p, y) in [
+            (1.5708, 1.5708, 0.0),
+            (0.0, 1.5708, -1.5708),
+            (3.1416, -1.5708, 1.5708),
+        ] {
+            let rot =
+                Rotation3::from_euler_angles(r, p, y) * Rotation3::from_euler_angles(0.3, 0.0, 0.0);
             worst = worst.max(rebuild_error(&rot));
         }
         assert!(worst < 2e-15, "worst entry error {worst:e}");

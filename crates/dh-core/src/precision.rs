@@ -211,9 +211,9 @@ mod tests {
 
     fn arm() -> DhTable {
         let mut rows = vec![
-            DhRow::revolute("j1", 0.1, 1.5707963267948966, 0.4, 0.2),
+            DhRow::revolute("j1", 0.1, std::f64::consts::FRAC_PI_2, 0.4, 0.2),
             DhRow::revolute("j2", 0.7, 0.0, 0.0, -1.1),
-            DhRow::prismatic("j3", 0.05, -1.5707963267948966, 0.3, 0.0),
+            DhRow::prismatic("j3", 0.05, -std::f64::consts::FRAC_PI_2, 0.3, 0.0),
             DhRow::revolute("j4", 0.0, 0.9, 0.25, 0.4),
         ];
         rows[2].limits = Some(Limits {
@@ -227,7 +227,10 @@ mod tests {
         });
         DhTable {
             convention: Convention::Standard,
-            base: from_xyz_rpy([0.1, -0.2, 0.3], [0.4, 1.5707, -2.0]),
+            base: from_xyz_rpy(
+                [0.1, -0.2, 0.3],
+                [0.4, std::f64::consts::FRAC_PI_2 - 1e-4, -2.0],
+            ),
             tool: from_xyz_rpy([0.0, 0.05, 0.12], [3.0, -0.3, 1.0]),
             rows,
         }
@@ -236,7 +239,8 @@ mod tests {
     /// Every value of `t` moved by up to its precision, at random.
     fn perturbed(t: &DhTable, p: Precision, rng: &mut impl Rng) -> DhTable {
         let mut t = t.clone();
-        let mut e = |v: f64, abs: f64| v + rng.random_range(-1.0..=1.0) * (abs + p.relative * v.abs());
+        let mut e =
+            |v: f64, abs: f64| v + rng.random_range(-1.0..=1.0) * (abs + p.relative * v.abs());
         for r in &mut t.rows {
             r.a = e(r.a, p.length);
             r.d = e(r.d, p.length);
@@ -249,10 +253,7 @@ mod tests {
         }
         for pose in [&mut t.base, &mut t.tool] {
             let (xyz, rpy) = crate::pose::to_xyz_rpy(pose);
-            *pose = from_xyz_rpy(
-                xyz.map(|v| e(v, p.length)),
-                rpy.map(|v| e(v, p.angle)),
-            );
+            *pose = from_xyz_rpy(xyz.map(|v| e(v, p.length)), rpy.map(|v| e(v, p.angle)));
         }
         t
     }
