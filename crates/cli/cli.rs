@@ -7,6 +7,7 @@ use std::io::Write;
 use clap::{Args, Parser, Subcommand};
 use dh_core::Tolerance;
 
+use crate::commands::batch::{batch, BatchArgs};
 use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK_LINEAR};
 use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
@@ -31,6 +32,9 @@ enum Command {
     /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
     /// forward kinematics against the URDF at many joint values.
     Extract(ExtractCli),
+    /// Extract many chains of many URDFs in one process (a list of `ROBOT [BASE [TIP]]` lines),
+    /// one JSON line per table, each proved as `extract` proves it.
+    Batch(BatchCli),
     /// Check a URDF against a vendor's DH sheet: exit 0 when they describe the same kinematics,
     /// 1 naming every joint and parameter that differs.
     Check(CheckCli),
@@ -167,6 +171,37 @@ struct ExtractCli {
     q: Option<Vec<f64>>,
 }
 
+/// Conventions `batch` extracts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Conventions {
+    /// Standard DH only.
+    Standard,
+    /// Modified (Craig) DH only.
+    Modified,
+    /// Both, standard first.
+    Both,
+}
+
+#[derive(Debug, Args)]
+struct BatchCli {
+    /// The list of chains, one per line: `ROBOT [BASE [TIP]]` (`-` for the default, `#` starts a
+    /// comment; relative paths are relative to the list's folder), or - for standard input.
+    list: String,
+    /// DH convention(s) of the tables.
+    #[arg(long, value_enum, default_value_t = Conventions::Standard)]
+    convention: Conventions,
+    /// Length unit of the output.
+    #[arg(long, value_enum, default_value_t = LengthUnit::M)]
+    length_unit: LengthUnit,
+    /// Angle unit of the output.
+    #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
+    angle_unit: AngleUnit,
+    #[command(flatten)]
+    tol: ToleranceCli,
+    #[command(flatten)]
+    verify: VerifyCli,
+}
+
 #[derive(Debug, Args)]
 struct CheckCli {
     /// The robot: a URDF file, a .xacro file, or - for standard input.
@@ -253,6 +288,25 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             };
             check(&args, out, err)
         }
+        Command::Batch(a) => batch(
+            &BatchArgs {
+                list: a.list,
+                conventions: match a.convention {
+                    Conventions::Standard => vec![dh_core::Convention::Standard],
+                    Conventions::Modified => vec![dh_core::Convention::Modified],
+                    Conventions::Both => {
+                        vec![dh_core::Convention::Standard, dh_core::Convention::Modified]
+                    }
+                },
+                length_unit: a.length_unit,
+                angle_unit: a.angle_unit,
+                tolerance: a.tol.tolerance()?,
+                samples: a.verify.samples,
+                seed: a.verify.seed,
+            },
+            out,
+            err,
+        ),
         Command::Convert(a) => convert(
             &ConvertArgs {
                 sheet: a.sheet,

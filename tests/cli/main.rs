@@ -1,5 +1,6 @@
 //! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
+mod batch;
 mod calibrate;
 mod check;
 mod common;

@@ -103,13 +103,53 @@ pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(
 /// As [`load_chain`], plus geometry errors (a chain without moving joints).
 pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
     let (model, chain) = load_chain(&args.path, args.base.as_deref(), args.tip.as_deref())?;
+    extract_chain(&model, chain, &display_name(&args.path), &args.options())
+}
+
+/// What an extraction of one chain needs besides the chain.
+#[derive(Clone, Copy, Debug)]
+pub struct ExtractOptions {
+    /// DH convention of the table.
+    pub convention: Convention,
+    /// Length unit of the output.
+    pub length_unit: LengthUnit,
+    /// Angle unit of the output.
+    pub angle_unit: AngleUnit,
+    /// Tolerances for the axis classification.
+    pub tolerance: Tolerance,
+}
+
+impl ExtractArgs {
+    /// The options of one chain's extraction.
+    pub fn options(&self) -> ExtractOptions {
+        ExtractOptions {
+            convention: self.convention,
+            length_unit: self.length_unit,
+            angle_unit: self.angle_unit,
+            tolerance: self.tolerance,
+        }
+    }
+}
+
+/// Extracts the table of `chain` (of `model`, read from the file shown as `name`) and its sheet
+/// with the extraction's facts; the caller proves it ([`prove_extracted`]).
+///
+/// # Errors
+/// Geometry errors (non-finite values).
+pub fn extract_chain(
+    model: &UrdfModel,
+    chain: Chain,
+    name: &str,
+    options: &ExtractOptions,
+) -> Result<Extracted> {
+    let args = options;
     let extraction = dh_core::extract(
         chain.axes(),
         &chain.tip_pose(),
         args.tolerance,
         args.convention,
     )
-    .with_context(|| format!("{}: extraction failed", display_name(&args.path)))?;
+    .with_context(|| format!("{name}: extraction failed"))?;
     let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
     sheet.robot = Some(model.robot_name().to_string());
     sheet.base_link = Some(chain.base().to_string());
