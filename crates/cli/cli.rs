@@ -31,27 +31,61 @@ pub struct Cli {
 enum Command {
     /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
     /// forward kinematics against the URDF at many joint values.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh extract robot.urdf                               # root link to the arm's tip, standard DH, text\n  urdf-dh extract robot.urdf --tip tool0 --convention modified --angle-unit deg\n  urdf-dh extract robot.urdf --format yaml > robot-dh.yaml  # the sheet format, proved as written\n  xacro robot.urdf.xacro | urdf-dh extract - --tip flange --svg frames.svg"
+    )]
     Extract(ExtractCli),
     /// Extract many chains of many URDFs in one process (a list of `ROBOT [BASE [TIP]]` lines),
     /// one JSON line per table, each proved as `extract` proves it.
+    #[command(
+        after_help = "EXAMPLES:\n  printf 'ur5/robot.urdf\\npanda/robot.urdf base_link panda_link8\\n' > chains.list\n  urdf-dh batch chains.list --convention both > tables.jsonl"
+    )]
     Batch(BatchCli),
     /// Check a URDF against a vendor's DH sheet: exit 0 when they describe the same kinematics,
     /// 1 naming every joint and parameter that differs.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh check robot.urdf --sheet vendor-dh.yaml --tip tool0\n  urdf-dh check robot.urdf --sheet vendor-dh.yaml --format json > report.json || cat report.json"
+    )]
     Check(CheckCli),
     /// Convert a sheet to the other DH convention (or other units), exactly.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh convert vendor-dh.yaml --to modified\n  urdf-dh convert vendor-dh.yaml --to standard --length-unit mm --angle-unit deg --format markdown"
+    )]
     Convert(ConvertCli),
     /// Write a URDF whose kinematics equal a DH sheet.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh to-urdf vendor-dh.yaml > robot.urdf\n  urdf-dh to-urdf vendor-dh.yaml --name my_arm --base-link base --tip-link flange > my_arm.urdf"
+    )]
     ToUrdf(ToUrdfCli),
     /// Read a published measurement dataset as its authors left it and write the canonical
     /// measurement CSV.
+    #[command(after_help = "EXAMPLES:\n  urdf-dh import dataset/poses.txt --out measured.csv")]
     Import(import::ImportCli),
     /// Fit a model to measured points: nominal, geometric and effect steps, each with its
     /// residuals on calibration and validation data.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh calibrate --model nominal.yaml --data measured.csv\n  urdf-dh calibrate --model nominal.yaml --data measured.csv --effects auto --out calibrated.yaml"
+    )]
     Calibrate(calibrate::CalibrateCli),
     /// Circle-point analysis: joint axes from sweeps of one joint at a time, and their DH table.
+    #[command(after_help = "EXAMPLES:\n  urdf-dh cpa sweeps.csv --format yaml > measured-dh.yaml")]
     Cpa(cpa::CpaCli),
     /// Simulate measurements of a model with known errors, noise and effects.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh simulate --model vendor.yaml --poses 200 --noise 0.00005 --out measured.csv --truth truth.yaml"
+    )]
     Simulate(simulate::SimulateCli),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh completions bash > ~/.local/share/bash-completion/completions/urdf-dh\n  urdf-dh completions zsh > ~/.zfunc/_urdf-dh"
+    )]
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) to stdout.
+    #[command(after_help = "EXAMPLES:\n  urdf-dh man > urdf-dh.1 && man ./urdf-dh.1")]
+    Man,
 }
 
 #[derive(Debug, Args)]
@@ -344,5 +378,15 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
         }
         Command::Cpa(a) => cpa::cpa(&a.into_args()?, out, err),
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", out);
+            Ok(Outcome::Pass)
+        }
+        Command::Man => {
+            use clap::CommandFactory;
+            clap_mangen::Man::new(Cli::command()).render(out)?;
+            Ok(Outcome::Pass)
+        }
     }
 }

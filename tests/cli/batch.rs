@@ -97,3 +97,22 @@ fn a_refused_chain_is_named_on_its_line_and_the_others_are_written() {
         "{out}"
     );
 }
+
+#[test]
+fn completions_and_the_manual_page_are_generated() {
+    let bash = run(&["completions", "bash"], None);
+    assert!(
+        bash.starts_with("exit: 0\n") && bash.contains("urdf-dh") && bash.contains("batch"),
+        "{bash}"
+    );
+    let man = run(&["man"], None);
+    assert!(
+        man.starts_with("exit: 0\n") && man.contains(".TH urdf-dh 1"),
+        "{man}"
+    );
+    let help = run(&["extract", "--help"], None);
+    assert!(
+        help.contains("EXAMPLES:\n  urdf-dh extract robot.urdf"),
+        "{help}"
+    );
+}
