@@ -49,6 +49,8 @@ pub struct Extracted {
     pub sheet: SheetDoc,
     /// Whether the self-check passed.
     pub passed: bool,
+    /// Warnings of reading the URDF that concern the chain (see [`urdf_warnings`]).
+    pub urdf_warnings: Vec<String>,
 }
 
 /// Loads the URDF and its chain.
@@ -59,10 +61,27 @@ pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(
     let bytes = read_robot(path)?;
     let name = display_name(path);
     let model = UrdfModel::from_bytes(&bytes).with_context(|| format!("{name}: invalid URDF"))?;
-    let chain = model
-        .chain(base, tip)
-        .with_context(|| format!("{name}: cannot choose the chain"))?;
+    let chain = model.chain(base, tip).map_err(|e| {
+        // A fault of a joint on the chain is a fault of the file, not of the choice.
+        let what = if e.is_choice() {
+            "cannot choose the chain"
+        } else {
+            "invalid URDF"
+        };
+        anyhow::Error::new(e).context(format!("{name}: {what}"))
+    })?;
     Ok((model, chain))
+}
+
+/// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name,
+/// for `urdf-dh: warning:` lines.
+pub fn urdf_warnings(path: &str, model: &UrdfModel, chain: &Chain) -> Vec<String> {
+    let name = display_name(path);
+    model
+        .warnings_for(chain)
+        .iter()
+        .map(|w| format!("{name}: {w}"))
+        .collect()
 }
 
 /// Extracts and verifies; the caller prints.
@@ -116,11 +135,13 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
         orientation_bound: crate::units::bound_for_print(extraction.bound.orientation),
         passed,
     });
+    let urdf_warnings = urdf_warnings(&args.path, &model, &chain);
     Ok(Extracted {
         chain,
         extraction,
         sheet,
         passed,
+        urdf_warnings,
     })
 }
 
@@ -134,6 +155,9 @@ pub fn extract(
     err: &mut dyn std::io::Write,
 ) -> Result<Outcome> {
     let ex = run_extract(args)?;
+    for w in &ex.urdf_warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     for w in &ex.extraction.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
