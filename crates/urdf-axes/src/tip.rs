@@ -11,11 +11,31 @@
 //!   they split, or its fixed link named like a tool frame.
 //! - Otherwise (two arms of one length, a humanoid) there is no tip to guess: refused with
 //!   the candidates and their moving-joint counts.
+//!
+//! Then a gripper is taken off the end: while the last moving joint of the chosen chain is
+//! named like a gripper (`gripper`, `jaw`, `finger`, `claw`, `rh`: a
+//! single moving jaw) and at least [`MIN_ARM_JOINTS`] moving joints precede it, the tip moves
+//! up to that joint's parent link (or its fixed link named like a tool frame).
 
 use crate::{UrdfError, UrdfModel};
 
 /// Most moving joints of one finger below the hand link where the fingers split.
 pub(crate) const MAX_HAND_JOINTS: usize = 3;
+
+/// Fewest moving joints an arm keeps when a gripper joint is taken off its end.
+pub(crate) const MIN_ARM_JOINTS: usize = 3;
+
+/// Whether a joint or link name reads like a gripper's: it contains `gripper`, `finger` or
+/// `jaw`, or one of its words is `claw` or `rh` (robot hand).
+fn gripper_like(name: &str) -> bool {
+    let lower = name.to_lowercase();
+    ["gripper", "finger", "jaw"]
+        .iter()
+        .any(|w| lower.contains(w))
+        || lower
+            .split(|c: char| !c.is_ascii_alphanumeric())
+            .any(|w| matches!(w, "claw" | "rh"))
+}
 
 /// Most fingers of one hand (more equally long branches are no hand).
 const MAX_FINGERS: usize = 8;
@@ -46,6 +66,49 @@ impl UrdfModel {
 
     /// The default tip below `base` (see the module docs).
     pub(crate) fn default_tip(&self, base: usize) -> Result<usize, UrdfError> {
+        let tip = self.arm_end(base)?;
+        Ok(self.without_gripper(base, tip))
+    }
+
+    /// Moves `tip` up past gripper joints at its end (see the module docs).
+    fn without_gripper(&self, base: usize, mut tip: usize) -> usize {
+        for _ in 0..MAX_HAND_JOINTS {
+            // The last moving joint above the tip, and the moving joints before it.
+            let mut last = None;
+            let mut before = 0;
+            for link in self.ancestors(tip) {
+                if link == base {
+                    break;
+                }
+                let Some(k) = self.parent_joint.get(link).copied().flatten() else {
+                    break;
+                };
+                if self.is_moving_joint(k) {
+                    if last.is_none() {
+                        last = Some(k);
+                    } else {
+                        before += 1;
+                    }
+                }
+            }
+            let Some(k) = last else { return tip };
+            // The joint's name only: the link a wrist joint moves is often called the gripper.
+            let name = self.robot.joints.get(k).map_or("", |j| j.name.as_str());
+            if !gripper_like(name) || before < MIN_ARM_JOINTS {
+                return tip;
+            }
+            let Some(&hand) = self.joint_parent.get(k) else {
+                return tip;
+            };
+            let fixed = self.fixed_descendants(hand);
+            tip = self.tool_below(hand, &fixed).unwrap_or(hand);
+        }
+        tip
+    }
+
+    /// The end of the longest run of moving joints below `base`, before a gripper is taken
+    /// off it.
+    fn arm_end(&self, base: usize) -> Result<usize, UrdfError> {
         let n = self.child_joints.len();
         // Per link below the base: moving joints from the base, and the link moved by the
         // last of them (the base itself before the first).
@@ -180,6 +243,22 @@ impl UrdfModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gripper_names() {
+        for n in [
+            "gripper",
+            "jointGripper",
+            "moving_jaw_link",
+            "finger_joint1",
+            "rh_r1_joint",
+        ] {
+            assert!(gripper_like(n), "{n}");
+        }
+        for n in ["joint6", "wrist_3_link", "shoulder", "rhino"] {
+            assert!(!gripper_like(n), "{n}");
+        }
+    }
 
     #[test]
     fn tool_names() {
