@@ -440,6 +440,45 @@ fn timed_extract(urdf: &str) -> (Duration, String) {
     (start.elapsed(), out)
 }
 
+/// A 4000-joint chain in which each joint mimics the next (drivers after their followers)
+/// extracts and verifies; the csv names each row's driver.
+#[test]
+fn a_long_chain_of_mimics_extracts() {
+    let n = 4000;
+    let urdf: String = long_chain(n)
+        .lines()
+        .map(|l| {
+            let joint = l
+                .strip_prefix("<joint name=\"j")
+                .and_then(|r| r.split('"').next())
+                .and_then(|k| k.parse::<usize>().ok())
+                .filter(|&k| k < n);
+            let line = match joint {
+                Some(k) => l.replacen(
+                    "<parent",
+                    &format!("<mimic joint=\"j{}\" multiplier=\"0.5\"/><parent", k + 1),
+                    1,
+                ),
+                None => l.to_owned(),
+            };
+            line + "\n"
+        })
+        .collect();
+    let (_, out) = timed_extract(&urdf);
+    assert!(
+        out.starts_with("exit: 0\n"),
+        "{}",
+        &out[..out.len().min(2000)]
+    );
+    for i in [1, 2, n / 2, n - 1] {
+        let row = out
+            .lines()
+            .find(|l| l.starts_with(&format!("j{i},")))
+            .unwrap_or_else(|| panic!("row j{i}"));
+        assert!(row.contains(&format!(",j{},0.5,0", i + 1)), "{row}");
+    }
+}
+
 /// 10 000 joints extract and verify, in time linear in the chain's length.
 #[test]
 fn a_ten_thousand_joint_chain_works_in_linear_time() {
