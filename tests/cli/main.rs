@@ -7,6 +7,7 @@ mod common;
 mod contacts;
 mod corpus;
 mod cpa;
+mod default_tip;
 mod extract;
 mod invalid;
 mod measured;

@@ -48,6 +48,8 @@ pub struct Extracted {
     pub extraction: Extraction,
     /// The sheet (table and facts, without the verification) in the requested units.
     pub sheet: SheetDoc,
+    /// Warnings of reading the URDF that concern the chain (see [`urdf_warnings`]).
+    pub urdf_warnings: Vec<String>,
 }
 
 /// Renders the sheet of `ex` in `format` and proves what was written: the text is read back at
@@ -95,6 +97,16 @@ pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(
         .chain(base, tip)
         .with_context(|| format!("{name}: cannot choose the chain"))?;
     Ok((model, chain))
+}
+
+/// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name
+/// (`name`), for `urdf-dh: warning:` lines.
+pub fn urdf_warnings(name: &str, model: &UrdfModel, chain: &Chain) -> Vec<String> {
+    model
+        .warnings_for(chain)
+        .iter()
+        .map(|w| format!("{name}: {w}"))
+        .collect()
 }
 
 /// Extracts; the caller proves what it writes ([`prove_extracted`]) and prints.
@@ -175,10 +187,12 @@ pub fn extract_chain(
         angular: args.tolerance.angular,
     });
     sheet.warnings = Some(extraction.warnings.iter().map(|w| w.to_string()).collect());
+    let urdf_warnings = urdf_warnings(name, model, &chain);
     Ok(Extracted {
         chain,
         extraction,
         sheet,
+        urdf_warnings,
     })
 }
 
@@ -192,6 +206,9 @@ pub fn extract(
     err: &mut dyn std::io::Write,
 ) -> Result<Outcome> {
     let mut ex = run_extract(args)?;
+    for w in &ex.urdf_warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     for w in &ex.extraction.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
