@@ -35,7 +35,7 @@ use crate::input::display_name;
 use crate::measured::{
     header_joints, load_model, parse_effect, read_measurements, DataFile, DataUnits, LoadedModel,
 };
-use crate::output::write_atomically;
+use crate::output::write_all;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::sheet::{ConventionDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -730,14 +730,10 @@ pub fn calibrate(
         ),
     };
     let doc = document(args, &inputs, &report);
-    match args.format {
-        CalibrateFormat::Json => {
-            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
-        }
-        CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
-    }
+    // Every output file is built before any is written, and all are written or none.
+    let mut files = Vec::new();
     if let Some(path) = &args.out {
-        write_model(path, &inputs, &report, &doc)?;
+        files.push((Path::new(path), model_bytes(path, &inputs, &report, &doc)?));
     }
     if let Some(path) = &args.plot {
         // Residuals are millimetres or less on any arm: the chart reads best in mm whatever
@@ -749,7 +745,15 @@ pub fn calibrate(
             &effects,
             LengthUnit::Mm,
         )?;
-        write_atomically(Path::new(path), residuals_svg(&chart).as_bytes())?;
+        files.push((Path::new(path), residuals_svg(&chart)));
+    }
+    let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
+    write_all(&files)?;
+    match args.format {
+        CalibrateFormat::Json => {
+            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+        }
+        CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
     }
     Ok(Outcome::Pass)
 }
@@ -1185,8 +1189,13 @@ fn absorbed(aliases: &[String]) -> String {
     }
 }
 
-/// Writes the calibrated model: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
-fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDoc) -> Result<()> {
+/// The calibrated model's file: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
+fn model_bytes(
+    path: &str,
+    inputs: &Inputs,
+    report: &Report,
+    doc: &CalibrationDoc,
+) -> Result<String> {
     let calibration = CalibrationSection {
         data: doc.data.clone(),
         rms_before: doc.rms_before,
@@ -1208,7 +1217,7 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     );
-    write_calibrated(
+    calibrated_bytes(
         path,
         inputs,
         &report.calibrated,
@@ -1219,14 +1228,14 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
 
 /// Writes `table` as the calibrated model of `inputs` (its robot name, links, units and
 /// coupled joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with
-/// `source` and the `calibration` section, atomically.
-pub(crate) fn write_calibrated(
+/// `source` and the `calibration` section.
+pub(crate) fn calibrated_bytes(
     path: &str,
     inputs: &Inputs,
     table: &DhTable,
     source: String,
     calibration: serde_yaml::Value,
-) -> Result<()> {
+) -> Result<String> {
     let lower = path.to_ascii_lowercase();
     let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
     let bytes = if lower.ends_with(".urdf") {
@@ -1252,8 +1261,7 @@ pub(crate) fn write_calibrated(
             serde_yaml::to_string(&sheet)?
         }
     };
-    write_atomically(Path::new(path), bytes.as_bytes())
-        .with_context(|| format!("writing the calibrated model to {}", display_name(path)))
+    Ok(bytes)
 }
 
 /// The `calibration` section of a calibrated sheet (metres, radians): what the table was
@@ -1534,10 +1542,10 @@ pub struct CalibrateCli {
     targets: Vec<String>,
     /// Known measurement noise per axis, in the length unit [default: the data's sigma column
     /// or the scatter of repeated poses].
-    #[arg(long, value_name = "SIGMA")]
+    #[arg(long, value_name = "SIGMA", value_parser = crate::guard::sigma)]
     sigma: Option<f64>,
     /// Folds of the cross-validation.
-    #[arg(long, value_name = "K", default_value_t = 5)]
+    #[arg(long, value_name = "K", default_value_t = 5, value_parser = crate::guard::folds)]
     folds: usize,
     /// Length unit of the measurement files and --sigma (reports are in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
@@ -1565,7 +1573,8 @@ pub struct CalibrateCli {
         long,
         value_name = "X,Y,Z",
         value_delimiter = ',',
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::guard::gravity
     )]
     gravity: Option<Vec<f64>>,
     /// A payload at the tip: mass in kg, then its centre in the tip frame in metres.
@@ -1573,12 +1582,13 @@ pub struct CalibrateCli {
         long,
         value_name = "M,X,Y,Z",
         value_delimiter = ',',
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::guard::payload
     )]
     payload: Option<Vec<f64>>,
     /// Most effects --effects auto adds before it stops (a guard; the run's notes say when it
     /// stopped the selection).
-    #[arg(long, value_name = "N", default_value_t = 12)]
+    #[arg(long, value_name = "N", default_value_t = 12, value_parser = crate::guard::max_effects)]
     max_effects: usize,
 }
 

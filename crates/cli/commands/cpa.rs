@@ -614,10 +614,10 @@ pub struct CpaCli {
     #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
     convention: crate::sheet::ConventionDoc,
     /// Measured axes whose common normal is shorter than this intersect (metres).
-    #[arg(long, value_name = "M", default_value_t = CPA_LINEAR)]
+    #[arg(long, value_name = "M", default_value_t = CPA_LINEAR, value_parser = crate::guard::linear_tol)]
     linear_tol: f64,
     /// Measured axes this close to parallel are parallel (radians).
-    #[arg(long, value_name = "RAD", default_value_t = CPA_ANGULAR)]
+    #[arg(long, value_name = "RAD", default_value_t = CPA_ANGULAR, value_parser = crate::guard::angular_tol)]
     angular_tol: f64,
     /// Length unit of the measurement file (the output is in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
