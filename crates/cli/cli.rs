@@ -181,6 +181,10 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
+    // Every message goes through one escaping rule (guard::escape): a name quoted from a file
+    // or an argument cannot drive the terminal.
+    let mut err = crate::guard::Escaping(err);
+    let err: &mut dyn Write = &mut err;
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
@@ -200,9 +204,11 @@ where
         Ok(Outcome::Pass) => 0,
         Ok(Outcome::Differs) => 1,
         Err(e) => {
-            let _ = writeln!(err, "urdf-dh: error: {e:#}");
+            // One line each: a line feed inside a quoted name is escaped too.
+            let message = format!("{e:#}");
+            let _ = writeln!(err, "urdf-dh: error: {}", crate::guard::escape(&message));
             if let Some(h) = crate::error::hint_for(&e) {
-                let _ = writeln!(err, "hint: {h}");
+                let _ = writeln!(err, "hint: {}", crate::guard::escape(&h));
             }
             2
         }

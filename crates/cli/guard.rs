@@ -7,6 +7,7 @@
 //! `invalid value '1e200' for '--sigma <SIGMA>': expected a length in (0, 1000], found 1e200`.
 
 use std::borrow::Cow;
+use std::io::Write;
 
 /// Widest padded column of a text table, in characters. Longer names are printed whole and
 /// push the row's later cells to the right; the width itself never grows past this (a format
@@ -25,16 +26,7 @@ pub fn column_width<'a>(names: impl IntoIterator<Item = &'a str>, min: usize) ->
         .min(MAX_COLUMN)
 }
 
-/// Is `c` a character that changes how a terminal shows the text around it: a control
-/// character (C0, DEL, C1) or a bidirectional override, embedding or isolate (U+202A-U+202E,
-/// U+2066-U+2069) or mark (U+200E, U+200F, U+061C)?
-pub fn is_spoofing(c: char) -> bool {
-    c.is_control()
-        || matches!(
-            c,
-            '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}' | '\u{200E}' | '\u{200F}' | '\u{061C}'
-        )
-}
+pub use dh_calib::csv::is_spoofing;
 
 /// A name as the tool prints it: every control or bidi character ([`is_spoofing`]) written as
 /// `\u{XX}` (Rust's escape), everything else as it is. Names the readers accept never hold
@@ -53,6 +45,29 @@ pub fn escape(name: &str) -> Cow<'_, str> {
         }
     }
     Cow::Owned(s)
+}
+
+/// A writer that passes text on with every [`is_spoofing`] character but the line feed
+/// [`escape`]d: standard error goes through it, so no message, warning or usage text can put a
+/// raw escape sequence or bidi override on the user's terminal, whatever it quotes.
+pub struct Escaping<'a>(pub &'a mut dyn Write);
+
+impl Write for Escaping<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        // `write!` hands over whole `str` pieces; other bytes pass as they are.
+        match std::str::from_utf8(buf) {
+            Ok(s) if s.chars().any(|c| c != '\n' && is_spoofing(c)) => {
+                let escaped: Vec<Cow<'_, str>> = s.split('\n').map(escape).collect();
+                self.0.write_all(escaped.join("\n").as_bytes())?;
+                Ok(buf.len())
+            }
+            _ => self.0.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
 }
 
 /// What is wrong with a name that a file or option gives (a joint, target, link or column), or
@@ -202,6 +217,20 @@ mod tests {
         assert_eq!(escape("a\u{1b}[31mb"), "a\\u{1b}[31mb");
         assert_eq!(escape("x\u{202e}y\0"), "x\\u{202e}y\\u{0}");
         assert!(matches!(escape("plain"), Cow::Borrowed(_)));
+    }
+
+    #[test]
+    fn the_escaping_writer_keeps_lines_and_escapes_the_rest() {
+        let mut buf = Vec::new();
+        {
+            let mut w = Escaping(&mut buf);
+            write!(w, "tip '{}' not found\n", "a\u{1b}[2Jb").unwrap();
+            write!(w, "plain\n").unwrap();
+        }
+        assert_eq!(
+            String::from_utf8(buf).unwrap(),
+            "tip 'a\\u{1b}[2Jb' not found\nplain\n"
+        );
     }
 
     #[test]

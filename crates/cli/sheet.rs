@@ -260,6 +260,16 @@ pub struct Sheet {
 /// mm), and far from overflow in any unit conversion or forward kinematics.
 const MAX_MAGNITUDE: f64 = 1e30;
 
+/// Largest magnitude of a sheet value in metres or radians: a thousandth of
+/// [`MAX_MAGNITUDE`], so that whatever a sheet holds can be written in any unit (mm, deg: at
+/// most x1000) and read back.
+const MAX_SI_MAGNITUDE: f64 = 1e27;
+
+/// Is `v` (in a unit of `scale` metres or radians) beyond what a sheet may hold?
+fn too_large(v: f64, scale: f64) -> bool {
+    v.abs() > MAX_MAGNITUDE || (v * scale).abs() > MAX_SI_MAGNITUDE
+}
+
 /// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
 const SUSPICIOUS_METRES: f64 = 20.0;
 
@@ -487,25 +497,42 @@ pub(crate) fn row_of(
     warnings: &mut Vec<String>,
 ) -> Result<DhRow> {
     let (lu, au) = (length_unit.metres(), angle_unit.radians());
-    if let Some((k, c)) = j.name.chars().enumerate().find(|(_, c)| c.is_control()) {
-        // As the URDF reader: such a name corrupts tables, CSV and terminals.
+    if j.name.trim().is_empty() {
         bail!(
-            "{origin}: joint '{}': expected a name without control characters, found \
+            "{origin}: joint '{}': expected a name, found a blank one",
+            j.name
+        );
+    }
+    if let Some((k, c)) = j
+        .name
+        .chars()
+        .enumerate()
+        .find(|(_, c)| crate::guard::is_spoofing(*c))
+    {
+        // As the URDF reader: such a name corrupts tables, CSV and terminals (and a bidi
+        // override reorders what they show).
+        bail!(
+            "{origin}: joint '{}': expected a name without control or bidi characters, found \
              U+{:04X} at character {}",
             j.name.escape_debug(),
             u32::from(c),
             k + 1
         );
     }
-    for (field, v) in [
-        ("a", j.a),
-        ("alpha", j.alpha),
-        ("d", j.d),
-        ("theta", j.theta),
+    let limit_scale = if j.kind == JointType::Prismatic {
+        lu
+    } else {
+        au
+    };
+    for (field, v, scale) in [
+        ("a", j.a, lu),
+        ("alpha", j.alpha, au),
+        ("d", j.d, lu),
+        ("theta", j.theta, au),
     ]
     .into_iter()
-    .chain(j.lower.map(|v| ("lower", v)))
-    .chain(j.upper.map(|v| ("upper", v)))
+    .chain(j.lower.map(|v| ("lower", v, limit_scale)))
+    .chain(j.upper.map(|v| ("upper", v, limit_scale)))
     {
         if !v.is_finite() {
             bail!(
@@ -513,9 +540,9 @@ pub(crate) fn row_of(
                 j.name
             );
         }
-        if v.abs() > MAX_MAGNITUDE {
+        if too_large(v, scale) {
             bail!(
-                "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30, found {v:e}",
+                "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30 (1e27 m or rad), found {v:e}",
                 j.name
             );
         }
@@ -609,8 +636,8 @@ pub(crate) fn pose_of(
             if p.xyz.iter().chain(&p.rpy).any(|v| !v.is_finite()) {
                 bail!("{origin}: {what}: xyz and rpy must be finite numbers");
             }
-            if let Some(v) = p.xyz.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
-                bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30, found {v:e}");
+            if let Some(v) = p.xyz.iter().find(|v| too_large(**v, lu)) {
+                bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30 (1e27 m), found {v:e}");
             }
             Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
         }

@@ -393,7 +393,7 @@ impl TreeSheet {
         for (k, b) in branch_docs.iter().enumerate() {
             let count = branch_docs[..k].iter().filter(|o| o.name == b.name).count();
             let here = at(origin, line_of(text, "name", &b.name, count));
-            if b.name.trim().is_empty() || b.name.chars().any(char::is_control) {
+            if b.name.trim().is_empty() || b.name.chars().any(crate::guard::is_spoofing) {
                 bail!(
                     "{here}: branch {}: expected a name of printable characters, found '{}'",
                     k + 1,

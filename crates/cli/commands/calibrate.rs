@@ -29,7 +29,7 @@ use nalgebra::{Isometry3, Vector3};
 use serde::Serialize;
 
 use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
-use crate::commands::to_urdf::urdf_of;
+use crate::commands::to_urdf::{check_urdf, urdf_of};
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{
@@ -1043,13 +1043,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         s,
         "estimated parameters (nominal -> estimate +- standard error):"
     );
-    let width = doc
-        .parameters
-        .iter()
-        .map(|p| p.name.len())
-        .max()
-        .unwrap_or(4)
-        .max(4);
+    let width = crate::guard::column_width(doc.parameters.iter().map(|p| p.name.as_str()), 4);
     for p in doc
         .parameters
         .iter()
@@ -1058,7 +1052,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         let _ = writeln!(
             s,
             "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
-            p.name,
+            crate::guard::escape(&p.name),
             unit_label(p.unit, units),
             value(p.nominal, p.unit, units),
             value(p.estimate, p.unit, units),
@@ -1239,6 +1233,7 @@ pub(crate) fn calibrated_bytes(
     let lower = path.to_ascii_lowercase();
     let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
     let bytes = if lower.ends_with(".urdf") {
+        check_urdf(table, &robot, &inputs.links.0, &inputs.links.1)?;
         urdf_of(table, &robot, &inputs.links.0, &inputs.links.1)
     } else {
         let (lu, au) = inputs.units;

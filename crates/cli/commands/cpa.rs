@@ -528,13 +528,7 @@ fn text(doc: &CpaDoc, sheet: &SheetDoc) -> String {
         lu.symbol(),
         au.symbol()
     );
-    let w = doc
-        .joints
-        .iter()
-        .map(|j| j.name.len())
-        .max()
-        .unwrap_or(5)
-        .max(5);
+    let w = crate::guard::column_width(doc.joints.iter().map(|j| j.name.as_str()), 5);
     let _ = writeln!(
         s,
         "  {:<w$} {:>5} {:>6} {:>12} {:>11} {:>11} {:>11} {:>12}",
@@ -558,7 +552,7 @@ fn text(doc: &CpaDoc, sheet: &SheetDoc) -> String {
         let _ = writeln!(
             s,
             "  {:<w$} {:>5} {:>6} {:>12} {:>11} {:>11} {:>11} {:>12}",
-            j.name,
+            crate::guard::escape(&j.name),
             j.poses,
             j.points,
             j.radius.map_or_else(|| "-".into(), l),

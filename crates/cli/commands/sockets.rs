@@ -198,13 +198,7 @@ fn text(doc: &ContactDoc) -> String {
          then averaged (MUKCa's mean absolute error); distance error: |socket means' distance - \
          known distance|; mm"
     );
-    let w = doc
-        .steps
-        .iter()
-        .map(|st| st.label.len())
-        .max()
-        .unwrap_or(0)
-        .max(10);
+    let w = crate::guard::column_width(doc.steps.iter().map(|st| st.label.as_str()), 10);
     let _ = writeln!(
         s,
         "  {:<w$} {:>5} {:>9} {:>11} {:>10} {:>10} {:>10}",
