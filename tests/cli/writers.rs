@@ -161,8 +161,9 @@ proptest! {
             }
             let converted = dir.path().join(format!("converted.{format}"));
             std::fs::write(&converted, &out).unwrap();
+            // Read back as it is (same convention, same units).
             let (code, again, err) = cli(&[
-                "convert", &converted.to_string_lossy(), "--to", "standard",
+                "convert", &converted.to_string_lossy(), "--to", to,
             ]);
             prop_assert_eq!(code, 0, "convert refused what convert wrote:\n{}\n{}\n{}", err, out, s.yaml);
             prop_assert!(!again.is_empty());

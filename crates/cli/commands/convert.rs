@@ -53,6 +53,11 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     if !sheet.has_tool {
         doc.tool = None;
     }
+    // What convert writes, a sheet reader reads: refuse a result beyond a sheet's limits
+    // (the conversion moves a row's a and alpha into the base or tool, where they add up).
+    if let Err(e) = Sheet::parse(&render_sheet(&doc, Format::Yaml)?, &name) {
+        anyhow::bail!("{name}: cannot convert: the result would not be a valid sheet: {e:#}");
+    }
     out.write_all(render_sheet(&doc, args.format)?.as_bytes())?;
     Ok(Outcome::Pass)
 }
