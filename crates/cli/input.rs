@@ -23,12 +23,16 @@ pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
     std::fs::read(path).with_context(|| format!("{path}: cannot read the file"))
 }
 
-/// Reads `path` (or `-`) as UTF-8 text.
+/// Reads `path` (or `-`) as UTF-8 text, without the byte-order mark some editors put first
+/// (the YAML parser would take it for part of the first key; URDF and JSON readers skip it).
 ///
 /// # Errors
 /// The file cannot be read or is not UTF-8 (the message gives the line of the first bad byte).
 pub fn read_text(path: &str) -> Result<String> {
-    let bytes = read_bytes(path)?;
+    let mut bytes = read_bytes(path)?;
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;

@@ -17,6 +17,7 @@
 //! file `truth`; a sheet may carry them and they are ignored on input.
 
 use anyhow::{bail, Context, Result};
+use dh_calib::import::{too_deep_at, MAX_FLOW_DEPTH};
 use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
 use dh_core::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
 use nalgebra::Isometry3;
@@ -292,6 +293,8 @@ impl Sheet {
 /// # Errors
 /// Syntax errors with line and column, unknown or missing keys, nesting too deep.
 pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
+    // A byte-order mark is no part of the first key (URDF and JSON readers skip it too).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     {
         if text.trim().is_empty() {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
@@ -316,45 +319,14 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
     }
 }
 
-/// Flow collections (`[`, `{`) nested deeper than this are refused before YAML parsing: a sheet
-/// needs three levels, and libyaml's scanner takes time quadratic in the depth (found by
-/// fuzzing: 8 KiB of `[` took over 10 s).
-const MAX_FLOW_DEPTH: usize = 64;
-
-/// Refuses flow collections nested deeper than [`MAX_FLOW_DEPTH`], in one linear pass that
-/// skips quoted strings and comments.
-fn check_nesting(text: &str, origin: &str) -> Result<()> {
-    let (mut depth, mut line) = (0usize, 1usize);
-    let mut quote: Option<char> = None;
-    let mut comment = false;
-    let mut previous = '\n';
-    for c in text.chars() {
-        if c == '\n' {
-            line += 1;
-            comment = false;
-        } else if comment {
-        } else if let Some(q) = quote {
-            if c == q {
-                quote = None;
-            }
-        } else {
-            match c {
-                '"' | '\'' => quote = Some(c),
-                '#' if previous.is_whitespace() => comment = true,
-                '[' | '{' => {
-                    depth += 1;
-                    if depth > MAX_FLOW_DEPTH {
-                        bail!(
-                            "{origin} (line {line}): expected lists and maps nested at most \
-                             {MAX_FLOW_DEPTH} deep, found deeper"
-                        );
-                    }
-                }
-                ']' | '}' => depth = depth.saturating_sub(1),
-                _ => {}
-            }
-        }
-        previous = c;
+/// Refuses flow collections nested deeper than [`MAX_FLOW_DEPTH`] (a sheet needs three
+/// levels; libyaml's scanner takes time quadratic in the depth), in one linear pass.
+pub(crate) fn check_nesting(text: &str, origin: &str) -> Result<()> {
+    if let Some(line) = too_deep_at(text) {
+        bail!(
+            "{origin} (line {line}): expected lists and maps nested at most \
+             {MAX_FLOW_DEPTH} deep, found deeper"
+        );
     }
     Ok(())
 }

@@ -225,6 +225,7 @@ impl InertialsDoc {
     /// # Errors
     /// Syntax errors with line and column, unknown or missing keys.
     pub fn parse(text: &str, origin: &str) -> Result<InertialsDoc> {
+        crate::sheet::check_nesting(text, origin)?;
         serde_yaml::from_str(text).map_err(|e| anyhow::anyhow!("{origin}: {e}"))
     }
 }

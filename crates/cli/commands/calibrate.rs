@@ -17,7 +17,7 @@ use anyhow::{Context, Result};
 use dh_calib::calibrate::Validation;
 use dh_calib::calibrate::{calibrate as run_calibration, CalibrationOptions, NoiseSource, Report};
 use dh_calib::cpa::{analyse, CpaOptions};
-use dh_calib::data::{Measurements, Split};
+use dh_calib::data::{Measurements, Sample, Split};
 use dh_calib::diagnose::{diagnose, DiagnoseOptions};
 use dh_calib::effects::{label_of, parse_label_in, EffectContext};
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
@@ -124,7 +124,8 @@ pub struct CalibrateArgs {
 /// row's DH frame), optional `payloads: [{mass, com}]` (tip frame) and `gravity: [x, y, z]`.
 fn read_inertials(path: &str, table: &DhTable) -> Result<(Inertials, Option<Vector3<f64>>)> {
     let origin = display_name(path);
-    let text = std::fs::read_to_string(path).with_context(|| format!("{origin}: cannot read"))?;
+    let text = crate::input::read_text(path)?;
+    crate::sheet::check_nesting(&text, &origin)?;
     let doc: serde_yaml::Value =
         serde_yaml::from_str(&text).with_context(|| format!("{origin}: not YAML"))?;
     let num = |v: &serde_yaml::Value, what: &str| -> Result<f64> {
@@ -645,6 +646,33 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
     })
 }
 
+/// Refuses, before any fitting, point data that cannot determine its own unknowns: every step
+/// estimates each target's position (3 parameters) and the device frame (6), and each sample
+/// gives 3 coordinates, so fewer than `targets + 3` calibration samples fit nothing (200 rows
+/// of 200 targets took minutes to say so).
+fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
+    let cal: Vec<&Sample> = data
+        .samples
+        .iter()
+        .filter(|s| s.split == Split::Calibration)
+        .collect();
+    let mut targets: Vec<usize> = cal.iter().map(|s| s.target).collect();
+    targets.sort_unstable();
+    targets.dedup();
+    let needed = targets.len() + 3;
+    if cal.len() < needed {
+        return Err(hinted(
+            format!(
+                "{data_name}: expected at least {needed} calibration samples for {} target(s) (each target's position and the device frame are estimated: 3 per target + 6, 3 coordinates per sample), found {}",
+                targets.len(),
+                cal.len()
+            ),
+            "measure each target at several poses (the target column names the reflector, not the pose)",
+        ));
+    }
+    Ok(())
+}
+
 /// Runs `calibrate`.
 ///
 /// # Errors
@@ -659,6 +687,7 @@ pub fn calibrate(
     if inputs.data.samples.iter().any(|s| s.socket.is_some()) {
         return crate::commands::sockets::calibrate_contacts(args, &inputs, out);
     }
+    enough_samples(&inputs.data, &display_name(&args.data))?;
     let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
     let ctx = EffectContext {
         tree: DhTree::serial(&inputs.table),
