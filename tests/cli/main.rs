@@ -9,5 +9,6 @@ mod cpa;
 mod extract;
 mod invalid;
 mod measured;
+mod outputs;
 mod tree;
 mod writers;

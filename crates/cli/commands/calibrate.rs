@@ -596,6 +596,9 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
     if let Some(m) = &model {
         m.couple(&mut data)
             .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
+        for w in crate::measured::beyond_limits(&m.table, &data, &data_name) {
+            writeln!(err, "urdf-dh: warning: {w}")?;
+        }
     }
     if !args.targets.is_empty() {
         keep_targets(&mut data, &args.targets, &data_name)?;
