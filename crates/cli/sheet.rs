@@ -309,7 +309,11 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
                     if let Some(k) = message.find(&said) {
                         message.replace_range(k..k + said.len(), "");
                     }
-                    format!(" (line {}, column {})", l.line(), l.column())
+                    // For a repeated key serde_yaml points at the start of the mapping: point
+                    // at the repetition instead.
+                    let (line, column) = duplicate_key_at(text, &message, l.index())
+                        .unwrap_or((l.line(), l.column()));
+                    format!(" (line {line}, column {column})")
                 }
                 None => String::new(),
             };
@@ -317,6 +321,39 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
         })?;
         Ok(doc)
     }
+}
+
+/// Where the key named in serde's "duplicate field `KEY`" message is given the second time at
+/// or after byte `from` (the mapping's start): (line, column), both from 1. `None` for other
+/// messages or when the key is not found as a key (`KEY:` after a line start, `-`, `{` or `,`).
+fn duplicate_key_at(text: &str, message: &str, from: usize) -> Option<(usize, usize)> {
+    let key = message
+        .split_once("duplicate field `")?
+        .1
+        .split_once('`')?
+        .0;
+    let mut seen = 0;
+    let mut k = from.min(text.len());
+    while let Some(found) = text.get(k..)?.find(key) {
+        let at = k + found;
+        let before = text[..at].trim_end_matches([' ', '\t', '"', '\'']);
+        let after = text[at + key.len()..].trim_start_matches(['"', '\'', ' ', '\t']);
+        let starts_key = before.is_empty() || before.ends_with(['\n', '-', '{', ',']);
+        if starts_key && after.starts_with(':') {
+            seen += 1;
+            if seen == 2 {
+                let line = text[..at].matches('\n').count() + 1;
+                let column = text[..at]
+                    .rsplit('\n')
+                    .next()
+                    .map_or(0, |l| l.chars().count())
+                    + 1;
+                return Some((line, column));
+            }
+        }
+        k = at + key.len();
+    }
+    None
 }
 
 /// Refuses flow collections nested deeper than [`MAX_FLOW_DEPTH`] (a sheet needs three
@@ -739,8 +776,9 @@ mod tests {
         )
         .unwrap_err();
         assert!(
-            e.to_string()
-                .contains("joint 'a': d: expected a magnitude of at most 1e30, found 1e306"),
+            e.to_string().contains(
+                "joint 'a': d: expected a magnitude of at most 1e30 (1e27 m or rad), found 1e306"
+            ),
             "{e}"
         );
         // Found by fuzzing: extract writes ill-conditioned rows kilometres long, and they
@@ -787,5 +825,19 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("line 1"), "{e}");
+    }
+
+    #[test]
+    fn a_repeated_key_is_located_where_it_repeats() {
+        let text =
+            "convention: standard\nlength_unit: m\nangle_unit: deg\nangle_unit: rad\njoints: []\n";
+        let e = parse_doc(text, "s.yaml").unwrap_err().to_string();
+        assert!(e.contains("(line 4, column 1)"), "{e}");
+        let flow = "joints:\n  - {name: j, d: 0, a: 0, d: 1}\n";
+        assert_eq!(
+            duplicate_key_at(flow, "joints[0]: duplicate field `d`", 10),
+            Some((2, 27))
+        );
+        assert_eq!(duplicate_key_at(flow, "some other message", 0), None);
     }
 }
