@@ -62,7 +62,12 @@ pub struct SimulateArgs {
     pub truth: Option<String>,
 }
 
-/// `NAME=VALUE[,VALUE...]`.
+/// Largest magnitude of an `--error` or `--effect` value (metres, radians or the effect's own
+/// unit): an error of a kilometre or a thousand radians is no robot's, and beyond it the
+/// simulated points leave what the measurement reader accepts (100 m).
+const MAX_SIM_VALUE: f64 = 1e3;
+
+/// `NAME=VALUE[,VALUE...]`, each value finite and within [`MAX_SIM_VALUE`].
 fn name_values(s: &str, what: &str) -> Result<(String, Vec<f64>)> {
     let (name, values) = s.split_once('=').ok_or_else(|| {
         hinted(
@@ -76,10 +81,10 @@ fn name_values(s: &str, what: &str) -> Result<(String, Vec<f64>)> {
             v.trim()
                 .parse::<f64>()
                 .ok()
-                .filter(|v| v.is_finite())
+                .filter(|v| v.is_finite() && v.abs() <= MAX_SIM_VALUE)
                 .ok_or_else(|| {
                     anyhow::anyhow!(
-                        "{what} '{s}': expected a finite number, found '{}'",
+                        "--{what} '{s}': expected a number in [-{MAX_SIM_VALUE}, {MAX_SIM_VALUE}], found '{}'",
                         v.trim()
                     )
                 })
@@ -309,6 +314,19 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
         display_name(&truth_path)
     );
     csv.push_str(&write_measurements(&data));
+    // What simulate writes, calibrate reads: a model whose points leave the reader's limits
+    // (coordinates beyond 100 m, joint values beyond four turns) is refused here, not there.
+    let opts = dh_calib::csv::CsvOptions {
+        length_unit: dh_calib::csv::LengthUnit::Metre,
+        angle_unit: dh_calib::csv::AngleUnit::Radian,
+        prismatic: model.prismatic(),
+    };
+    dh_calib::csv::parse_measurements(&csv, &data.joint_names, &opts).map_err(|e| {
+        hinted(
+            format!("simulate: the simulated data would not read back: {e}"),
+            "simulate a model of robot size (points within 100 m of the device, joint ranges within four turns)",
+        )
+    })?;
 
     let mut sheet = SheetDoc::from_table(&truth.table, LengthUnit::M, AngleUnit::Rad);
     sheet.robot = Some(format!("truth of {out_name}"));
