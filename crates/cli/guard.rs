@@ -224,8 +224,9 @@ mod tests {
         let mut buf = Vec::new();
         {
             let mut w = Escaping(&mut buf);
-            write!(w, "tip '{}' not found\n", "a\u{1b}[2Jb").unwrap();
-            write!(w, "plain\n").unwrap();
+            let tip = "a\u{1b}[2Jb";
+            writeln!(w, "tip '{tip}' not found").unwrap();
+            writeln!(w, "plain").unwrap();
         }
         assert_eq!(
             String::from_utf8(buf).unwrap(),

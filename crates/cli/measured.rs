@@ -421,51 +421,6 @@ pub fn parse_effect(label: &str, table: &DhTable) -> Result<Arc<dyn Effect>> {
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn header_cells_are_split_unquoted_and_trimmed() {
-        assert_eq!(
-            split_header(" j1 ,\"j,2\", x,y,z,\"a\"\"b\""),
-            ["j1", "j,2", "x", "y", "z", "a\"b"]
-        );
-    }
-
-    #[test]
-    fn urdf_or_sheet_by_extension_then_content() {
-        assert!(is_urdf("r.urdf", "convention: standard"));
-        assert!(!is_urdf("r.yaml", "<robot/>"));
-        assert!(is_urdf("r.txt", "  <?xml version='1.0'?><robot/>"));
-        assert!(!is_urdf("-", "convention: standard"));
-    }
-
-    #[test]
-    fn effect_labels() {
-        let table = DhTable {
-            convention: Convention::Standard,
-            base: nalgebra::Isometry3::identity(),
-            tool: nalgebra::Isometry3::identity(),
-            rows: vec![dh_core::DhRow::revolute("j1", 0.3, 0.0, 0.0, 0.0)],
-        };
-        assert_eq!(
-            parse_effect("gear_ratio:j1", &table)
-                .unwrap()
-                .parameter_names(),
-            ["gear_ratio:j1"]
-        );
-        for (label, says) in [
-            ("gear_ratio", "found 0 arguments"),
-            ("gear_ratio:j9", "j9"),
-            ("wobble:j1", "found 'wobble'"),
-        ] {
-            let e = parse_effect(label, &table).err().unwrap();
-            assert!(e.to_string().contains(says), "{e}");
-        }
-    }
-}
-
 /// Slack beyond a joint's limits before a measured value counts as outside them (radians, or
 /// metres for a prismatic joint): controllers report a hair past a soft limit.
 pub const LIMIT_SLACK: f64 = 1e-3;
@@ -523,4 +478,49 @@ pub fn beyond_limits(table: &DhTable, data: &Measurements, data_name: &str) -> V
         ));
     }
     warnings
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_cells_are_split_unquoted_and_trimmed() {
+        assert_eq!(
+            split_header(" j1 ,\"j,2\", x,y,z,\"a\"\"b\""),
+            ["j1", "j,2", "x", "y", "z", "a\"b"]
+        );
+    }
+
+    #[test]
+    fn urdf_or_sheet_by_extension_then_content() {
+        assert!(is_urdf("r.urdf", "convention: standard"));
+        assert!(!is_urdf("r.yaml", "<robot/>"));
+        assert!(is_urdf("r.txt", "  <?xml version='1.0'?><robot/>"));
+        assert!(!is_urdf("-", "convention: standard"));
+    }
+
+    #[test]
+    fn effect_labels() {
+        let table = DhTable {
+            convention: Convention::Standard,
+            base: nalgebra::Isometry3::identity(),
+            tool: nalgebra::Isometry3::identity(),
+            rows: vec![dh_core::DhRow::revolute("j1", 0.3, 0.0, 0.0, 0.0)],
+        };
+        assert_eq!(
+            parse_effect("gear_ratio:j1", &table)
+                .unwrap()
+                .parameter_names(),
+            ["gear_ratio:j1"]
+        );
+        for (label, says) in [
+            ("gear_ratio", "found 0 arguments"),
+            ("gear_ratio:j9", "j9"),
+            ("wobble:j1", "found 'wobble'"),
+        ] {
+            let e = parse_effect(label, &table).err().unwrap();
+            assert!(e.to_string().contains(says), "{e}");
+        }
+    }
 }

@@ -119,7 +119,10 @@ pub fn check_urdf(table: &DhTable, robot: &str, base_link: &str, tip_link: &str)
         before = post;
     }
     let (xyz, _) = to_xyz_rpy(&(before * table.tool));
-    if let Some(v) = xyz.iter().find(|v| !(v.abs() <= URDF_MAX_MAGNITUDE)) {
+    if let Some(v) = xyz
+        .iter()
+        .find(|v| v.abs() > URDF_MAX_MAGNITUDE || !v.is_finite())
+    {
         anyhow::bail!(
             "the tip link's origin: expected coordinates within {URDF_MAX_MAGNITUDE:e} m (what a URDF may hold), found {v:e}"
         );
