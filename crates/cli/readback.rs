@@ -10,7 +10,7 @@ use anyhow::{anyhow, bail, ensure, Context, Result};
 use dh_core::{Bound, DhTable, Precision};
 use nalgebra::Isometry3;
 
-use crate::render::{render_sheet, Format};
+use crate::render::{render_sheet_at, Format};
 use crate::sheet::VerificationDoc;
 use crate::sheet::{parse_doc, ConventionDoc, JointDoc, JointType, MimicDoc, PoseDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit, PRINT_NOISE};
@@ -20,6 +20,16 @@ use crate::units::{AngleUnit, LengthUnit, PRINT_NOISE};
 /// to multiples of 45° within 1e-12 rad) of the sheet's numbers in YAML, JSON and CSV
 /// ([`LengthUnit::from_si`], [`AngleUnit::from_si`]), plus the float noise printed as 0.
 pub fn precision_of(format: Format, length: LengthUnit, angle: AngleUnit) -> Precision {
+    precision_at(format, length, angle, 0)
+}
+
+/// [`precision_of`] for text and Markdown tables written with `extra` more decimals.
+pub fn precision_at(
+    format: Format,
+    length: LengthUnit,
+    angle: AngleUnit,
+    extra: usize,
+) -> Precision {
     let sheet_length = 0.5 * 10f64.powi(-(length.decimals() as i32)) * length.metres();
     let sheet_angle =
         (0.5 * 10f64.powi(-(angle.decimals() as i32)) * angle.radians()).max(10.0 * PRINT_NOISE);
@@ -27,7 +37,7 @@ pub fn precision_of(format: Format, length: LengthUnit, angle: AngleUnit) -> Pre
     match format {
         Format::Yaml | Format::Json | Format::Csv => Precision::rounded(l, a),
         Format::Text | Format::Markdown => {
-            let step = |decimals: usize| 0.5 * 10f64.powi(-(decimals as i32));
+            let step = |decimals: usize| 0.5 * 10f64.powi(-((decimals + extra) as i32));
             Precision::rounded(
                 l + step(crate::render::decimals(length.symbol())) * length.metres(),
                 a + step(crate::render::decimals(angle.symbol())) * angle.radians(),
@@ -82,8 +92,17 @@ pub fn prove<F>(
 where
     F: FnMut(&[f64]) -> Isometry3<f64>,
 {
+    let size = source.table.size();
+    if size > MAX_PROVABLE_SIZE {
+        bail!(
+            "the chain spans {size:.3e} m (lengths, offsets and prismatic travel): beyond {MAX_PROVABLE_SIZE:e} m \
+             no table can be proved to {} m in double precision",
+            Bound::MAX_POSITION
+        );
+    }
     doc.verification = None;
-    let first = render_sheet(doc, format)?;
+    let extra = extra_decimals(source.table, format, doc.length_unit, doc.angle_unit);
+    let first = render_sheet_at(doc, format, extra)?;
     let written = table_of(&first, format, free)?;
     let mut problems = Vec::new();
     for (w, s) in written.rows.iter().zip(&source.table.rows) {
@@ -110,8 +129,7 @@ where
     // source never verifies, whatever its precision allows.
     let bound = Bound {
         position: (source.bound.position + rounding.position).min(Bound::MAX_POSITION),
-        orientation: (source.bound.orientation + rounding.orientation)
-            .min(Bound::MAX_ORIENTATION),
+        orientation: (source.bound.orientation + rounding.orientation).min(Bound::MAX_ORIENTATION),
     };
     let passed = problems.is_empty()
         && dev.max_position_error <= bound.position
@@ -126,13 +144,37 @@ where
         passed,
         against: source.against,
     });
-    let last = render_sheet(doc, format)?;
+    let last = render_sheet_at(doc, format, extra)?;
     // What was proved must be what is written: the verification is attached after the table.
     ensure!(
         table_of(&last, format, free)? == written,
         "internal error: the {format:?} output reads back differently once verified"
     );
     Ok((last, passed))
+}
+
+/// The largest chain (metres, [`DhTable::size`]) whose written table can be proved: float
+/// arithmetic alone moves the tip of a larger one by more than [`Bound::MAX_POSITION`] (a
+/// double holds about 16 digits; 1e10 m to 1 mm takes 13 of them, with the rest for rounding
+/// over the chain).
+pub const MAX_PROVABLE_SIZE: f64 = 1e10;
+
+/// The text and Markdown tables' usual decimals (1e-6 m, 1e-6 rad or 1e-4°) bound a written
+/// arm's error by some 1e-5 m; a chain of kilometres (a mobile base's prismatic joints with
+/// limits of ±1e6 m) needs more to stay within a tenth of [`Bound::MAX_POSITION`]: the fewest
+/// extra decimals that do (at most 9).
+pub const TEXT_TARGET: f64 = 0.1 * Bound::MAX_POSITION;
+
+fn extra_decimals(table: &DhTable, format: Format, l: LengthUnit, a: AngleUnit) -> usize {
+    if !matches!(format, Format::Text | Format::Markdown) {
+        return 0;
+    }
+    (0..9)
+        .find(|&k| {
+            let b = dh_core::written_bound(table, precision_at(format, l, a, k));
+            b.position <= TEXT_TARGET && b.orientation <= TEXT_TARGET
+        })
+        .unwrap_or(9)
 }
 
 /// The base and tool to use where a written sheet leaves them out (free transforms).

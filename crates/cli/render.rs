@@ -27,12 +27,22 @@ pub enum Format {
 /// # Errors
 /// Serialisation failures (not expected for finite numbers).
 pub fn render_sheet(doc: &SheetDoc, format: Format) -> Result<String> {
+    render_sheet_at(doc, format, 0)
+}
+
+/// Renders `doc` in `format`, the text and Markdown tables with `extra` decimals beyond their
+/// usual ones (so that a very large chain's table still proves itself as written; see
+/// [`crate::readback::prove`]).
+///
+/// # Errors
+/// Serialisation failures (not expected for finite numbers).
+pub fn render_sheet_at(doc: &SheetDoc, format: Format, extra: usize) -> Result<String> {
     Ok(match format {
         Format::Yaml => serde_yaml::to_string(doc)?,
         Format::Json => serde_json::to_string_pretty(doc)? + "\n",
-        Format::Text => text(doc),
+        Format::Text => text(doc, extra),
         Format::Csv => csv(doc),
-        Format::Markdown => markdown(doc),
+        Format::Markdown => markdown(doc, extra),
     })
 }
 
@@ -48,7 +58,12 @@ pub(crate) fn decimals(unit: &str) -> usize {
 
 /// Formats `v` with the decimals its unit deserves, `-0` printed as `0`.
 fn num(v: f64, unit: &str) -> String {
-    let s = format!("{:.*}", decimals(unit), v);
+    num_at(v, unit, 0)
+}
+
+/// Formats `v` with `extra` decimals more than its unit deserves, `-0` printed as `0`.
+fn num_at(v: f64, unit: &str, extra: usize) -> String {
+    let s = format!("{:.*}", decimals(unit) + extra, v);
     if s.trim_start_matches('-')
         .chars()
         .all(|c| c == '0' || c == '.')
@@ -66,7 +81,7 @@ fn limit_unit<'a>(doc: &'a SheetDoc, j: &JointDoc) -> &'a str {
     }
 }
 
-fn coupling(doc: &SheetDoc, j: &JointDoc) -> String {
+fn coupling(doc: &SheetDoc, j: &JointDoc, extra: usize) -> String {
     j.mimic
         .as_ref()
         .map(|m| {
@@ -75,7 +90,7 @@ fn coupling(doc: &SheetDoc, j: &JointDoc) -> String {
                 m.multiplier,
                 m.joint,
                 if m.offset < 0.0 { "-" } else { "+" },
-                num(m.offset.abs(), limit_unit(doc, j))
+                num_at(m.offset.abs(), limit_unit(doc, j), extra)
             )
         })
         .unwrap_or_default()
@@ -97,7 +112,7 @@ fn header_line(doc: &SheetDoc) -> String {
     format!("{}{chain}, {conv}", doc.robot.as_deref().unwrap_or("robot"))
 }
 
-fn text(doc: &SheetDoc) -> String {
+fn text(doc: &SheetDoc, extra: usize) -> String {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let mut s = String::new();
     let _ = writeln!(s, "{}", header_line(doc));
@@ -124,10 +139,10 @@ fn text(doc: &SheetDoc) -> String {
         let lim =
             |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{} {lu}", num(v, lu)));
         let cells = [
-            num(j.theta, a),
-            num(j.d, l),
-            num(j.a, l),
-            num(j.alpha, a),
+            num_at(j.theta, a, extra),
+            num_at(j.d, l, extra),
+            num_at(j.a, l, extra),
+            num_at(j.alpha, a, extra),
             lim(j.lower),
             lim(j.upper),
         ];
@@ -136,19 +151,19 @@ fn text(doc: &SheetDoc) -> String {
         for c in &cells {
             let _ = write!(s, "  {c:>13}");
         }
-        let _ = writeln!(s, "  {}", coupling(doc, j)).map(|_| ());
+        let _ = writeln!(s, "  {}", coupling(doc, j, extra)).map(|_| ());
     }
     // Trailing spaces from an empty coupling column would make diffs noisy.
     s = s.lines().map(str::trim_end).collect::<Vec<_>>().join("\n") + "\n";
     let pose = |name: &str, what: &str, p: &Option<crate::sheet::PoseDoc>| match p {
         Some(p) => format!(
             "{name:<5} {what}: xyz [{l}] {} {} {}   rpy [{a}] {} {} {}\n",
-            num(p.xyz[0], l),
-            num(p.xyz[1], l),
-            num(p.xyz[2], l),
-            num(p.rpy[0], a),
-            num(p.rpy[1], a),
-            num(p.rpy[2], a)
+            num_at(p.xyz[0], l, extra),
+            num_at(p.xyz[1], l, extra),
+            num_at(p.xyz[2], l, extra),
+            num_at(p.rpy[0], a, extra),
+            num_at(p.rpy[1], a, extra),
+            num_at(p.rpy[2], a, extra)
         ),
         None => format!("{name:<5} {what}: not given\n"),
     };
@@ -273,7 +288,7 @@ fn md_cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
-fn markdown(doc: &SheetDoc) -> String {
+fn markdown(doc: &SheetDoc, extra: usize) -> String {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let mut s = String::new();
     let _ = writeln!(s, "**{}**\n", header_line(doc));
@@ -295,13 +310,13 @@ fn markdown(doc: &SheetDoc) -> String {
             "| {} | {} | {kind} | {} | {} | {} | {} | {} | {} | {} |",
             i + 1,
             md_cell(&j.name),
-            num(j.theta, a),
-            num(j.d, l),
-            num(j.a, l),
-            num(j.alpha, a),
+            num_at(j.theta, a, extra),
+            num_at(j.d, l, extra),
+            num_at(j.a, l, extra),
+            num_at(j.alpha, a, extra),
             lim(j.lower),
             lim(j.upper),
-            md_cell(&coupling(doc, j))
+            md_cell(&coupling(doc, j, extra))
         );
     }
     for (name, p) in [("base", &doc.base), ("tool", &doc.tool)] {
@@ -309,12 +324,12 @@ fn markdown(doc: &SheetDoc) -> String {
             let _ = writeln!(
                 s,
                 "\n{name}: xyz [{l}] {} {} {}, rpy [{a}] {} {} {}",
-                num(p.xyz[0], l),
-                num(p.xyz[1], l),
-                num(p.xyz[2], l),
-                num(p.rpy[0], a),
-                num(p.rpy[1], a),
-                num(p.rpy[2], a)
+                num_at(p.xyz[0], l, extra),
+                num_at(p.xyz[1], l, extra),
+                num_at(p.xyz[2], l, extra),
+                num_at(p.rpy[0], a, extra),
+                num_at(p.rpy[1], a, extra),
+                num_at(p.rpy[2], a, extra)
             );
         }
     }

@@ -274,6 +274,11 @@ fn too_large(v: f64, scale: f64) -> bool {
     v.abs() > MAX_MAGNITUDE || (v * scale).abs() > MAX_SI_MAGNITUDE
 }
 
+/// Largest magnitude of a DH angle or `rpy` angle (radians): past it a double wraps the angle
+/// to the circle with an error above 1e-10 rad, and 9.9e26 rad has no angle left in it at all.
+/// Joint limits may be larger (they only bound the joint values drawn).
+const MAX_ANGLE: f64 = 1e6;
+
 /// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
 const SUSPICIOUS_METRES: f64 = 20.0;
 
@@ -558,6 +563,13 @@ pub(crate) fn row_of(
                 j.name
             );
         }
+        if matches!(field, "alpha" | "theta") && (v * scale).abs() > MAX_ANGLE {
+            bail!(
+                "{origin}: joint '{}': {field}: expected an angle of at most {MAX_ANGLE:e} rad, found {v:e} {} (a double holds no angle that large)",
+                j.name,
+                angle_unit.symbol()
+            );
+        }
     }
     let kind = match j.kind {
         JointType::Revolute => JointKind::Revolute,
@@ -650,6 +662,12 @@ pub(crate) fn pose_of(
             }
             if let Some(v) = p.xyz.iter().find(|v| too_large(**v, lu)) {
                 bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30 (1e27 m), found {v:e}");
+            }
+            if let Some(v) = p.rpy.iter().find(|v| (**v * au).abs() > MAX_ANGLE) {
+                bail!(
+                    "{origin}: {what}: rpy: expected an angle of at most {MAX_ANGLE:e} rad, found {v:e} {} (a double holds no angle that large)",
+                    angle_unit.symbol()
+                );
             }
             Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
         }

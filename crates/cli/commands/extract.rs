@@ -172,7 +172,7 @@ pub fn extract_chain(
     )
     .with_context(|| format!("{name}: extraction failed"))?;
     let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
-    sheet.robot = Some(model.robot_name().to_string());
+    sheet.robot = Some(model.robot_name().to_string()).filter(|n| !n.is_empty());
     sheet.base_link = Some(chain.base().to_string());
     sheet.tip_link = Some(chain.tip().to_string());
     let ex_rows = &extraction.table.rows;

@@ -324,7 +324,7 @@ pub fn to_urdf(args: &ToUrdfArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let robot = args
         .name
         .clone()
-        .or(sheet.robot.clone())
+        .or(sheet.robot.clone().filter(|n| !n.trim().is_empty()))
         .unwrap_or_else(|| "robot".into());
     check_urdf(&sheet.table, &robot, &args.base_link, &args.tip_link)?;
     let mut text = urdf_of(&sheet.table, &robot, &args.base_link, &args.tip_link);
