@@ -21,11 +21,11 @@ pub enum UrdfError {
     /// The document is larger than [`crate::MAX_URDF_BYTES`] (refused before reading it all).
     #[error(
         "expected a urdf of at most {limit} bytes, found {}",
-        if *.size > *.limit { format!("{} bytes", .size) } else { "more".to_owned() }
+        .size.map_or_else(|| "more".to_owned(), |s| format!("{s} bytes"))
     )]
     TooLarge {
-        /// Bytes found (or `limit + 1` when reading stopped there).
-        size: usize,
+        /// Bytes found, when known (reading from a pipe stops after the limit).
+        size: Option<usize>,
         /// The limit.
         limit: usize,
     },

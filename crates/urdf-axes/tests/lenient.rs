@@ -192,7 +192,7 @@ fn a_long_chain_of_mimics_is_valid() {
     }
     // Closing the chain into a ring makes one cycle of n joints, reported shortened.
     let ring = mimic_chain(n).replace(
-        &format!("<axis xyz=\"0 0 1\"/></joint>\n</robot>"),
+        "<axis xyz=\"0 0 1\"/></joint>\n</robot>",
         "<axis xyz=\"0 0 1\"/><mimic joint=\"j1\"/></joint>\n</robot>",
     );
     let e = UrdfModel::parse(&ring)
