@@ -129,6 +129,7 @@ fn mimic_cycles_and_mimics_of_fixed_joints_are_refused() {
         e,
         UrdfError::MimicCycle {
             joints: vec!["j1".into(), "j2".into(), "j1".into()],
+            length: 2,
             line: Some(7)
         }
     );
@@ -201,7 +202,10 @@ fn a_long_chain_of_mimics_is_valid() {
         .unwrap_err();
     assert_message(
         &e,
-        &["joint 'j1'", "cycle j1 -> j2", &format!("({n} links)")],
+        &[
+            "joint 'j1'",
+            "cycle j1 -> j2 -> j3 -> j4 -> j5 -> j6 -> ... -> j4000 -> j1 (4000 joints)",
+        ],
     );
 }
 
