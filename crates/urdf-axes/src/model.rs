@@ -245,7 +245,9 @@ impl UrdfModel {
             }
             if out.len() < read::MAX_WARNINGS {
                 out.push(Warning {
-                    element: format!("joint '{}'", j.name),
+                    // Escaped: an off-chain joint's name may hold the very control or
+                    // bidirectional character its fault is about.
+                    element: format!("joint '{}'", j.name.escape_debug()),
                     line: Some(j.line),
                     message: format!("{} ({note})", fault_summary(j, fault)),
                 });

@@ -210,6 +210,16 @@ fn a_long_chain_of_mimics_is_valid() {
 }
 
 #[test]
+fn names_in_warnings_are_escaped() {
+    let m = UrdfModel::parse(&arm("", LIMIT).replace("name=\"w\"", "name=\"w\u{202e}x\"")).unwrap();
+    let c = m.chain(None, Some("l2")).unwrap();
+    let w: Vec<String> = m.warnings_for(&c).iter().map(ToString::to_string).collect();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].starts_with("joint 'w\\u{202e}x' (line 12): "), "{w:?}");
+    assert!(!w[0].contains('\u{202e}'), "{w:?}");
+}
+
+#[test]
 fn names_with_bidirectional_overrides_are_refused() {
     let e = common::parse_err(&arm("", LIMIT).replace("name=\"j2\"", "name=\"j\u{202e}2\""));
     assert!(matches!(e, UrdfError::ControlCharacterInName { .. }), "{e}");
