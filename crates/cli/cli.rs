@@ -145,7 +145,7 @@ struct ChainCli {
     /// Base link of the chain [default: the URDF's root link].
     #[arg(long)]
     base: Option<String>,
-    /// Tip link of the chain [default: the only leaf link].
+    /// Tip link of the chain [default: the end of the longest run of moving joints].
     #[arg(long)]
     tip: Option<String>,
 }

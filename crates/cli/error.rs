@@ -62,6 +62,9 @@ pub fn hint_for(e: &anyhow::Error) -> Option<String> {
         UrdfError::EntityDeclaration { .. } => {
             "expand the entities first (xacro, or by hand): urdf-dh reads plain URDF".into()
         }
+        UrdfError::TooLarge { .. } => "a robot description is a few megabytes at most (meshes live \
+             in their own files): check what is being read"
+            .into(),
         UrdfError::NotUtf8 { .. } => {
             "convert the file to UTF-8, e.g. iconv -f latin1 -t utf-8 FILE > FILE.utf8".into()
         }

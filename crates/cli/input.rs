@@ -32,6 +32,7 @@ pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
 pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
     let limit = urdf_axes::MAX_URDF_BYTES;
     let mut buf = Vec::new();
+    let mut size = None;
     let read = if path == "-" {
         std::io::stdin()
             .take(limit as u64 + 1)
@@ -39,13 +40,19 @@ pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
             .context("reading standard input")
     } else {
         std::fs::File::open(path)
-            .and_then(|f| f.take(limit as u64 + 1).read_to_end(&mut buf))
+            .and_then(|f| {
+                size = f
+                    .metadata()
+                    .ok()
+                    .and_then(|m| usize::try_from(m.len()).ok());
+                f.take(limit as u64 + 1).read_to_end(&mut buf)
+            })
             .with_context(|| format!("{path}: cannot read the file"))
     };
     read?;
     if buf.len() > limit {
         return Err(anyhow::Error::new(urdf_axes::UrdfError::TooLarge {
-            size: buf.len(),
+            size: size.filter(|&s| s > limit),
             limit,
         })
         .context(format!("{}: invalid URDF", display_name(path))));

@@ -640,6 +640,23 @@ fn timed_extract(urdf: &str) -> (Duration, String) {
     (start.elapsed(), out)
 }
 
+/// An endless input (`extract - < /dev/zero`) is cut at the size limit with a clear error, not
+/// read until memory runs out.
+#[test]
+fn input_beyond_the_size_limit_is_refused() {
+    let bytes = vec![0u8; urdf_axes::MAX_URDF_BYTES + 1];
+    let out = run(&["extract", "-"], Some(&bytes));
+    assert_eq!(
+        out,
+        format!(
+            "exit: 2\n--- stdout\n--- stderr\nurdf-dh: error: <stdin>: invalid URDF: expected a \
+             urdf of at most {} bytes, found more\nhint: a robot description is a few megabytes \
+             at most (meshes live in their own files): check what is being read\n",
+            urdf_axes::MAX_URDF_BYTES
+        )
+    );
+}
+
 /// A 4000-joint chain in which each joint mimics the next (drivers after their followers)
 /// extracts and verifies; the csv names each row's driver.
 #[test]

@@ -1547,7 +1547,7 @@ pub struct CalibrateCli {
     /// Base link of a URDF chain [default: the root link].
     #[arg(long)]
     base: Option<String>,
-    /// Tip link of a URDF chain [default: the only leaf].
+    /// Tip link of a URDF chain [default: the end of the longest run of moving joints].
     #[arg(long)]
     tip: Option<String>,
     /// DH convention for a URDF model or the CPA start.

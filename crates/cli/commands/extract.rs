@@ -18,7 +18,7 @@ pub struct ExtractArgs {
     pub path: String,
     /// Base link (default: the root link).
     pub base: Option<String>,
-    /// Tip link (default: the only leaf).
+    /// Tip link (default: the end of the longest run of moving joints).
     pub tip: Option<String>,
     /// DH convention of the table.
     pub convention: Convention,

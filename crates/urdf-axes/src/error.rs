@@ -21,11 +21,11 @@ pub enum UrdfError {
     /// The document is larger than [`crate::MAX_URDF_BYTES`] (refused before reading it all).
     #[error(
         "expected a urdf of at most {limit} bytes, found {}",
-        if *.size > *.limit { format!("{} bytes", .size) } else { "more".to_owned() }
+        .size.map_or_else(|| "more".to_owned(), |s| format!("{s} bytes"))
     )]
     TooLarge {
-        /// Bytes found (or `limit + 1` when reading stopped there).
-        size: usize,
+        /// Bytes found, when known (reading from a pipe stops after the limit).
+        size: Option<usize>,
         /// The limit.
         limit: usize,
     },
@@ -284,11 +284,15 @@ pub enum UrdfError {
         "joint '{}'{}: mimic: expected drivers that end at a joint that mimics none, found a cycle {}",
         .joints.first().map_or("", String::as_str),
         at(.line),
-        cycle(.joints)
+        joint_cycle(.joints, *.length)
     )]
     MimicCycle {
-        /// The joints of the cycle, each mimicking the next, the first repeated at the end.
+        /// The joints of the cycle from this one, each mimicking the next, the first repeated
+        /// at the end; of a cycle longer than 8 joints only the first 6 and the last 2 (so that
+        /// every joint of a long cycle does not hold all of it).
         joints: Vec<String>,
+        /// Joints in the cycle.
+        length: usize,
         /// Line of the first joint's `<mimic>`.
         line: Option<usize>,
     },
@@ -482,6 +486,17 @@ fn counted(names: &[String], moving: &[usize]) -> String {
         s.push_str(&format!(" and {} more", names.len() - SHOWN));
     }
     s
+}
+
+/// Formats a mimic cycle as `a -> b -> a`, a long one (shortened, see
+/// [`UrdfError::MimicCycle`]) as its start, `...`, its end and its length.
+fn joint_cycle(joints: &[String], length: usize) -> String {
+    if joints.len() > length {
+        return joints.join(" -> ");
+    }
+    let head = joints.get(..SHOWN - 2).unwrap_or(joints).join(" -> ");
+    let tail = joints.get(SHOWN - 2..).unwrap_or(&[]).join(" -> ");
+    format!("{head} -> ... -> {tail} ({length} joints)")
 }
 
 /// Formats a cycle as `a -> b -> a`; a long one as its start, `...`, its end and its length.

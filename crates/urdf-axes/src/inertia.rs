@@ -40,7 +40,8 @@ pub struct JointInertial {
 /// # Errors
 /// [`UrdfError::NonFinite`] for a negative or non-finite mass, a non-finite inertial origin,
 /// a malformed `<inertial>` (its reading warned; here its mass is needed) or a non-finite
-/// origin of a joint inside a body (named by the joint whose body holds the link).
+/// origin of a joint inside a body (named by the joint whose body holds the link);
+/// [`UrdfError::Parse`] for a joint inside a body whose text did not read.
 pub fn joint_inertials(model: &UrdfModel, chain: &Chain) -> Result<Vec<JointInertial>, UrdfError> {
     let robot = &model.robot;
     let moving: Vec<usize> = chain
@@ -111,6 +112,11 @@ pub fn joint_inertials(model: &UrdfModel, chain: &Chain) -> Result<Vec<JointIner
                     continue;
                 }
                 if let (Some(&c), Some(jj)) = (model.joint_child.get(j), robot.joints.get(j)) {
+                    // A joint whose text did not read (its origin may be the default) cannot
+                    // place the links it carries.
+                    if let Some(fault @ UrdfError::Parse { .. }) = &jj.fault {
+                        return Err(fault.clone());
+                    }
                     if let Some(v) = jj
                         .origin
                         .xyz

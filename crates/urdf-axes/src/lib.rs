@@ -30,6 +30,7 @@ mod mimic;
 mod model;
 mod read;
 mod scan;
+mod text;
 mod tip;
 
 pub use chain::{Chain, MimicJoint};

@@ -7,6 +7,9 @@ use std::collections::HashMap;
 use crate::read::{Joint, JointType};
 use crate::UrdfError;
 
+/// Longest mimic cycle whose joints are all named in its error.
+const SHOWN_CYCLE: usize = 8;
+
 /// Records in [`Joint::fault`] a mimic of an undefined joint, of a joint that does not move,
 /// or a mimic cycle (on every joint of the cycle). Joints that already have a fault keep it.
 pub(crate) fn check_mimics(joints: &mut [Joint], index: &HashMap<String, usize>) {
@@ -52,21 +55,25 @@ pub(crate) fn check_mimics(joints: &mut [Joint], index: &HashMap<String, usize>)
             .iter()
             .filter_map(|&k| joints.get(k).map(|j| j.name.clone()))
             .collect();
+        let length = names.len();
         for (pos, &k) in cycle.iter().enumerate() {
             // Each joint's message starts at itself: a -> b -> c -> a, b -> c -> a -> b, ...
-            let mut rotated: Vec<String> = names
-                .iter()
-                .cycle()
-                .skip(pos)
-                .take(names.len())
-                .cloned()
-                .collect();
-            if let Some(first) = rotated.first().cloned() {
-                rotated.push(first);
-            }
+            // A long cycle keeps its first 6 and last 2 names (constant per joint).
+            let at = |i: usize| {
+                names
+                    .get((pos + i) % length.max(1))
+                    .cloned()
+                    .unwrap_or_default()
+            };
+            let shown: Vec<String> = if length <= SHOWN_CYCLE {
+                (0..=length).map(at).collect()
+            } else {
+                (0..6).chain([length - 1, length]).map(at).collect()
+            };
             if let Some(j) = joints.get_mut(k) {
                 j.fault = Some(UrdfError::MimicCycle {
-                    joints: rotated,
+                    joints: shown,
+                    length,
                     line: j.mimic_line.or(Some(j.line)),
                 });
             }

@@ -7,9 +7,10 @@ use crate::read::{self, fault_summary, Robot, Warning};
 use crate::scan::{self, ScanError};
 use crate::{Chain, UrdfError};
 
-/// Largest URDF accepted, in bytes. The biggest real URDFs are a few megabytes; the limit
-/// bounds memory (the scan keeps at most a few times the input) for piped or hostile input.
-pub const MAX_URDF_BYTES: usize = 256 * 1024 * 1024;
+/// Largest URDF accepted, in bytes (64 MiB). Real URDFs are at most a few megabytes (meshes
+/// live in their own files); the limit bounds time and memory (about ten times the input at
+/// worst) for piped or hostile input.
+pub const MAX_URDF_BYTES: usize = 64 * 1024 * 1024;
 
 /// A parsed and validated URDF: one tree of uniquely named links joined by joints, indexed by
 /// name, with the warnings of its reading.
@@ -54,7 +55,7 @@ impl UrdfModel {
     pub fn parse(text: &str) -> Result<UrdfModel, UrdfError> {
         if text.len() > MAX_URDF_BYTES {
             return Err(UrdfError::TooLarge {
-                size: text.len(),
+                size: Some(text.len()),
                 limit: MAX_URDF_BYTES,
             });
         }
@@ -76,7 +77,7 @@ impl UrdfModel {
     pub fn from_bytes(bytes: &[u8]) -> Result<UrdfModel, UrdfError> {
         if bytes.len() > MAX_URDF_BYTES {
             return Err(UrdfError::TooLarge {
-                size: bytes.len(),
+                size: Some(bytes.len()),
                 limit: MAX_URDF_BYTES,
             });
         }
@@ -244,7 +245,9 @@ impl UrdfModel {
             }
             if out.len() < read::MAX_WARNINGS {
                 out.push(Warning {
-                    element: format!("joint '{}'", j.name),
+                    // Escaped: an off-chain joint's name may hold the very control or
+                    // bidirectional character its fault is about.
+                    element: format!("joint '{}'", j.name.escape_debug()),
                     line: Some(j.line),
                     message: format!("{} ({note})", fault_summary(j, fault)),
                 });

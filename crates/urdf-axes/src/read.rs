@@ -172,7 +172,8 @@ pub(crate) fn read(doc: &Doc) -> Result<Robot, UrdfError> {
                 robot.joints.push(joint);
             }
             "material" => {
-                let what = format!("material '{}'", e.attr("name").unwrap_or(""));
+                let name = e.attr("name").unwrap_or("").escape_debug().to_string();
+                let what = format!("material '{name}'");
                 check_material(doc, e, &what, &mut robot);
             }
             _ => {}

@@ -10,6 +10,9 @@
 
 use std::borrow::Cow;
 
+pub(crate) use crate::text::Lines;
+use crate::text::{bad_reference, column_of, decode, excerpt, forbidden_character, LineCounter};
+
 /// Deepest element nesting accepted. A URDF needs about six levels (robot, link, visual,
 /// geometry, mesh); vendor extensions (`<gazebo>` plugins) a few more.
 pub(crate) const MAX_DEPTH: usize = 100;
@@ -109,48 +112,10 @@ pub(crate) enum ScanError {
     },
 }
 
-/// Byte offsets of line starts, for offset -> line lookups.
-pub(crate) struct Lines {
-    starts: Vec<usize>,
-}
-
-impl Lines {
-    /// Indexes the line starts of `bytes`.
-    pub fn new(bytes: &[u8]) -> Self {
-        let mut starts = vec![0];
-        starts.extend(
-            bytes
-                .iter()
-                .enumerate()
-                .filter(|(_, &b)| b == b'\n')
-                .map(|(i, _)| i + 1),
-        );
-        Self { starts }
-    }
-
-    /// 1-based line of byte `offset`.
-    pub fn line_of(&self, offset: usize) -> usize {
-        self.starts.partition_point(|&s| s <= offset).max(1)
-    }
-}
-
 fn malformed(message: String, line: usize) -> ScanError {
     ScanError::Malformed {
         message,
         line: Some(line),
-    }
-}
-
-/// Shortens text quoted in a message.
-fn excerpt(s: &str) -> String {
-    let t = s.trim();
-    // One line of a message: stop at the first line break.
-    let first = t.lines().next().unwrap_or("");
-    let short: String = first.chars().take(24).collect();
-    if short.len() < t.len() {
-        format!("{short}...")
-    } else {
-        short
     }
 }
 
@@ -164,46 +129,6 @@ fn skip(b: &[u8], mut j: usize, pred: impl Fn(u8) -> bool) -> usize {
 
 fn is_name_end(b: u8) -> bool {
     b.is_ascii_whitespace() || b == b'/' || b == b'>' || b == b'='
-}
-
-/// Lines of offsets met in increasing order, counted as the scan goes (no index of the whole
-/// text is built).
-struct LineCounter<'t> {
-    bytes: &'t [u8],
-    offset: usize,
-    line: usize,
-}
-
-impl LineCounter<'_> {
-    /// 1-based line of byte `offset`.
-    fn line_of(&mut self, offset: usize) -> usize {
-        if offset < self.offset {
-            self.offset = 0;
-            self.line = 1;
-        }
-        let newlines = self
-            .bytes
-            .get(self.offset..offset)
-            .map_or(0, |s| s.iter().filter(|&&c| c == b'\n').count());
-        self.line += newlines;
-        self.offset = offset;
-        self.line
-    }
-}
-
-/// The first character XML 1.0 forbids (a C0 control other than tab, line feed and carriage
-/// return): its offset and code.
-fn forbidden_character(b: &[u8]) -> Option<(usize, u8)> {
-    b.iter()
-        .position(|&c| c < 0x20 && !matches!(c, b'\t' | b'\n' | b'\r'))
-        .and_then(|i| b.get(i).map(|&c| (i, c)))
-}
-
-/// 1-based column (in characters) of byte `offset` within its line.
-fn column_of(text: &str, offset: usize) -> usize {
-    let before = text.get(..offset).unwrap_or("");
-    let start = before.rfind('\n').map_or(0, |i| i + 1);
-    before.get(start..).map_or(0, |s| s.chars().count()) + 1
 }
 
 /// An open element: its name, line and index among the kept elements (if kept).
@@ -585,72 +510,6 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<StartTag<'_>, ScanErr
         attrs.push((key, value));
         j = vend + 1;
     }
-}
-
-/// The character a reference (`lt`, `#65`, `#x41`) stands for.
-fn reference(name: &str) -> Option<char> {
-    Some(match name {
-        "lt" => '<',
-        "gt" => '>',
-        "amp" => '&',
-        "quot" => '"',
-        "apos" => '\'',
-        _ => {
-            let code = if let Some(hex) = name.strip_prefix("#x") {
-                u32::from_str_radix(hex, 16).ok()?
-            } else {
-                name.strip_prefix('#')?.parse().ok()?
-            };
-            char::from_u32(code)?
-        }
-    })
-}
-
-/// The first `&...` of `raw` that is not a predefined entity or a character reference.
-fn bad_reference(raw: &str) -> Option<String> {
-    let mut rest = raw;
-    while let Some(amp) = rest.find('&') {
-        let tail = rest.get(amp..).unwrap_or("");
-        let ok = tail
-            .find(';')
-            .and_then(|s| tail.get(1..s))
-            .and_then(reference)
-            .is_some();
-        if !ok {
-            return Some(excerpt(tail.split(';').next().unwrap_or(tail)));
-        }
-        rest = tail.get(1..).unwrap_or("");
-    }
-    None
-}
-
-/// Decodes the predefined entities and numeric character references (checked by
-/// [`bad_reference`] when the tag was read).
-fn decode(raw: &str) -> Cow<'_, str> {
-    if !raw.contains('&') {
-        return Cow::Borrowed(raw);
-    }
-    let mut out = String::with_capacity(raw.len());
-    let mut rest = raw;
-    while let Some(amp) = rest.find('&') {
-        out.push_str(rest.get(..amp).unwrap_or(""));
-        let tail = rest.get(amp..).unwrap_or("");
-        let decoded = tail
-            .find(';')
-            .and_then(|s| Some((reference(tail.get(1..s)?)?, s)));
-        match decoded {
-            Some((c, s)) => {
-                out.push(c);
-                rest = tail.get(s + 1..).unwrap_or("");
-            }
-            None => {
-                out.push('&');
-                rest = tail.get(1..).unwrap_or("");
-            }
-        }
-    }
-    out.push_str(rest);
-    Cow::Owned(out)
 }
 
 #[cfg(test)]

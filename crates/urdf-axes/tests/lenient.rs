@@ -129,6 +129,7 @@ fn mimic_cycles_and_mimics_of_fixed_joints_are_refused() {
         e,
         UrdfError::MimicCycle {
             joints: vec!["j1".into(), "j2".into(), "j1".into()],
+            length: 2,
             line: Some(7)
         }
     );
@@ -201,8 +202,21 @@ fn a_long_chain_of_mimics_is_valid() {
         .unwrap_err();
     assert_message(
         &e,
-        &["joint 'j1'", "cycle j1 -> j2", &format!("({n} links)")],
+        &[
+            "joint 'j1'",
+            "cycle j1 -> j2 -> j3 -> j4 -> j5 -> j6 -> ... -> j4000 -> j1 (4000 joints)",
+        ],
     );
+}
+
+#[test]
+fn names_in_warnings_are_escaped() {
+    let m = UrdfModel::parse(&arm("", LIMIT).replace("name=\"w\"", "name=\"w\u{202e}x\"")).unwrap();
+    let c = m.chain(None, Some("l2")).unwrap();
+    let w: Vec<String> = m.warnings_for(&c).iter().map(ToString::to_string).collect();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].starts_with("joint 'w\\u{202e}x' (line 12): "), "{w:?}");
+    assert!(!w[0].contains('\u{202e}'), "{w:?}");
 }
 
 #[test]
