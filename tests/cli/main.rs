@@ -2,6 +2,8 @@
 
 mod calibrate;
 mod check;
+mod check_cases;
+mod check_round_trip;
 mod common;
 mod contacts;
 mod corpus;

@@ -104,6 +104,11 @@ pub struct CheckReport {
     pub max_position_error: Option<f64>,
     /// Largest orientation deviation likewise (radians).
     pub max_orientation_error: Option<f64>,
+    /// What `max_position_error` may reach in a match (metres): `linear + angular × size` of
+    /// the chain; `null` when the joint counts differ.
+    pub position_bound: Option<f64>,
+    /// What `max_orientation_error` may reach in a match (radians): `angular`.
+    pub orientation_bound: Option<f64>,
     /// Tolerances used.
     pub tolerances: CheckTolerances,
     /// The sheet's base and tool: given (compared) or free (fitted).
@@ -184,6 +189,8 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
             differences,
             max_position_error: None,
             max_orientation_error: None,
+            position_bound: None,
+            orientation_bound: None,
             tolerances,
             base_given: sheet.has_base,
             tool_given: sheet.has_tool,
@@ -256,6 +263,8 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
         differences,
         max_position_error: Some(dev.max_position_error),
         max_orientation_error: Some(dev.max_orientation_error),
+        position_bound: Some(verdict.bound().position),
+        orientation_bound: Some(verdict.bound().orientation),
         tolerances,
         base_given: sheet.has_base,
         tool_given: sheet.has_tool,
@@ -344,11 +353,16 @@ fn text(title: &str, r: &CheckReport, sheet: &Sheet) -> String {
             );
         }
     }
-    if let (Some(p), Some(o)) = (r.max_position_error, r.max_orientation_error) {
+    if let (Some(p), Some(o), Some(bp), Some(bo)) = (
+        r.max_position_error,
+        r.max_orientation_error,
+        r.position_bound,
+        r.orientation_bound,
+    ) {
         let _ = writeln!(
             s,
-            "sheet taken literally (same joint values, free base/tool fitted), {} samples: max position error {:.3e} m, max orientation error {:.3e} rad",
-            r.samples, p, o
+            "sheet taken literally (same joint values, free base/tool fitted), {} samples: max position error {:.3e} m, max orientation error {:.3e} rad (bound {:.1e} m, {:.1e} rad)",
+            r.samples, p, o, bp, bo
         );
     }
     s

@@ -6,10 +6,12 @@
 //!    tip deviation from the robot's own forward kinematics.
 //!
 //! The invariant: a sheet [`SheetCheck::matches`] only when the walk finds no difference **and**
-//! the literal deviation is within the tolerances (position against `linear` metres,
-//! orientation against `angular` radians). Should the walk find nothing while the literal
-//! comparison disagrees, the verdict carries an [`Parameter::FkPosition`] /
-//! [`Parameter::FkOrientation`] difference, so no caller can print a match with a differing FK.
+//! the literal deviation is within the tolerances, [`FkBound`]: orientation within `angular`
+//! radians, position within `linear + angular × size` metres (an angle within the tolerance,
+//! such as a URDF's `rpy="1.5708"`, moves a point at the chain's size by `angular × size`).
+//! Should the walk find nothing while the literal comparison disagrees, the verdict carries a
+//! [`Parameter::FkPosition`] / [`Parameter::FkOrientation`] difference, so no caller can print
+//! a match with a differing FK.
 
 use nalgebra::Isometry3;
 
@@ -18,25 +20,40 @@ use crate::literal::{fit_literal, LiteralFit};
 use crate::table::DhTable;
 use crate::{CoreError, Tolerance};
 
+/// What the sheet taken literally may deviate from the robot and still match.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FkBound {
+    /// Tip position (metres): `linear + angular × size`.
+    pub position: f64,
+    /// Tip orientation (radians): `angular`.
+    pub orientation: f64,
+}
+
+impl FkBound {
+    /// The bound for tolerances `tol` on a chain of `size` metres ([`DhTable::size`]).
+    pub fn new(tol: Tolerance, size: f64) -> Self {
+        Self {
+            position: tol.linear + tol.angular * size,
+            orientation: tol.angular,
+        }
+    }
+}
+
 /// The verdict of [`check_sheet`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SheetCheck {
     differences: Vec<Difference>,
     literal: LiteralFit,
-    tolerance: Tolerance,
+    bound: FkBound,
 }
 
 impl SheetCheck {
     /// Combines the walk's differences with the literal fit, adding the FK differences the
     /// invariant asks for (see the module docs).
-    pub fn new(
-        mut differences: Vec<Difference>,
-        literal: LiteralFit,
-        tolerance: Tolerance,
-    ) -> Self {
+    pub fn new(mut differences: Vec<Difference>, literal: LiteralFit, bound: FkBound) -> Self {
         if differences.is_empty() {
             let dev = &literal.deviation;
-            if beyond(dev.max_position_error, tolerance.linear) {
+            if beyond(dev.max_position_error, bound.position) {
                 differences.push(Difference {
                     row: None,
                     parameter: Parameter::FkPosition,
@@ -45,7 +62,7 @@ impl SheetCheck {
                     aliases: vec![],
                 });
             }
-            if beyond(dev.max_orientation_error, tolerance.angular) {
+            if beyond(dev.max_orientation_error, bound.orientation) {
                 differences.push(Difference {
                     row: None,
                     parameter: Parameter::FkOrientation,
@@ -58,7 +75,7 @@ impl SheetCheck {
         Self {
             differences,
             literal,
-            tolerance,
+            bound,
         }
     }
 
@@ -67,8 +84,13 @@ impl SheetCheck {
     pub fn matches(&self) -> bool {
         let dev = &self.literal.deviation;
         self.differences.is_empty()
-            && dev.max_position_error <= self.tolerance.linear
-            && dev.max_orientation_error <= self.tolerance.angular
+            && dev.max_position_error <= self.bound.position
+            && dev.max_orientation_error <= self.bound.orientation
+    }
+
+    /// The bound the literal deviation is held to.
+    pub fn bound(&self) -> FkBound {
+        self.bound
     }
 
     /// Every difference (the walk's, then any FK difference).
@@ -107,7 +129,8 @@ where
 {
     let literal = fit_literal(sheet, reference, freedom, oracle, tol)?;
     let walk = compare_tables(reference, sheet, freedom, tol);
-    Ok(SheetCheck::new(walk.differences, literal, tol))
+    let bound = FkBound::new(tol, reference.size());
+    Ok(SheetCheck::new(walk.differences, literal, bound))
 }
 
 #[cfg(test)]
@@ -132,15 +155,17 @@ mod tests {
     #[test]
     fn no_match_while_the_literal_fk_differs() {
         let tol = Tolerance::new(1e-4, 2e-4).unwrap();
-        assert!(SheetCheck::new(vec![], literal(5e-5, 1e-4), tol).matches());
-        let far = SheetCheck::new(vec![], literal(7.31, 3.137), tol);
+        let bound = FkBound::new(tol, 1.5);
+        assert!((bound.position - 4e-4).abs() < 1e-15);
+        assert!(SheetCheck::new(vec![], literal(3.9e-4, 1.9e-4), bound).matches());
+        let far = SheetCheck::new(vec![], literal(7.31, 3.137), bound);
         assert!(!far.matches());
         let named: Vec<Parameter> = far.differences().iter().map(|d| d.parameter).collect();
         assert_eq!(named, [Parameter::FkPosition, Parameter::FkOrientation]);
-        let turned = SheetCheck::new(vec![], literal(5e-5, 3e-4), tol);
+        let turned = SheetCheck::new(vec![], literal(5e-5, 3e-4), bound);
         assert!(!turned.matches());
         assert_eq!(turned.differences()[0].parameter, Parameter::FkOrientation);
-        let nan = SheetCheck::new(vec![], literal(f64::NAN, 0.0), tol);
+        let nan = SheetCheck::new(vec![], literal(f64::NAN, 0.0), bound);
         assert!(!nan.matches());
         assert_eq!(nan.differences()[0].parameter, Parameter::FkPosition);
     }

@@ -28,7 +28,7 @@ pub mod table;
 pub mod tolerance;
 pub mod verify;
 
-pub use check::{check_sheet, SheetCheck};
+pub use check::{check_sheet, FkBound, SheetCheck};
 pub use equivalence::{compare_tables, kind_code, Difference, Equivalence, Freedom, Parameter};
 pub use error::CoreError;
 pub use extract::{extract, Bound, Extraction, JointAxis, PairReport, Warning};
