@@ -7,6 +7,7 @@ use std::io::Write;
 use clap::{Args, Parser, Subcommand};
 use dh_core::Tolerance;
 
+use crate::commands::batch::{batch, BatchArgs};
 use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK_LINEAR};
 use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
@@ -30,24 +31,61 @@ pub struct Cli {
 enum Command {
     /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
     /// forward kinematics against the URDF at many joint values.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh extract robot.urdf                               # root link to the arm's tip, standard DH, text\n  urdf-dh extract robot.urdf --tip tool0 --convention modified --angle-unit deg\n  urdf-dh extract robot.urdf --format yaml > robot-dh.yaml  # the sheet format, proved as written\n  xacro robot.urdf.xacro | urdf-dh extract - --tip flange --svg frames.svg"
+    )]
     Extract(ExtractCli),
+    /// Extract many chains of many URDFs in one process (a list of `ROBOT [BASE [TIP]]` lines),
+    /// one JSON line per table, each proved as `extract` proves it.
+    #[command(
+        after_help = "EXAMPLES:\n  printf 'ur5/robot.urdf\\npanda/robot.urdf base_link panda_link8\\n' > chains.list\n  urdf-dh batch chains.list --convention both > tables.jsonl"
+    )]
+    Batch(BatchCli),
     /// Check a URDF against a vendor's DH sheet: exit 0 when they describe the same kinematics,
     /// 1 naming every joint and parameter that differs.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh check robot.urdf --sheet vendor-dh.yaml --tip tool0\n  urdf-dh check robot.urdf --sheet vendor-dh.yaml --format json > report.json || cat report.json"
+    )]
     Check(CheckCli),
     /// Convert a sheet to the other DH convention (or other units), exactly.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh convert vendor-dh.yaml --to modified\n  urdf-dh convert vendor-dh.yaml --to standard --length-unit mm --angle-unit deg --format markdown"
+    )]
     Convert(ConvertCli),
     /// Write a URDF whose kinematics equal a DH sheet.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh to-urdf vendor-dh.yaml > robot.urdf\n  urdf-dh to-urdf vendor-dh.yaml --name my_arm --base-link base --tip-link flange > my_arm.urdf"
+    )]
     ToUrdf(ToUrdfCli),
     /// Read a published measurement dataset as its authors left it and write the canonical
     /// measurement CSV.
+    #[command(after_help = "EXAMPLES:\n  urdf-dh import dataset/poses.txt --out measured.csv")]
     Import(import::ImportCli),
     /// Fit a model to measured points: nominal, geometric and effect steps, each with its
     /// residuals on calibration and validation data.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh calibrate --model nominal.yaml --data measured.csv\n  urdf-dh calibrate --model nominal.yaml --data measured.csv --effects auto --out calibrated.yaml"
+    )]
     Calibrate(calibrate::CalibrateCli),
     /// Circle-point analysis: joint axes from sweeps of one joint at a time, and their DH table.
+    #[command(after_help = "EXAMPLES:\n  urdf-dh cpa sweeps.csv --format yaml > measured-dh.yaml")]
     Cpa(cpa::CpaCli),
     /// Simulate measurements of a model with known errors, noise and effects.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh simulate --model vendor.yaml --poses 200 --noise 0.00005 --out measured.csv --truth truth.yaml"
+    )]
     Simulate(simulate::SimulateCli),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh completions bash > ~/.local/share/bash-completion/completions/urdf-dh\n  urdf-dh completions zsh > ~/.zfunc/_urdf-dh"
+    )]
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) to stdout.
+    #[command(after_help = "EXAMPLES:\n  urdf-dh man > urdf-dh.1 && man ./urdf-dh.1")]
+    Man,
 }
 
 #[derive(Debug, Args)]
@@ -66,6 +104,20 @@ struct ConvertCli {
     /// Angle unit of the output [default: the sheet's].
     #[arg(long, value_enum)]
     angle_unit: Option<AngleUnit>,
+    #[command(flatten)]
+    verify: VerifyCli,
+}
+
+/// The check of a written artefact against its source.
+#[derive(Debug, Args)]
+struct VerifyCli {
+    /// Random joint-value samples of the check of what is written (the zero pose is always the
+    /// first).
+    #[arg(long, value_name = "N", default_value_t = 1000)]
+    samples: usize,
+    /// Seed of the check's sampler.
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
 }
 
 #[derive(Debug, Args)]
@@ -81,6 +133,8 @@ struct ToUrdfCli {
     /// Name of the tip link.
     #[arg(long, default_value = "tool0")]
     tip_link: String,
+    #[command(flatten)]
+    verify: VerifyCli,
 }
 
 /// Options shared by every command that reads a URDF chain.
@@ -149,6 +203,37 @@ struct ExtractCli {
         allow_hyphen_values = true
     )]
     q: Option<Vec<f64>>,
+}
+
+/// Conventions `batch` extracts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Conventions {
+    /// Standard DH only.
+    Standard,
+    /// Modified (Craig) DH only.
+    Modified,
+    /// Both, standard first.
+    Both,
+}
+
+#[derive(Debug, Args)]
+struct BatchCli {
+    /// The list of chains, one per line: `ROBOT [BASE [TIP]]` (`-` for the default, `#` starts a
+    /// comment; relative paths are relative to the list's folder), or - for standard input.
+    list: String,
+    /// DH convention(s) of the tables.
+    #[arg(long, value_enum, default_value_t = Conventions::Standard)]
+    convention: Conventions,
+    /// Length unit of the output.
+    #[arg(long, value_enum, default_value_t = LengthUnit::M)]
+    length_unit: LengthUnit,
+    /// Angle unit of the output.
+    #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
+    angle_unit: AngleUnit,
+    #[command(flatten)]
+    tol: ToleranceCli,
+    #[command(flatten)]
+    verify: VerifyCli,
 }
 
 #[derive(Debug, Args)]
@@ -237,6 +322,25 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             };
             check(&args, out, err)
         }
+        Command::Batch(a) => batch(
+            &BatchArgs {
+                list: a.list,
+                conventions: match a.convention {
+                    Conventions::Standard => vec![dh_core::Convention::Standard],
+                    Conventions::Modified => vec![dh_core::Convention::Modified],
+                    Conventions::Both => {
+                        vec![dh_core::Convention::Standard, dh_core::Convention::Modified]
+                    }
+                },
+                length_unit: a.length_unit,
+                angle_unit: a.angle_unit,
+                tolerance: a.tol.tolerance()?,
+                samples: a.verify.samples,
+                seed: a.verify.seed,
+            },
+            out,
+            err,
+        ),
         Command::Convert(a) => convert(
             &ConvertArgs {
                 sheet: a.sheet,
@@ -244,6 +348,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 format: a.format,
                 length_unit: a.length_unit,
                 angle_unit: a.angle_unit,
+                samples: a.verify.samples,
+                seed: a.verify.seed,
             },
             out,
             err,
@@ -254,6 +360,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 name: a.name,
                 base_link: a.base_link,
                 tip_link: a.tip_link,
+                samples: a.verify.samples,
+                seed: a.verify.seed,
             },
             out,
             err,
@@ -270,5 +378,15 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
         }
         Command::Cpa(a) => cpa::cpa(&a.into_args()?, out, err),
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", out);
+            Ok(Outcome::Pass)
+        }
+        Command::Man => {
+            use clap::CommandFactory;
+            clap_mangen::Man::new(Cli::command()).render(out)?;
+            Ok(Outcome::Pass)
+        }
     }
 }

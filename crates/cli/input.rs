@@ -23,12 +23,49 @@ pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
     std::fs::read(path).with_context(|| format!("{path}: cannot read the file"))
 }
 
+/// Reads `path`, or standard input when it is `-`, as bytes, refusing more than
+/// [`urdf_axes::MAX_URDF_BYTES`] without reading further (so `- < /dev/zero` stops there).
+///
+/// # Errors
+/// The file cannot be read; the message names it. Too long: [`urdf_axes::UrdfError::TooLarge`]
+/// in the context "`NAME`: invalid URDF".
+pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
+    let limit = urdf_axes::MAX_URDF_BYTES;
+    let mut buf = Vec::new();
+    let read = if path == "-" {
+        std::io::stdin()
+            .take(limit as u64 + 1)
+            .read_to_end(&mut buf)
+            .context("reading standard input")
+    } else {
+        std::fs::File::open(path)
+            .and_then(|f| f.take(limit as u64 + 1).read_to_end(&mut buf))
+            .with_context(|| format!("{path}: cannot read the file"))
+    };
+    read?;
+    if buf.len() > limit {
+        return Err(anyhow::Error::new(urdf_axes::UrdfError::TooLarge {
+            size: buf.len(),
+            limit,
+        })
+        .context(format!("{}: invalid URDF", display_name(path))));
+    }
+    Ok(buf)
+}
+
 /// Reads `path` (or `-`) as UTF-8 text.
 ///
 /// # Errors
 /// The file cannot be read or is not UTF-8 (the message gives the line of the first bad byte).
 pub fn read_text(path: &str) -> Result<String> {
-    let bytes = read_bytes(path)?;
+    utf8_text(path, read_bytes(path)?)
+}
+
+/// The bytes read from `path` as UTF-8 text.
+///
+/// # Errors
+/// Not UTF-8 (the message gives the line of the first bad byte).
+pub fn utf8_text(path: &str, bytes: Vec<u8>) -> Result<String> {
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
@@ -47,7 +84,7 @@ pub fn read_text(path: &str) -> Result<String> {
 /// The file cannot be read; a `.xacro` file when `xacro` is not on PATH or fails.
 pub fn read_robot(path: &str) -> Result<Vec<u8>> {
     if !path.ends_with(".xacro") {
-        return read_bytes(path);
+        return read_robot_bytes(path);
     }
     if !Path::new(path).is_file() {
         anyhow::bail!("{path}: cannot read the file: no such file");

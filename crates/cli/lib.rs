@@ -12,6 +12,7 @@ pub mod input;
 pub mod measured;
 pub mod output;
 pub mod plot;
+pub mod readback;
 pub mod render;
 pub mod sheet;
 pub mod svg;

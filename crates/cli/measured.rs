@@ -218,7 +218,10 @@ pub fn load_model(
     let text = if path.to_ascii_lowercase().ends_with(".xacro") {
         None
     } else {
-        Some(read_text(path)?)
+        Some(crate::input::utf8_text(
+            path,
+            crate::input::read_robot_bytes(path)?,
+        )?)
     };
     let urdf = text.as_deref().is_none_or(|t| is_urdf(path, t));
     if urdf && path == "-" {
@@ -266,7 +269,10 @@ pub fn load_model(
         origin,
         robot: Some(urdf_model.robot_name().to_string()),
         units: (LengthUnit::M, AngleUnit::Rad),
-        warnings: extraction.warnings.iter().map(|w| w.to_string()).collect(),
+        warnings: crate::commands::extract::urdf_warnings(path, &urdf_model, &chain)
+            .into_iter()
+            .chain(extraction.warnings.iter().map(|w| w.to_string()))
+            .collect(),
         links: (chain.base().to_string(), chain.tip().to_string()),
         coupled: Vec::new(),
     })

@@ -36,7 +36,8 @@ pub fn render_sheet(doc: &SheetDoc, format: Format) -> Result<String> {
     })
 }
 
-fn decimals(unit: &str) -> usize {
+/// Decimals of the text and Markdown tables per unit symbol.
+pub(crate) fn decimals(unit: &str) -> usize {
     match unit {
         "m" => 6,
         "mm" => 3,
@@ -199,9 +200,10 @@ fn text(doc: &SheetDoc) -> String {
     if let Some(v) = &doc.verification {
         let _ = writeln!(
             s,
-            "verification: {} joint samples (seed {}) against the URDF: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {}",
+            "verification of this table as written: {} joint samples (seed {}) against {}: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {}",
             v.samples,
             v.seed,
+            v.against.as_deref().unwrap_or("the URDF"),
             v.max_position_error,
             v.position_bound,
             v.max_orientation_error,
@@ -246,17 +248,32 @@ fn csv(doc: &SheetDoc) -> String {
         };
         let _ = writeln!(
             s,
-            "{},{kind},{},{},{},{},{},{},{mj},{mm},{mo}",
-            j.name,
+            "{},{kind},{},{},{},{},{},{},{},{mm},{mo}",
+            csv_field(&j.name),
             j.a,
             j.alpha,
             j.d,
             j.theta,
             opt(j.lower),
-            opt(j.upper)
+            opt(j.upper),
+            csv_field(&mj)
         );
     }
     s
+}
+
+/// A CSV field, quoted (RFC 4180) when it holds a separator, a quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// A Markdown table cell: `|` escaped so that it does not end the cell.
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|")
 }
 
 fn markdown(doc: &SheetDoc) -> String {
@@ -265,9 +282,9 @@ fn markdown(doc: &SheetDoc) -> String {
     let _ = writeln!(s, "**{}**\n", header_line(doc));
     let _ = writeln!(
         s,
-        "| # | joint | type | theta [{a}] | d [{l}] | a [{l}] | alpha [{a}] | lower | upper |"
+        "| # | joint | type | theta [{a}] | d [{l}] | a [{l}] | alpha [{a}] | lower | upper | coupling |"
     );
-    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---|");
     for (i, j) in doc.joints.iter().enumerate() {
         let lu = limit_unit(doc, j);
         let lim =
@@ -278,15 +295,16 @@ fn markdown(doc: &SheetDoc) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {kind} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {kind} | {} | {} | {} | {} | {} | {} | {} |",
             i + 1,
-            j.name,
+            md_cell(&j.name),
             num(j.theta, a),
             num(j.d, l),
             num(j.a, l),
             num(j.alpha, a),
             lim(j.lower),
-            lim(j.upper)
+            lim(j.upper),
+            md_cell(&coupling(doc, j))
         );
     }
     for (name, p) in [("base", &doc.base), ("tool", &doc.tool)] {

@@ -132,6 +132,9 @@ pub struct VerificationDoc {
     pub orientation_bound: f64,
     /// Whether both stayed within their bounds.
     pub passed: bool,
+    /// What the written table was compared with, when not the URDF (e.g. "the input sheet").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub against: Option<String>,
 }
 
 /// A DH sheet as written to and read from YAML or JSON.

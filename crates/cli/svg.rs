@@ -89,6 +89,51 @@ fn scene(table: &DhTable, q: &[f64]) -> Option<Scene> {
     })
 }
 
+/// Labels placed so that none overlaps another: each tries spots around its anchor, then
+/// further below, and takes the first free one (greedy, in drawing order).
+#[derive(Default)]
+struct Labels {
+    /// Boxes taken: (left, top, right, bottom) in SVG units.
+    taken: Vec<(f64, f64, f64, f64)>,
+}
+
+impl Labels {
+    /// Width of `text` at the drawing's 11-unit font (bold a little wider).
+    fn width(text: &str, bold: bool) -> f64 {
+        text.chars().count() as f64 * if bold { 7.0 } else { 6.2 }
+    }
+
+    /// Where the baseline of `text` goes for an anchor at `(x, y)`.
+    fn place(&mut self, x: f64, y: f64, text: &str, bold: bool) -> (f64, f64) {
+        let (w, h) = (Self::width(text, bold), 12.0);
+        let free = |l: f64, b: f64, taken: &[(f64, f64, f64, f64)]| {
+            let (t, r) = (b - h + 2.0, l + w);
+            taken
+                .iter()
+                .all(|&(l2, t2, r2, b2)| r <= l2 || l >= r2 || b + 1.0 <= t2 || t >= b2 + 1.0)
+        };
+        let mut spots = vec![
+            (x + 4.0, y - 4.0),
+            (x + 4.0, y + 12.0),
+            (x - w - 4.0, y - 4.0),
+            (x - w - 4.0, y + 12.0),
+        ];
+        for k in 1..=12 {
+            let down = 12.0 * k as f64;
+            spots.push((x + 4.0, y - 4.0 + down));
+            spots.push((x + 4.0, y - 4.0 - down));
+        }
+        let spot = spots
+            .iter()
+            .copied()
+            .find(|&(l, b)| free(l, b, &self.taken))
+            .unwrap_or((x + 4.0, y - 4.0));
+        self.taken
+            .push((spot.0, spot.1 - h + 2.0, spot.0 + w, spot.1));
+        spot
+    }
+}
+
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -143,6 +188,7 @@ pub fn frames_svg(table: &DhTable, q: &[f64], title: &str) -> Option<String> {
             (ox + (u - u0) * scale, oy - (v - v0) * scale)
         };
         let _ = writeln!(s, "<g id=\"view-{k}\">");
+        let mut labels = Labels::default();
         let _ = writeln!(
             s,
             "<rect x=\"{}\" y=\"30\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#ccc\"/>",
@@ -159,13 +205,6 @@ pub fn frames_svg(table: &DhTable, q: &[f64], title: &str) -> Option<String> {
         for (p, z, name) in &sc.axes {
             let (a, b) = (at(&(p - z * axis_half)), at(&(p + z * axis_half)));
             let _ = writeln!(s, "<line x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" y2=\"{:.2}\" stroke=\"#888\" stroke-dasharray=\"6 4\"><title>axis of {}</title></line>", a.0, a.1, b.0, b.1, esc(name));
-            let _ = writeln!(
-                s,
-                "<text x=\"{:.2}\" y=\"{:.2}\" fill=\"#666\">{}</text>",
-                b.0 + 3.0,
-                b.1,
-                esc(name)
-            );
         }
         let path: Vec<String> = sc
             .frames
@@ -182,13 +221,15 @@ pub fn frames_svg(table: &DhTable, q: &[f64], title: &str) -> Option<String> {
             let (a, b) = (at(a), at(b));
             let _ = writeln!(s, "<line x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" y2=\"{:.2}\" stroke=\"orange\" stroke-width=\"2.5\"><title>common normal of row {}</title></line>", a.0, a.1, b.0, b.1, i + 1);
         }
-        let labelled = sc
+        // Frames whose origins land on one spot share one label ("F1 F2", "F7 tool").
+        let mut spots: Vec<((f64, f64), String, &Isometry3<f64>)> = Vec::new();
+        let named = sc
             .frames
             .iter()
             .enumerate()
             .map(|(i, f)| (format!("F{i}"), f))
             .chain([("tool".to_string(), &sc.tip)]);
-        for (label, f) in labelled {
+        for (label, f) in named {
             let o = at(&f.translation.vector);
             for (a, colour) in [
                 (Vector3::x(), "red"),
@@ -203,12 +244,33 @@ pub fn frames_svg(table: &DhTable, q: &[f64], title: &str) -> Option<String> {
                 "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"2.5\" fill=\"black\"/>",
                 o.0, o.1
             );
+            match spots
+                .iter_mut()
+                .find(|(p, _, _)| (p.0 - o.0).hypot(p.1 - o.1) < 3.0)
+            {
+                Some((_, text, _)) => {
+                    text.push(' ');
+                    text.push_str(&label);
+                }
+                None => spots.push((o, label, f)),
+            }
+        }
+        for (o, text, _) in &spots {
+            let (x, y) = labels.place(o.0, o.1, text, true);
             let _ = writeln!(
                 s,
-                "<text x=\"{:.2}\" y=\"{:.2}\" font-weight=\"bold\">{}</text>",
-                o.0 + 4.0,
-                o.1 - 4.0,
-                esc(&label)
+                "<text x=\"{x:.2}\" y=\"{y:.2}\" font-weight=\"bold\">{}</text>",
+                esc(text)
+            );
+        }
+        // Axis names after the frame labels, each at the upper end of its axis.
+        for (p, z, name) in &sc.axes {
+            let b = at(&(p + z * axis_half));
+            let (x, y) = labels.place(b.0, b.1 + 4.0, name, false);
+            let _ = writeln!(
+                s,
+                "<text x=\"{x:.2}\" y=\"{y:.2}\" fill=\"#666\">{}</text>",
+                esc(name)
             );
         }
         let _ = writeln!(s, "</g>");

@@ -249,9 +249,32 @@ fn svg_shows_every_frame() {
             .chain(["tool".to_string(), "isometric".to_string()])
         {
             assert!(
-                texts.iter().filter(|t| t.starts_with(&label)).count() >= 1,
+                texts
+                    .iter()
+                    .any(|t| t.split_whitespace().any(|w| w == label)),
                 "{id}: no label {label}"
             );
+        }
+        // No label covers another (frames on one spot share a label): boxes of 6 units a
+        // character and 10 high, slimmer than the writer's own spacing.
+        let boxes: Vec<(f64, f64, f64, f64)> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text") && n.attribute("x").is_some())
+            .filter(|n| n.attribute("font-size").is_none())
+            .filter_map(|n| {
+                let (x, y): (f64, f64) = (
+                    n.attribute("x")?.parse().ok()?,
+                    n.attribute("y")?.parse().ok()?,
+                );
+                let w = 6.0 * n.text()?.chars().count() as f64;
+                Some((x, y - 10.0, x + w, y))
+            })
+            .collect();
+        for (i, a) in boxes.iter().enumerate() {
+            for b in &boxes[i + 1..] {
+                let apart = a.2 <= b.0 || b.2 <= a.0 || a.3 <= b.1 || b.3 <= a.1;
+                assert!(apart, "{id}: labels overlap: {a:?} {b:?}");
+            }
         }
         // Every frame is drawn in both views, three axes each.
         let lines = doc.descendants().filter(|n| n.has_tag_name("line")).count();

@@ -95,11 +95,14 @@ const CASES: &[Case] = &[
     urdf!("wrong_root"),
     urdf!("deep_nesting"),
     urdf!("entity_bomb"),
+    urdf!("control_character"),
+    urdf!("raw_lt_in_attribute"),
     // Not one tree of uniquely named links.
     urdf!("no_links"),
     urdf!("duplicate_link"),
     urdf!("duplicate_joint"),
     urdf!("control_character_in_name"),
+    urdf!("bidi_in_name"),
     urdf!("two_parents"),
     urdf!("cycle"),
     urdf!("cycle_without_root"),
@@ -123,12 +126,30 @@ const CASES: &[Case] = &[
     urdf!("unknown_joint_type"),
     urdf!("mimic_missing_joint"),
     urdf!("mimic_itself"),
+    urdf!("mimic_cycle"),
+    urdf!("mimic_fixed"),
     urdf!("floating_joint"),
     urdf!("planar_joint"),
     urdf!("no_moving_joint"),
-    // Choosing the chain.
-    urdf!("several_leaves"),
-    urdf!("many_leaves"),
+    // Faults that cannot change the chain's kinematics: warnings, as urdfdom reads them.
+    warns(
+        "urdf_off_chain_faults",
+        &["extract", "fixtures/invalid/urdf/off_chain_faults.urdf"],
+        0,
+    ),
+    // Choosing the chain: the default tip is the end of the longest arm (tool0 here, beside a
+    // camera and 20 sensors); two arms of one length are refused.
+    warns(
+        "urdf_several_leaves",
+        &["extract", "fixtures/invalid/urdf/several_leaves.urdf"],
+        0,
+    ),
+    warns(
+        "urdf_many_leaves",
+        &["extract", "fixtures/invalid/urdf/many_leaves.urdf"],
+        0,
+    ),
+    urdf!("two_arms"),
     case("arg_unknown_tip", &["extract", VALID_ARM, "--tip", "tool"]),
     case(
         "arg_unknown_base",
@@ -417,6 +438,45 @@ fn timed_extract(urdf: &str) -> (Duration, String) {
         Some(urdf.as_bytes()),
     );
     (start.elapsed(), out)
+}
+
+/// A 4000-joint chain in which each joint mimics the next (drivers after their followers)
+/// extracts and verifies; the csv names each row's driver.
+#[test]
+fn a_long_chain_of_mimics_extracts() {
+    let n = 4000;
+    let urdf: String = long_chain(n)
+        .lines()
+        .map(|l| {
+            let joint = l
+                .strip_prefix("<joint name=\"j")
+                .and_then(|r| r.split('"').next())
+                .and_then(|k| k.parse::<usize>().ok())
+                .filter(|&k| k < n);
+            let line = match joint {
+                Some(k) => l.replacen(
+                    "<parent",
+                    &format!("<mimic joint=\"j{}\" multiplier=\"0.5\"/><parent", k + 1),
+                    1,
+                ),
+                None => l.to_owned(),
+            };
+            line + "\n"
+        })
+        .collect();
+    let (_, out) = timed_extract(&urdf);
+    assert!(
+        out.starts_with("exit: 0\n"),
+        "{}",
+        &out[..out.len().min(2000)]
+    );
+    for i in [1, 2, n / 2, n - 1] {
+        let row = out
+            .lines()
+            .find(|l| l.starts_with(&format!("j{i},")))
+            .unwrap_or_else(|| panic!("row j{i}"));
+        assert!(row.contains(&format!(",j{},0.5,0", i + 1)), "{row}");
+    }
 }
 
 /// 10 000 joints extract and verify, in time linear in the chain's length.

@@ -1,5 +1,6 @@
 //! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
+mod batch;
 mod calibrate;
 mod check;
 mod check_cases;
@@ -8,7 +9,9 @@ mod common;
 mod contacts;
 mod corpus;
 mod cpa;
+mod default_tip;
 mod extract;
 mod invalid;
 mod measured;
+mod roundtrip;
 mod tree;

@@ -126,7 +126,10 @@ pub struct CheckReport {
 /// # Errors
 /// Unreadable or invalid URDF or sheet.
 pub fn check(args: &CheckArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    let (_, chain) = load_chain(&args.robot, args.base.as_deref(), args.tip.as_deref())?;
+    let (model, chain) = load_chain(&args.robot, args.base.as_deref(), args.tip.as_deref())?;
+    for w in crate::commands::extract::urdf_warnings(&args.robot, &model, &chain) {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     let sheet_name = display_name(&args.sheet);
     let sheet = Sheet::parse(&read_text(&args.sheet)?, &sheet_name)?;
     let report = compare(&chain, &sheet, args.tolerance)?;

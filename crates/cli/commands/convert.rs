@@ -3,11 +3,13 @@
 use std::io::Write;
 
 use anyhow::Result;
-use dh_core::Convention;
+use dh_core::{Bound, Convention};
+use nalgebra::Isometry3;
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_text};
-use crate::render::{render_sheet, Format};
+use crate::readback::{prove, Isometry3Pair, Source};
+use crate::render::Format;
 use crate::sheet::{Sheet, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -24,10 +26,16 @@ pub struct ConvertArgs {
     pub length_unit: Option<LengthUnit>,
     /// Angle unit of the output (default: the sheet's).
     pub angle_unit: Option<AngleUnit>,
+    /// Joint-value samples of the check of the written table against the input.
+    pub samples: usize,
+    /// Seed of the sampler.
+    pub seed: u64,
 }
 
 /// Runs `convert`: `a`, `alpha` move one row and the base or tool takes the pair that falls
 /// off the end (see `DhTable::to_convention`); `theta`, `d`, joint directions and zero pose stay.
+/// What is written is read back and compared with the input sheet by forward kinematics
+/// ([`crate::readback::prove`]); exit 1 if it strays beyond the written precision's bound.
 ///
 /// # Errors
 /// Unreadable or invalid sheet.
@@ -53,6 +61,43 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     if !sheet.has_tool {
         doc.tool = None;
     }
-    out.write_all(render_sheet(&doc, args.format)?.as_bytes())?;
-    Ok(Outcome::Pass)
+    let source = sheet.table.prepare();
+    let free = Isometry3Pair {
+        base: table.base,
+        tool: table.tool,
+    };
+    // Unit conversion and the change of convention are exact up to float rounding: a few ulps per
+    // row, relative to the chain's size (as extraction's own arithmetic bound).
+    let n = sheet.table.rows.len() as f64 + 1.0;
+    let bound = Bound {
+        position: 16.0 * n * f64::EPSILON * sheet.table.size(),
+        orientation: 16.0 * n * f64::EPSILON,
+    };
+    let (text, passed) = prove(
+        &mut doc,
+        args.format,
+        &free,
+        Source {
+            table: &sheet.table,
+            bound,
+            oracle: |q: &[f64]| source.fk(q).unwrap_or_else(|_| Isometry3::identity()),
+            against: Some("the input sheet".into()),
+            samples: args.samples,
+            seed: args.seed,
+        },
+    )?;
+    out.write_all(text.as_bytes())?;
+    if passed {
+        return Ok(Outcome::Pass);
+    }
+    let v = doc.verification.as_ref();
+    writeln!(
+        err,
+        "urdf-dh: error: verification failed: forward kinematics of the converted table as written strays {:.3e} m, {:.3e} rad from {name} (bound {:.3e} m, {:.3e} rad)",
+        v.map_or(f64::INFINITY, |v| v.max_position_error),
+        v.map_or(f64::INFINITY, |v| v.max_orientation_error),
+        v.map_or(0.0, |v| v.position_bound),
+        v.map_or(0.0, |v| v.orientation_bound)
+    )?;
+    Ok(Outcome::Differs)
 }

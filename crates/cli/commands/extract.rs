@@ -6,8 +6,9 @@ use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_robot};
-use crate::render::{render_sheet, Format};
-use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc, VerificationDoc};
+use crate::readback::{prove, Isometry3Pair, Source};
+use crate::render::Format;
+use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Everything `extract` needs.
@@ -45,10 +46,43 @@ pub struct Extracted {
     pub chain: Chain,
     /// The extraction.
     pub extraction: Extraction,
-    /// The sheet (table, facts, verification) in the requested units.
+    /// The sheet (table and facts, without the verification) in the requested units.
     pub sheet: SheetDoc,
-    /// Whether the self-check passed.
-    pub passed: bool,
+    /// Warnings of reading the URDF that concern the chain (see [`urdf_warnings`]).
+    pub urdf_warnings: Vec<String>,
+}
+
+/// Renders the sheet of `ex` in `format` and proves what was written: the text is read back at
+/// its precision and compared with the URDF ([`crate::readback::prove`]); returns the text (with
+/// the verification attached) and whether it passed.
+///
+/// # Errors
+/// A writer bug (the text does not read back).
+pub fn prove_extracted(
+    ex: &mut Extracted,
+    format: Format,
+    samples: usize,
+    seed: u64,
+) -> Result<(String, bool)> {
+    let table = &ex.extraction.table;
+    let chain = &ex.chain;
+    let free = Isometry3Pair {
+        base: table.base,
+        tool: table.tool,
+    };
+    prove(
+        &mut ex.sheet,
+        format,
+        &free,
+        Source {
+            table,
+            bound: ex.extraction.bound,
+            oracle: |q: &[f64]| chain.fk(q),
+            against: None,
+            samples,
+            seed,
+        },
+    )
 }
 
 /// Loads the URDF and its chain.
@@ -65,23 +99,69 @@ pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(
     Ok((model, chain))
 }
 
-/// Extracts and verifies; the caller prints.
+/// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name
+/// (`name`), for `urdf-dh: warning:` lines.
+pub fn urdf_warnings(name: &str, model: &UrdfModel, chain: &Chain) -> Vec<String> {
+    model
+        .warnings_for(chain)
+        .iter()
+        .map(|w| format!("{name}: {w}"))
+        .collect()
+}
+
+/// Extracts; the caller proves what it writes ([`prove_extracted`]) and prints.
 ///
 /// # Errors
 /// As [`load_chain`], plus geometry errors (a chain without moving joints).
 pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
     let (model, chain) = load_chain(&args.path, args.base.as_deref(), args.tip.as_deref())?;
+    extract_chain(&model, chain, &display_name(&args.path), &args.options())
+}
+
+/// What an extraction of one chain needs besides the chain.
+#[derive(Clone, Copy, Debug)]
+pub struct ExtractOptions {
+    /// DH convention of the table.
+    pub convention: Convention,
+    /// Length unit of the output.
+    pub length_unit: LengthUnit,
+    /// Angle unit of the output.
+    pub angle_unit: AngleUnit,
+    /// Tolerances for the axis classification.
+    pub tolerance: Tolerance,
+}
+
+impl ExtractArgs {
+    /// The options of one chain's extraction.
+    pub fn options(&self) -> ExtractOptions {
+        ExtractOptions {
+            convention: self.convention,
+            length_unit: self.length_unit,
+            angle_unit: self.angle_unit,
+            tolerance: self.tolerance,
+        }
+    }
+}
+
+/// Extracts the table of `chain` (of `model`, read from the file shown as `name`) and its sheet
+/// with the extraction's facts; the caller proves it ([`prove_extracted`]).
+///
+/// # Errors
+/// Geometry errors (non-finite values).
+pub fn extract_chain(
+    model: &UrdfModel,
+    chain: Chain,
+    name: &str,
+    options: &ExtractOptions,
+) -> Result<Extracted> {
+    let args = options;
     let extraction = dh_core::extract(
         chain.axes(),
         &chain.tip_pose(),
         args.tolerance,
         args.convention,
     )
-    .with_context(|| format!("{}: extraction failed", display_name(&args.path)))?;
-    let deviation = dh_core::compare(&extraction.table, |q| chain.fk(q), args.samples, args.seed)?;
-    let passed = deviation.max_position_error <= extraction.bound.position
-        && deviation.max_orientation_error <= extraction.bound.orientation;
-
+    .with_context(|| format!("{name}: extraction failed"))?;
     let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
     sheet.robot = Some(model.robot_name().to_string());
     sheet.base_link = Some(chain.base().to_string());
@@ -107,20 +187,12 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
         angular: args.tolerance.angular,
     });
     sheet.warnings = Some(extraction.warnings.iter().map(|w| w.to_string()).collect());
-    sheet.verification = Some(VerificationDoc {
-        samples: deviation.samples,
-        seed: args.seed,
-        max_position_error: deviation.max_position_error,
-        max_orientation_error: deviation.max_orientation_error,
-        position_bound: crate::units::bound_for_print(extraction.bound.position),
-        orientation_bound: crate::units::bound_for_print(extraction.bound.orientation),
-        passed,
-    });
+    let urdf_warnings = urdf_warnings(name, model, &chain);
     Ok(Extracted {
         chain,
         extraction,
         sheet,
-        passed,
+        urdf_warnings,
     })
 }
 
@@ -133,7 +205,10 @@ pub fn extract(
     out: &mut dyn std::io::Write,
     err: &mut dyn std::io::Write,
 ) -> Result<Outcome> {
-    let ex = run_extract(args)?;
+    let mut ex = run_extract(args)?;
+    for w in &ex.urdf_warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     for w in &ex.extraction.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
@@ -163,18 +238,19 @@ pub fn extract(
             .ok_or_else(|| anyhow::anyhow!("--q: the joint values do not fit the table"))?;
         crate::output::write_atomically(std::path::Path::new(path), svg.as_bytes())?;
     }
-    out.write_all(render_sheet(&ex.sheet, args.format)?.as_bytes())?;
-    if ex.passed {
+    let (text, passed) = prove_extracted(&mut ex, args.format, args.samples, args.seed)?;
+    out.write_all(text.as_bytes())?;
+    if passed {
         Ok(Outcome::Pass)
     } else {
         let v = ex.sheet.verification.as_ref();
         writeln!(
             err,
-            "urdf-dh: error: verification failed: forward kinematics of the table strays {:.3e} m, {:.3e} rad from the URDF (bound {:.3e} m, {:.3e} rad)",
-            v.map_or(f64::NAN, |v| v.max_position_error),
-            v.map_or(f64::NAN, |v| v.max_orientation_error),
-            ex.extraction.bound.position,
-            ex.extraction.bound.orientation
+            "urdf-dh: error: verification failed: forward kinematics of the table as written strays {:.3e} m, {:.3e} rad from the URDF (bound {:.3e} m, {:.3e} rad)",
+            v.map_or(f64::INFINITY, |v| v.max_position_error),
+            v.map_or(f64::INFINITY, |v| v.max_orientation_error),
+            v.map_or(0.0, |v| v.position_bound),
+            v.map_or(0.0, |v| v.orientation_bound)
         )?;
         Ok(Outcome::Differs)
     }

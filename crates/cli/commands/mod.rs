@@ -1,5 +1,6 @@
 //! One module per subcommand.
 
+pub mod batch;
 pub mod calibrate;
 pub mod calibrate_tree;
 pub mod check;

@@ -29,6 +29,10 @@ pub struct ToUrdfArgs {
     pub base_link: String,
     /// Tip link name.
     pub tip_link: String,
+    /// Joint-value samples of the check of the written URDF.
+    pub samples: usize,
+    /// Seed of the sampler.
+    pub seed: u64,
 }
 
 fn split(row: &DhRow, convention: Convention) -> (Isometry3<f64>, Isometry3<f64>) {
@@ -103,7 +107,13 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
                 l.lower, l.upper
             );
         }
-        if let Some(m) = &row.mimic {
+        // A driver that is no row of the sheet (a gripper finger following its twin on another
+        // branch) has no joint here to follow: the joint moves on its own (the sheet reader warns).
+        if let Some(m) = row
+            .mimic
+            .as_ref()
+            .filter(|m| table.rows.iter().any(|r| r.name == m.joint))
+        {
             let _ = writeln!(
                 s,
                 "    <mimic joint=\"{}\" multiplier=\"{}\" offset=\"{}\"/>",
@@ -131,10 +141,82 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
     s
 }
 
-/// Runs `to-urdf`.
+/// The check of a written URDF: it is read back and extracted, and that table (with the
+/// written `<mimic>` couplings) is compared with the sheet by forward kinematics, within the
+/// extraction's bound, the written precision (15 decimals) and the float error of the sheet's
+/// own arithmetic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfProof {
+    /// Joint-value samples compared.
+    pub samples: usize,
+    /// Largest tip deviation (metres, radians).
+    pub deviation: (f64, f64),
+    /// Bound it must stay within (metres, radians).
+    pub bound: (f64, f64),
+    /// Whether it stayed within.
+    pub passed: bool,
+}
+
+/// Proves `text` (a URDF written from `table`) by extracting it.
 ///
 /// # Errors
-/// Unreadable or invalid sheet.
+/// A written URDF that does not read back (a writer bug, or names the URDF reader refuses).
+pub fn prove_urdf(
+    text: &str,
+    table: &DhTable,
+    base_link: &str,
+    tip_link: &str,
+    samples: usize,
+    seed: u64,
+) -> Result<UrdfProof> {
+    let model = urdf_axes::UrdfModel::parse(text)
+        .map_err(|e| anyhow::anyhow!("the written URDF does not read back: {e}"))?;
+    let chain = model
+        .chain(Some(base_link), Some(tip_link))
+        .map_err(|e| anyhow::anyhow!("the written URDF does not read back: {e}"))?;
+    let ex = dh_core::extract(
+        chain.axes(),
+        &chain.tip_pose(),
+        dh_core::Tolerance::default(),
+        table.convention,
+    )
+    .map_err(|e| anyhow::anyhow!("the written URDF does not extract: {e}"))?;
+    let source = table.prepare();
+    let dev = dh_core::compare_written(
+        &ex.table,
+        table,
+        |q| source.fk(q).unwrap_or_else(|_| Isometry3::identity()),
+        samples,
+        seed,
+    )
+    .map_err(|e| anyhow::anyhow!("the written URDF has other joints than the sheet: {e}"))?;
+    let n = table.rows.len() as f64 + 1.0;
+    let rounding = dh_core::written_bound(&ex.table, dh_core::Precision::rounded(0.5e-15, 0.5e-15));
+    let bound = (
+        ex.bound.position + rounding.position + 16.0 * n * f64::EPSILON * table.size(),
+        ex.bound.orientation + rounding.orientation + 16.0 * n * f64::EPSILON,
+    );
+    let kinds_agree = ex
+        .table
+        .rows
+        .iter()
+        .zip(&table.rows)
+        .all(|(w, s)| w.kind == s.kind && w.name == s.name);
+    Ok(UrdfProof {
+        samples: dev.samples,
+        deviation: (dev.max_position_error, dev.max_orientation_error),
+        bound,
+        passed: kinds_agree
+            && dev.max_position_error <= bound.0
+            && dev.max_orientation_error <= bound.1,
+    })
+}
+
+/// Runs `to-urdf`: writes the URDF, proved by extracting what was written ([`prove_urdf`]); the
+/// proof is appended as a comment after the root element. Exit 1 if it fails.
+///
+/// # Errors
+/// Unreadable or invalid sheet; a written URDF that does not read back.
 pub fn to_urdf(args: &ToUrdfArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let name = display_name(&args.sheet);
     let sheet = Sheet::parse(&read_text(&args.sheet)?, &name)?;
@@ -146,6 +228,34 @@ pub fn to_urdf(args: &ToUrdfArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         .clone()
         .or(sheet.robot.clone())
         .unwrap_or_else(|| "robot".into());
-    out.write_all(urdf_of(&sheet.table, &robot, &args.base_link, &args.tip_link).as_bytes())?;
-    Ok(Outcome::Pass)
+    let mut text = urdf_of(&sheet.table, &robot, &args.base_link, &args.tip_link);
+    let proof = prove_urdf(
+        &text,
+        &sheet.table,
+        &args.base_link,
+        &args.tip_link,
+        args.samples,
+        args.seed,
+    )?;
+    let verdict = if proof.passed { "PASS" } else { "FAIL" };
+    let _ = writeln!(
+        text,
+        "<!-- verification of this URDF as written (extracted again): {} joint samples (seed {}) against {name}: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {verdict} -->",
+        proof.samples,
+        args.seed,
+        proof.deviation.0,
+        crate::units::bound_for_print(proof.bound.0),
+        proof.deviation.1,
+        crate::units::bound_for_print(proof.bound.1)
+    );
+    out.write_all(text.as_bytes())?;
+    if proof.passed {
+        return Ok(Outcome::Pass);
+    }
+    writeln!(
+        err,
+        "urdf-dh: error: verification failed: the written URDF's kinematics stray {:.3e} m, {:.3e} rad from {name} (bound {:.3e} m, {:.3e} rad)",
+        proof.deviation.0, proof.deviation.1, proof.bound.0, proof.bound.1
+    )?;
+    Ok(Outcome::Differs)
 }

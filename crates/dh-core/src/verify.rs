@@ -42,12 +42,17 @@ enum Draw {
 #[derive(Clone, Debug)]
 pub struct JointSampler {
     draws: Vec<Draw>,
+    /// The following rows, each after its driver: one pass resolves every chain of drivers.
+    order: Vec<usize>,
     rng: ChaCha8Rng,
     emitted: usize,
 }
 
 impl JointSampler {
     /// A sampler for `rows` with `seed`; `size` (metres) bounds unlimited prismatic joints.
+    /// Linear in the number of rows: drivers are found by name once, and the rows that follow
+    /// others are put in dependency order once; rows of a mimic cycle are drawn within their
+    /// own limits.
     pub fn new(rows: &[DhRow], size: f64, seed: u64) -> Self {
         // A joint whose limits allow no motion is drawn as if unlimited: the table must be
         // right at every value, and a frozen joint would leave its row unchecked.
@@ -66,11 +71,14 @@ impl JointSampler {
             },
         };
         let mut draws: Vec<Draw> = rows.iter().map(own).collect();
+        let mut index: std::collections::HashMap<&str, usize> =
+            std::collections::HashMap::with_capacity(rows.len());
+        for (i, r) in rows.iter().enumerate() {
+            index.entry(r.name.as_str()).or_insert(i);
+        }
         for (i, r) in rows.iter().enumerate() {
             if let Some(m) = &r.mimic {
-                if let Some(driver) = rows.iter().position(|d| d.name == m.joint) {
-                    // A driver that itself follows another, or a cycle, is resolved below by
-                    // drawing in dependency order; a cycle falls back to own limits.
+                if let Some(&driver) = index.get(m.joint.as_str()) {
                     if driver != i {
                         draws[i] = Draw::Follows {
                             driver,
@@ -81,8 +89,38 @@ impl JointSampler {
                 }
             }
         }
+        // Dependency order, walking each chain of drivers once (0 unseen, 1 on the walk,
+        // 2 placed).
+        let mut state = vec![0u8; rows.len()];
+        let mut order = Vec::new();
+        for start in 0..rows.len() {
+            let mut walk = Vec::new();
+            let mut k = start;
+            while state[k] == 0 {
+                let Draw::Follows { driver, .. } = draws[k] else {
+                    break;
+                };
+                state[k] = 1;
+                walk.push(k);
+                k = driver;
+            }
+            let mut placed = walk.clone();
+            if state[k] == 1 {
+                // A cycle: its rows move on their own; those leading into it follow them.
+                let from = walk.iter().position(|&w| w == k).unwrap_or(0);
+                for &c in &walk[from..] {
+                    draws[c] = own(&rows[c]);
+                }
+                placed.truncate(from);
+            }
+            order.extend(placed.iter().rev());
+            for w in walk {
+                state[w] = 2;
+            }
+        }
         Self {
             draws,
+            order,
             rng: ChaCha8Rng::seed_from_u64(seed),
             emitted: 0,
         }
@@ -93,7 +131,7 @@ impl JointSampler {
     pub fn next_into(&mut self, q: &mut Vec<f64>) {
         let n = self.draws.len();
         q.clear();
-        q.resize(n, f64::NAN);
+        q.resize(n, 0.0);
         let zero = self.emitted == 0;
         self.emitted += 1;
         for (i, draw) in self.draws.iter().enumerate() {
@@ -107,31 +145,15 @@ impl JointSampler {
                 };
             }
         }
-        // Followers: at most n passes resolve any chain of drivers; what is left is a cycle.
-        for _ in 0..n {
-            let mut open = false;
-            for i in 0..n {
-                if let Draw::Follows {
-                    driver,
-                    multiplier,
-                    offset,
-                } = self.draws[i]
-                {
-                    if q[i].is_nan() {
-                        if q[driver].is_nan() {
-                            open = true;
-                        } else {
-                            q[i] = multiplier * q[driver] + offset;
-                        }
-                    }
-                }
+        for &i in &self.order {
+            if let Draw::Follows {
+                driver,
+                multiplier,
+                offset,
+            } = self.draws[i]
+            {
+                q[i] = multiplier * q[driver] + offset;
             }
-            if !open {
-                break;
-            }
-        }
-        for v in q.iter_mut().filter(|v| v.is_nan()) {
-            *v = 0.0;
         }
     }
 }
@@ -202,6 +224,71 @@ mod tests {
             assert!((q[1] - (-2.0 * q[0] + 0.5)).abs() < 1e-15);
             assert!(q[0].abs() <= std::f64::consts::PI);
         }
+    }
+
+    fn chain_of_followers(n: usize) -> Vec<DhRow> {
+        // Row i follows row i + 1 (q_i = 0.5 q_{i+1} + 0.001); the last moves on its own: the
+        // drivers come after their followers, the worst order for repeated passes.
+        (0..n)
+            .map(|i| {
+                let mut r = DhRow::revolute(&format!("j{i}"), 0.1, 0.0, 0.0, 0.0);
+                if i + 1 < n {
+                    r.mimic = Some(Mimic {
+                        joint: format!("j{}", i + 1),
+                        multiplier: 0.5,
+                        offset: 0.001,
+                    });
+                }
+                r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_long_chain_of_mimics_is_resolved_in_one_pass() {
+        let rows = chain_of_followers(4000);
+        let mut s = JointSampler::new(&rows, 1.0, 11);
+        let mut q = Vec::new();
+        s.next_into(&mut q);
+        assert_eq!(q[3999], 0.0, "the zero pose first");
+        for _ in 0..20 {
+            s.next_into(&mut q);
+            assert_ne!(q[3999], 0.0);
+            for i in 0..3999 {
+                assert_eq!(q[i], 0.5 * q[i + 1] + 0.001, "row {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn mimic_cycles_move_on_their_own() {
+        let mut rows = chain_of_followers(3);
+        // j2 follows j0: j0 -> j1 -> j2 -> j0.
+        rows[2].mimic = Some(Mimic {
+            joint: "j0".into(),
+            multiplier: 1.0,
+            offset: 0.0,
+        });
+        let mut extra = DhRow::revolute("k", 0.1, 0.0, 0.0, 0.0);
+        extra.mimic = Some(Mimic {
+            joint: "j1".into(),
+            multiplier: 2.0,
+            offset: 0.0,
+        });
+        rows.push(extra);
+        let mut s = JointSampler::new(&rows, 1.0, 5);
+        let mut q = Vec::new();
+        s.next_into(&mut q);
+        let mut moved = [false; 3];
+        for _ in 0..20 {
+            s.next_into(&mut q);
+            for (m, v) in moved.iter_mut().zip(&q) {
+                *m |= *v != 0.0;
+            }
+            // A row leading into the cycle still follows its driver.
+            assert_eq!(q[3], 2.0 * q[1]);
+        }
+        assert_eq!(moved, [true; 3]);
     }
 
     #[test]

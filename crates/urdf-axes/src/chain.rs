@@ -3,9 +3,9 @@
 use dh_core::pose::from_xyz_rpy;
 use dh_core::{CoreError, JointAxis, JointKind, Limits, Line, Mimic};
 use nalgebra::{Isometry3, Unit, UnitQuaternion, Vector3};
-use urdf_rs::JointType;
 
 use crate::model::UrdfModel;
+use crate::read::JointType;
 use crate::UrdfError;
 
 /// A moving joint of a [`Chain`] that follows another joint (URDF `<mimic>`):
@@ -94,22 +94,33 @@ impl Chain {
         let in_path = |driver: &str| {
             model.joint_index_of(driver).is_some_and(|d| {
                 on_path.get(d).copied().unwrap_or(false)
-                    && model.robot.joints.get(d).is_some_and(|j| {
-                        matches!(
-                            j.joint_type,
-                            JointType::Revolute | JointType::Continuous | JointType::Prismatic
-                        )
-                    })
+                    && model
+                        .robot
+                        .joints
+                        .get(d)
+                        .and_then(|j| j.kind)
+                        .is_some_and(JointType::is_moving)
             })
         };
         for &k in path {
             let Some(joint) = model.robot.joints.get(k) else {
                 continue;
             };
-            let line = model.joint_sources.get(k).and_then(|s| s.line);
+            let line = Some(joint.line);
             joints.push(joint.name.clone());
-            let origin = from_xyz_rpy(joint.origin.xyz.0, joint.origin.rpy.0);
-            let kind = match joint.joint_type {
+            let origin = from_xyz_rpy(joint.origin.xyz, joint.origin.rpy);
+            let Some(joint_type) = joint.kind else {
+                // A joint without a known type carries a fault, refused before building.
+                return Err(joint
+                    .fault
+                    .clone()
+                    .unwrap_or(UrdfError::UnsupportedJointType {
+                        joint: joint.name.clone(),
+                        found: String::new(),
+                        line,
+                    }));
+            };
+            let kind = match joint_type {
                 JointType::Fixed => {
                     pending *= origin;
                     pose *= origin;
@@ -121,7 +132,7 @@ impl Chain {
                 JointType::Floating | JointType::Planar => {
                     return Err(UrdfError::JointTypeInChain {
                         joint: joint.name.clone(),
-                        found: if joint.joint_type == JointType::Floating {
+                        found: if joint_type == JointType::Floating {
                             "floating"
                         } else {
                             "planar"
@@ -131,17 +142,10 @@ impl Chain {
                         line,
                     });
                 }
-                JointType::Spherical => {
-                    return Err(UrdfError::UnsupportedJointType {
-                        joint: joint.name.clone(),
-                        found: "spherical".into(),
-                        line,
-                    })
-                }
             };
-            let axis = unit_axis(joint.axis.xyz.0).ok_or_else(|| UrdfError::ZeroAxis {
+            let axis = unit_axis(joint.axis).ok_or_else(|| UrdfError::ZeroAxis {
                 joint: joint.name.clone(),
-                axis: joint.axis.xyz.0,
+                axis: joint.axis,
                 line,
             })?;
             let frame = pose * origin;
@@ -150,18 +154,17 @@ impl Chain {
                     joint: joint.name.clone(),
                     cause,
                 })?;
-            let limits = match joint.joint_type {
-                JointType::Continuous => None,
-                _ => {
-                    let (lower, upper) = (joint.limit.lower, joint.limit.upper);
-                    // Only URDF 1.2 lets infinities through validation: "no limit".
+            let limits = match (joint_type, joint.limit) {
+                (JointType::Continuous, _) | (_, None) => None,
+                // Only URDF 1.2 lets infinities through validation: "no limit".
+                (_, Some((lower, upper))) => {
                     (lower.is_finite() && upper.is_finite()).then_some(Limits { lower, upper })
                 }
             };
             let mimic = joint.mimic.as_ref().map(|m| Mimic {
                 joint: m.joint.clone(),
-                multiplier: m.multiplier.unwrap_or(1.0),
-                offset: m.offset.unwrap_or(0.0),
+                multiplier: m.multiplier,
+                offset: m.offset,
             });
             if let Some(m) = &mimic {
                 mimics.push(MimicJoint {

@@ -18,6 +18,17 @@ pub enum UrdfError {
         /// 1-based line of that byte.
         line: usize,
     },
+    /// The document is larger than [`crate::MAX_URDF_BYTES`] (refused before reading it all).
+    #[error(
+        "expected a urdf of at most {limit} bytes, found {}",
+        if *.size > *.limit { format!("{} bytes", .size) } else { "more".to_owned() }
+    )]
+    TooLarge {
+        /// Bytes found (or `limit + 1` when reading stopped there).
+        size: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// The document declares entities. Refused before parsing: nested entity expansion (the
     /// "billion laughs" document) can exhaust memory, and no URDF needs entities.
     #[error(
@@ -59,9 +70,10 @@ pub enum UrdfError {
     },
     /// A link or joint name holds a control character (C0, DEL or C1): it would corrupt every
     /// table, CSV and terminal line the name is written to, and YAML cannot carry some of them
-    /// unescaped.
+    /// unescaped; or a bidirectional formatting character (U+202E...), which makes the name
+    /// display as something it is not.
     #[error(
-        "{kind} '{name}'{}: expected a name without control characters, found {code} at character {position}",
+        "{kind} '{name}'{}: expected a name without control or bidirectional formatting characters, found {code} at character {position}",
         at(.line)
     )]
     ControlCharacterInName {
@@ -227,7 +239,7 @@ pub enum UrdfError {
         /// Line of the joint.
         line: Option<usize>,
     },
-    /// A joint type that is not URDF (urdf-rs's `spherical`, or an unknown word).
+    /// A joint type that is not URDF (`spherical`, `ball`, or any other word).
     #[error(
         "joint '{joint}'{}: expected type revolute, continuous, prismatic, fixed, floating or \
          planar, found '{found}'",
@@ -266,6 +278,36 @@ pub enum UrdfError {
         /// Line of the `<mimic>` element.
         line: Option<usize>,
     },
+    /// Joints that mimic each other in a cycle (each follows the next, the last the first):
+    /// no joint of the cycle has a value of its own.
+    #[error(
+        "joint '{}'{}: mimic: expected drivers that end at a joint that mimics none, found a cycle {}",
+        .joints.first().map_or("", String::as_str),
+        at(.line),
+        cycle(.joints)
+    )]
+    MimicCycle {
+        /// The joints of the cycle, each mimicking the next, the first repeated at the end.
+        joints: Vec<String>,
+        /// Line of the first joint's `<mimic>`.
+        line: Option<usize>,
+    },
+    /// A `<mimic>` whose driver is not a revolute, continuous or prismatic joint.
+    #[error(
+        "joint '{joint}'{}: mimic: expected a revolute, continuous or prismatic driver, found \
+         '{driver}', a {kind} joint",
+        at(.line)
+    )]
+    MimicOfFixed {
+        /// The mimicking joint.
+        joint: String,
+        /// The driver.
+        driver: String,
+        /// The driver's type (`fixed`, `floating`, `planar`).
+        kind: &'static str,
+        /// Line of the `<mimic>` element.
+        line: Option<usize>,
+    },
     /// A base or tip link name that the URDF does not define.
     #[error(
         "{role} link '{link}': expected a link of the urdf, found no such link{}",
@@ -280,17 +322,21 @@ pub enum UrdfError {
         /// the leaves for a tip and the root for a base).
         candidates: Vec<String>,
     },
-    /// No tip was given and the base has several leaf links below it.
+    /// No tip was given and several leaves below the base end equally long runs of moving
+    /// joints (two arms of one length, a humanoid), or none does.
     #[error(
-        "expected one leaf link below '{base}' to use as the tip, found {}: {} (choose one as the tip)",
+        "expected one tip below '{base}' at the end of the longest run of moving joints, found \
+         {}: {} (choose one as the tip)",
         .leaves.len(),
-        list(.leaves)
+        counted(.leaves, .moving)
     )]
     SeveralLeaves {
         /// The base link.
         base: String,
-        /// The leaves below it, in document order.
+        /// The candidate tips, in document order.
         leaves: Vec<String>,
+        /// Per candidate: the moving joints from the base down to it.
+        moving: Vec<usize>,
     },
     /// The tip is not below the base.
     #[error(
@@ -354,6 +400,24 @@ pub enum UrdfError {
     },
 }
 
+impl UrdfError {
+    /// Whether the error is about the choice of base and tip (an unknown or ambiguous link,
+    /// a tip not below the base, a floating or planar joint or no moving joint between them)
+    /// rather than about the file.
+    pub fn is_choice(&self) -> bool {
+        matches!(
+            self,
+            UrdfError::UnknownLink { .. }
+                | UrdfError::SeveralLeaves { .. }
+                | UrdfError::Disconnected { .. }
+                | UrdfError::JointTypeInChain { .. }
+                | UrdfError::NoMovingJoint { .. }
+                | UrdfError::JointCount { .. }
+                | UrdfError::Geometry { .. }
+        )
+    }
+}
+
 /// Formats an optional line as ` (line N)`.
 struct At(Option<usize>);
 
@@ -396,6 +460,22 @@ pub(crate) fn list(names: &[String]) -> String {
         .iter()
         .take(SHOWN)
         .map(|n| format!("'{n}'"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    if names.len() > SHOWN {
+        s.push_str(&format!(" and {} more", names.len() - SHOWN));
+    }
+    s
+}
+
+/// Formats candidate tips as `'a' (6 moving joints), 'b' (6 moving joints)`, the first [`SHOWN`]
+/// and how many more.
+fn counted(names: &[String], moving: &[usize]) -> String {
+    let mut s = names
+        .iter()
+        .zip(moving)
+        .take(SHOWN)
+        .map(|(n, m)| format!("'{n}' ({m} moving joint{})", if *m == 1 { "" } else { "s" }))
         .collect::<Vec<_>>()
         .join(", ");
     if names.len() > SHOWN {
@@ -450,11 +530,14 @@ mod tests {
         let e = UrdfError::SeveralLeaves {
             base: "b".into(),
             leaves: names.clone(),
+            moving: vec![1; names.len()],
         };
         assert_eq!(
             e.to_string(),
-            "expected one leaf link below 'b' to use as the tip, found 10000: 'l0', 'l1', 'l2', \
-             'l3', 'l4', 'l5', 'l6', 'l7' and 9992 more (choose one as the tip)"
+            "expected one tip below 'b' at the end of the longest run of moving joints, found \
+             10000: 'l0' (1 moving joint), 'l1' (1 moving joint), 'l2' (1 moving joint), \
+             'l3' (1 moving joint), 'l4' (1 moving joint), 'l5' (1 moving joint), \
+             'l6' (1 moving joint), 'l7' (1 moving joint) and 9992 more (choose one as the tip)"
         );
         let mut links = names;
         links.push("l0".into());

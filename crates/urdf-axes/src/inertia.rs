@@ -6,7 +6,7 @@
 //! rigidly attached to it, that is reached from it through joints that are not moving joints of
 //! the chain (fixed joints, and joints off the chain taken at zero), up to the next moving
 //! joint of the chain. Links before the first moving joint (the fixed base) belong to no joint.
-//! A link without `<inertial>` weighs nothing (urdf-rs reads a missing element as mass 0).
+//! A link without `<inertial>` weighs nothing.
 //!
 //! # Frames
 //! The body's centre of mass is given in the joint's child link frame (which moves with it),
@@ -34,84 +34,126 @@ pub struct JointInertial {
     pub com_at_zero: Vector3<f64>,
 }
 
-fn pose_of(origin: &urdf_rs::Pose) -> Isometry3<f64> {
-    from_xyz_rpy(origin.xyz.0, origin.rpy.0)
-}
-
 /// The body every moving joint of `chain` carries, base to tip (see the module docs).
+/// Linear in the number of links.
 ///
 /// # Errors
-/// [`UrdfError::NonFinite`] for a negative or non-finite mass or a non-finite inertial origin
-/// (named by the joint whose body holds the link).
+/// [`UrdfError::NonFinite`] for a negative or non-finite mass, a non-finite inertial origin,
+/// a malformed `<inertial>` (its reading warned; here its mass is needed) or a non-finite
+/// origin of a joint inside a body (named by the joint whose body holds the link).
 pub fn joint_inertials(model: &UrdfModel, chain: &Chain) -> Result<Vec<JointInertial>, UrdfError> {
-    let robot = model.robot();
-    let moving: Vec<&String> = chain
+    let robot = &model.robot;
+    let moving: Vec<usize> = chain
         .joints()
         .iter()
-        .filter(|name| {
-            robot.joints.iter().any(|j| {
-                &j.name == *name
-                    && matches!(
-                        j.joint_type,
-                        urdf_rs::JointType::Revolute
-                            | urdf_rs::JointType::Continuous
-                            | urdf_rs::JointType::Prismatic
-                    )
-            })
+        .filter_map(|name| model.joint_index_of(name))
+        .filter(|&k| {
+            robot
+                .joints
+                .get(k)
+                .and_then(|j| j.kind)
+                .is_some_and(|t| t.is_moving())
         })
         .collect();
-    let stop: HashSet<&str> = moving.iter().map(|s| s.as_str()).collect();
+    let stop: HashSet<usize> = moving.iter().copied().collect();
+    let Some(base) = model.link_index_of(chain.base()) else {
+        return Ok(Vec::new());
+    };
+    let origin_of = |k: usize| {
+        robot.joints.get(k).map_or_else(Isometry3::identity, |j| {
+            from_xyz_rpy(j.origin.xyz, j.origin.rpy)
+        })
+    };
     // Every link's pose at zero in the base link frame, by walking down from the base.
-    let mut at_zero: Vec<(String, Isometry3<f64>)> =
-        vec![(chain.base().to_owned(), Isometry3::identity())];
-    let mut i = 0;
-    while let Some((link, pose)) = at_zero.get(i).cloned() {
-        for j in robot.joints.iter().filter(|j| j.parent.link == link) {
-            if !at_zero.iter().any(|(l, _)| *l == j.child.link) {
-                at_zero.push((j.child.link.clone(), pose * pose_of(&j.origin)));
+    let n = model.child_joints.len();
+    let mut at_zero: Vec<Option<Isometry3<f64>>> = vec![None; n];
+    if let Some(slot) = at_zero.get_mut(base) {
+        *slot = Some(Isometry3::identity());
+    }
+    let mut queue = vec![base];
+    while let Some(link) = queue.pop() {
+        let pose = at_zero
+            .get(link)
+            .copied()
+            .flatten()
+            .unwrap_or_else(Isometry3::identity);
+        for &k in model
+            .child_joints
+            .get(link)
+            .map(Vec::as_slice)
+            .unwrap_or(&[])
+        {
+            if let Some(&c) = model.joint_child.get(k) {
+                if let Some(slot) = at_zero.get_mut(c) {
+                    *slot = Some(pose * origin_of(k));
+                }
+                queue.push(c);
             }
         }
-        i += 1;
     }
-    let zero_pose = |link: &str| {
-        at_zero
-            .iter()
-            .find(|(l, _)| l == link)
-            .map_or_else(Isometry3::identity, |(_, p)| *p)
-    };
     let mut out = Vec::with_capacity(moving.len());
-    for name in moving {
-        let Some(joint) = robot.joints.iter().find(|j| &j.name == name) else {
+    for k in moving {
+        let (Some(joint), Some(&child)) = (robot.joints.get(k), model.joint_child.get(k)) else {
             continue;
         };
-        let child = joint.child.link.as_str();
+        let name = &joint.name;
         // The body: links reached from the child link without crossing a chain joint.
-        let mut body: Vec<(&str, Isometry3<f64>)> = vec![(child, Isometry3::identity())];
-        let mut k = 0;
-        while let Some(&(link, pose)) = body.get(k) {
-            for j in robot
-                .joints
-                .iter()
-                .filter(|j| j.parent.link == link && !stop.contains(j.name.as_str()))
+        let mut body: Vec<(usize, Isometry3<f64>)> = vec![(child, Isometry3::identity())];
+        let mut i = 0;
+        while let Some(&(link, pose)) = body.get(i) {
+            for &j in model
+                .child_joints
+                .get(link)
+                .map(Vec::as_slice)
+                .unwrap_or(&[])
             {
-                body.push((j.child.link.as_str(), pose * pose_of(&j.origin)));
+                if stop.contains(&j) {
+                    continue;
+                }
+                if let (Some(&c), Some(jj)) = (model.joint_child.get(j), robot.joints.get(j)) {
+                    if let Some(v) = jj
+                        .origin
+                        .xyz
+                        .iter()
+                        .chain(&jj.origin.rpy)
+                        .find(|v| !v.is_finite())
+                    {
+                        return Err(UrdfError::NonFinite {
+                            joint: name.clone(),
+                            what: "origin of a joint inside the body it carries",
+                            value: *v,
+                            line: Some(jj.line),
+                        });
+                    }
+                    body.push((c, pose * origin_of(j)));
+                }
             }
-            k += 1;
+            i += 1;
         }
         let mut mass = 0.0;
         let mut moment = Vector3::zeros();
         for (link, pose) in body {
-            let Some(l) = robot.links.iter().find(|l| l.name == link) else {
+            let Some(l) = robot.links.get(link) else {
                 continue;
             };
-            let m = l.inertial.mass.value;
-            let c = l.inertial.origin.xyz.0;
+            let inertial = match &l.inertial {
+                Ok(i) => i.unwrap_or_default(),
+                Err(_) => {
+                    return Err(UrdfError::NonFinite {
+                        joint: name.clone(),
+                        what: "inertial of a link it carries (malformed, see the warnings)",
+                        value: f64::NAN,
+                        line: Some(l.line),
+                    })
+                }
+            };
+            let (m, c) = (inertial.mass, inertial.com);
             if !(m.is_finite() && m >= 0.0) {
                 return Err(UrdfError::NonFinite {
                     joint: name.clone(),
                     what: "inertial mass of a link it carries (expected >= 0)",
                     value: m,
-                    line: model.link_line(link),
+                    line: Some(l.line),
                 });
             }
             if let Some(v) = c.iter().find(|v| !v.is_finite()) {
@@ -119,7 +161,7 @@ pub fn joint_inertials(model: &UrdfModel, chain: &Chain) -> Result<Vec<JointIner
                     joint: name.clone(),
                     what: "inertial origin of a link it carries",
                     value: *v,
-                    line: model.link_line(link),
+                    line: Some(l.line),
                 });
             }
             moment += (pose * Point3::from(Vector3::from(c))).coords * m;
@@ -130,7 +172,12 @@ pub fn joint_inertials(model: &UrdfModel, chain: &Chain) -> Result<Vec<JointIner
         } else {
             Vector3::zeros()
         };
-        let com_at_zero = (zero_pose(child) * Point3::from(com)).coords;
+        let zero = at_zero
+            .get(child)
+            .copied()
+            .flatten()
+            .unwrap_or_else(Isometry3::identity);
+        let com_at_zero = (zero * Point3::from(com)).coords;
         out.push(JointInertial {
             joint: name.clone(),
             mass,

@@ -5,15 +5,13 @@
 //! angles in radians. URDF `rpy` means `R = Rz(yaw) Ry(pitch) Rx(roll)`
 //! ([`dh_core::pose::from_xyz_rpy`]).
 //!
-//! # What urdf-rs does and what is checked here
-//! urdf-rs 0.10 validates almost nothing. It fills a missing `<origin>` with the identity, a
-//! missing `<axis>` with `1 0 0` (the URDF default), and a missing `<limit>` with zeros (so a
-//! revolute joint without limits is refused here as [`UrdfError::MissingLimit`]). It reads
-//! `nan` and `inf`, drops vector tokens that are not numbers (`"1 x 2 3"` reads as `1 2 3`),
-//! accepts any root element and ignores a second one, and its XML backend recurses once per
-//! nesting level. Its backend rejects entity declarations as "malformed xml"; they are refused
-//! here first with a clear [`UrdfError::EntityDeclaration`]. Positions are only in its XML
-//! syntax errors; for the others the line is found in the source text.
+//! # Reading
+//! One linear scan of the text ([`UrdfModel::parse`]), without recursion and without entity
+//! expansion, then the model is read from it: strict on what defines the tree and on the
+//! joints of the chosen chain, lenient (a [`Warning`] with the element and its line) on what
+//! cannot change the chain's kinematics, as ROS's urdfdom is (it ignores unknown elements,
+//! takes the first `<material>`, logs a malformed `rgba` and goes on). Inputs beyond
+//! [`MAX_URDF_BYTES`] are refused.
 #![cfg_attr(
     not(test),
     deny(
@@ -25,12 +23,16 @@
 )]
 
 mod chain;
+mod check;
 mod error;
 pub mod inertia;
-mod locate;
+mod mimic;
 mod model;
+mod read;
 mod scan;
+mod tip;
 
 pub use chain::{Chain, MimicJoint};
 pub use error::UrdfError;
-pub use model::UrdfModel;
+pub use model::{UrdfModel, MAX_URDF_BYTES};
+pub use read::{Warning, MAX_WARNINGS};

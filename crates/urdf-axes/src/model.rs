@@ -2,88 +2,37 @@
 
 use std::collections::HashMap;
 
-use urdf_rs::{JointType, Robot};
-
-use crate::scan::{self, Doc, ScanError};
+use crate::check::check_name;
+use crate::read::{self, fault_summary, Robot, Warning};
+use crate::scan::{self, ScanError};
 use crate::{Chain, UrdfError};
 
-/// Where a joint and its parts sit in the source text, and what urdf-rs forgets about it.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct JointSource {
-    /// Line of `<joint`.
-    pub line: Option<usize>,
-    pub parent_line: Option<usize>,
-    pub child_line: Option<usize>,
-    pub origin_line: Option<usize>,
-    pub axis_line: Option<usize>,
-    pub limit_line: Option<usize>,
-    pub mimic_line: Option<usize>,
-    /// Whether a `<limit>` element is present (urdf-rs fills in zeros when it is not).
-    pub has_limit: bool,
-    /// Raw `xyz`, `rpy` of `<origin>` and `xyz` of `<axis>`: urdf-rs silently drops tokens that
-    /// are not numbers.
-    pub raw_vectors: Vec<(&'static str, String, Option<usize>)>,
-}
+/// Largest URDF accepted, in bytes. The biggest real URDFs are a few megabytes; the limit
+/// bounds memory (the scan keeps at most a few times the input) for piped or hostile input.
+pub const MAX_URDF_BYTES: usize = 256 * 1024 * 1024;
 
-impl JointSource {
-    fn unknown() -> Self {
-        Self {
-            has_limit: true,
-            ..Self::default()
-        }
-    }
-
-    fn from_doc(doc: &Doc, index: usize) -> Self {
-        let line_of = |name: &str| doc.child(index, name).map(|e| e.line);
-        let mut raw_vectors = Vec::new();
-        if let Some(o) = doc.child(index, "origin") {
-            for (what, attr) in [("origin xyz", "xyz"), ("origin rpy", "rpy")] {
-                if let Some(v) = o.attr(attr) {
-                    raw_vectors.push((what, v.to_owned(), Some(o.line)));
-                }
-            }
-        }
-        if let Some(a) = doc.child(index, "axis") {
-            if let Some(v) = a.attr("xyz") {
-                raw_vectors.push(("axis xyz", v.to_owned(), Some(a.line)));
-            }
-        }
-        Self {
-            line: doc.get(index).map(|e| e.line),
-            parent_line: line_of("parent"),
-            child_line: line_of("child"),
-            origin_line: line_of("origin"),
-            axis_line: line_of("axis"),
-            limit_line: line_of("limit"),
-            mimic_line: line_of("mimic"),
-            has_limit: doc.child(index, "limit").is_some(),
-            raw_vectors,
-        }
-    }
-}
-
-/// A parsed and validated URDF: one tree of uniquely named links joined by joints with finite
-/// numbers, indexed by name.
+/// A parsed and validated URDF: one tree of uniquely named links joined by joints, indexed by
+/// name, with the warnings of its reading.
 ///
 /// Build it with [`UrdfModel::parse`] or [`UrdfModel::from_bytes`], then pick a serial chain
-/// with [`UrdfModel::chain`]. Validation covers the whole document (names, tree shape, numbers,
-/// limits, mimic drivers); what depends on the chosen chain (floating or planar joints, at
-/// least one moving joint) is checked by [`UrdfModel::chain`].
+/// with [`UrdfModel::chain`]. What defines the tree (names, parents, children) is validated
+/// here. A fault in a joint's own content (type, numbers, limits, mimic) is kept with the
+/// joint: [`UrdfModel::chain`] refuses a chain through that joint, and elsewhere it is a
+/// warning ([`UrdfModel::warnings_for`]). Faults of visuals, collisions, materials and
+/// inertials are warnings ([`UrdfModel::warnings`]), as urdfdom logs and skips them.
 #[derive(Debug, Clone)]
 pub struct UrdfModel {
     pub(crate) robot: Robot,
     link_index: HashMap<String, usize>,
     joint_index: HashMap<String, usize>,
-    link_lines: Vec<Option<usize>>,
-    pub(crate) joint_sources: Vec<JointSource>,
     /// Per joint: index of its parent link.
     pub(crate) joint_parent: Vec<usize>,
     /// Per joint: index of its child link.
-    joint_child: Vec<usize>,
+    pub(crate) joint_child: Vec<usize>,
     /// Per link: the joint whose child it is.
-    parent_joint: Vec<Option<usize>>,
+    pub(crate) parent_joint: Vec<Option<usize>>,
     /// Per link: joints whose parent it is.
-    child_joints: Vec<Vec<usize>>,
+    pub(crate) child_joints: Vec<Vec<usize>>,
     root: usize,
 }
 
@@ -94,25 +43,29 @@ impl UrdfModel {
     /// refused before any XML parsing, so an entity-expansion bomb costs one linear scan.
     ///
     /// # Errors
+    /// - [`UrdfError::TooLarge`] beyond [`MAX_URDF_BYTES`];
     /// - [`UrdfError::EntityDeclaration`] for an entity declaration;
-    /// - [`UrdfError::Parse`] for text that is not one well-formed `<robot>` element, a missing
-    ///   required attribute or element, or a malformed number (with the line when found);
+    /// - [`UrdfError::Parse`] for text that is not one well-formed `<robot>` element, or a link
+    ///   or joint without a name, parent or child;
     /// - [`UrdfError::NoLinks`], [`UrdfError::DuplicateLink`], [`UrdfError::DuplicateJoint`],
-    ///   [`UrdfError::MissingLink`], [`UrdfError::TwoParents`], [`UrdfError::Cycle`],
-    ///   [`UrdfError::NoRoot`], [`UrdfError::SeveralRoots`] when the links are not one tree;
-    /// - [`UrdfError::UnsupportedJointType`] for a type that is not URDF (`spherical`, `ball`);
-    /// - [`UrdfError::NonFinite`], [`UrdfError::ZeroAxis`], [`UrdfError::MissingLimit`],
-    ///   [`UrdfError::LimitsReversed`], [`UrdfError::UnknownMimicJoint`],
-    ///   [`UrdfError::MimicItself`] for a joint's numbers.
+    ///   [`UrdfError::ControlCharacterInName`] (of a link), [`UrdfError::MissingLink`],
+    ///   [`UrdfError::TwoParents`], [`UrdfError::Cycle`], [`UrdfError::NoRoot`],
+    ///   [`UrdfError::SeveralRoots`] when the links are not one tree.
     pub fn parse(text: &str) -> Result<UrdfModel, UrdfError> {
+        if text.len() > MAX_URDF_BYTES {
+            return Err(UrdfError::TooLarge {
+                size: text.len(),
+                limit: MAX_URDF_BYTES,
+            });
+        }
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let doc = scan::scan(text).map_err(|e| match e {
             ScanError::Entity { line } => UrdfError::EntityDeclaration { line },
             ScanError::Malformed { message, line } => UrdfError::Parse { message, line },
         })?;
-        let robot = urdf_rs::read_from_string(text)
-            .map_err(|e| crate::locate::urdf_rs_error(&e.to_string(), &doc))?;
-        Self::validate(robot, &doc)
+        let robot = read::read(&doc)?;
+        drop(doc);
+        Self::validate(robot)
     }
 
     /// Decodes `bytes` as UTF-8, then parses and validates them like [`UrdfModel::parse`].
@@ -121,6 +74,12 @@ impl UrdfModel {
     /// [`UrdfError::NotUtf8`] with the offset and line of the first invalid byte; otherwise as
     /// [`UrdfModel::parse`].
     pub fn from_bytes(bytes: &[u8]) -> Result<UrdfModel, UrdfError> {
+        if bytes.len() > MAX_URDF_BYTES {
+            return Err(UrdfError::TooLarge {
+                size: bytes.len(),
+                limit: MAX_URDF_BYTES,
+            });
+        }
         match std::str::from_utf8(bytes) {
             Ok(text) => Self::parse(text),
             Err(e) => {
@@ -131,27 +90,7 @@ impl UrdfModel {
         }
     }
 
-    fn validate(robot: Robot, doc: &Doc) -> Result<UrdfModel, UrdfError> {
-        let link_elems = doc.top_level("link");
-        let joint_elems = doc.top_level("joint");
-        let link_lines: Vec<Option<usize>> = if link_elems.len() == robot.links.len() {
-            link_elems
-                .iter()
-                .map(|&i| doc.get(i).map(|e| e.line))
-                .collect()
-        } else {
-            vec![None; robot.links.len()]
-        };
-        let joint_sources: Vec<JointSource> = if joint_elems.len() == robot.joints.len() {
-            joint_elems
-                .iter()
-                .map(|&i| JointSource::from_doc(doc, i))
-                .collect()
-        } else {
-            vec![JointSource::unknown(); robot.joints.len()]
-        };
-        let infinite_limits_allowed = version_at_least_1_2(robot.version.as_deref());
-
+    fn validate(mut robot: Robot) -> Result<UrdfModel, UrdfError> {
         if robot.links.is_empty() {
             return Err(UrdfError::NoLinks {
                 robot: robot.name.clone(),
@@ -159,39 +98,32 @@ impl UrdfModel {
         }
         let mut link_index: HashMap<String, usize> = HashMap::with_capacity(robot.links.len());
         for (i, link) in robot.links.iter().enumerate() {
-            check_name("link", &link.name, line_at(&link_lines, i))?;
+            check_name("link", &link.name, Some(link.line))?;
             if let Some(&first) = link_index.get(&link.name) {
                 return Err(UrdfError::DuplicateLink {
                     link: link.name.clone(),
-                    line: line_at(&link_lines, i),
-                    first_line: line_at(&link_lines, first),
+                    line: Some(link.line),
+                    first_line: robot.links.get(first).map(|l| l.line),
                 });
             }
             link_index.insert(link.name.clone(), i);
         }
         let mut joint_index: HashMap<String, usize> = HashMap::with_capacity(robot.joints.len());
         for (k, joint) in robot.joints.iter().enumerate() {
-            check_name(
-                "joint",
-                &joint.name,
-                joint_sources.get(k).and_then(|s| s.line),
-            )?;
             if let Some(&first) = joint_index.get(&joint.name) {
                 return Err(UrdfError::DuplicateJoint {
                     joint: joint.name.clone(),
-                    line: joint_sources.get(k).and_then(|s| s.line),
-                    first_line: joint_sources.get(first).and_then(|s| s.line),
+                    line: Some(joint.line),
+                    first_line: robot.joints.get(first).map(|j| j.line),
                 });
             }
             joint_index.insert(joint.name.clone(), k);
         }
 
-        let unknown = JointSource::unknown();
         let mut joint_parent = Vec::with_capacity(robot.joints.len());
         let mut joint_child = Vec::with_capacity(robot.joints.len());
-        for (k, joint) in robot.joints.iter().enumerate() {
-            let src = joint_sources.get(k).unwrap_or(&unknown);
-            let find = |role: &'static str, name: &str, line: Option<usize>| {
+        for joint in &robot.joints {
+            let find = |role: &'static str, name: &str, line: usize| {
                 link_index
                     .get(name)
                     .copied()
@@ -199,13 +131,13 @@ impl UrdfModel {
                         joint: joint.name.clone(),
                         role,
                         link: name.to_owned(),
-                        line: line.or(src.line),
+                        line: Some(line),
                     })
             };
-            joint_parent.push(find("parent", &joint.parent.link, src.parent_line)?);
-            joint_child.push(find("child", &joint.child.link, src.child_line)?);
-            check_joint(joint, src, infinite_limits_allowed, &joint_index)?;
+            joint_parent.push(find("parent", &joint.parent, joint.parent_line)?);
+            joint_child.push(find("child", &joint.child, joint.child_line)?);
         }
+        crate::mimic::check_mimics(&mut robot.joints, &joint_index);
 
         // Tree shape: one parent per link, no cycle, one root.
         let n = robot.links.len();
@@ -216,10 +148,10 @@ impl UrdfModel {
             };
             if let Some(first) = *slot {
                 return Err(UrdfError::TwoParents {
-                    link: name_of(&robot.links, child, |l| &l.name),
-                    first: name_of(&robot.joints, first, |j| &j.name),
-                    second: name_of(&robot.joints, k, |j| &j.name),
-                    line: joint_sources.get(k).and_then(|s| s.line),
+                    link: link_name_of(&robot, child),
+                    first: joint_name_of(&robot, first),
+                    second: joint_name_of(&robot, k),
+                    line: robot.joints.get(k).map(|j| j.line),
                 });
             }
             *slot = Some(k);
@@ -236,9 +168,7 @@ impl UrdfModel {
             .filter(|&i| parent_joint.get(i).is_some_and(|p| p.is_none()))
             .collect();
         let link_names = |idx: &[usize]| -> Vec<String> {
-            idx.iter()
-                .map(|&i| name_of(&robot.links, i, |l| &l.name))
-                .collect()
+            idx.iter().map(|&i| link_name_of(&robot, i)).collect()
         };
         if let Some(cycle) = cycle {
             let links = link_names(&cycle);
@@ -252,8 +182,8 @@ impl UrdfModel {
                 .unwrap_or(0);
             return Err(UrdfError::Cycle {
                 links,
-                joint: name_of(&robot.joints, joint, |j| &j.name),
-                line: joint_sources.get(joint).and_then(|s| s.line),
+                joint: joint_name_of(&robot, joint),
+                line: robot.joints.get(joint).map(|j| j.line),
             });
         }
         let root = match roots.as_slice() {
@@ -274,8 +204,6 @@ impl UrdfModel {
             robot,
             link_index,
             joint_index,
-            link_lines,
-            joint_sources,
             joint_parent,
             joint_child,
             parent_joint,
@@ -284,15 +212,59 @@ impl UrdfModel {
         })
     }
 
+    /// Warnings of the reading: faults of visuals, collisions, materials and inertials (each
+    /// ignored, as urdfdom ignores them), and the fault of every joint that has one (an error
+    /// from [`UrdfModel::chain`] for a chain through that joint). At most
+    /// [`MAX_WARNINGS`](crate::MAX_WARNINGS) are listed, then one saying how many more.
+    pub fn warnings(&self) -> Vec<Warning> {
+        self.collect_warnings(|_| true, "an error on a chain through it")
+    }
+
+    /// The warnings that concern `chain` (taken from this model): those of
+    /// [`UrdfModel::warnings`], with the faults of joints off the chain (a joint on it has
+    /// none, or the chain would have been refused).
+    pub fn warnings_for(&self, chain: &Chain) -> Vec<Warning> {
+        let on: std::collections::HashSet<&str> =
+            chain.joints().iter().map(String::as_str).collect();
+        let note = format!(
+            "ignored: not on the chain from '{}' to '{}'",
+            chain.base(),
+            chain.tip()
+        );
+        self.collect_warnings(|j| !on.contains(j), &note)
+    }
+
+    fn collect_warnings(&self, include: impl Fn(&str) -> bool, note: &str) -> Vec<Warning> {
+        let mut out = self.robot.warnings.clone();
+        let mut more = self.robot.more_warnings;
+        for j in &self.robot.joints {
+            let Some(fault) = &j.fault else { continue };
+            if !include(&j.name) {
+                continue;
+            }
+            if out.len() < read::MAX_WARNINGS {
+                out.push(Warning {
+                    element: format!("joint '{}'", j.name),
+                    line: Some(j.line),
+                    message: format!("{} ({note})", fault_summary(j, fault)),
+                });
+            } else {
+                more += 1;
+            }
+        }
+        if more > 0 {
+            out.push(Warning {
+                element: format!("robot '{}'", self.robot.name),
+                line: None,
+                message: format!("{more} more warnings not shown"),
+            });
+        }
+        out
+    }
+
     /// The `name` attribute of `<robot>` (empty when absent).
     pub fn robot_name(&self) -> &str {
         &self.robot.name
-    }
-
-    /// The robot as urdf-rs parsed it (with urdf-rs's defaults filled in: a missing `<origin>`
-    /// is the identity, a missing `<axis>` is `1 0 0`, a missing `<limit>` is all zeros).
-    pub fn robot(&self) -> &Robot {
-        &self.robot
     }
 
     /// The root link: the one link that is no joint's child.
@@ -324,19 +296,22 @@ impl UrdfModel {
     /// known.
     pub fn link_line(&self, link: &str) -> Option<usize> {
         let &i = self.link_index.get(link)?;
-        line_at(&self.link_lines, i)
+        self.robot.links.get(i).map(|l| l.line)
     }
 
     /// The 1-based source line of `<joint name="joint"`, when the joint exists and its line is
     /// known.
     pub fn joint_line(&self, joint: &str) -> Option<usize> {
         let &k = self.joint_index.get(joint)?;
-        self.joint_sources.get(k).and_then(|s| s.line)
+        self.robot.joints.get(k).map(|j| j.line)
     }
 
     /// Chooses a serial chain from `base` down to `tip` (link names).
     ///
-    /// `base` defaults to the root link. `tip` defaults to the only leaf link below the base.
+    /// `base` defaults to the root link. `tip` defaults to the end of the arm below the base:
+    /// the leaf at the end of the longest run of moving joints, preferring a tool-like fixed
+    /// link (`tool0`, `flange`...) off the last moving link, and the hand link when the
+    /// longest runs are the fingers of one gripper (the rule is in the `tip` module's docs).
     /// Fixed joints between them are folded into the neighbouring transforms; every revolute,
     /// continuous and prismatic joint becomes one axis of the chain. Frames: everything the
     /// chain returns is in the base link's frame, metres and radians.
@@ -344,7 +319,14 @@ impl UrdfModel {
     /// # Errors
     /// - [`UrdfError::UnknownLink`] for a base or tip the URDF does not define (with close
     ///   names, or every link when there are few);
-    /// - [`UrdfError::SeveralLeaves`] when no tip is given and several leaves lie below the base;
+    /// - [`UrdfError::SeveralLeaves`] when no tip is given and the longest runs of moving
+    ///   joints below the base end at several places (two arms, a humanoid);
+    /// - the fault of a joint on the chain (its type, numbers, limits or mimic:
+    ///   [`UrdfError::Parse`], [`UrdfError::UnsupportedJointType`], [`UrdfError::NonFinite`],
+    ///   [`UrdfError::OutOfRange`], [`UrdfError::ZeroAxis`], [`UrdfError::MissingLimit`],
+    ///   [`UrdfError::LimitsReversed`], [`UrdfError::ControlCharacterInName`],
+    ///   [`UrdfError::UnknownMimicJoint`], [`UrdfError::MimicItself`],
+    ///   [`UrdfError::MimicCycle`], [`UrdfError::MimicOfFixed`]);
     /// - [`UrdfError::Disconnected`] when the tip is not below the base;
     /// - [`UrdfError::JointTypeInChain`] for a floating or planar joint between them;
     /// - [`UrdfError::NoMovingJoint`] when only fixed joints (or none) join them;
@@ -356,9 +338,17 @@ impl UrdfModel {
         };
         let tip = match tip {
             Some(name) => self.find_link(name, "tip")?,
-            None => self.only_leaf_below(base)?,
+            None => self.default_tip(base)?,
         };
         let path = self.path(base, tip)?;
+        // A fault of a joint's own content is an error on the chain (a warning off it).
+        if let Some(fault) = path
+            .iter()
+            .filter_map(|&k| self.robot.joints.get(k))
+            .find_map(|j| j.fault.as_ref())
+        {
+            return Err(fault.clone());
+        }
         Chain::build(self, base, tip, &path)
     }
 
@@ -368,6 +358,10 @@ impl UrdfModel {
             .get(link)
             .map(|l| l.name.as_str())
             .unwrap_or("")
+    }
+
+    pub(crate) fn link_index_of(&self, link: &str) -> Option<usize> {
+        self.link_index.get(link).copied()
     }
 
     pub(crate) fn joint_index_of(&self, joint: &str) -> Option<usize> {
@@ -398,40 +392,13 @@ impl UrdfModel {
         })
     }
 
-    fn only_leaf_below(&self, base: usize) -> Result<usize, UrdfError> {
-        let mut leaves = Vec::new();
-        let mut stack = vec![base];
-        while let Some(link) = stack.pop() {
-            let children = self
-                .child_joints
-                .get(link)
-                .map(Vec::as_slice)
-                .unwrap_or(&[]);
-            if children.is_empty() {
-                leaves.push(link);
-            }
-            stack.extend(children.iter().filter_map(|&j| self.joint_child.get(j)));
-        }
-        leaves.sort_unstable();
-        match leaves.as_slice() {
-            [leaf] => Ok(*leaf),
-            _ => Err(UrdfError::SeveralLeaves {
-                base: self.link_name(base).to_owned(),
-                leaves: leaves
-                    .iter()
-                    .map(|&l| self.link_name(l).to_owned())
-                    .collect(),
-            }),
-        }
-    }
-
     /// Whether `below` lies in the subtree of `above` (or is it).
     fn is_below(&self, below: usize, above: usize) -> bool {
         self.ancestors(below).any(|l| l == above)
     }
 
     /// `link`, its parent, its grandparent, ..., the root.
-    fn ancestors(&self, link: usize) -> impl Iterator<Item = usize> + '_ {
+    pub(crate) fn ancestors(&self, link: usize) -> impl Iterator<Item = usize> + '_ {
         std::iter::successors(Some(link), move |&l| {
             let j = self.parent_joint.get(l).copied().flatten()?;
             self.joint_parent.get(j).copied()
@@ -467,37 +434,20 @@ impl UrdfModel {
     }
 }
 
-/// Refuses a link or joint name holding a control character (see
-/// [`UrdfError::ControlCharacterInName`]).
-fn check_name(kind: &'static str, name: &str, line: Option<usize>) -> Result<(), UrdfError> {
-    match name.chars().enumerate().find(|(_, c)| c.is_control()) {
-        Some((k, c)) => Err(UrdfError::ControlCharacterInName {
-            kind,
-            name: format!("{name:?}").trim_matches('"').to_owned(),
-            code: format!("U+{:04X}", u32::from(c)),
-            position: k + 1,
-            line,
-        }),
-        None => Ok(()),
-    }
+fn link_name_of(robot: &Robot, i: usize) -> String {
+    robot
+        .links
+        .get(i)
+        .map(|l| l.name.clone())
+        .unwrap_or_default()
 }
 
-fn line_at(lines: &[Option<usize>], i: usize) -> Option<usize> {
-    lines.get(i).copied().flatten()
-}
-
-fn name_of<T>(items: &[T], i: usize, name: impl Fn(&T) -> &String) -> String {
-    items.get(i).map(|t| name(t).clone()).unwrap_or_default()
-}
-
-/// `version="1.2"` or later: omitted limits are infinite by definition (urdf-rs follows it).
-fn version_at_least_1_2(version: Option<&str>) -> bool {
-    version
-        .and_then(|v| {
-            let (major, minor) = v.trim().split_once('.')?;
-            Some((major.parse::<u32>().ok()?, minor.parse::<u32>().ok()?))
-        })
-        .is_some_and(|v| v >= (1, 2))
+fn joint_name_of(robot: &Robot, k: usize) -> String {
+    robot
+        .joints
+        .get(k)
+        .map(|j| j.name.clone())
+        .unwrap_or_default()
 }
 
 /// A cycle of links (each the parent of the next, the first repeated at the end), found by
@@ -538,157 +488,6 @@ fn find_cycle(n: usize, parent: impl Fn(usize) -> Option<usize>) -> Option<Vec<u
         }
     }
     None
-}
-
-/// Largest magnitude of an origin coordinate (metres), a limit (radians or metres) or a mimic
-/// number: far beyond any robot, and far enough from overflow that every unit conversion and
-/// composition stays finite.
-pub(crate) const MAX_MAGNITUDE: f64 = 1e9;
-
-/// Checks one joint's type, numbers, limits and mimic.
-fn check_joint(
-    joint: &urdf_rs::Joint,
-    src: &JointSource,
-    infinite_limits_allowed: bool,
-    joint_index: &HashMap<String, usize>,
-) -> Result<(), UrdfError> {
-    let name = || joint.name.clone();
-    let (moving, limited) = match joint.joint_type {
-        JointType::Revolute => (true, Some("revolute")),
-        JointType::Prismatic => (true, Some("prismatic")),
-        JointType::Continuous => (true, None),
-        JointType::Fixed | JointType::Floating | JointType::Planar => (false, None),
-        JointType::Spherical => {
-            return Err(UrdfError::UnsupportedJointType {
-                joint: name(),
-                found: "spherical".into(),
-                line: src.line,
-            })
-        }
-    };
-    let finite = |what: &'static str, value: f64, line: Option<usize>| {
-        if value.is_finite() {
-            Ok(())
-        } else {
-            Err(UrdfError::NonFinite {
-                joint: name(),
-                what,
-                value,
-                line: line.or(src.line),
-            })
-        }
-    };
-    for (what, v, line) in [
-        ("origin xyz", joint.origin.xyz.0, src.origin_line),
-        ("origin rpy", joint.origin.rpy.0, src.origin_line),
-        ("axis xyz", joint.axis.xyz.0, src.axis_line),
-    ] {
-        for x in v {
-            finite(what, x, line)?;
-        }
-    }
-    // Found by fuzzing: an origin of 1e306 m is finite, but its table printed in millimetres is
-    // not. No robot needs lengths or limits beyond MAX_MAGNITUDE.
-    let limits = [
-        ("limit lower", joint.limit.lower),
-        ("limit upper", joint.limit.upper),
-    ];
-    let mimic = joint.mimic.as_ref().map_or([None, None], |m| {
-        [
-            m.multiplier.map(|v| ("mimic multiplier", v)),
-            m.offset.map(|v| ("mimic offset", v)),
-        ]
-    });
-    for (what, v, line) in joint
-        .origin
-        .xyz
-        .0
-        .iter()
-        .map(|&v| ("origin xyz", v, src.origin_line))
-        .chain(limits.into_iter().map(|(w, v)| (w, v, src.limit_line)))
-        .chain(
-            mimic
-                .into_iter()
-                .flatten()
-                .map(|(w, v)| (w, v, src.mimic_line)),
-        )
-    {
-        if v.is_finite() && v.abs() > MAX_MAGNITUDE {
-            return Err(UrdfError::OutOfRange {
-                joint: name(),
-                what,
-                value: v,
-                line: line.or(src.line),
-            });
-        }
-    }
-    for (what, raw, line) in &src.raw_vectors {
-        if raw.split_whitespace().any(|t| t.parse::<f64>().is_err()) {
-            return Err(UrdfError::Parse {
-                message: format!(
-                    "joint '{}': {what}: expected 3 numbers, found '{}'",
-                    joint.name,
-                    raw.trim()
-                ),
-                line: line.or(src.line),
-            });
-        }
-    }
-    let axis = joint.axis.xyz.0;
-    if moving && crate::chain::unit_axis(axis).is_none() {
-        return Err(UrdfError::ZeroAxis {
-            joint: name(),
-            axis,
-            line: src.axis_line.or(src.line),
-        });
-    }
-    if let Some(kind) = limited {
-        if !src.has_limit {
-            return Err(UrdfError::MissingLimit {
-                joint: name(),
-                kind,
-                line: src.line,
-            });
-        }
-        let (lower, upper) = (joint.limit.lower, joint.limit.upper);
-        for (what, v) in [("limit lower", lower), ("limit upper", upper)] {
-            if v.is_nan() || v.is_infinite() && !infinite_limits_allowed {
-                finite(what, v, src.limit_line)?;
-            }
-        }
-        if lower > upper {
-            return Err(UrdfError::LimitsReversed {
-                joint: name(),
-                lower,
-                upper,
-                line: src.limit_line.or(src.line),
-            });
-        }
-    }
-    if let Some(m) = &joint.mimic {
-        for (what, v) in [
-            ("mimic multiplier", m.multiplier),
-            ("mimic offset", m.offset),
-        ] {
-            if let Some(v) = v {
-                finite(what, v, src.mimic_line)?;
-            }
-        }
-        if m.joint == joint.name {
-            return Err(UrdfError::MimicItself {
-                joint: name(),
-                line: src.mimic_line.or(src.line),
-            });
-        }
-        if !joint_index.contains_key(&m.joint) {
-            return Err(UrdfError::UnknownMimicJoint {
-                joint: name(),
-                driver: m.joint.clone(),
-                line: src.mimic_line.or(src.line),
-            });
-        }
-    }
-    Ok(())
 }
 
 /// Links to suggest for an unknown name: all of them when there are few, else the closest.
@@ -762,15 +561,6 @@ mod tests {
         assert_eq!(c.first().map(String::as_str), Some("link_3"));
         assert!(c.len() <= 5);
         assert!(candidates("zzzzzzzzzz", &refs).is_empty());
-    }
-
-    #[test]
-    fn versions() {
-        assert!(!version_at_least_1_2(None));
-        assert!(!version_at_least_1_2(Some("1.1")));
-        assert!(version_at_least_1_2(Some("1.2")));
-        assert!(version_at_least_1_2(Some(" 2.0")));
-        assert!(!version_at_least_1_2(Some("garbage")));
     }
 
     #[test]

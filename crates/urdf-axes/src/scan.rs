@@ -1,65 +1,76 @@
-//! A small XML scanner for what urdf-rs does not keep.
+//! The XML scanner: the one parse of a URDF.
 //!
-//! urdf-rs deserialises into plain structs: it forgets source lines, cannot tell a missing
-//! `<limit>` from `<limit lower="0" upper="0">`, reads only the first of several root elements,
-//! accepts any root element name, and its XML backend recurses once per nesting level (a deeply
-//! nested document overflows the stack). This scanner runs first, in one linear pass without
-//! recursion and without expanding anything: it refuses entity declarations and excessive
-//! nesting, checks the document's shape, and records every element with its line.
+//! One linear pass without recursion and without expanding anything: it refuses entity
+//! declarations, excessive nesting, characters XML forbids, unknown entity references and raw
+//! `<` in attribute values, checks the document's shape, and records with its line every
+//! element a URDF reader needs: the root, its `<link>`, `<joint>` and `<material>` children and
+//! everything inside them. Other elements (`<gazebo>`, `<transmission>`, vendor extensions)
+//! are checked for well-formedness and dropped at once, so memory stays proportional to the
+//! kept part of the document. Names and attribute values borrow from the text.
+
+use std::borrow::Cow;
 
 /// Deepest element nesting accepted. A URDF needs about six levels (robot, link, visual,
 /// geometry, mesh); vendor extensions (`<gazebo>` plugins) a few more.
 pub(crate) const MAX_DEPTH: usize = 100;
 
+/// Most attributes accepted on one element: a URDF element has at most a dozen, and the
+/// duplicate check must not turn quadratic on a hostile file.
+pub(crate) const MAX_ATTRIBUTES: usize = 256;
+
+/// Top-level elements kept for the model; the others are checked and dropped.
+const KEPT: [&str; 3] = ["link", "joint", "material"];
+
 /// One element of the document.
 #[derive(Debug)]
-pub(crate) struct Element {
+pub(crate) struct Element<'a> {
     /// Tag name, with any namespace prefix.
-    pub name: String,
+    pub name: &'a str,
     /// Attributes in source order, values with the predefined and numeric character
     /// references decoded.
-    pub attrs: Vec<(String, String)>,
+    pub attrs: Vec<(&'a str, Cow<'a, str>)>,
     /// 1-based line of the `<`.
     pub line: usize,
     /// Child elements (indices into [`Doc::elements`]).
     pub children: Vec<usize>,
 }
 
-impl Element {
+impl Element<'_> {
     /// The value of attribute `name`.
     pub fn attr(&self, name: &str) -> Option<&str> {
         self.attrs
             .iter()
-            .find(|(k, _)| k == name)
-            .map(|(_, v)| v.as_str())
+            .find(|(k, _)| *k == name)
+            .map(|(_, v)| v.as_ref())
     }
 }
 
-/// The scanned document: every element, the root first.
+/// The scanned document: the kept elements, the root first.
 #[derive(Debug)]
-pub(crate) struct Doc {
-    /// Elements in document order; index 0 is the root.
-    pub elements: Vec<Element>,
+pub(crate) struct Doc<'a> {
+    /// Kept elements in document order; index 0 is the root.
+    pub elements: Vec<Element<'a>>,
 }
 
-impl Doc {
+impl<'a> Doc<'a> {
     /// The element at `index`.
-    pub fn get(&self, index: usize) -> Option<&Element> {
+    pub fn get(&self, index: usize) -> Option<&Element<'a>> {
         self.elements.get(index)
     }
 
     /// The root element.
-    #[cfg(test)]
-    pub fn root(&self) -> Option<&Element> {
+    pub fn root(&self) -> Option<&Element<'a>> {
         self.elements.first()
     }
 
     /// Indices of the root's children named `name`, in document order.
+    #[cfg(test)]
     pub fn top_level(&self, name: &str) -> Vec<usize> {
         self.children_named(0, name)
     }
 
     /// Indices of the children of `parent` named `name`, in document order.
+    #[cfg(test)]
     pub fn children_named(&self, parent: usize, name: &str) -> Vec<usize> {
         self.get(parent)
             .map(|p| {
@@ -73,14 +84,15 @@ impl Doc {
     }
 
     /// The first child of `parent` named `name`.
-    pub fn child(&self, parent: usize, name: &str) -> Option<&Element> {
+    #[cfg(test)]
+    pub fn child(&self, parent: usize, name: &str) -> Option<&Element<'a>> {
         self.children_named(parent, name)
             .first()
             .and_then(|&c| self.get(c))
     }
 }
 
-/// Why a document was refused before urdf-rs saw it.
+/// Why a document was refused by the scan.
 #[derive(Debug, PartialEq)]
 pub(crate) enum ScanError {
     /// A `<!ENTITY` declaration (refused: entity expansion can exhaust memory).
@@ -154,20 +166,82 @@ fn is_name_end(b: u8) -> bool {
     b.is_ascii_whitespace() || b == b'/' || b == b'>' || b == b'='
 }
 
+/// Lines of offsets met in increasing order, counted as the scan goes (no index of the whole
+/// text is built).
+struct LineCounter<'t> {
+    bytes: &'t [u8],
+    offset: usize,
+    line: usize,
+}
+
+impl LineCounter<'_> {
+    /// 1-based line of byte `offset`.
+    fn line_of(&mut self, offset: usize) -> usize {
+        if offset < self.offset {
+            self.offset = 0;
+            self.line = 1;
+        }
+        let newlines = self
+            .bytes
+            .get(self.offset..offset)
+            .map_or(0, |s| s.iter().filter(|&&c| c == b'\n').count());
+        self.line += newlines;
+        self.offset = offset;
+        self.line
+    }
+}
+
+/// The first character XML 1.0 forbids (a C0 control other than tab, line feed and carriage
+/// return): its offset and code.
+fn forbidden_character(b: &[u8]) -> Option<(usize, u8)> {
+    b.iter()
+        .position(|&c| c < 0x20 && !matches!(c, b'\t' | b'\n' | b'\r'))
+        .and_then(|i| b.get(i).map(|&c| (i, c)))
+}
+
+/// 1-based column (in characters) of byte `offset` within its line.
+fn column_of(text: &str, offset: usize) -> usize {
+    let before = text.get(..offset).unwrap_or("");
+    let start = before.rfind('\n').map_or(0, |i| i + 1);
+    before.get(start..).map_or(0, |s| s.chars().count()) + 1
+}
+
+/// An open element: its name, line and index among the kept elements (if kept).
+struct Open<'a> {
+    name: &'a str,
+    line: usize,
+    kept: Option<usize>,
+}
+
 /// Scans `text` as a URDF document.
 ///
 /// # Errors
 /// [`ScanError::Entity`] for an entity declaration; [`ScanError::Malformed`] for anything that
 /// is not one well-formed `<robot>` element (unclosed or mismatched tags, text or a second
-/// element outside the root, nesting deeper than [`MAX_DEPTH`]).
-pub(crate) fn scan(text: &str) -> Result<Doc, ScanError> {
+/// element outside the root, nesting deeper than [`MAX_DEPTH`], a character XML forbids, an
+/// unknown entity reference, a raw `<` in an attribute value, more than [`MAX_ATTRIBUTES`]
+/// attributes on one element, a double dash inside a comment).
+pub(crate) fn scan(text: &str) -> Result<Doc<'_>, ScanError> {
     let b = text.as_bytes();
-    let lines = Lines::new(b);
+    let mut lines = LineCounter {
+        bytes: b,
+        offset: 0,
+        line: 1,
+    };
+    if let Some((at, c)) = forbidden_character(b) {
+        return Err(malformed(
+            format!(
+                "expected xml text, found the control character U+{c:04X} (column {}), which xml forbids",
+                column_of(text, at)
+            ),
+            lines.line_of(at),
+        ));
+    }
     let find =
         |from: usize, pat: &str| text.get(from..).and_then(|s| s.find(pat)).map(|i| i + from);
 
     let mut elements: Vec<Element> = Vec::new();
-    let mut stack: Vec<usize> = Vec::new();
+    let mut stack: Vec<Open> = Vec::new();
     let mut root_closed = false;
     let mut i = 0;
     while i < b.len() {
@@ -200,6 +274,20 @@ pub(crate) fn scan(text: &str) -> Result<Doc, ScanError> {
                     line,
                 )
             })?;
+            // XML forbids "--" inside a comment (and a comment ending in "--->").
+            if let Some(k) = text.get(lt + 4..end).and_then(|c| {
+                c.find("--")
+                    .or_else(|| c.ends_with('-').then(|| c.len() - 1))
+            }) {
+                let at = lt + 4 + k;
+                return Err(malformed(
+                    format!(
+                        "no more than one adjacent '-' allowed in a comment (column {})",
+                        column_of(text, at + 2)
+                    ),
+                    lines.line_of(at),
+                ));
+            }
             i = end + 3;
         } else if rest.starts_with("<![CDATA[") {
             let end = find(lt + 9, "]]>").ok_or_else(|| {
@@ -224,7 +312,7 @@ pub(crate) fn scan(text: &str) -> Result<Doc, ScanError> {
             })?;
             i = end + 2;
         } else if rest.starts_with("<!") {
-            i = declaration(text, lt, &lines)?;
+            i = declaration(text, lt, &mut lines)?;
         } else if rest.starts_with("</") {
             let start = lt + 2;
             let mut j = start;
@@ -237,8 +325,7 @@ pub(crate) fn scan(text: &str) -> Result<Doc, ScanError> {
                     line,
                 ));
             }
-            let open = stack.pop().and_then(|k| elements.get(k));
-            match open {
+            match stack.pop() {
                 None => {
                     return Err(malformed(
                         format!("expected an opening tag, found </{name}> with no open element"),
@@ -261,38 +348,51 @@ pub(crate) fn scan(text: &str) -> Result<Doc, ScanError> {
             }
             i = j + 1;
         } else {
-            let (element, end, self_closing) = start_tag(text, lt, line)?;
-            let index = elements.len();
-            match stack.last() {
-                Some(&parent) => {
-                    if let Some(p) = elements.get_mut(parent) {
-                        p.children.push(index);
+            // Kept: the root, its link/joint/material children, and everything inside those.
+            let parent = stack.last();
+            let (name, attrs, end, self_closing) = start_tag(text, lt, line)?;
+            let kept = match parent {
+                Some(p) => {
+                    let keep = p.kept.is_some_and(|k| k != 0 || KEPT.contains(&name));
+                    match (keep, p.kept) {
+                        (true, Some(pk)) => {
+                            let index = elements.len();
+                            if let Some(pe) = elements.get_mut(pk) {
+                                pe.children.push(index);
+                            }
+                            Some(index)
+                        }
+                        _ => None,
                     }
                 }
                 None if root_closed || !elements.is_empty() => {
                     return Err(malformed(
-                        format!(
-                            "expected one root element, found a second one <{}>",
-                            element.name
-                        ),
+                        format!("expected one root element, found a second one <{name}>"),
                         line,
                     ))
                 }
-                None if element.name != "robot" => {
+                None if name != "robot" => {
                     return Err(malformed(
-                        format!("expected a <robot> root element, found <{}>", element.name),
+                        format!("expected a <robot> root element, found <{name}>"),
                         line,
                     ))
                 }
-                None => {}
+                None => Some(0),
+            };
+            if kept.is_some() {
+                elements.push(Element {
+                    name,
+                    attrs: attrs.into_iter().map(|(k, v)| (k, decode(v))).collect(),
+                    line,
+                    children: Vec::new(),
+                });
             }
-            elements.push(element);
             if self_closing {
                 if stack.is_empty() {
                     root_closed = true;
                 }
             } else {
-                stack.push(index);
+                stack.push(Open { name, line, kept });
                 if stack.len() > MAX_DEPTH {
                     return Err(malformed(
                         format!("expected elements nested at most {MAX_DEPTH} deep, found deeper"),
@@ -303,7 +403,7 @@ pub(crate) fn scan(text: &str) -> Result<Doc, ScanError> {
             i = end;
         }
     }
-    if let Some(e) = stack.last().and_then(|&k| elements.get(k)) {
+    if let Some(e) = stack.last() {
         return Err(malformed(
             format!(
                 "expected </{}> closing the <{}> of line {}, found end of file",
@@ -336,7 +436,7 @@ fn found_at(text: &str, at: usize) -> String {
 
 /// Skips a `<!DOCTYPE ...>` (or other `<!...>`) declaration starting at `lt`, refusing entity
 /// declarations; returns the offset after it.
-fn declaration(text: &str, lt: usize, lines: &Lines) -> Result<usize, ScanError> {
+fn declaration(text: &str, lt: usize, lines: &mut LineCounter) -> Result<usize, ScanError> {
     let b = text.as_bytes();
     let mut depth = 0usize;
     let mut quote: Option<u8> = None;
@@ -372,13 +472,15 @@ fn declaration(text: &str, lt: usize, lines: &Lines) -> Result<usize, ScanError>
     ))
 }
 
-/// Parses the start tag at `lt`; returns the element, the offset after the tag and whether it
-/// closes itself.
-fn start_tag(text: &str, lt: usize, line: usize) -> Result<(Element, usize, bool), ScanError> {
+/// A start tag's name and raw attributes, the offset after it and whether it closes itself.
+type StartTag<'a> = (&'a str, Vec<(&'a str, &'a str)>, usize, bool);
+
+/// Parses the start tag at `lt`.
+fn start_tag(text: &str, lt: usize, line: usize) -> Result<StartTag<'_>, ScanError> {
     let b = text.as_bytes();
     let mut j = lt + 1;
     j = skip(b, j, |c| !is_name_end(c));
-    let name = text.get(lt + 1..j).unwrap_or("").to_owned();
+    let name = text.get(lt + 1..j).unwrap_or("");
     if name.is_empty() {
         return Err(malformed(
             format!(
@@ -388,7 +490,7 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<(Element, usize, bool
             line,
         ));
     }
-    let mut attrs = Vec::new();
+    let mut attrs: Vec<(&str, &str)> = Vec::new();
     loop {
         j = skip(b, j, |c| c.is_ascii_whitespace());
         match b.get(j) {
@@ -398,10 +500,10 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<(Element, usize, bool
                     line,
                 ))
             }
-            Some(b'>') => return Ok((element(name, attrs, line), j + 1, false)),
+            Some(b'>') => return Ok((name, attrs, j + 1, false)),
             Some(b'/') => {
                 if b.get(j + 1) == Some(&b'>') {
-                    return Ok((element(name, attrs, line), j + 2, true));
+                    return Ok((name, attrs, j + 2, true));
                 }
                 return Err(malformed(
                     format!(
@@ -415,7 +517,7 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<(Element, usize, bool
         }
         let start = j;
         j = skip(b, j, |c| !is_name_end(c));
-        let key = text.get(start..j).unwrap_or("").to_owned();
+        let key = text.get(start..j).unwrap_or("");
         j = skip(b, j, |c| c.is_ascii_whitespace());
         if key.is_empty() || b.get(j) != Some(&b'=') {
             return Err(malformed(
@@ -453,56 +555,89 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<(Element, usize, bool
                     line,
                 )
             })?;
+        let value = text.get(vstart..vend).unwrap_or("");
+        if value.contains('<') {
+            return Err(malformed(
+                format!(
+                    "attribute '{key}' of <{name}>: expected '&lt;' for a '<' in a value, found a raw '<'"
+                ),
+                line,
+            ));
+        }
+        if let Some(bad) = bad_reference(value) {
+            return Err(malformed(
+                format!("attribute '{key}' of <{name}>: expected a known entity reference, found '{bad}'"),
+                line,
+            ));
+        }
+        if attrs.len() >= MAX_ATTRIBUTES {
+            return Err(malformed(
+                format!("expected at most {MAX_ATTRIBUTES} attributes in <{name}>, found more"),
+                line,
+            ));
+        }
         if attrs.iter().any(|(k, _)| *k == key) {
             return Err(malformed(
                 format!("expected attribute '{key}' once in <{name}>, found it twice"),
                 line,
             ));
         }
-        attrs.push((key, decode(text.get(vstart..vend).unwrap_or(""))));
+        attrs.push((key, value));
         j = vend + 1;
     }
 }
 
-fn element(name: String, attrs: Vec<(String, String)>, line: usize) -> Element {
-    Element {
-        name,
-        attrs,
-        line,
-        children: Vec::new(),
-    }
+/// The character a reference (`lt`, `#65`, `#x41`) stands for.
+fn reference(name: &str) -> Option<char> {
+    Some(match name {
+        "lt" => '<',
+        "gt" => '>',
+        "amp" => '&',
+        "quot" => '"',
+        "apos" => '\'',
+        _ => {
+            let code = if let Some(hex) = name.strip_prefix("#x") {
+                u32::from_str_radix(hex, 16).ok()?
+            } else {
+                name.strip_prefix('#')?.parse().ok()?
+            };
+            char::from_u32(code)?
+        }
+    })
 }
 
-/// Decodes the predefined entities and numeric character references; anything else is kept.
-fn decode(raw: &str) -> String {
+/// The first `&...` of `raw` that is not a predefined entity or a character reference.
+fn bad_reference(raw: &str) -> Option<String> {
+    let mut rest = raw;
+    while let Some(amp) = rest.find('&') {
+        let tail = rest.get(amp..).unwrap_or("");
+        let ok = tail
+            .find(';')
+            .and_then(|s| tail.get(1..s))
+            .and_then(reference)
+            .is_some();
+        if !ok {
+            return Some(excerpt(tail.split(';').next().unwrap_or(tail)));
+        }
+        rest = tail.get(1..).unwrap_or("");
+    }
+    None
+}
+
+/// Decodes the predefined entities and numeric character references (checked by
+/// [`bad_reference`] when the tag was read).
+fn decode(raw: &str) -> Cow<'_, str> {
     if !raw.contains('&') {
-        return raw.to_owned();
+        return Cow::Borrowed(raw);
     }
     let mut out = String::with_capacity(raw.len());
     let mut rest = raw;
     while let Some(amp) = rest.find('&') {
         out.push_str(rest.get(..amp).unwrap_or(""));
         let tail = rest.get(amp..).unwrap_or("");
-        let semi = tail.find(';');
-        let decoded = semi.and_then(|s| {
-            let name = tail.get(1..s)?;
-            let c = match name {
-                "lt" => '<',
-                "gt" => '>',
-                "amp" => '&',
-                "quot" => '"',
-                "apos" => '\'',
-                _ => {
-                    let code = if let Some(hex) = name.strip_prefix("#x") {
-                        u32::from_str_radix(hex, 16).ok()?
-                    } else {
-                        name.strip_prefix('#')?.parse().ok()?
-                    };
-                    char::from_u32(code)?
-                }
-            };
-            Some((c, s))
-        });
+        let decoded = tail
+            .find(';')
+            .and_then(|s| Some((reference(tail.get(1..s)?)?, s)));
         match decoded {
             Some((c, s)) => {
                 out.push(c);
@@ -515,7 +650,7 @@ fn decode(raw: &str) -> String {
         }
     }
     out.push_str(rest);
-    out
+    Cow::Owned(out)
 }
 
 #[cfg(test)]

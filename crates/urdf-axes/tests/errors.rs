@@ -95,14 +95,14 @@ fn xml_that_is_not_a_robot_is_a_parse_error() {
         assert!(message.contains(piece), "{text:?}: {message}");
         assert_message(&e, &[]);
     }
-    // urdf-rs's backend recurses per level (10,000 levels overflow the stack): refused first.
+    // Nesting is bounded (a recursive reader would overflow its stack on 10,000 levels).
     let deep = format!(
         "<robot>{}{}</robot>",
         "<x>".repeat(10_000),
         "</x>".repeat(10_000)
     );
     assert!(parse_error(&parse_err(&deep)).0.contains("nested"));
-    // Just below the limit, inside a joint that urdf-rs walks, parsing works.
+    // Just below the limit, inside a joint, parsing works.
     let nested = one_joint(
         "",
         "continuous",
@@ -156,10 +156,13 @@ fn malformed_numbers_are_located() {
     let e = parse_err(&one_joint("", "continuous", &["<axis xyz=\"1 0\"/>"]));
     assert_eq!(parse_error(&e).1, Some(6));
     assert_message(&e, &["joint 'j'", "expected 3 numbers", "'1 0'", "line 6"]);
-    // urdf-rs alone would read "1 x 2 3" as 1 2 3.
+    // Every token must be a number ("1 x 2 3" is not 1 2 3).
     let e = parse_err(&one_joint("", "continuous", &["<origin xyz=\"1 x 2 3\"/>"]));
     assert_eq!(parse_error(&e).1, Some(6));
-    assert_message(&e, &["joint 'j'", "origin xyz", "'1 x 2 3'", "line 6"]);
+    assert_message(
+        &e,
+        &["joint 'j'", "<origin>", "'xyz'", "'1 x 2 3'", "line 6"],
+    );
 }
 
 #[test]
@@ -362,14 +365,13 @@ fn non_finite_numbers_anywhere() {
         assert_eq!((joint.as_str(), *w, *l), ("j", what, Some(line)));
         assert_message(&e, &["joint 'j'", what, "finite", &format!("line {line}")]);
     }
-    // A fixed joint outside any chain is checked too (urdf-rs's backend rejects NaN in limits
-    // of 1.2 documents itself, so NaN is never "no limit").
+    // Under URDF 1.2 an omitted limit is infinite, but NaN is never "no limit".
     let e = parse_err(&one_joint(
         "1.2",
         "revolute",
         &["<limit lower=\"nan\" upper=\"1\" effort=\"1\" velocity=\"1\"/>"],
     ));
-    assert_message(&e, &["joint [j]", "line 4"]);
+    assert_message(&e, &["joint 'j'", "limit lower", "NaN", "line 6"]);
 }
 
 #[test]
@@ -435,7 +437,7 @@ fn reversed_limits() {
         }
     );
     assert_message(&e, &["joint 'j'", "lower <= upper", "line 6"]);
-    // urdf-rs checks URDF 1.2 limits itself; its message is mapped to the same variant.
+    // URDF 1.2 documents too (with the line of the <limit>).
     let e = parse_err(&one_joint(
         "1.2",
         "prismatic",
@@ -447,7 +449,7 @@ fn reversed_limits() {
             joint: "j".into(),
             lower: 2.0,
             upper: 1.0,
-            line: Some(4)
+            line: Some(6)
         }
     );
 }
@@ -555,18 +557,89 @@ fn unknown_base_or_tip() {
 }
 
 #[test]
-fn several_leaves_need_a_tip() {
-    let e = tree().chain(None, None).unwrap_err();
+fn default_tip_is_the_end_of_the_longest_arm() {
+    // The arm (2 moving joints) wins over the camera (fixed).
+    assert_eq!(tree().chain(None, None).unwrap().tip(), "hand");
+    assert_eq!(tree().chain(Some("upper"), None).unwrap().tip(), "hand");
+    // Two arms of equal length: refused, listing both with their moving-joint counts.
+    let two = lines(&[
+        "<robot name=\"two\">",
+        "  <link name=\"torso\"/><link name=\"l1\"/><link name=\"l2\"/><link name=\"r1\"/><link name=\"r2\"/>",
+        "  <joint name=\"lj1\" type=\"continuous\"><parent link=\"torso\"/><child link=\"l1\"/></joint>",
+        "  <joint name=\"lj2\" type=\"continuous\"><parent link=\"l1\"/><child link=\"l2\"/></joint>",
+        "  <joint name=\"rj1\" type=\"continuous\"><parent link=\"torso\"/><child link=\"r1\"/></joint>",
+        "  <joint name=\"rj2\" type=\"continuous\"><parent link=\"r1\"/><child link=\"r2\"/></joint>",
+        "</robot>",
+    ]);
+    let e = UrdfModel::parse(&two)
+        .unwrap()
+        .chain(None, None)
+        .unwrap_err();
     assert_eq!(
         e,
         UrdfError::SeveralLeaves {
-            base: "base".into(),
-            leaves: vec!["hand".into(), "camera".into()]
+            base: "torso".into(),
+            leaves: vec!["l2".into(), "r2".into()],
+            moving: vec![2, 2],
         }
     );
-    assert_message(&e, &["'base'", "'hand'", "'camera'", "found 2"]);
-    // Below `upper` there is only one leaf.
-    assert_eq!(tree().chain(Some("upper"), None).unwrap().tip(), "hand");
+    assert_message(
+        &e,
+        &[
+            "'torso'",
+            "'l2' (2 moving joints)",
+            "'r2' (2 moving joints)",
+            "found 2",
+        ],
+    );
+}
+
+/// An arm `base -> l1 -> l2 -> l3 -> l4` (4 revolute joints) with `extra` appended inside
+/// `<robot>`.
+fn arm_with(extra: &[&str]) -> String {
+    let mut l = vec!["<robot name=\"arm\">".to_owned()];
+    l.push("<link name=\"base\"/>".into());
+    for i in 1..=4 {
+        l.push(format!("<link name=\"l{i}\"/>"));
+        l.push(format!(
+            "<joint name=\"j{i}\" type=\"continuous\"><parent link=\"{}\"/><child link=\"l{i}\"/><axis xyz=\"0 0 1\"/></joint>",
+            if i == 1 { "base".to_owned() } else { format!("l{}", i - 1) }
+        ));
+    }
+    l.extend(extra.iter().map(|s| (*s).to_owned()));
+    l.push("</robot>".into());
+    l.join("\n")
+}
+
+#[test]
+fn default_tip_prefers_a_tool_frame_and_stops_at_the_hand() {
+    // Fixed links off the last moving link: the tool-named one.
+    let m = UrdfModel::parse(&arm_with(&[
+        "<link name=\"camera\"/><link name=\"tool0\"/><link name=\"cable\"/>",
+        "<joint name=\"c\" type=\"fixed\"><parent link=\"l4\"/><child link=\"camera\"/></joint>",
+        "<joint name=\"t\" type=\"fixed\"><parent link=\"l4\"/><child link=\"tool0\"/></joint>",
+        "<joint name=\"k\" type=\"fixed\"><parent link=\"base\"/><child link=\"cable\"/></joint>",
+    ]))
+    .unwrap();
+    assert_eq!(m.chain(None, None).unwrap().tip(), "tool0");
+    // Several fixed links, none tool-like: the last moving link.
+    let m = UrdfModel::parse(&arm_with(&[
+        "<link name=\"camera\"/><link name=\"light\"/>",
+        "<joint name=\"c\" type=\"fixed\"><parent link=\"l4\"/><child link=\"camera\"/></joint>",
+        "<joint name=\"t\" type=\"fixed\"><parent link=\"l4\"/><child link=\"light\"/></joint>",
+    ]))
+    .unwrap();
+    assert_eq!(m.chain(None, None).unwrap().tip(), "l4");
+    // Two prismatic fingers (one mimics the other) off the hand: the hand's flange.
+    let m = UrdfModel::parse(&arm_with(&[
+        "<link name=\"flange\"/><link name=\"left\"/><link name=\"right\"/>",
+        "<joint name=\"f\" type=\"fixed\"><parent link=\"l4\"/><child link=\"flange\"/></joint>",
+        "<joint name=\"fl\" type=\"prismatic\"><parent link=\"l4\"/><child link=\"left\"/><limit lower=\"0\" upper=\"0.04\" effort=\"1\" velocity=\"1\"/></joint>",
+        "<joint name=\"fr\" type=\"prismatic\"><parent link=\"l4\"/><child link=\"right\"/><limit lower=\"0\" upper=\"0.04\" effort=\"1\" velocity=\"1\"/><mimic joint=\"fl\"/></joint>",
+    ]))
+    .unwrap();
+    let c = m.chain(None, None).unwrap();
+    assert_eq!((c.tip(), c.axes().len()), ("flange", 4));
 }
 
 #[test]

@@ -10,9 +10,10 @@ pub fn lines(lines: &[&str]) -> String {
     lines.join("\n")
 }
 
-/// The error of parsing `text`.
+/// The error of parsing `text` and choosing its default chain (a joint's own faults are
+/// errors only on the chosen chain).
 pub fn parse_err(text: &str) -> UrdfError {
-    match UrdfModel::parse(text) {
+    match UrdfModel::parse(text).and_then(|m| m.chain(None, None)) {
         Ok(_) => panic!("expected an error for:\n{text}"),
         Err(e) => e,
     }

@@ -1,0 +1,264 @@
+//! `urdf-dh batch`: many chains of many URDFs in one process, one JSON line per table.
+//!
+//! The list names one chain per line: `ROBOT [BASE [TIP]]` (whitespace-separated, `-` for the
+//! default, `#` starts a comment); a relative ROBOT path is relative to the list's folder. Each
+//! URDF is read and validated once however many of its chains are listed, files are spread over
+//! the machine's cores, and every table is proved as written, exactly as `extract --format json`
+//! proves it. Output order is the list's.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Result};
+use dh_core::{Convention, Tolerance};
+use serde::Serialize;
+use urdf_axes::UrdfModel;
+
+use crate::commands::extract::{extract_chain, prove_extracted, ExtractOptions};
+use crate::error::Outcome;
+use crate::input::{display_name, read_robot, read_text};
+use crate::render::Format;
+use crate::sheet::SheetDoc;
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Everything `batch` needs.
+#[derive(Clone, Debug)]
+pub struct BatchArgs {
+    /// The list of chains (a file or `-`).
+    pub list: String,
+    /// The conventions to extract each chain in.
+    pub conventions: Vec<Convention>,
+    /// Length unit of the output.
+    pub length_unit: LengthUnit,
+    /// Angle unit of the output.
+    pub angle_unit: AngleUnit,
+    /// Tolerances for the axis classification.
+    pub tolerance: Tolerance,
+    /// Joint-value samples of each proof.
+    pub samples: usize,
+    /// Seed of the sampler.
+    pub seed: u64,
+}
+
+/// One line of the list.
+#[derive(Clone, Debug)]
+struct Entry {
+    line: usize,
+    robot: String,
+    path: PathBuf,
+    base: Option<String>,
+    tip: Option<String>,
+}
+
+/// One output line.
+#[derive(Serialize)]
+struct Record<'a> {
+    /// Line of the list.
+    line: usize,
+    robot: &'a str,
+    base: Option<&'a str>,
+    tip: Option<&'a str>,
+    convention: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sheet: Option<SheetDoc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    error: Option<String>,
+}
+
+/// The result of one chain in one convention.
+#[derive(Clone)]
+enum Done {
+    Proved { sheet: Box<SheetDoc>, passed: bool },
+    Refused(String),
+}
+
+fn parse_list(text: &str, origin: &str, folder: &Path) -> Result<Vec<Entry>> {
+    let mut entries = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("");
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if fields.is_empty() {
+            continue;
+        }
+        if fields.len() > 3 {
+            bail!(
+                "{origin} (line {}): expected 'ROBOT [BASE [TIP]]', found {} fields",
+                k + 1,
+                fields.len()
+            );
+        }
+        let opt = |i: usize| {
+            fields
+                .get(i)
+                .filter(|f| **f != "-")
+                .map(|f| (*f).to_string())
+        };
+        let robot = fields[0].to_string();
+        let path = if Path::new(&robot).is_absolute() {
+            PathBuf::from(&robot)
+        } else {
+            folder.join(&robot)
+        };
+        entries.push(Entry {
+            line: k + 1,
+            robot,
+            path,
+            base: opt(1),
+            tip: opt(2),
+        });
+    }
+    if entries.is_empty() {
+        bail!("{origin}: the list names no chain; expected lines 'ROBOT [BASE [TIP]]'");
+    }
+    Ok(entries)
+}
+
+/// Every chain of one URDF file, in every convention.
+fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
+    let path = entries[0].path.to_string_lossy().into_owned();
+    let name = display_name(&path);
+    let model = read_robot(&path).and_then(|bytes| {
+        UrdfModel::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{name}: invalid URDF: {e}"))
+    });
+    entries
+        .iter()
+        .map(|entry| {
+            let model = match &model {
+                Ok(m) => m,
+                Err(e) => return vec![Done::Refused(format!("{e:#}")); args.conventions.len()],
+            };
+            args.conventions
+                .iter()
+                .map(|&convention| {
+                    let one = || -> Result<Done> {
+                        let chain = model
+                            .chain(entry.base.as_deref(), entry.tip.as_deref())
+                            .map_err(|e| anyhow::anyhow!("{name}: cannot choose the chain: {e}"))?;
+                        let options = ExtractOptions {
+                            convention,
+                            length_unit: args.length_unit,
+                            angle_unit: args.angle_unit,
+                            tolerance: args.tolerance,
+                        };
+                        let mut ex = extract_chain(model, chain, &name, &options)?;
+                        let (_, passed) =
+                            prove_extracted(&mut ex, Format::Json, args.samples, args.seed)?;
+                        Ok(Done::Proved {
+                            sheet: Box::new(ex.sheet),
+                            passed,
+                        })
+                    };
+                    one().unwrap_or_else(|e| Done::Refused(format!("{e:#}")))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Runs `batch`: one JSON line per chain and convention on `out`, a summary on `err`. Exit 0
+/// when every table is proved, 1 when one fails its proof, 2 when a chain is refused (bad
+/// input; the other chains are still written).
+///
+/// # Errors
+/// An unreadable or empty list.
+pub fn batch(args: &BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    let origin = display_name(&args.list);
+    let text = read_text(&args.list)?;
+    let folder = if args.list == "-" {
+        PathBuf::from(".")
+    } else {
+        Path::new(&args.list)
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default()
+    };
+    let entries = parse_list(&text, &origin, &folder)?;
+    // One group per file, in order of first mention; files spread over the cores.
+    let mut groups: BTreeMap<&Path, Vec<usize>> = BTreeMap::new();
+    for (i, e) in entries.iter().enumerate() {
+        groups.entry(e.path.as_path()).or_default().push(i);
+    }
+    let groups: Vec<Vec<usize>> = groups.into_values().collect();
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(groups.len())
+        .max(1);
+    let mut results: Vec<Option<Vec<Done>>> = vec![None; entries.len()];
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..workers)
+            .map(|w| {
+                let (groups, entries) = (&groups, &entries);
+                scope.spawn(move || {
+                    let mut done = Vec::new();
+                    for group in groups.iter().skip(w).step_by(workers) {
+                        let members: Vec<&Entry> = group.iter().map(|&i| &entries[i]).collect();
+                        for (i, r) in group.iter().zip(run_file(&members, args)) {
+                            done.push((*i, r));
+                        }
+                    }
+                    done
+                })
+            })
+            .collect();
+        for h in handles {
+            // A worker that panicked leaves its chains as None, reported below.
+            if let Ok(done) = h.join() {
+                for (i, r) in done {
+                    results[i] = Some(r);
+                }
+            }
+        }
+    });
+    let (mut proved, mut failed, mut refused) = (0usize, 0usize, 0usize);
+    for (entry, result) in entries.iter().zip(results) {
+        let result = result.unwrap_or_else(|| {
+            vec![
+                Done::Refused("internal error: the chain was not processed".into());
+                args.conventions.len()
+            ]
+        });
+        for (&convention, done) in args.conventions.iter().zip(result) {
+            let (sheet, error) = match done {
+                Done::Proved { sheet, passed } => {
+                    if passed {
+                        proved += 1;
+                    } else {
+                        failed += 1;
+                    }
+                    (Some(*sheet), None)
+                }
+                Done::Refused(e) => {
+                    refused += 1;
+                    (None, Some(e))
+                }
+            };
+            let record = Record {
+                line: entry.line,
+                robot: &entry.robot,
+                base: entry.base.as_deref(),
+                tip: entry.tip.as_deref(),
+                convention: convention.to_string(),
+                sheet,
+                error,
+            };
+            writeln!(out, "{}", serde_json::to_string(&record)?)?;
+        }
+    }
+    writeln!(
+        err,
+        "urdf-dh: batch: {} tables: {proved} proved, {failed} failed their proof, {refused} refused",
+        proved + failed + refused
+    )?;
+    if refused > 0 {
+        bail!(
+            "{refused} of {} tables refused (their lines carry the error)",
+            proved + failed + refused
+        );
+    }
+    Ok(if failed > 0 {
+        Outcome::Differs
+    } else {
+        Outcome::Pass
+    })
+}

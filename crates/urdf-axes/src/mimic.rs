@@ -1,0 +1,132 @@
+//! Mimic drivers over the whole model: each must exist, move, and lead to a joint that mimics
+//! none. Linear in the number of joints (each joint has at most one driver, so the drivers
+//! form a functional graph, walked once).
+
+use std::collections::HashMap;
+
+use crate::read::{Joint, JointType};
+use crate::UrdfError;
+
+/// Records in [`Joint::fault`] a mimic of an undefined joint, of a joint that does not move,
+/// or a mimic cycle (on every joint of the cycle). Joints that already have a fault keep it.
+pub(crate) fn check_mimics(joints: &mut [Joint], index: &HashMap<String, usize>) {
+    let n = joints.len();
+    // Per joint: the index of its driver, for joints whose mimic is sound so far.
+    let mut driver: Vec<Option<usize>> = vec![None; n];
+    for k in 0..n {
+        let Some(j) = joints.get(k) else { continue };
+        let Some(m) = j.mimic.as_ref().filter(|_| j.fault.is_none()) else {
+            continue;
+        };
+        let fault = match index.get(&m.joint).copied() {
+            None => Some(UrdfError::UnknownMimicJoint {
+                joint: j.name.clone(),
+                driver: m.joint.clone(),
+                line: j.mimic_line.or(Some(j.line)),
+            }),
+            Some(d) => match joints.get(d).and_then(|dj| dj.kind) {
+                Some(kind) if !kind.is_moving() => Some(UrdfError::MimicOfFixed {
+                    joint: j.name.clone(),
+                    driver: m.joint.clone(),
+                    kind: match kind {
+                        JointType::Floating => "floating",
+                        JointType::Planar => "planar",
+                        _ => "fixed",
+                    },
+                    line: j.mimic_line.or(Some(j.line)),
+                }),
+                _ => {
+                    if let Some(slot) = driver.get_mut(k) {
+                        *slot = Some(d);
+                    }
+                    None
+                }
+            },
+        };
+        if let (Some(f), Some(j)) = (fault, joints.get_mut(k)) {
+            j.fault = Some(f);
+        }
+    }
+    for cycle in cycles(&driver) {
+        let names: Vec<String> = cycle
+            .iter()
+            .filter_map(|&k| joints.get(k).map(|j| j.name.clone()))
+            .collect();
+        for (pos, &k) in cycle.iter().enumerate() {
+            // Each joint's message starts at itself: a -> b -> c -> a, b -> c -> a -> b, ...
+            let mut rotated: Vec<String> = names
+                .iter()
+                .cycle()
+                .skip(pos)
+                .take(names.len())
+                .cloned()
+                .collect();
+            if let Some(first) = rotated.first().cloned() {
+                rotated.push(first);
+            }
+            if let Some(j) = joints.get_mut(k) {
+                j.fault = Some(UrdfError::MimicCycle {
+                    joints: rotated,
+                    line: j.mimic_line.or(Some(j.line)),
+                });
+            }
+        }
+    }
+}
+
+/// The cycles of a functional graph (`next[k]` is `k`'s successor), each once, each in
+/// successor order from the first member met. Linear time.
+fn cycles(next: &[Option<usize>]) -> Vec<Vec<usize>> {
+    // 0: unvisited, 1: on the current walk, 2: done.
+    let mut state = vec![0u8; next.len()];
+    let mut out = Vec::new();
+    for start in 0..next.len() {
+        let mut walk = Vec::new();
+        let mut k = start;
+        loop {
+            match state.get(k).copied() {
+                Some(0) => {
+                    if let Some(s) = state.get_mut(k) {
+                        *s = 1;
+                    }
+                    walk.push(k);
+                    match next.get(k).copied().flatten() {
+                        Some(d) => k = d,
+                        None => break,
+                    }
+                }
+                Some(1) => {
+                    let from = walk.iter().position(|&w| w == k).unwrap_or(0);
+                    out.push(walk.get(from..).unwrap_or(&[]).to_vec());
+                    break;
+                }
+                _ => break,
+            }
+        }
+        for w in walk {
+            if let Some(s) = state.get_mut(w) {
+                *s = 2;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cycles_of_a_functional_graph() {
+        // 0 -> 1 -> 2 -> 1, 3 -> 3 is excluded upstream, 4 -> 5 -> end.
+        let next = [Some(1), Some(2), Some(1), None, Some(5), None];
+        assert_eq!(cycles(&next), vec![vec![1, 2]]);
+        let ring: Vec<Option<usize>> = (0..5).map(|k| Some((k + 1) % 5)).collect();
+        assert_eq!(cycles(&ring), vec![vec![0, 1, 2, 3, 4]]);
+        // A long chain without a cycle: linear, no stack.
+        let long: Vec<Option<usize>> = (0..100_000)
+            .map(|k| (k + 1 < 100_000).then_some(k + 1))
+            .collect();
+        assert!(cycles(&long).is_empty());
+    }
+}
