@@ -102,9 +102,10 @@ where
             };
             starts.push((base, tool));
         }
-        if !freedom.tool_free {
-            starts.push((zero.tip * (zero.chain * table.tool).inverse(), table.tool));
-        }
+        // The zero poses made to coincide with the sheet's tool (given, or the identity when
+        // free): exact for a right sheet with a given tool, and for a wrong sheet one more
+        // basin the best fit may lie in.
+        starts.push((zero.tip * (zero.chain * table.tool).inverse(), table.tool));
     } else if freedom.tool_free {
         starts.push((table.base, tool_at_zero(&table.base)));
     } else {
