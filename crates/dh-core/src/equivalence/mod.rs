@@ -503,6 +503,38 @@ mod tests {
         );
     }
 
+    /// All axes parallel (a SCARA with its quill), base free, tool given: the free base slides
+    /// along the whole run, so no `d` is observable; `a` still is.
+    #[test]
+    fn a_free_base_frees_every_d_of_an_all_parallel_chain() {
+        let truth = DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.3, -0.2, 0.1)),
+            tool: Isometry3::new(Vector3::new(0.0, 0.01, 0.05), Vector3::new(0.0, 0.0, 0.4)),
+            rows: vec![
+                DhRow::revolute("j1", 0.325, 0.0, 0.387, 0.0),
+                DhRow::revolute("j2", 0.275, PI, 0.0, 0.0),
+                DhRow::prismatic("j3", 0.0, 0.0, 0.0, 0.0),
+                DhRow::revolute("j4", 0.0, 0.0, 0.0, 0.0),
+            ],
+        };
+        let free = Freedom {
+            base_free: true,
+            tool_free: false,
+        };
+        let mut sheet = truth.clone();
+        sheet.base = Isometry3::identity();
+        sheet.rows[0].d = 0.0;
+        sheet.rows[1].d = 0.1;
+        sheet.rows[3].d = -0.05;
+        assert_eq!(named(&compare_tables(&truth, &sheet, free, tol())), []);
+        sheet.rows[1].a += 0.001;
+        assert_eq!(
+            named(&compare_tables(&truth, &sheet, free, tol())),
+            [(Some(1), Parameter::A)]
+        );
+    }
+
     /// With the base given only the signed sum of `d` along the run is observable: moving d
     /// between antiparallel joints 1 and 2 takes the same sign on both; a wrong sum is named
     /// with the run's other joints as aliases.
