@@ -14,6 +14,8 @@ use crate::commands::extract::{extract, ExtractArgs};
 use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
 use crate::commands::{calibrate, calibrate_tree, cpa, import, simulate};
 use crate::error::Outcome;
+use crate::guard;
+use crate::output::check_destinations;
 use crate::render::Format;
 use crate::sheet::ConventionDoc;
 use crate::units::{AngleUnit, LengthUnit};
@@ -152,10 +154,10 @@ struct ChainCli {
 #[derive(Debug, Args)]
 struct ToleranceCli {
     /// Common normals shorter than this count as zero (metres).
-    #[arg(long, value_name = "M", default_value_t = Tolerance::DEFAULT_LINEAR)]
+    #[arg(long, value_name = "M", default_value_t = Tolerance::DEFAULT_LINEAR, value_parser = guard::linear_tol)]
     linear_tol: f64,
     /// Axes this close to parallel count as parallel (radians).
-    #[arg(long, value_name = "RAD", default_value_t = Tolerance::DEFAULT_ANGULAR)]
+    #[arg(long, value_name = "RAD", default_value_t = Tolerance::DEFAULT_ANGULAR, value_parser = guard::angular_tol)]
     angular_tol: f64,
 }
 
@@ -186,7 +188,7 @@ struct ExtractCli {
     #[command(flatten)]
     tol: ToleranceCli,
     /// Random joint-value samples of the self-check (the zero pose is always the first).
-    #[arg(long, value_name = "N", default_value_t = 1000)]
+    #[arg(long, value_name = "N", default_value_t = 1000, value_parser = guard::samples)]
     samples: usize,
     /// Seed of the self-check's sampler.
     #[arg(long, value_name = "S", default_value_t = 0)]
@@ -200,7 +202,8 @@ struct ExtractCli {
         long,
         value_name = "Q1,Q2,...",
         value_delimiter = ',',
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = guard::joint_value
     )]
     q: Option<Vec<f64>>,
 }
@@ -246,10 +249,10 @@ struct CheckCli {
     #[command(flatten)]
     chain: ChainCli,
     /// Lengths that differ by less than this match (metres).
-    #[arg(long, value_name = "M", default_value_t = CHECK_LINEAR)]
+    #[arg(long, value_name = "M", default_value_t = CHECK_LINEAR, value_parser = guard::linear_tol)]
     linear_tol: f64,
     /// Angles that differ by less than this match (radians).
-    #[arg(long, value_name = "RAD", default_value_t = CHECK_ANGULAR)]
+    #[arg(long, value_name = "RAD", default_value_t = CHECK_ANGULAR, value_parser = guard::angular_tol)]
     angular_tol: f64,
     /// Output format.
     #[arg(long, value_enum, default_value_t = CheckFormat::Text)]
@@ -263,6 +266,10 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
+    // Every message goes through one escaping rule (guard::escape): a name quoted from a file
+    // or an argument cannot drive the terminal.
+    let mut err = crate::guard::Escaping(err);
+    let err: &mut dyn Write = &mut err;
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
@@ -282,9 +289,11 @@ where
         Ok(Outcome::Pass) => 0,
         Ok(Outcome::Differs) => 1,
         Err(e) => {
-            let _ = writeln!(err, "urdf-dh: error: {e:#}");
+            // One line each: a line feed inside a quoted name is escaped too.
+            let message = format!("{e:#}");
+            let _ = writeln!(err, "urdf-dh: error: {}", crate::guard::escape(&message));
             if let Some(h) = crate::error::hint_for(&e) {
-                let _ = writeln!(err, "hint: {h}");
+                let _ = writeln!(err, "hint: {}", crate::guard::escape(&h));
             }
             2
         }
@@ -294,6 +303,9 @@ where
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {
+            if let Some(svg) = &a.svg {
+                check_destinations(&[("ROBOT", &a.robot)], &[("--svg", svg)])?;
+            }
             let args = ExtractArgs {
                 path: a.robot,
                 base: a.chain.base,
@@ -369,6 +381,20 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
         Command::Import(a) => import::import(&a.into_args(), out, err),
         Command::Calibrate(a) => {
             let args = a.into_args();
+            let inputs: Vec<(&str, &str)> = [
+                ("--model", args.model.as_deref()),
+                ("--data", Some(args.data.as_str())),
+                ("--validate", args.validate.as_deref()),
+                ("--inertials", args.inertials.as_deref()),
+            ]
+            .into_iter()
+            .filter_map(|(o, p)| Some((o, p?)))
+            .collect();
+            let outputs: Vec<(&str, &str)> = [("--out", &args.out), ("--plot", &args.plot)]
+                .into_iter()
+                .filter_map(|(o, p)| Some((o, p.as_deref()?)))
+                .collect();
+            check_destinations(&inputs, &outputs)?;
             match calibrate_tree::tree_model(&args)? {
                 Some((tree, origin)) => {
                     calibrate_tree::calibrate_tree(&args, &tree, &origin, out, err)

@@ -53,7 +53,8 @@ pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
     Ok(buf)
 }
 
-/// Reads `path` (or `-`) as UTF-8 text.
+/// Reads `path` (or `-`) as UTF-8 text, without the byte-order mark some editors put first
+/// (the YAML parser would take it for part of the first key; URDF and JSON readers skip it).
 ///
 /// # Errors
 /// The file cannot be read or is not UTF-8 (the message gives the line of the first bad byte).
@@ -65,7 +66,10 @@ pub fn read_text(path: &str) -> Result<String> {
 ///
 /// # Errors
 /// Not UTF-8 (the message gives the line of the first bad byte).
-pub fn utf8_text(path: &str, bytes: Vec<u8>) -> Result<String> {
+pub fn utf8_text(path: &str, mut bytes: Vec<u8>) -> Result<String> {
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;

@@ -8,6 +8,7 @@
 pub mod cli;
 pub mod commands;
 pub mod error;
+pub mod guard;
 pub mod input;
 pub mod measured;
 pub mod output;

@@ -427,6 +427,65 @@ pub fn parse_effect(label: &str, table: &DhTable) -> Result<Arc<dyn Effect>> {
     })
 }
 
+/// Slack beyond a joint's limits before a measured value counts as outside them (radians, or
+/// metres for a prismatic joint): controllers report a hair past a soft limit.
+pub const LIMIT_SLACK: f64 = 1e-3;
+
+/// One warning per joint whose measured values (SI, after coupling) leave the model's limits,
+/// naming the column, the first such row's line, the value and the limits: values past the
+/// limits are what degrees read as radians (or millimetres as metres) look like when they stay
+/// below the reader's four-turn guard.
+pub fn beyond_limits(table: &DhTable, data: &Measurements, data_name: &str) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for (i, joint) in data.joint_names.iter().enumerate() {
+        let Some(row) = table.rows.iter().find(|r| &r.name == joint) else {
+            continue;
+        };
+        let Some(l) = row.limits else { continue };
+        let outside = |s: &&dh_calib::data::Sample| {
+            s.q.get(i)
+                .is_some_and(|&v| v < l.lower - LIMIT_SLACK || v > l.upper + LIMIT_SLACK)
+        };
+        let count = data.samples.iter().filter(outside).count();
+        let Some(first) = data.samples.iter().find(outside) else {
+            continue;
+        };
+        // Past a full turn (or a metre beyond the stroke) the unit is the likely fault; else
+        // the joint's zero, its direction, or the model's limits.
+        let v = first.q[i];
+        let far = match row.kind {
+            JointKind::Revolute => v.abs() > std::f64::consts::TAU,
+            JointKind::Prismatic => (v - v.clamp(l.lower, l.upper)).abs() > 1.0,
+        };
+        let (unit, hint) = match (row.kind, far) {
+            (JointKind::Revolute, true) => {
+                ("rad", "degrees labelled as radians? pass --angle-unit deg")
+            }
+            (JointKind::Prismatic, true) => {
+                ("m", "millimetres labelled as metres? pass --length-unit mm")
+            }
+            (JointKind::Revolute, false) => (
+                "rad",
+                "check the joint's zero and direction, or the model's limits",
+            ),
+            (JointKind::Prismatic, false) => (
+                "m",
+                "check the joint's zero and direction, or the model's limits",
+            ),
+        };
+        warnings.push(format!(
+            "{data_name}: line {}, column '{}': {:.4} {unit} is beyond the joint's limits [{:.4}, {:.4}] {unit} ({count} of {} samples are); {hint}",
+            first.line,
+            crate::guard::escape(joint),
+            first.q[i],
+            l.lower,
+            l.upper,
+            data.samples.len()
+        ));
+    }
+    warnings
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

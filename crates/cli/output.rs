@@ -10,6 +10,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
+use crate::error::hinted;
+
 /// Writes `bytes` to `path` atomically: into a temporary file in the target's own directory
 /// (a rename is atomic only within one file system), synced to disk, then renamed over `path`.
 ///
@@ -21,8 +23,34 @@ use anyhow::{Context, Result};
 /// The directory does not exist or is not writable, the disk is full, or `path` is a directory;
 /// the message names `path`.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_all(&[(path, bytes)])
+}
+
+/// Writes several files as one: every file is staged (written in full and synced to a
+/// temporary beside its target) before the first rename, so a failure while writing (a full
+/// disk, a vanished directory) leaves every target as it was. Only a failure of a rename itself
+/// (which moves no data) can leave the earlier targets replaced.
+///
+/// # Errors
+/// As [`write_atomically`], for the first file that fails.
+pub fn write_all(files: &[(&Path, &[u8])]) -> Result<()> {
+    let mut staged = Vec::with_capacity(files.len());
+    for (path, bytes) in files {
+        staged.push(stage(path, bytes)?);
+    }
+    for (tmp, target, shown) in staged {
+        tmp.persist(&target)
+            .map_err(|e| e.error)
+            .with_context(|| format!("{shown}: cannot write the output"))?;
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to a synced temporary file beside `path`'s target: (the temporary, the
+/// target, `path` as shown in messages).
+fn stage(path: &Path, bytes: &[u8]) -> Result<(tempfile::NamedTempFile, PathBuf, String)> {
     let target = resolve_symlink(path);
-    let shown = path.display();
+    let shown = path.display().to_string();
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -50,9 +78,105 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         tmp.as_file().sync_all()
     })();
     written.with_context(|| format!("{shown}: cannot write the output"))?;
-    tmp.persist(&target)
-        .map_err(|e| e.error)
-        .with_context(|| format!("{shown}: cannot write the output"))?;
+    Ok((tmp, target, shown))
+}
+
+/// What makes two spellings of a path the same file: the device and inode of an existing file
+/// (so hard links and symbolic links match), else the canonical directory and the file name.
+#[derive(Debug, PartialEq, Eq)]
+enum Identity {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    Path(PathBuf),
+}
+
+fn identity(path: &str) -> Option<Identity> {
+    if path == "-" {
+        return None;
+    }
+    let p = Path::new(path);
+    if let Ok(m) = std::fs::metadata(p) {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            let _ = &m;
+            return Some(Identity::Inode(m.dev(), m.ino()));
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = m;
+            return std::fs::canonicalize(p).ok().map(Identity::Path);
+        }
+    }
+    let dir = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let dir = std::fs::canonicalize(dir).ok()?;
+    Some(Identity::Path(dir.join(p.file_name()?)))
+}
+
+/// Checks a run's output files before it reads or computes anything: each output must be a
+/// new file or a plain file, in a directory that exists and can be written, and no output may
+/// be one of the inputs or another output, however spelled (`./d.csv`, a symbolic or hard
+/// link). `inputs` and `outputs` are `(option, path)`; `-` (standard input or output) is never
+/// a clash.
+///
+/// # Errors
+/// A usage error naming both options and the file, or the output that cannot be written.
+pub fn check_destinations(inputs: &[(&str, &str)], outputs: &[(&str, &str)]) -> Result<()> {
+    let ids: Vec<Option<Identity>> = inputs
+        .iter()
+        .chain(outputs)
+        .map(|(_, p)| identity(p))
+        .collect();
+    for (k, (option, path)) in outputs.iter().enumerate() {
+        let at = inputs.len() + k;
+        let shown = crate::guard::escape(path);
+        if let Some(id) = &ids[at] {
+            if let Some(j) = ids[..at].iter().position(|o| o.as_ref() == Some(id)) {
+                let (other, kind) = if j < inputs.len() {
+                    (inputs[j], "input")
+                } else {
+                    (outputs[j - inputs.len()], "output")
+                };
+                return Err(hinted(
+                    format!(
+                        "{option} {shown}: expected a file of its own, found the {kind} {} {}",
+                        other.0,
+                        crate::guard::escape(other.1)
+                    ),
+                    "write each output to a new file: urdf-dh never writes over its inputs or one output over another",
+                ));
+            }
+        }
+        if *path == "-" {
+            continue;
+        }
+        let p = Path::new(path);
+        if p.is_dir() {
+            anyhow::bail!(
+                "{option} {shown}: cannot write the output: expected a file, found a directory"
+            );
+        }
+        let target = resolve_symlink(p);
+        let dir = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if !dir.is_dir() {
+            anyhow::bail!(
+                "{option} {shown}: cannot write the output: the directory {} does not exist",
+                crate::guard::escape(&dir.to_string_lossy())
+            );
+        }
+        // Writable: the same probe the write itself makes (a temporary beside the target).
+        tempfile::Builder::new()
+            .prefix(".urdf-dh-")
+            .suffix(".tmp")
+            .tempfile_in(dir)
+            .with_context(|| format!("{option} {shown}: cannot write the output"))?;
+    }
     Ok(())
 }
 

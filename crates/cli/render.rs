@@ -101,13 +101,7 @@ fn text(doc: &SheetDoc) -> String {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let mut s = String::new();
     let _ = writeln!(s, "{}", header_line(doc));
-    let name_w = doc
-        .joints
-        .iter()
-        .map(|j| j.name.len())
-        .max()
-        .unwrap_or(5)
-        .max(5);
+    let name_w = crate::guard::column_width(doc.joints.iter().map(|j| j.name.as_str()), 5);
     let headers = [
         format!("theta [{a}]"),
         format!("d [{l}]"),
@@ -137,7 +131,8 @@ fn text(doc: &SheetDoc) -> String {
             lim(j.lower),
             lim(j.upper),
         ];
-        let _ = write!(s, "{:>3}  {:<name_w$}  {:<9}", i + 1, j.name, kind);
+        let name = crate::guard::escape(&j.name);
+        let _ = write!(s, "{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
         for c in &cells {
             let _ = write!(s, "  {c:>13}");
         }
@@ -164,13 +159,15 @@ fn text(doc: &SheetDoc) -> String {
     s += &pose("tool", &format!("{tip_link} in DH frame {n}"), &doc.tool);
     if let Some(pairs) = &doc.pairs {
         let _ = writeln!(s, "axis pairs:");
-        let w = pairs
+        let names: Vec<String> = pairs
             .iter()
-            .map(|p| p.joints[0].len() + p.joints[1].len() + 4)
-            .max()
-            .unwrap_or(0);
-        for p in pairs {
-            let names = format!("{} -> {}", p.joints[0], p.joints[1]);
+            .map(|p| {
+                let [a, b] = &p.joints;
+                format!("{} -> {}", crate::guard::escape(a), crate::guard::escape(b))
+            })
+            .collect();
+        let w = crate::guard::column_width(names.iter().map(String::as_str), 0);
+        for (p, names) in pairs.iter().zip(&names) {
             let _ = writeln!(
                 s,
                 "  {names:<w$}  {:<21} angle {:>10} {a}  distance {:>10} {l}",

@@ -17,6 +17,7 @@
 //! file `truth`; a sheet may carry them and they are ignored on input.
 
 use anyhow::{bail, Context, Result};
+use dh_calib::import::{too_deep_at, MAX_FLOW_DEPTH};
 use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
 use dh_core::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
 use nalgebra::Isometry3;
@@ -263,6 +264,16 @@ pub struct Sheet {
 /// mm), and far from overflow in any unit conversion or forward kinematics.
 const MAX_MAGNITUDE: f64 = 1e30;
 
+/// Largest magnitude of a sheet value in metres or radians: a thousandth of
+/// [`MAX_MAGNITUDE`], so that whatever a sheet holds can be written in any unit (mm, deg: at
+/// most x1000) and read back.
+const MAX_SI_MAGNITUDE: f64 = 1e27;
+
+/// Is `v` (in a unit of `scale` metres or radians) beyond what a sheet may hold?
+fn too_large(v: f64, scale: f64) -> bool {
+    v.abs() > MAX_MAGNITUDE || (v * scale).abs() > MAX_SI_MAGNITUDE
+}
+
 /// Lengths beyond this in a sheet that says metres are almost surely millimetres (m).
 const SUSPICIOUS_METRES: f64 = 20.0;
 
@@ -285,6 +296,8 @@ impl Sheet {
 /// # Errors
 /// Syntax errors with line and column, unknown or missing keys, nesting too deep.
 pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
+    // A byte-order mark is no part of the first key (URDF and JSON readers skip it too).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     {
         if text.trim().is_empty() {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
@@ -299,7 +312,11 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
                     if let Some(k) = message.find(&said) {
                         message.replace_range(k..k + said.len(), "");
                     }
-                    format!(" (line {}, column {})", l.line(), l.column())
+                    // For a repeated key serde_yaml points at the start of the mapping: point
+                    // at the repetition instead.
+                    let (line, column) = duplicate_key_at(text, &message, l.index())
+                        .unwrap_or((l.line(), l.column()));
+                    format!(" (line {line}, column {column})")
                 }
                 None => String::new(),
             };
@@ -309,45 +326,47 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
     }
 }
 
-/// Flow collections (`[`, `{`) nested deeper than this are refused before YAML parsing: a sheet
-/// needs three levels, and libyaml's scanner takes time quadratic in the depth (found by
-/// fuzzing: 8 KiB of `[` took over 10 s).
-const MAX_FLOW_DEPTH: usize = 64;
-
-/// Refuses flow collections nested deeper than [`MAX_FLOW_DEPTH`], in one linear pass that
-/// skips quoted strings and comments.
-fn check_nesting(text: &str, origin: &str) -> Result<()> {
-    let (mut depth, mut line) = (0usize, 1usize);
-    let mut quote: Option<char> = None;
-    let mut comment = false;
-    let mut previous = '\n';
-    for c in text.chars() {
-        if c == '\n' {
-            line += 1;
-            comment = false;
-        } else if comment {
-        } else if let Some(q) = quote {
-            if c == q {
-                quote = None;
-            }
-        } else {
-            match c {
-                '"' | '\'' => quote = Some(c),
-                '#' if previous.is_whitespace() => comment = true,
-                '[' | '{' => {
-                    depth += 1;
-                    if depth > MAX_FLOW_DEPTH {
-                        bail!(
-                            "{origin} (line {line}): expected lists and maps nested at most \
-                             {MAX_FLOW_DEPTH} deep, found deeper"
-                        );
-                    }
-                }
-                ']' | '}' => depth = depth.saturating_sub(1),
-                _ => {}
+/// Where the key named in serde's "duplicate field `KEY`" message is given the second time at
+/// or after byte `from` (the mapping's start): (line, column), both from 1. `None` for other
+/// messages or when the key is not found as a key (`KEY:` after a line start, `-`, `{` or `,`).
+fn duplicate_key_at(text: &str, message: &str, from: usize) -> Option<(usize, usize)> {
+    let key = message
+        .split_once("duplicate field `")?
+        .1
+        .split_once('`')?
+        .0;
+    let mut seen = 0;
+    let mut k = from.min(text.len());
+    while let Some(found) = text.get(k..)?.find(key) {
+        let at = k + found;
+        let before = text[..at].trim_end_matches([' ', '\t', '"', '\'']);
+        let after = text[at + key.len()..].trim_start_matches(['"', '\'', ' ', '\t']);
+        let starts_key = before.is_empty() || before.ends_with(['\n', '-', '{', ',']);
+        if starts_key && after.starts_with(':') {
+            seen += 1;
+            if seen == 2 {
+                let line = text[..at].matches('\n').count() + 1;
+                let column = text[..at]
+                    .rsplit('\n')
+                    .next()
+                    .map_or(0, |l| l.chars().count())
+                    + 1;
+                return Some((line, column));
             }
         }
-        previous = c;
+        k = at + key.len();
+    }
+    None
+}
+
+/// Refuses flow collections nested deeper than [`MAX_FLOW_DEPTH`] (a sheet needs three
+/// levels; libyaml's scanner takes time quadratic in the depth), in one linear pass.
+pub(crate) fn check_nesting(text: &str, origin: &str) -> Result<()> {
+    if let Some(line) = too_deep_at(text) {
+        bail!(
+            "{origin} (line {line}): expected lists and maps nested at most \
+             {MAX_FLOW_DEPTH} deep, found deeper"
+        );
     }
     Ok(())
 }
@@ -490,25 +509,42 @@ pub(crate) fn row_of(
     warnings: &mut Vec<String>,
 ) -> Result<DhRow> {
     let (lu, au) = (length_unit.metres(), angle_unit.radians());
-    if let Some((k, c)) = j.name.chars().enumerate().find(|(_, c)| c.is_control()) {
-        // As the URDF reader: such a name corrupts tables, CSV and terminals.
+    if j.name.trim().is_empty() {
         bail!(
-            "{origin}: joint '{}': expected a name without control characters, found \
+            "{origin}: joint '{}': expected a name, found a blank one",
+            j.name
+        );
+    }
+    if let Some((k, c)) = j
+        .name
+        .chars()
+        .enumerate()
+        .find(|(_, c)| crate::guard::is_spoofing(*c))
+    {
+        // As the URDF reader: such a name corrupts tables, CSV and terminals (and a bidi
+        // override reorders what they show).
+        bail!(
+            "{origin}: joint '{}': expected a name without control or bidi characters, found \
              U+{:04X} at character {}",
             j.name.escape_debug(),
             u32::from(c),
             k + 1
         );
     }
-    for (field, v) in [
-        ("a", j.a),
-        ("alpha", j.alpha),
-        ("d", j.d),
-        ("theta", j.theta),
+    let limit_scale = if j.kind == JointType::Prismatic {
+        lu
+    } else {
+        au
+    };
+    for (field, v, scale) in [
+        ("a", j.a, lu),
+        ("alpha", j.alpha, au),
+        ("d", j.d, lu),
+        ("theta", j.theta, au),
     ]
     .into_iter()
-    .chain(j.lower.map(|v| ("lower", v)))
-    .chain(j.upper.map(|v| ("upper", v)))
+    .chain(j.lower.map(|v| ("lower", v, limit_scale)))
+    .chain(j.upper.map(|v| ("upper", v, limit_scale)))
     {
         if !v.is_finite() {
             bail!(
@@ -516,9 +552,9 @@ pub(crate) fn row_of(
                 j.name
             );
         }
-        if v.abs() > MAX_MAGNITUDE {
+        if too_large(v, scale) {
             bail!(
-                "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30, found {v:e}",
+                "{origin}: joint '{}': {field}: expected a magnitude of at most 1e30 (1e27 m or rad), found {v:e}",
                 j.name
             );
         }
@@ -612,8 +648,8 @@ pub(crate) fn pose_of(
             if p.xyz.iter().chain(&p.rpy).any(|v| !v.is_finite()) {
                 bail!("{origin}: {what}: xyz and rpy must be finite numbers");
             }
-            if let Some(v) = p.xyz.iter().find(|v| v.abs() > MAX_MAGNITUDE) {
-                bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30, found {v:e}");
+            if let Some(v) = p.xyz.iter().find(|v| too_large(**v, lu)) {
+                bail!("{origin}: {what}: xyz: expected a magnitude of at most 1e30 (1e27 m), found {v:e}");
             }
             Ok(from_xyz_rpy(p.xyz.map(|v| v * lu), p.rpy.map(|v| v * au)))
         }
@@ -743,8 +779,9 @@ mod tests {
         )
         .unwrap_err();
         assert!(
-            e.to_string()
-                .contains("joint 'a': d: expected a magnitude of at most 1e30, found 1e306"),
+            e.to_string().contains(
+                "joint 'a': d: expected a magnitude of at most 1e30 (1e27 m or rad), found 1e306"
+            ),
             "{e}"
         );
         // Found by fuzzing: extract writes ill-conditioned rows kilometres long, and they
@@ -791,5 +828,19 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("line 1"), "{e}");
+    }
+
+    #[test]
+    fn a_repeated_key_is_located_where_it_repeats() {
+        let text =
+            "convention: standard\nlength_unit: m\nangle_unit: deg\nangle_unit: rad\njoints: []\n";
+        let e = parse_doc(text, "s.yaml").unwrap_err().to_string();
+        assert!(e.contains("(line 4, column 1)"), "{e}");
+        let flow = "joints:\n  - {name: j, d: 0, a: 0, d: 1}\n";
+        assert_eq!(
+            duplicate_key_at(flow, "joints[0]: duplicate field `d`", 10),
+            Some((2, 27))
+        );
+        assert_eq!(duplicate_key_at(flow, "some other message", 0), None);
     }
 }

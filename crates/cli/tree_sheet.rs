@@ -225,6 +225,7 @@ impl InertialsDoc {
     /// # Errors
     /// Syntax errors with line and column, unknown or missing keys.
     pub fn parse(text: &str, origin: &str) -> Result<InertialsDoc> {
+        crate::sheet::check_nesting(text, origin)?;
         serde_yaml::from_str(text).map_err(|e| anyhow::anyhow!("{origin}: {e}"))
     }
 }
@@ -393,7 +394,7 @@ impl TreeSheet {
         for (k, b) in branch_docs.iter().enumerate() {
             let count = branch_docs[..k].iter().filter(|o| o.name == b.name).count();
             let here = at(origin, line_of(text, "name", &b.name, count));
-            if b.name.trim().is_empty() || b.name.chars().any(char::is_control) {
+            if b.name.trim().is_empty() || b.name.chars().any(crate::guard::is_spoofing) {
                 bail!(
                     "{here}: branch {}: expected a name of printable characters, found '{}'",
                     k + 1,

@@ -83,6 +83,8 @@ macro_rules! csv {
 }
 
 const VALID_ARM: &str = "fixtures/invalid/urdf/valid_arm.urdf";
+const VALID_SHEET: &str = "fixtures/invalid/sheet/valid_arm.yaml";
+const VALID_CSV: &str = "fixtures/invalid/csv/valid_arm.csv";
 
 const CASES: &[Case] = &[
     // Not a URDF at all.
@@ -219,6 +221,64 @@ const CASES: &[Case] = &[
     sheet!("deep_nesting", "deep_nesting.yaml"),
     sheet!("unclosed_nesting", "unclosed_nesting.yaml"),
     sheet!("missing_file", "no_such_sheet.yaml"),
+    sheet!("bidi_in_name", "bidi_in_name.yaml"),
+    sheet!("blank_name", "blank_name.yaml"),
+    sheet!("base_beyond_si_limit", "base_beyond_si_limit.yaml"),
+    case(
+        "sheet_conversion_overflow",
+        &[
+            "convert",
+            "fixtures/invalid/sheet/conversion_overflow.yaml",
+            "--to",
+            "standard",
+        ],
+    ),
+    case(
+        "sheet_deep_inertials",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/valid_arm.csv",
+            "--inertials",
+            "fixtures/invalid/sheet/deep_inertials.yaml",
+        ],
+    ),
+    // Writers refuse what their readers would: to-urdf names and limits.
+    case(
+        "to_urdf_joint_named_like_tip_joint",
+        &[
+            "to-urdf",
+            "fixtures/invalid/sheet/joint_named_like_tip_joint.yaml",
+        ],
+    ),
+    case(
+        "to_urdf_prismatic_without_limits",
+        &[
+            "to-urdf",
+            "fixtures/invalid/sheet/prismatic_without_limits.yaml",
+        ],
+    ),
+    case(
+        "to_urdf_tip_link_is_a_joint_link",
+        &["to-urdf", VALID_SHEET, "--tip-link", "joint_1_link"],
+    ),
+    case(
+        "to_urdf_base_link_is_tip_link",
+        &[
+            "to-urdf",
+            VALID_SHEET,
+            "--base-link",
+            "tool0",
+            "--tip-link",
+            "tool0",
+        ],
+    ),
+    case(
+        "to_urdf_tab_in_link",
+        &["to-urdf", VALID_SHEET, "--tip-link", "tool\t0"],
+    ),
     // Tree sheets: `check` refuses one; `calibrate` names the file, line, branch and joint.
     sheet!("tree_in_check", "tree_in_check.yaml"),
     tree!("tree_unknown_key_in_branch"),
@@ -247,6 +307,24 @@ const CASES: &[Case] = &[
     csv!("deg_as_rad"),
     csv!("mixed_units"),
     csv!("too_few_poses"),
+    // Hostile names and magnitudes (issue 11): refused, the name escaped in the message.
+    csv!("escape_in_target"),
+    csv!("bidi_in_target"),
+    csv!("nul_in_config"),
+    csv!("huge_sigma"),
+    csv!("target_per_row"),
+    case(
+        "csv_huge_mm_coordinate",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/huge_mm_coordinate.csv",
+            "--length-unit",
+            "mm",
+        ],
+    ),
     case(
         "csv_missing_file",
         &[
@@ -281,6 +359,91 @@ const CASES: &[Case] = &[
     case(
         "arg_nan_tolerance",
         &["extract", VALID_ARM, "--linear-tol", "nan"],
+    ),
+    // Every numeric option is range-checked by its parser, which names option and range.
+    case(
+        "arg_angular_tolerance_too_large",
+        &["extract", VALID_ARM, "--angular-tol", "4"],
+    ),
+    case(
+        "arg_check_linear_tolerance_too_large",
+        &[
+            "check",
+            VALID_ARM,
+            "--sheet",
+            VALID_SHEET,
+            "--linear-tol",
+            "2",
+        ],
+    ),
+    case(
+        "arg_samples_too_many",
+        &["extract", VALID_ARM, "--samples", "1000000000"],
+    ),
+    case(
+        "arg_nan_joint_value",
+        &[
+            "extract",
+            VALID_ARM,
+            "--svg",
+            "fixtures/invalid/never_written.svg",
+            "--q",
+            "nan,0",
+        ],
+    ),
+    case(
+        "arg_huge_sigma",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            VALID_CSV,
+            "--sigma",
+            "1e200",
+        ],
+    ),
+    case(
+        "arg_zero_folds",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            VALID_CSV,
+            "--folds",
+            "0",
+        ],
+    ),
+    case(
+        "arg_too_many_poses",
+        &[
+            "simulate",
+            "--model",
+            VALID_ARM,
+            "--out",
+            "fixtures/invalid/never_written.csv",
+            "--poses",
+            "100000000",
+        ],
+    ),
+    case(
+        "arg_too_many_samples_in_all",
+        &[
+            "simulate",
+            "--model",
+            VALID_ARM,
+            "--out",
+            "fixtures/invalid/never_written.csv",
+            "--poses",
+            "1000000",
+            "--targets",
+            "10",
+        ],
+    ),
+    case(
+        "arg_escape_in_tip",
+        &["extract", VALID_ARM, "--tip", "\u{1b}[2Jtool0"],
     ),
     // Readable but suspicious: a warning, and the comparison's own verdict.
     warns(
@@ -328,6 +491,43 @@ const CASES: &[Case] = &[
         "urdf_zero_limits",
         &["extract", "fixtures/invalid/urdf/zero_limits.urdf"],
         0,
+    ),
+    warns(
+        "csv_deg_below_four_turns",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/deg_below_four_turns.csv",
+        ],
+        0,
+    ),
+    warns(
+        "sheet_bom",
+        &[
+            "check",
+            VALID_ARM,
+            "--sheet",
+            "fixtures/invalid/sheet/bom.yaml",
+        ],
+        0,
+    ),
+    // Loose tolerances snap the tilted pair; the table misses the URDF by centimetres, which
+    // is never a pass (the bound is capped at 1 mm, 1 mrad).
+    warns(
+        "urdf_tilted_axes_with_loose_tolerances",
+        &[
+            "extract",
+            "fixtures/invalid/urdf/tilted_axes.urdf",
+            "--angular-tol",
+            "0.1",
+            "--linear-tol",
+            "0.1",
+            "--samples",
+            "100",
+        ],
+        1,
     ),
     // The control: the valid pair matches.
     warns(

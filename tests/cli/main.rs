@@ -13,5 +13,7 @@ mod default_tip;
 mod extract;
 mod invalid;
 mod measured;
+mod outputs;
 mod roundtrip;
 mod tree;
+mod writers;

@@ -15,7 +15,7 @@ use dh_core::{Convention, Tolerance};
 use serde::Serialize;
 use urdf_axes::UrdfModel;
 
-use crate::commands::extract::{extract_chain, prove_extracted, ExtractOptions};
+use crate::commands::extract::{chain_error, extract_chain, prove_extracted, ExtractOptions};
 use crate::error::Outcome;
 use crate::input::{display_name, read_robot, read_text};
 use crate::render::Format;
@@ -134,7 +134,7 @@ fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
                     let one = || -> Result<Done> {
                         let chain = model
                             .chain(entry.base.as_deref(), entry.tip.as_deref())
-                            .map_err(|e| anyhow::anyhow!("{name}: cannot choose the chain: {e}"))?;
+                            .map_err(|e| chain_error(&name, e))?;
                         let options = ExtractOptions {
                             convention,
                             length_unit: args.length_unit,

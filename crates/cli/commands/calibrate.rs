@@ -17,7 +17,7 @@ use anyhow::{Context, Result};
 use dh_calib::calibrate::Validation;
 use dh_calib::calibrate::{calibrate as run_calibration, CalibrationOptions, NoiseSource, Report};
 use dh_calib::cpa::{analyse, CpaOptions};
-use dh_calib::data::{Measurements, Split};
+use dh_calib::data::{Measurements, Sample, Split};
 use dh_calib::diagnose::{diagnose, DiagnoseOptions};
 use dh_calib::effects::{label_of, parse_label_in, EffectContext};
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
@@ -29,13 +29,13 @@ use nalgebra::{Isometry3, Vector3};
 use serde::Serialize;
 
 use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
-use crate::commands::to_urdf::urdf_of;
+use crate::commands::to_urdf::{check_urdf, urdf_of};
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{
     header_joints, load_model, parse_effect, read_measurements, DataFile, DataUnits, LoadedModel,
 };
-use crate::output::write_atomically;
+use crate::output::write_all;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::sheet::{ConventionDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -124,7 +124,8 @@ pub struct CalibrateArgs {
 /// row's DH frame), optional `payloads: [{mass, com}]` (tip frame) and `gravity: [x, y, z]`.
 fn read_inertials(path: &str, table: &DhTable) -> Result<(Inertials, Option<Vector3<f64>>)> {
     let origin = display_name(path);
-    let text = std::fs::read_to_string(path).with_context(|| format!("{origin}: cannot read"))?;
+    let text = crate::input::read_text(path)?;
+    crate::sheet::check_nesting(&text, &origin)?;
     let doc: serde_yaml::Value =
         serde_yaml::from_str(&text).with_context(|| format!("{origin}: not YAML"))?;
     let num = |v: &serde_yaml::Value, what: &str| -> Result<f64> {
@@ -595,6 +596,9 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
     if let Some(m) = &model {
         m.couple(&mut data)
             .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
+        for w in crate::measured::beyond_limits(&m.table, &data, &data_name) {
+            writeln!(err, "urdf-dh: warning: {w}")?;
+        }
     }
     if !args.targets.is_empty() {
         keep_targets(&mut data, &args.targets, &data_name)?;
@@ -645,6 +649,33 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
     })
 }
 
+/// Refuses, before any fitting, point data that cannot determine its own unknowns: every step
+/// estimates each target's position (3 parameters) and the device frame (6), and each sample
+/// gives 3 coordinates, so fewer than `targets + 3` calibration samples fit nothing (200 rows
+/// of 200 targets took minutes to say so).
+fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
+    let cal: Vec<&Sample> = data
+        .samples
+        .iter()
+        .filter(|s| s.split == Split::Calibration)
+        .collect();
+    let mut targets: Vec<usize> = cal.iter().map(|s| s.target).collect();
+    targets.sort_unstable();
+    targets.dedup();
+    let needed = targets.len() + 3;
+    if cal.len() < needed {
+        return Err(hinted(
+            format!(
+                "{data_name}: expected at least {needed} calibration samples for {} target(s) (each target's position and the device frame are estimated: 3 per target + 6, 3 coordinates per sample), found {}",
+                targets.len(),
+                cal.len()
+            ),
+            "measure each target at several poses (the target column names the reflector, not the pose)",
+        ));
+    }
+    Ok(())
+}
+
 /// Runs `calibrate`.
 ///
 /// # Errors
@@ -659,6 +690,7 @@ pub fn calibrate(
     if inputs.data.samples.iter().any(|s| s.socket.is_some()) {
         return crate::commands::sockets::calibrate_contacts(args, &inputs, out);
     }
+    enough_samples(&inputs.data, &display_name(&args.data))?;
     let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
     let ctx = EffectContext {
         tree: DhTree::serial(&inputs.table),
@@ -730,14 +762,10 @@ pub fn calibrate(
         ),
     };
     let doc = document(args, &inputs, &report);
-    match args.format {
-        CalibrateFormat::Json => {
-            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
-        }
-        CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
-    }
+    // Every output file is built before any is written, and all are written or none.
+    let mut files = Vec::new();
     if let Some(path) = &args.out {
-        write_model(path, &inputs, &report, &doc)?;
+        files.push((Path::new(path), model_bytes(path, &inputs, &report, &doc)?));
     }
     if let Some(path) = &args.plot {
         // Residuals are millimetres or less on any arm: the chart reads best in mm whatever
@@ -749,7 +777,15 @@ pub fn calibrate(
             &effects,
             LengthUnit::Mm,
         )?;
-        write_atomically(Path::new(path), residuals_svg(&chart).as_bytes())?;
+        files.push((Path::new(path), residuals_svg(&chart)));
+    }
+    let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
+    write_all(&files)?;
+    match args.format {
+        CalibrateFormat::Json => {
+            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+        }
+        CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
     }
     Ok(Outcome::Pass)
 }
@@ -1039,13 +1075,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         s,
         "estimated parameters (nominal -> estimate +- standard error):"
     );
-    let width = doc
-        .parameters
-        .iter()
-        .map(|p| p.name.len())
-        .max()
-        .unwrap_or(4)
-        .max(4);
+    let width = crate::guard::column_width(doc.parameters.iter().map(|p| p.name.as_str()), 4);
     for p in doc
         .parameters
         .iter()
@@ -1054,7 +1084,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         let _ = writeln!(
             s,
             "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
-            p.name,
+            crate::guard::escape(&p.name),
             unit_label(p.unit, units),
             value(p.nominal, p.unit, units),
             value(p.estimate, p.unit, units),
@@ -1185,8 +1215,13 @@ fn absorbed(aliases: &[String]) -> String {
     }
 }
 
-/// Writes the calibrated model: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
-fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDoc) -> Result<()> {
+/// The calibrated model's file: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
+fn model_bytes(
+    path: &str,
+    inputs: &Inputs,
+    report: &Report,
+    doc: &CalibrationDoc,
+) -> Result<String> {
     let calibration = CalibrationSection {
         data: doc.data.clone(),
         rms_before: doc.rms_before,
@@ -1208,7 +1243,7 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     );
-    write_calibrated(
+    calibrated_bytes(
         path,
         inputs,
         &report.calibrated,
@@ -1219,17 +1254,18 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
 
 /// Writes `table` as the calibrated model of `inputs` (its robot name, links, units and
 /// coupled joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with
-/// `source` and the `calibration` section, atomically.
-pub(crate) fn write_calibrated(
+/// `source` and the `calibration` section.
+pub(crate) fn calibrated_bytes(
     path: &str,
     inputs: &Inputs,
     table: &DhTable,
     source: String,
     calibration: serde_yaml::Value,
-) -> Result<()> {
+) -> Result<String> {
     let lower = path.to_ascii_lowercase();
     let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
     let bytes = if lower.ends_with(".urdf") {
+        check_urdf(table, &robot, &inputs.links.0, &inputs.links.1)?;
         urdf_of(table, &robot, &inputs.links.0, &inputs.links.1)
     } else {
         let (lu, au) = inputs.units;
@@ -1252,8 +1288,7 @@ pub(crate) fn write_calibrated(
             serde_yaml::to_string(&sheet)?
         }
     };
-    write_atomically(Path::new(path), bytes.as_bytes())
-        .with_context(|| format!("writing the calibrated model to {}", display_name(path)))
+    Ok(bytes)
 }
 
 /// The `calibration` section of a calibrated sheet (metres, radians): what the table was
@@ -1534,10 +1569,10 @@ pub struct CalibrateCli {
     targets: Vec<String>,
     /// Known measurement noise per axis, in the length unit [default: the data's sigma column
     /// or the scatter of repeated poses].
-    #[arg(long, value_name = "SIGMA")]
+    #[arg(long, value_name = "SIGMA", value_parser = crate::guard::sigma)]
     sigma: Option<f64>,
     /// Folds of the cross-validation.
-    #[arg(long, value_name = "K", default_value_t = 5)]
+    #[arg(long, value_name = "K", default_value_t = 5, value_parser = crate::guard::folds)]
     folds: usize,
     /// Length unit of the measurement files and --sigma (reports are in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
@@ -1565,7 +1600,8 @@ pub struct CalibrateCli {
         long,
         value_name = "X,Y,Z",
         value_delimiter = ',',
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::guard::gravity
     )]
     gravity: Option<Vec<f64>>,
     /// A payload at the tip: mass in kg, then its centre in the tip frame in metres.
@@ -1573,12 +1609,13 @@ pub struct CalibrateCli {
         long,
         value_name = "M,X,Y,Z",
         value_delimiter = ',',
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = crate::guard::payload
     )]
     payload: Option<Vec<f64>>,
     /// Most effects --effects auto adds before it stops (a guard; the run's notes say when it
     /// stopped the selection).
-    #[arg(long, value_name = "N", default_value_t = 12)]
+    #[arg(long, value_name = "N", default_value_t = 12, value_parser = crate::guard::max_effects)]
     max_effects: usize,
 }
 

@@ -419,6 +419,17 @@ pub fn calibrate_tree(
     let calibrated = report.tree.clone().unwrap_or_else(|| tree.clone());
     let (doc, text) = report_for(args, &model, &data, &report);
     let tables = tables(tree, &calibrated, &doc, &targets);
+    // The file first: a run that cannot write it prints no report.
+    if let Some(path) = &args.out {
+        write_tree(
+            path,
+            sheet,
+            &calibrated,
+            &doc,
+            &targets,
+            inertials_doc.map(|(d, _, _)| d),
+        )?;
+    }
     match args.format {
         CalibrateFormat::Json => {
             let doc = TreeCalibrationDoc {
@@ -437,16 +448,6 @@ pub fn calibrate_tree(
             out.write_all(tree_text(&tables).as_bytes())?;
             out.write_all(result.as_bytes())?;
         }
-    }
-    if let Some(path) = &args.out {
-        write_tree(
-            path,
-            sheet,
-            &calibrated,
-            &doc,
-            &targets,
-            inertials_doc.map(|(d, _, _)| d),
-        )?;
     }
     Ok(Outcome::Pass)
 }

@@ -318,13 +318,12 @@ fn text(title: &str, r: &CheckReport, sheet: &Sheet) -> String {
         );
     } else {
         let _ = writeln!(s, "MISMATCH: {} difference(s)", r.differences.len());
-        let w = r
-            .differences
-            .iter()
-            .map(|d| d.joint.as_deref().unwrap_or("-").len())
-            .max()
-            .unwrap_or(5)
-            .max(5);
+        let w = crate::guard::column_width(
+            r.differences
+                .iter()
+                .map(|d| d.joint.as_deref().unwrap_or("-")),
+            5,
+        );
         let _ = writeln!(
             s,
             "  {:<w$}  {:<11}  {:>14}  {:>14}  {:>14}  note",
@@ -344,7 +343,7 @@ fn text(title: &str, r: &CheckReport, sheet: &Sheet) -> String {
             let _ = writeln!(
                 s,
                 "  {:<w$}  {:<11}  {:>14}  {:>14}  {:>14}  {note}",
-                d.joint.as_deref().unwrap_or("-"),
+                crate::guard::escape(d.joint.as_deref().unwrap_or("-")),
                 d.parameter,
                 fmt(d.urdf),
                 fmt(d.sheet),

@@ -9,7 +9,7 @@ use nalgebra::Isometry3;
 use crate::error::Outcome;
 use crate::input::{display_name, read_text};
 use crate::readback::{prove, Isometry3Pair, Source};
-use crate::render::Format;
+use crate::render::{render_sheet, Format};
 use crate::sheet::{Sheet, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -60,6 +60,11 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     }
     if !sheet.has_tool {
         doc.tool = None;
+    }
+    // What convert writes, a sheet reader reads: refuse a result beyond a sheet's limits
+    // (the conversion moves a row's a and alpha into the base or tool, where they add up).
+    if let Err(e) = Sheet::parse(&render_sheet(&doc, Format::Yaml)?, &name) {
+        anyhow::bail!("{name}: cannot convert: the result would not be a valid sheet: {e:#}");
     }
     let source = sheet.table.prepare();
     let free = Isometry3Pair {

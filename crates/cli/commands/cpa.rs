@@ -528,13 +528,7 @@ fn text(doc: &CpaDoc, sheet: &SheetDoc) -> String {
         lu.symbol(),
         au.symbol()
     );
-    let w = doc
-        .joints
-        .iter()
-        .map(|j| j.name.len())
-        .max()
-        .unwrap_or(5)
-        .max(5);
+    let w = crate::guard::column_width(doc.joints.iter().map(|j| j.name.as_str()), 5);
     let _ = writeln!(
         s,
         "  {:<w$} {:>5} {:>6} {:>12} {:>11} {:>11} {:>11} {:>12}",
@@ -558,7 +552,7 @@ fn text(doc: &CpaDoc, sheet: &SheetDoc) -> String {
         let _ = writeln!(
             s,
             "  {:<w$} {:>5} {:>6} {:>12} {:>11} {:>11} {:>11} {:>12}",
-            j.name,
+            crate::guard::escape(&j.name),
             j.poses,
             j.points,
             j.radius.map_or_else(|| "-".into(), l),
@@ -614,10 +608,10 @@ pub struct CpaCli {
     #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
     convention: crate::sheet::ConventionDoc,
     /// Measured axes whose common normal is shorter than this intersect (metres).
-    #[arg(long, value_name = "M", default_value_t = CPA_LINEAR)]
+    #[arg(long, value_name = "M", default_value_t = CPA_LINEAR, value_parser = crate::guard::linear_tol)]
     linear_tol: f64,
     /// Measured axes this close to parallel are parallel (radians).
-    #[arg(long, value_name = "RAD", default_value_t = CPA_ANGULAR)]
+    #[arg(long, value_name = "RAD", default_value_t = CPA_ANGULAR, value_parser = crate::guard::angular_tol)]
     angular_tol: f64,
     /// Length unit of the measurement file (the output is in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]

@@ -93,10 +93,19 @@ pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(
     let bytes = read_robot(path)?;
     let name = display_name(path);
     let model = UrdfModel::from_bytes(&bytes).with_context(|| format!("{name}: invalid URDF"))?;
-    let chain = model
-        .chain(base, tip)
-        .with_context(|| format!("{name}: cannot choose the chain"))?;
+    let chain = model.chain(base, tip).map_err(|e| chain_error(&name, e))?;
     Ok((model, chain))
+}
+
+/// The error of choosing a chain of the file shown as `name`: a fault of a joint on the chain is
+/// a fault of the file ("invalid URDF"), not of the choice ("cannot choose the chain").
+pub fn chain_error(name: &str, e: urdf_axes::UrdfError) -> anyhow::Error {
+    let what = if e.is_choice() {
+        "cannot choose the chain"
+    } else {
+        "invalid URDF"
+    };
+    anyhow::Error::new(e).context(format!("{name}: {what}"))
 }
 
 /// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name

@@ -11,7 +11,7 @@ use dh_calib::import::{import as import_layout, mukca, Layout, Source};
 
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_text};
-use crate::output::write_atomically;
+use crate::output::{check_destinations, write_atomically};
 
 /// Everything `import` needs.
 #[derive(Clone, Debug)]
@@ -101,6 +101,10 @@ fn gather(args: &[String]) -> Result<Vec<(String, String)>> {
 /// Unreadable files, an undetectable layout, any parse error of the layout (naming the file,
 /// line and column), a failed write.
 pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    if let Some(path) = &args.out {
+        let inputs: Vec<(&str, &str)> = args.files.iter().map(|f| ("FILE", f.as_str())).collect();
+        check_destinations(&inputs, &[("--out", path)])?;
+    }
     let files = gather(&args.files)?;
     let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
     let layouts = || {

@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use dh_calib::csv::write_measurements;
 use dh_calib::data::Measurements;
 use dh_calib::model::{Effect, Model, ModelOptions};
@@ -19,7 +19,7 @@ use crate::commands::calibrate::{PoseSi, TargetDoc};
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{load_model, parse_effect};
-use crate::output::write_atomically;
+use crate::output::{check_destinations, write_all};
 use crate::sheet::SheetDoc;
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -62,7 +62,12 @@ pub struct SimulateArgs {
     pub truth: Option<String>,
 }
 
-/// `NAME=VALUE[,VALUE...]`.
+/// Largest magnitude of an `--error` or `--effect` value (metres, radians or the effect's own
+/// unit): an error of a kilometre or a thousand radians is no robot's, and beyond it the
+/// simulated points leave what the measurement reader accepts (100 m).
+const MAX_SIM_VALUE: f64 = 1e3;
+
+/// `NAME=VALUE[,VALUE...]`, each value finite and within [`MAX_SIM_VALUE`].
 fn name_values(s: &str, what: &str) -> Result<(String, Vec<f64>)> {
     let (name, values) = s.split_once('=').ok_or_else(|| {
         hinted(
@@ -76,10 +81,10 @@ fn name_values(s: &str, what: &str) -> Result<(String, Vec<f64>)> {
             v.trim()
                 .parse::<f64>()
                 .ok()
-                .filter(|v| v.is_finite())
+                .filter(|v| v.is_finite() && v.abs() <= MAX_SIM_VALUE)
                 .ok_or_else(|| {
                     anyhow::anyhow!(
-                        "{what} '{s}': expected a finite number, found '{}'",
+                        "--{what} '{s}': expected a number in [-{MAX_SIM_VALUE}, {MAX_SIM_VALUE}], found '{}'",
                         v.trim()
                     )
                 })
@@ -199,6 +204,11 @@ pub fn truth_path(out: &str) -> String {
 /// # Errors
 /// A bad model, option or effect; failed writes.
 pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    let truth_file = args.truth.clone().unwrap_or_else(|| truth_path(&args.out));
+    check_destinations(
+        &[("--model", &args.model)],
+        &[("--out", &args.out), ("--truth", &truth_file)],
+    )?;
     let model = load_model(
         &args.model,
         args.base.as_deref(),
@@ -212,6 +222,24 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
         anyhow::bail!("--noise: expected a length >= 0, found {}", args.noise);
     }
     let table = &model.table;
+    // Each option is in range on its own; their product sizes the file (and the memory).
+    let sweeps = if args.cpa { table.rows.len() } else { 1 };
+    let samples = [sweeps, args.targets, args.repeats]
+        .iter()
+        .fold(args.poses, |n, k| n.saturating_mul(*k));
+    if samples > crate::guard::MAX_SIM_SAMPLES {
+        return Err(hinted(
+            format!(
+                "--poses {} x --targets {} x --repeats {}{}: expected at most {} samples, found {samples}",
+                args.poses,
+                args.targets,
+                args.repeats,
+                if args.cpa { format!(" x {sweeps} joint sweeps") } else { String::new() },
+                crate::guard::MAX_SIM_SAMPLES
+            ),
+            "simulate fewer poses, targets or repeats",
+        ));
+    }
     let effects = args
         .effects
         .iter()
@@ -286,7 +314,19 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
         display_name(&truth_path)
     );
     csv.push_str(&write_measurements(&data));
-    write_atomically(Path::new(&args.out), csv.as_bytes())?;
+    // What simulate writes, calibrate reads: a model whose points leave the reader's limits
+    // (coordinates beyond 100 m, joint values beyond four turns) is refused here, not there.
+    let opts = dh_calib::csv::CsvOptions {
+        length_unit: dh_calib::csv::LengthUnit::Metre,
+        angle_unit: dh_calib::csv::AngleUnit::Radian,
+        prismatic: model.prismatic(),
+    };
+    dh_calib::csv::parse_measurements(&csv, &data.joint_names, &opts).map_err(|e| {
+        hinted(
+            format!("simulate: the simulated data would not read back: {e}"),
+            "simulate a model of robot size (points within 100 m of the device, joint ranges within four turns)",
+        )
+    })?;
 
     let mut sheet = SheetDoc::from_table(&truth.table, LengthUnit::M, AngleUnit::Rad);
     sheet.robot = Some(format!("truth of {out_name}"));
@@ -314,11 +354,12 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
         unfolded: truth.unfolded.clone(),
     };
     sheet.truth = Some(serde_yaml::to_value(&section)?);
-    write_atomically(
-        Path::new(&truth_path),
-        serde_yaml::to_string(&sheet)?.as_bytes(),
-    )
-    .with_context(|| format!("writing the truth file {}", display_name(&truth_path)))?;
+    let truth_text = serde_yaml::to_string(&sheet)?;
+    // Both files or neither.
+    write_all(&[
+        (Path::new(&args.out), csv.as_bytes()),
+        (Path::new(&truth_path), truth_text.as_bytes()),
+    ])?;
     writeln!(
         err,
         "urdf-dh: {out_name}: {} samples at {poses} poses of {} target(s); truth in {}",
@@ -367,17 +408,17 @@ pub struct SimulateCli {
     #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
     convention: crate::sheet::ConventionDoc,
     /// Random poses within the joint limits; with --cpa, poses per joint sweep.
-    #[arg(long, value_name = "N", default_value_t = 100)]
+    #[arg(long, value_name = "N", default_value_t = 100, value_parser = crate::guard::poses)]
     poses: usize,
     /// Gaussian noise, standard deviation per device axis (metres).
-    #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
+    #[arg(long, value_name = "SIGMA", default_value_t = 0.0, value_parser = crate::guard::noise)]
     noise: f64,
     /// Sweep one joint at a time (circle-point analysis data) instead of random poses.
     #[arg(long)]
     cpa: bool,
     /// Width of each CPA sweep (radians) [default: a quarter turn, or the narrowest joint
     /// range].
-    #[arg(long, value_name = "RAD")]
+    #[arg(long, value_name = "RAD", value_parser = crate::guard::arc)]
     arc: Option<f64>,
     /// An effect of the true robot, LABEL=VALUE (e.g. gear_ratio:elbow_joint=0.001); repeatable.
     #[arg(long = "effect", value_name = "LABEL=VALUE")]
@@ -387,16 +428,16 @@ pub struct SimulateCli {
     #[arg(long = "error", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     errors: Vec<String>,
     /// Random errors on every DH parameter, uniform within LENGTH metres and ANGLE radians.
-    #[arg(long, value_name = "LENGTH,ANGLE", value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_name = "LENGTH,ANGLE", value_delimiter = ',', num_args = 2, value_parser = crate::guard::random_error)]
     random_errors: Option<Vec<f64>>,
     /// Targets (reflectors) on the tool, placed at random within 0.1 m of the tip.
-    #[arg(long, value_name = "K", default_value_t = 1)]
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = crate::guard::small_count)]
     targets: usize,
     /// Measurements of each pose.
-    #[arg(long, value_name = "R", default_value_t = 1)]
+    #[arg(long, value_name = "R", default_value_t = 1, value_parser = crate::guard::small_count)]
     repeats: usize,
     /// Fraction of the poses (the last ones) marked for validation.
-    #[arg(long, value_name = "F", default_value_t = 0.0)]
+    #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = crate::guard::fraction)]
     validation: f64,
     /// Seed of the random stream (a seed reproduces a data set exactly).
     #[arg(long, value_name = "S", default_value_t = 1)]

@@ -23,13 +23,13 @@ use nalgebra::{Isometry3, Translation3};
 use serde::Serialize;
 
 use crate::commands::calibrate::{
-    gravity_inputs, unit_of, write_calibrated, CalibrateArgs, CalibrateFormat, CandidateDoc,
+    calibrated_bytes, gravity_inputs, unit_of, CalibrateArgs, CalibrateFormat, CandidateDoc,
     EffectsChoice, FixedDoc, Inputs, TargetDoc,
 };
 use crate::error::Outcome;
 use crate::input::display_name;
 use crate::measured::parse_effect;
-use crate::output::write_atomically;
+use crate::output::write_all;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::units::LengthUnit;
 
@@ -198,13 +198,7 @@ fn text(doc: &ContactDoc) -> String {
          then averaged (MUKCa's mean absolute error); distance error: |socket means' distance - \
          known distance|; mm"
     );
-    let w = doc
-        .steps
-        .iter()
-        .map(|st| st.label.len())
-        .max()
-        .unwrap_or(0)
-        .max(10);
+    let w = crate::guard::column_width(doc.steps.iter().map(|st| st.label.as_str()), 10);
     let _ = writeln!(
         s,
         "  {:<w$} {:>5} {:>9} {:>11} {:>10} {:>10} {:>10}",
@@ -384,18 +378,25 @@ pub(crate) fn calibrate_contacts(
     let r = diagnose_sockets(&DhTree::serial(table), &inputs.data, &options, &diag)
         .map_err(|e| anyhow::anyhow!("{name}: calibration failed: {e}"))?;
     let doc = document(&inputs.model_name, &name, &r);
+    // Every output file is built before any is written, and all are written or none.
+    let mut files = Vec::new();
+    if let Some(path) = &args.out {
+        files.push((
+            Path::new(path),
+            contact_model_bytes(path, inputs, &r, &doc)?,
+        ));
+    }
+    if let Some(path) = &args.plot {
+        let chart = chart(&inputs.model_name, &name, &r);
+        files.push((Path::new(path), residuals_svg(&chart)));
+    }
+    let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
+    write_all(&files)?;
     match args.format {
         CalibrateFormat::Json => {
             out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
         }
         CalibrateFormat::Text => out.write_all(text(&doc).as_bytes())?,
-    }
-    if let Some(path) = &args.out {
-        write_contact_model(path, inputs, &r, &doc)?;
-    }
-    if let Some(path) = &args.plot {
-        let chart = chart(&inputs.model_name, &name, &r);
-        write_atomically(Path::new(path), residuals_svg(&chart).as_bytes())?;
     }
     Ok(Outcome::Pass)
 }
@@ -446,13 +447,13 @@ fn written_table(r: &SocketReport) -> (DhTable, Vec<TargetDoc>) {
     }
 }
 
-/// Writes the model calibrated from contacts (see [`written_table`]) as the point path does.
-fn write_contact_model(
+/// The model calibrated from contacts (see [`written_table`]), as the point path writes it.
+fn contact_model_bytes(
     path: &str,
     inputs: &Inputs,
     r: &SocketReport,
     doc: &ContactDoc,
-) -> Result<()> {
+) -> Result<String> {
     let (table, targets) = written_table(r);
     let first = doc.steps.first();
     let last = doc.steps.last();
@@ -485,7 +486,7 @@ fn write_contact_model(
          -> {:.6} m",
         doc.model, doc.data, section.consistency_before, section.consistency_after
     );
-    write_calibrated(
+    calibrated_bytes(
         path,
         inputs,
         &table,

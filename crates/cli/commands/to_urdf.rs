@@ -77,6 +77,102 @@ fn origin(p: &Isometry3<f64>) -> String {
     )
 }
 
+/// Largest origin coordinate, limit or mimic number the URDF reader accepts (metres or radians;
+/// `urdf-axes` refuses larger ones).
+const URDF_MAX_MAGNITUDE: f64 = 1e9;
+
+/// Refuses a table or names that would make [`urdf_of`] write a URDF its own reader refuses:
+/// a robot, base or tip link name that is empty or holds a control or bidi character (a TAB
+/// too); two links or two joints of one name (the links are `base_link`, `<row>_link` per row
+/// and `tip_link`; the joints are the rows and `<tip_link>_joint`); an origin coordinate, limit
+/// or mimic number beyond the reader's 1e9 (metres or radians).
+///
+/// # Errors
+/// The first clash, bad name or value, naming the option or row that brings it.
+pub fn check_urdf(table: &DhTable, robot: &str, base_link: &str, tip_link: &str) -> Result<()> {
+    use crate::guard::{escape, name_problem};
+    let mut before = table.base;
+    for row in &table.rows {
+        if row.kind == JointKind::Prismatic && row.limits.is_none() {
+            return Err(crate::error::hinted(
+                format!(
+                    "joint '{}': expected lower and upper limits for a prismatic joint, found none",
+                    escape(&row.name)
+                ),
+                "a URDF prismatic joint needs a <limit>: give the row lower and upper in the sheet",
+            ));
+        }
+        let (pre, post) = split(row, table.convention);
+        let (xyz, _) = to_xyz_rpy(&(before * pre));
+        let limits = row.limits.map_or([0.0; 2], |l| [l.lower, l.upper]);
+        let mimic = row
+            .mimic
+            .as_ref()
+            .map_or([0.0; 2], |m| [m.multiplier, m.offset]);
+        let worst = xyz
+            .iter()
+            .chain(&limits)
+            .chain(&mimic)
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        if worst > URDF_MAX_MAGNITUDE || !worst.is_finite() {
+            anyhow::bail!(
+                "joint '{}': expected origin coordinates, limits and mimic numbers within {URDF_MAX_MAGNITUDE:e} m or rad (what a URDF may hold), found {worst:e}",
+                escape(&row.name)
+            );
+        }
+        before = post;
+    }
+    let (xyz, _) = to_xyz_rpy(&(before * table.tool));
+    if let Some(v) = xyz
+        .iter()
+        .find(|v| v.abs() > URDF_MAX_MAGNITUDE || !v.is_finite())
+    {
+        anyhow::bail!(
+            "the tip link's origin: expected coordinates within {URDF_MAX_MAGNITUDE:e} m (what a URDF may hold), found {v:e}"
+        );
+    }
+    for (what, name) in [
+        ("robot name", robot),
+        ("base link", base_link),
+        ("tip link", tip_link),
+    ] {
+        if let Some(p) = name_problem(name) {
+            anyhow::bail!("{what} {p}");
+        }
+    }
+    let mut links: Vec<(String, String)> = vec![(base_link.to_string(), "the base link".into())];
+    links.extend(table.rows.iter().map(|r| {
+        (
+            format!("{}_link", r.name),
+            format!("the link of joint '{}'", escape(&r.name)),
+        )
+    }));
+    links.push((tip_link.to_string(), "the tip link".into()));
+    let mut joints: Vec<(String, String)> = table
+        .rows
+        .iter()
+        .map(|r| (r.name.clone(), format!("joint '{}'", escape(&r.name))))
+        .collect();
+    joints.push((
+        format!("{tip_link}_joint"),
+        "the tip link's fixed joint".into(),
+    ));
+    for (kind, items) in [("link", &links), ("joint", &joints)] {
+        for (k, (name, who)) in items.iter().enumerate() {
+            if let Some((_, first)) = items[..k].iter().find(|(n, _)| n == name) {
+                return Err(crate::error::hinted(
+                    format!(
+                        "the URDF would have two {kind}s named '{}': {first} and {who}",
+                        escape(name)
+                    ),
+                    "choose other names with --base-link and --tip-link (the row links are <joint>_link, the tip's joint <tip>_joint)",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The URDF text of `table`.
 pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> String {
     let mut s = String::new();
@@ -193,8 +289,10 @@ pub fn prove_urdf(
     let n = table.rows.len() as f64 + 1.0;
     let rounding = dh_core::written_bound(&ex.table, dh_core::Precision::rounded(0.5e-15, 0.5e-15));
     let bound = (
-        ex.bound.position + rounding.position + 16.0 * n * f64::EPSILON * table.size(),
-        ex.bound.orientation + rounding.orientation + 16.0 * n * f64::EPSILON,
+        (ex.bound.position + rounding.position + 16.0 * n * f64::EPSILON * table.size())
+            .min(dh_core::Bound::MAX_POSITION),
+        (ex.bound.orientation + rounding.orientation + 16.0 * n * f64::EPSILON)
+            .min(dh_core::Bound::MAX_ORIENTATION),
     );
     let kinds_agree = ex
         .table
@@ -228,6 +326,7 @@ pub fn to_urdf(args: &ToUrdfArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
         .clone()
         .or(sheet.robot.clone())
         .unwrap_or_else(|| "robot".into());
+    check_urdf(&sheet.table, &robot, &args.base_link, &args.tip_link)?;
     let mut text = urdf_of(&sheet.table, &robot, &args.base_link, &args.tip_link);
     let proof = prove_urdf(
         &text,

@@ -49,6 +49,34 @@ const MAX_PLAUSIBLE_RADIANS: f64 = 8.0 * std::f64::consts::PI;
 /// camera system or total station used for arm calibration measures 100 m away.
 const MAX_PLAUSIBLE_METRES: f64 = 100.0;
 
+/// Is `c` a character that changes how a terminal or table shows the text around it: a control
+/// character (C0, DEL, C1) or a bidirectional override, embedding, isolate or mark (U+202A to
+/// U+202E, U+2066 to U+2069, U+200E, U+200F, U+061C)? Names holding one are refused: printed,
+/// they can hide or reorder what a report says (`t1` followed by U+202E reads backwards).
+pub fn is_spoofing(c: char) -> bool {
+    c.is_control()
+        || matches!(
+            c,
+            '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}' | '\u{200E}' | '\u{200F}' | '\u{061C}'
+        )
+}
+
+/// A name cell (`target`, `config`, `socket`, a header column) without [`is_spoofing`]
+/// characters.
+fn check_name(text: &str, line: usize, column: &str) -> Result<(), DataError> {
+    match text.chars().enumerate().find(|(_, c)| is_spoofing(*c)) {
+        None => Ok(()),
+        Some((k, c)) => Err(DataError::Format {
+            line,
+            expected: format!(
+                "a name without control or bidi characters in column '{}'",
+                column.escape_default()
+            ),
+            found: format!("U+{:04X} at character {}", u32::from(c), k + 1),
+        }),
+    }
+}
+
 /// Everything that can be wrong with a measurement file: the message names the line, the column
 /// and the text found.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -476,9 +504,9 @@ pub fn joint_name_problem(names: &[String]) -> Option<String> {
         if RESERVED_COLUMNS.contains(&name.as_str()) {
             return Some(format!("'{name}', the name of a reserved column"));
         }
-        if let Some(c) = name.chars().find(|c| c.is_control()) {
+        if let Some(c) = name.chars().find(|c| is_spoofing(*c)) {
             return Some(format!(
-                "'{}' with the control character U+{:04X}",
+                "'{}' with the control or bidi character U+{:04X}",
                 name.escape_debug(),
                 u32::from(c)
             ));
@@ -638,6 +666,9 @@ pub fn parse_measurements(
             found: "only a header",
         });
     }
+    for (k, field) in header.fields.iter().enumerate() {
+        check_name(field, header.line, &format!("{}", k + 1))?;
+    }
     let cols = header_columns(header, joint_names)?;
     let length = |v: f64| opts.length_unit.to_metres(v);
     let revolute: Vec<bool> = joint_names
@@ -695,11 +726,30 @@ pub fn parse_measurements(
             if let Some(m) = largest.get_mut(col) {
                 *m = m.max(value.abs());
             }
-            q.push(if revolute {
+            let si = if revolute {
                 opts.angle_unit.to_radians(value)
             } else {
                 length(value)
-            });
+            };
+            // Whatever the unit: a joint value past four turns or 100 m is no pose (and a
+            // huge one would lose every digit in the trigonometry).
+            let cap = if revolute {
+                MAX_PLAUSIBLE_RADIANS
+            } else {
+                MAX_PLAUSIBLE_METRES
+            };
+            if si.abs() > cap {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a joint value within {cap:.1} {} in column '{}'",
+                        if revolute { "rad" } else { "m" },
+                        name(col)
+                    ),
+                    found: format!("'{}'", cell(col)),
+                });
+            }
+            q.push(si);
         }
 
         let socket = match cols.socket.map(cell).filter(|c| !c.is_empty()) {
@@ -775,6 +825,16 @@ pub fn parse_measurements(
                 *m = m.max(value.abs());
             }
             point[k] = length(value);
+            if point[k].abs() > MAX_PLAUSIBLE_METRES {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a coordinate within {MAX_PLAUSIBLE_METRES} m in column '{}'",
+                        name(col)
+                    ),
+                    found: format!("'{}'", cell(col)),
+                });
+            }
         }
 
         let sigma_cell = |col: usize| -> Result<Option<f64>, DataError> {
@@ -788,6 +848,16 @@ pub fn parse_measurements(
                     line,
                     column: name(col).into(),
                     text: text.into(),
+                });
+            }
+            if length(value) > MAX_PLAUSIBLE_METRES {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a standard deviation within {MAX_PLAUSIBLE_METRES} m in column '{}'",
+                        name(col)
+                    ),
+                    found: format!("'{text}'"),
                 });
             }
             Ok(Some(length(value)))
@@ -808,6 +878,15 @@ pub fn parse_measurements(
             },
         };
 
+        for col in [cols.target, cols.config, cols.socket]
+            .into_iter()
+            .flatten()
+        {
+            check_name(cell(col), line, name(col))?;
+        }
+        if let Some([p, _, _]) = cols.partner {
+            check_name(cell(p), line, name(p))?;
+        }
         let target_name = cols.target.map_or(DEFAULT_TARGET, cell);
         let target = match m.targets.iter().position(|t| t == target_name) {
             Some(i) => i,

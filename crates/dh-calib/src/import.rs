@@ -23,6 +23,46 @@ use std::str::FromStr;
 use crate::csv::DataError;
 use crate::data::Measurements;
 
+/// Flow collections (`[`, `{`) nested deeper than this are refused before YAML or JSON parsing:
+/// a sheet or stationing file needs a few levels, and libyaml's scanner takes time quadratic in
+/// the depth (100 000 `[` took 22 s).
+pub const MAX_FLOW_DEPTH: usize = 64;
+
+/// The line (1-based) where `text` nests flow collections deeper than [`MAX_FLOW_DEPTH`], or
+/// `None`: one linear pass that skips quoted strings and `#` comments.
+pub fn too_deep_at(text: &str) -> Option<usize> {
+    let (mut depth, mut line) = (0usize, 1usize);
+    let mut quote: Option<char> = None;
+    let mut comment = false;
+    let mut previous = '\n';
+    for c in text.chars() {
+        if c == '\n' {
+            line += 1;
+            comment = false;
+        } else if comment {
+        } else if let Some(q) = quote {
+            if c == q {
+                quote = None;
+            }
+        } else {
+            match c {
+                '"' | '\'' => quote = Some(c),
+                '#' if previous.is_whitespace() => comment = true,
+                '[' | '{' => {
+                    depth += 1;
+                    if depth > MAX_FLOW_DEPTH {
+                        return Some(line);
+                    }
+                }
+                ']' | '}' => depth = depth.saturating_sub(1),
+                _ => {}
+            }
+        }
+        previous = c;
+    }
+    None
+}
+
 pub mod boby;
 pub mod dlr;
 pub mod hilti;

@@ -20,7 +20,9 @@ fn coordinate(limit: f64) -> impl Strategy<Value = f64> {
     ]
 }
 
-/// Names with delimiters, quotes, spaces and a leading '#', never empty.
+/// Names with delimiters, quotes, spaces, a leading '#' and non-ASCII letters, never empty
+/// (control and bidi characters are refused by the reader: see
+/// `names_with_control_or_bidi_characters_are_refused`).
 fn name() -> impl Strategy<Value = String> {
     prop_oneof![
         "[a-z_][a-z0-9_]{0,8}",
@@ -28,7 +30,7 @@ fn name() -> impl Strategy<Value = String> {
         Just("\"quoted\"".to_string()),
         Just(" padded ".to_string()),
         Just("#hash".to_string()),
-        Just("two\nlines".to_string()),
+        Just("Gelenk ä".to_string()),
     ]
 }
 
@@ -121,6 +123,38 @@ proptest! {
             prop_assert!(a.line > 1);
         }
     }
+}
+
+#[test]
+fn names_with_control_or_bidi_characters_are_refused() {
+    let names = ["j".to_string()];
+    for (cell, column, code) in [
+        ("\"two\nlines\"", "config", "U+000A"),
+        ("t\u{1b}[2J", "target", "U+001B"),
+        ("t\u{202e}1", "target", "U+202E"),
+    ] {
+        let text = if column == "config" {
+            format!("j,x,y,z,config\n0,0,0,0,{cell}\n")
+        } else {
+            format!("j,x,y,z,target\n0,0,0,0,{cell}\n")
+        };
+        let e = parse_measurements(&text, &names, &CsvOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("line 2: expected a name without control or bidi characters in column '{column}', found {code}")),
+            "{e}"
+        );
+    }
+    // A header column too.
+    let e = parse_measurements(
+        "j,x,y,z,t\u{7}\n0,0,0,0,a\n",
+        &names,
+        &CsvOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("line 1") && e.contains("U+0007"), "{e}");
 }
 
 #[test]

@@ -182,13 +182,24 @@ impl fmt::Display for Warning {
 }
 
 /// Largest deviations an extraction may show against its source and still be exact (or exact
-/// up to the reported snaps).
+/// up to the reported snaps), never more than [`Bound::MAX_POSITION`] and
+/// [`Bound::MAX_ORIENTATION`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bound {
     /// Position (metres).
     pub position: f64,
     /// Orientation (radians).
     pub orientation: f64,
+}
+
+impl Bound {
+    /// Cap of the position bound (metres), whatever the tolerances: 1 mm. Snaps with loose
+    /// tolerances on a large arm could otherwise bound the deviation by metres, and a table
+    /// that misses its source by that much would still verify. A table more than 1 mm off is
+    /// another robot for any calibration or check this tool makes.
+    pub const MAX_POSITION: f64 = 1e-3;
+    /// Cap of the orientation bound (radians): 1 mrad (0.057°), as [`Bound::MAX_POSITION`].
+    pub const MAX_ORIENTATION: f64 = 1e-3;
 }
 
 /// A DH table with the facts behind it.
@@ -382,6 +393,8 @@ pub fn extract(
             });
         }
     }
+    bound.position = bound.position.min(Bound::MAX_POSITION);
+    bound.orientation = bound.orientation.min(Bound::MAX_ORIENTATION);
     Ok(Extraction {
         table,
         pairs,

@@ -51,6 +51,16 @@ pub const SIGMA: f64 = 0.75e-3;
 /// field or a NaN or infinite value (naming the field and the station), [`DataError::Empty`] for a
 /// file without measurements.
 pub fn parse(text: &str) -> Result<Measurements, DataError> {
+    if let Some(line) = super::too_deep_at(text) {
+        return Err(DataError::Format {
+            line,
+            expected: format!(
+                "lists and maps nested at most {} deep",
+                super::MAX_FLOW_DEPTH
+            ),
+            found: "deeper".into(),
+        });
+    }
     let root: Value = serde_yaml::from_str(text).map_err(|e| match e.location() {
         Some(at) => DataError::Format {
             line: at.line(),

@@ -1,0 +1,273 @@
+//! Guards against hostile input at the command line's edges: one escaping rule for every name
+//! the tool prints, one test for names the readers refuse, capped column widths for text
+//! tables, and the value parsers (with their ranges) of the numeric options.
+//!
+//! The ranges are documented in README.md ("Bad input"); each parser's error names the range,
+//! and clap prefixes it with the option, so `--sigma 1e200` reads
+//! `invalid value '1e200' for '--sigma <SIGMA>': expected a length in (0, 1000], found 1e200`.
+
+use std::borrow::Cow;
+use std::io::Write;
+
+/// Widest padded column of a text table, in characters. Longer names are printed whole and
+/// push the row's later cells to the right; the width itself never grows past this (a format
+/// width of 65 536 or more panics in `std::fmt`).
+pub const MAX_COLUMN: usize = 48;
+
+/// The width of a text column holding `names`: the longest name's length in characters, at
+/// least `min`, at most [`MAX_COLUMN`].
+pub fn column_width<'a>(names: impl IntoIterator<Item = &'a str>, min: usize) -> usize {
+    names
+        .into_iter()
+        .map(|n| escape(n).chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(min)
+        .min(MAX_COLUMN)
+}
+
+pub use dh_calib::csv::is_spoofing;
+
+/// A name as the tool prints it: every control or bidi character ([`is_spoofing`]) written as
+/// `\u{XX}` (Rust's escape), everything else as it is. Names the readers accept never hold
+/// such characters, so they print unchanged; this is for names that reach a message before or
+/// without a reader's check (command-line arguments, the name a refusal quotes).
+pub fn escape(name: &str) -> Cow<'_, str> {
+    if !name.chars().any(is_spoofing) {
+        return Cow::Borrowed(name);
+    }
+    let mut s = String::with_capacity(name.len() + 8);
+    for c in name.chars() {
+        if is_spoofing(c) {
+            s.push_str(&format!("\\u{{{:x}}}", u32::from(c)));
+        } else {
+            s.push(c);
+        }
+    }
+    Cow::Owned(s)
+}
+
+/// A writer that passes text on with every [`is_spoofing`] character but the line feed
+/// [`escape`]d: standard error goes through it, so no message, warning or usage text can put a
+/// raw escape sequence or bidi override on the user's terminal, whatever it quotes.
+pub struct Escaping<'a>(pub &'a mut dyn Write);
+
+impl Write for Escaping<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        // `write!` hands over whole `str` pieces; other bytes pass as they are.
+        match std::str::from_utf8(buf) {
+            Ok(s) if s.chars().any(|c| c != '\n' && is_spoofing(c)) => {
+                let escaped: Vec<Cow<'_, str>> = s.split('\n').map(escape).collect();
+                self.0.write_all(escaped.join("\n").as_bytes())?;
+                Ok(buf.len())
+            }
+            _ => self.0.write(buf),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
+/// What is wrong with a name that a file or option gives (a joint, target, link or column), or
+/// `None`: empty, or holding a control or bidi character (found at character `k`, counted
+/// from 1). The URDF reader refuses the same characters.
+pub fn name_problem(name: &str) -> Option<String> {
+    if name.trim().is_empty() {
+        return Some("expected a name, found an empty one".into());
+    }
+    let (k, c) = name.chars().enumerate().find(|(_, c)| is_spoofing(*c))?;
+    Some(format!(
+        "'{}': expected a name without control or bidi characters, found U+{:04X} at character {}",
+        escape(name),
+        u32::from(c),
+        k + 1
+    ))
+}
+
+/// A finite number in `[lo, hi]` (or `(lo, hi]` when `open_low`), for a value parser.
+fn ranged(s: &str, what: &str, lo: f64, hi: f64, open_low: bool) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected {what}, found '{}'", escape(s)))?;
+    let low_ok = if open_low { v > lo } else { v >= lo };
+    if v.is_finite() && low_ok && v <= hi {
+        return Ok(v);
+    }
+    let open = if open_low { '(' } else { '[' };
+    Err(format!(
+        "expected {what} in {open}{lo}, {hi}], found {}",
+        escape(s.trim())
+    ))
+}
+
+/// An integer in `[lo, hi]`, for a value parser.
+fn counted(s: &str, what: &str, lo: usize, hi: usize) -> Result<usize, String> {
+    let v: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected {what}, found '{}'", escape(s)))?;
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected {what} in [{lo}, {hi}], found {}",
+            s.trim()
+        ))
+    }
+}
+
+/// Largest linear tolerance (metres): a common normal of 10 cm is a link, not rounding.
+pub const MAX_LINEAR_TOL: f64 = 0.1;
+/// Largest angular tolerance (radians, 5.7°): beyond it every pair of a real arm would snap.
+pub const MAX_ANGULAR_TOL: f64 = 0.1;
+
+/// `--linear-tol`: metres in `[0, 0.1]`.
+pub fn linear_tol(s: &str) -> Result<f64, String> {
+    ranged(s, "a length in metres", 0.0, MAX_LINEAR_TOL, false)
+}
+
+/// `--angular-tol`: radians in `[0, 0.1]`.
+pub fn angular_tol(s: &str) -> Result<f64, String> {
+    ranged(s, "an angle in radians", 0.0, MAX_ANGULAR_TOL, false)
+}
+
+/// `--sigma`: a standard deviation in the files' length unit, in `(0, 1000]` (1 m in mm, 1 km
+/// in m: far above any measuring device, far below overflow when squared).
+pub fn sigma(s: &str) -> Result<f64, String> {
+    ranged(s, "a length", 0.0, 1000.0, true)
+}
+
+/// `--noise`: metres in `[0, 1]`.
+pub fn noise(s: &str) -> Result<f64, String> {
+    ranged(s, "a length in metres", 0.0, 1.0, false)
+}
+
+/// `--validation`: a fraction in `[0, 0.9]`.
+pub fn fraction(s: &str) -> Result<f64, String> {
+    ranged(s, "a fraction", 0.0, 0.9, false)
+}
+
+/// `--arc`: radians in `(0, 2 pi]`.
+pub fn arc(s: &str) -> Result<f64, String> {
+    ranged(s, "an angle in radians", 0.0, std::f64::consts::TAU, true)
+}
+
+/// A joint value of `--q` (radians, or metres for a prismatic joint): `[-100, 100]`.
+pub fn joint_value(s: &str) -> Result<f64, String> {
+    ranged(s, "a joint value", -100.0, 100.0, false)
+}
+
+/// A bound of `--random-errors` (metres, then radians): `[0, 1]`.
+pub fn random_error(s: &str) -> Result<f64, String> {
+    ranged(s, "a length (m) or angle (rad)", 0.0, 1.0, false)
+}
+
+/// Largest `--samples` of `extract`'s self-check.
+pub const MAX_SAMPLES: usize = 1_000_000;
+/// `--samples`: `[1, 1 000 000]`.
+pub fn samples(s: &str) -> Result<usize, String> {
+    counted(s, "a number of samples", 1, MAX_SAMPLES)
+}
+
+/// Largest `--poses` of `simulate` (times targets and repeats: at most [`MAX_SIM_SAMPLES`]).
+pub const MAX_POSES: usize = 1_000_000;
+/// Largest number of simulated samples (poses x targets x repeats).
+pub const MAX_SIM_SAMPLES: usize = 2_000_000;
+/// `--poses`: `[1, 1 000 000]`.
+pub fn poses(s: &str) -> Result<usize, String> {
+    counted(s, "a number of poses", 1, MAX_POSES)
+}
+
+/// `--targets` (simulate) and `--repeats`: `[1, 1000]`.
+pub fn small_count(s: &str) -> Result<usize, String> {
+    counted(s, "a count", 1, 1000)
+}
+
+/// `--folds`: `[2, 100]`.
+pub fn folds(s: &str) -> Result<usize, String> {
+    counted(s, "a number of folds", 2, 100)
+}
+
+/// `--max-effects`: `[0, 100]`.
+pub fn max_effects(s: &str) -> Result<usize, String> {
+    counted(s, "a number of effects", 0, 100)
+}
+
+/// A gravity component (m/s²): `[-100, 100]`.
+pub fn gravity(s: &str) -> Result<f64, String> {
+    ranged(s, "an acceleration in m/s²", -100.0, 100.0, false)
+}
+
+/// A payload value (kg, or m for the centre): `[-1000, 1000]`.
+pub fn payload(s: &str) -> Result<f64, String> {
+    ranged(s, "a mass (kg) or position (m)", -1000.0, 1000.0, false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_control_and_bidi_only() {
+        assert_eq!(escape("joint_1"), "joint_1");
+        assert_eq!(escape("gelenk_ä"), "gelenk_ä");
+        assert_eq!(escape("a\u{1b}[31mb"), "a\\u{1b}[31mb");
+        assert_eq!(escape("x\u{202e}y\0"), "x\\u{202e}y\\u{0}");
+        assert!(matches!(escape("plain"), Cow::Borrowed(_)));
+    }
+
+    #[test]
+    fn the_escaping_writer_keeps_lines_and_escapes_the_rest() {
+        let mut buf = Vec::new();
+        {
+            let mut w = Escaping(&mut buf);
+            let tip = "a\u{1b}[2Jb";
+            writeln!(w, "tip '{tip}' not found").unwrap();
+            writeln!(w, "plain").unwrap();
+        }
+        assert_eq!(
+            String::from_utf8(buf).unwrap(),
+            "tip 'a\\u{1b}[2Jb' not found\nplain\n"
+        );
+    }
+
+    #[test]
+    fn names_with_spoofing_characters_are_refused() {
+        assert_eq!(name_problem("t1"), None);
+        let p = name_problem("t\u{202e}1").unwrap();
+        assert!(p.contains("U+202E at character 2"), "{p}");
+        assert!(name_problem(" ").is_some());
+        assert!(name_problem("a\tb").unwrap().contains("U+0009"));
+    }
+
+    #[test]
+    fn widths_are_capped() {
+        let long = "j".repeat(70_000);
+        assert_eq!(column_width([long.as_str()], 5), MAX_COLUMN);
+        assert_eq!(column_width(["ab"], 5), 5);
+        assert_eq!(column_width(["joint_12"], 5), 8);
+        // Formatting with the capped width does not panic and keeps the whole name.
+        let w = column_width([long.as_str()], 5);
+        assert_eq!(format!("{long:<w$}|").len(), 70_001);
+    }
+
+    #[test]
+    fn parsers_name_the_range() {
+        assert_eq!(sigma("0.5"), Ok(0.5));
+        assert!(sigma("1e200").unwrap_err().contains("(0, 1000]"));
+        assert!(sigma("0").is_err());
+        assert!(sigma("nan").is_err());
+        assert!(angular_tol("4").unwrap_err().contains("[0, 0.1]"));
+        assert_eq!(angular_tol("0"), Ok(0.0));
+        assert!(joint_value("nan").is_err());
+        assert!(joint_value("inf").is_err());
+        assert_eq!(joint_value("-1.5"), Ok(-1.5));
+        assert!(folds("0").unwrap_err().contains("[2, 100]"));
+        assert!(samples("1000000000").is_err());
+        assert!(poses("100000000").is_err());
+        assert_eq!(poses("100"), Ok(100));
+    }
+}
