@@ -3,6 +3,8 @@
 mod batch;
 mod calibrate;
 mod check;
+mod check_cases;
+mod check_round_trip;
 mod common;
 mod contacts;
 mod corpus;

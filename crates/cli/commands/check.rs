@@ -5,16 +5,18 @@
 //! 1. the row-by-row equivalence walk of `dh_core::equivalence`, which sees through the
 //!    representation freedoms (x signs, common-normal placement, convention, units) and names
 //!    every difference;
-//! 2. the sheet taken literally, with its free base and tool fitted by least squares (the
-//!    `dh-calib` machinery), against the URDF's own forward kinematics: the largest position and
-//!    orientation deviation over many joint values, the number a CI job can put a bound on.
+//! 2. the sheet taken literally, with its free base and tool fitted by least squares from a
+//!    closed-form registration of the joint axes (`dh_core::literal`), against the URDF's own
+//!    forward kinematics: the largest position and orientation deviation over many joint
+//!    values, the number a CI job can put a bound on.
+//!
+//! Both live in `dh_core::check`, which also holds the invariant: no MATCH while the literal
+//! comparison exceeds the tolerances.
 
 use std::io::Write;
 
 use anyhow::{Context, Result};
-use dh_calib::fit::{solve, FitOptions};
-use dh_calib::model::{Block, Model, ModelOptions, ModelProblem, Observation, Observed};
-use dh_core::{compare_tables, Convention, DhTable, Freedom, JointSampler, Parameter, Tolerance};
+use dh_core::{check_sheet, Convention, Freedom, Parameter, Tolerance};
 use serde::Serialize;
 use urdf_axes::Chain;
 
@@ -66,7 +68,7 @@ pub struct CheckArgs {
 pub struct DifferenceDoc {
     /// Joint name (`null` for base, tool and joint count).
     pub joint: Option<String>,
-    /// `a|alpha|d|theta|direction|base|tool|joint_count`.
+    /// `a|alpha|d|theta|direction|base|tool|type|fk_position|fk_orientation|joint_count`.
     pub parameter: String,
     /// What the URDF has (the value the sheet would need).
     pub urdf: f64,
@@ -102,6 +104,11 @@ pub struct CheckReport {
     pub max_position_error: Option<f64>,
     /// Largest orientation deviation likewise (radians).
     pub max_orientation_error: Option<f64>,
+    /// What `max_position_error` may reach in a match (metres): `linear + angular × size` of
+    /// the chain; `null` when the joint counts differ.
+    pub position_bound: Option<f64>,
+    /// What `max_orientation_error` may reach in a match (radians): `angular`.
+    pub orientation_bound: Option<f64>,
     /// Tolerances used.
     pub tolerances: CheckTolerances,
     /// The sheet's base and tool: given (compared) or free (fitted).
@@ -113,9 +120,6 @@ pub struct CheckReport {
     /// Remarks (joint names that differ, suspicious units).
     pub warnings: Vec<String>,
 }
-
-/// Joint-value samples of the literal comparison.
-const SAMPLES: usize = 500;
 
 /// Runs `check`.
 ///
@@ -188,6 +192,8 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
             differences,
             max_position_error: None,
             max_orientation_error: None,
+            position_bound: None,
+            orientation_bound: None,
             tolerances,
             base_given: sheet.has_base,
             tool_given: sheet.has_tool,
@@ -213,13 +219,16 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
         base_free: !sheet.has_base,
         tool_free: !sheet.has_tool,
     };
-    let eq = compare_tables(&reference.table, &sheet.table, freedom, tol);
+    let verdict = check_sheet(&reference.table, &sheet.table, freedom, tol, |q| {
+        chain.fk(q)
+    })
+    .context("comparing the sheet with the URDF")?;
     let name = |row: Option<usize>| {
         row.and_then(|r| sheet.table.rows.get(r))
             .map(|r| r.name.clone())
     };
-    let differences: Vec<DifferenceDoc> = eq
-        .differences
+    let differences: Vec<DifferenceDoc> = verdict
+        .differences()
         .iter()
         .map(|d| {
             let joint = name(d.row);
@@ -232,6 +241,13 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
                 Parameter::Alpha => "twist alpha differs".to_string(),
                 Parameter::Base => "the sheet's base puts joint 1's axis elsewhere (urdf: distance in metres)".to_string(),
                 Parameter::Tool => "the sheet's tool puts the tip elsewhere (urdf: distance in metres)".to_string(),
+                Parameter::Type => format!(
+                    "the URDF's joint is {}, the sheet's {} (urdf, sheet: 0 revolute, 1 prismatic)",
+                    kind_name(d.reference),
+                    kind_name(d.sheet)
+                ),
+                Parameter::FkPosition => "no parameter differs, yet the sheet taken literally puts the tip this far (metres) from the URDF's".to_string(),
+                Parameter::FkOrientation => "no parameter differs, yet the sheet taken literally turns the tip this far (radians) from the URDF's".to_string(),
             };
             DifferenceDoc {
                 joint,
@@ -244,16 +260,18 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
             }
         })
         .collect();
-    let (pos, rot) = literal_deviation(chain, sheet)?;
+    let dev = &verdict.literal().deviation;
     Ok(CheckReport {
-        matches: differences.is_empty(),
+        matches: verdict.matches(),
         differences,
-        max_position_error: Some(pos),
-        max_orientation_error: Some(rot),
+        max_position_error: Some(dev.max_position_error),
+        max_orientation_error: Some(dev.max_orientation_error),
+        position_bound: Some(verdict.bound().position),
+        orientation_bound: Some(verdict.bound().orientation),
         tolerances,
         base_given: sheet.has_base,
         tool_given: sheet.has_tool,
-        samples: SAMPLES,
+        samples: dev.samples,
         warnings,
     })
 }
@@ -270,65 +288,13 @@ fn missing(name: &str, note: &str) -> DifferenceDoc {
     }
 }
 
-/// The sheet taken literally (the same joint values), with its free base and tool fitted by
-/// least squares to the URDF's tip poses: the largest deviations over [`SAMPLES`] joint values.
-fn literal_deviation(chain: &Chain, sheet: &Sheet) -> Result<(f64, f64)> {
-    let mut table: DhTable = sheet.table.clone();
-    for (row, axis) in table.rows.iter_mut().zip(chain.axes()) {
-        row.limits = axis.limits;
-        row.mimic = axis.mimic.clone();
-    }
-    let n = table.rows.len();
-    if !sheet.has_base {
-        // Start where the zero poses coincide: base = tip_urdf(0) · tool⁻¹ · (A_1 ⋯ A_n)(0)⁻¹.
-        let mut unit = table.clone();
-        unit.base = nalgebra::Isometry3::identity();
-        unit.tool = nalgebra::Isometry3::identity();
-        table.base = chain.tip_pose() * table.tool.inverse() * unit.fk(&vec![0.0; n])?.inverse();
-    }
-    let model = Model::new(
-        &table,
-        &[],
-        &ModelOptions {
-            hayati_threshold: 0.0,
-            ..ModelOptions::default()
-        },
-    )?;
-    let mut sampler = JointSampler::new(&table.rows, table.size(), 17);
-    let mut observations = Vec::with_capacity(60);
-    let mut q = Vec::new();
-    for _ in 0..60 {
-        sampler.next_into(&mut q);
-        observations.push(Observed {
-            q: q.clone(),
-            observation: Observation::Pose(chain.fk(&q)),
-        });
-    }
-    let free: Vec<usize> = model.indices(|b| {
-        (b == Block::Base && !sheet.has_base) || (b == Block::Tool && !sheet.has_tool)
-    });
-    let x0 = vec![0.0; model.parameter_count()];
-    let x = if free.is_empty() {
-        x0
+/// The joint kind a `type` difference's number stands for (`dh_core::kind_code`).
+fn kind_name(code: f64) -> &'static str {
+    if code == 0.0 {
+        "revolute"
     } else {
-        let problem = ModelProblem {
-            model: &model,
-            observations: &observations,
-        };
-        solve(
-            &problem,
-            &x0,
-            &free,
-            &model.scales(),
-            &FitOptions::default(),
-        )?
-        .x
-    };
-    let mut fitted = table.clone();
-    fitted.base = model.pose_at(&x, Block::Base);
-    fitted.tool = model.pose_at(&x, Block::Tool);
-    let dev = dh_core::compare(&fitted, |q| chain.fk(q), SAMPLES, 29)?;
-    Ok((dev.max_position_error, dev.max_orientation_error))
+        "prismatic"
+    }
 }
 
 fn text(title: &str, r: &CheckReport, sheet: &Sheet) -> String {
@@ -365,8 +331,9 @@ fn text(title: &str, r: &CheckReport, sheet: &Sheet) -> String {
         );
         for d in &r.differences {
             let fmt = |v: f64| match d.parameter.as_str() {
-                "alpha" | "theta" => format!("{:.4} deg", v.to_degrees()),
-                "a" | "d" | "base" | "tool" => format!("{:.6} m", v),
+                "alpha" | "theta" | "fk_orientation" => format!("{:.4} deg", v.to_degrees()),
+                "a" | "d" | "base" | "tool" | "fk_position" => format!("{:.6} m", v),
+                "type" => kind_name(v).to_string(),
                 _ => format!("{v}"),
             };
             let mut note = d.note.clone();
@@ -380,15 +347,24 @@ fn text(title: &str, r: &CheckReport, sheet: &Sheet) -> String {
                 d.parameter,
                 fmt(d.urdf),
                 fmt(d.sheet),
-                fmt(d.difference)
+                if d.parameter == "type" {
+                    "-".to_string()
+                } else {
+                    fmt(d.difference)
+                }
             );
         }
     }
-    if let (Some(p), Some(o)) = (r.max_position_error, r.max_orientation_error) {
+    if let (Some(p), Some(o), Some(bp), Some(bo)) = (
+        r.max_position_error,
+        r.max_orientation_error,
+        r.position_bound,
+        r.orientation_bound,
+    ) {
         let _ = writeln!(
             s,
-            "sheet taken literally (same joint values, free base/tool fitted), {} samples: max position error {:.3e} m, max orientation error {:.3e} rad",
-            r.samples, p, o
+            "sheet taken literally (same joint values, free base/tool fitted), {} samples: max position error {:.3e} m, max orientation error {:.3e} rad (bound {:.1e} m, {:.1e} rad)",
+            r.samples, p, o, bp, bo
         );
     }
     s

@@ -15,22 +15,28 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod check;
 pub mod equivalence;
 mod error;
 pub mod extract;
 pub mod line;
+pub mod literal;
 pub mod pose;
 pub mod precision;
+pub mod registration;
 pub mod relation;
 pub mod table;
 pub mod tolerance;
 pub mod verify;
 
-pub use equivalence::{compare_tables, Difference, Equivalence, Freedom, Parameter};
+pub use check::{check_sheet, FkBound, SheetCheck};
+pub use equivalence::{compare_tables, kind_code, Difference, Equivalence, Freedom, Parameter};
 pub use error::CoreError;
 pub use extract::{extract, Bound, Extraction, JointAxis, PairReport, Warning};
 pub use line::{DualNumber, Line};
+pub use literal::{fit_literal, LiteralFit, LITERAL_SAMPLES};
 pub use precision::{compare_written, written_bound, Precision};
+pub use registration::{axis_lines, register_axes, AxisLine};
 pub use relation::{classify, PairGeometry, Relation};
 pub use table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic, PreparedFk};
 pub use tolerance::Tolerance;

@@ -19,13 +19,16 @@
 //! make the first row's `theta`, `d` (or the last row's parameters) unobservable, and they are
 //! never reported.
 
+mod row;
+
 use std::f64::consts::PI;
 
-use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Vector3};
 
 use crate::pose::{pose_error, rot_x, rot_z, trans_z};
 use crate::table::{Convention, DhTable, JointKind};
 use crate::Tolerance;
+use row::{residual_frame, solve_row, wrap, AxisMotion, SheetRow};
 
 /// Which parameter differs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -44,10 +47,29 @@ pub enum Parameter {
     Base,
     /// The tool transform given by the sheet.
     Tool,
+    /// The joint type: `urdf` and `sheet` are 0 for revolute, 1 for prismatic
+    /// ([`kind_code`]).
+    Type,
+    /// The sheet taken literally (same joint values, free base and tool fitted) puts the tip
+    /// farther from the URDF's than the linear tolerance although no parameter was found to
+    /// differ: `urdf` is the largest position deviation (metres). See [`crate::check`].
+    FkPosition,
+    /// As [`Parameter::FkPosition`] for the orientation (radians).
+    FkOrientation,
+}
+
+/// The number a [`Parameter::Type`] difference carries for a joint kind: 0 revolute,
+/// 1 prismatic.
+pub fn kind_code(kind: JointKind) -> f64 {
+    match kind {
+        JointKind::Revolute => 0.0,
+        JointKind::Prismatic => 1.0,
+    }
 }
 
 impl Parameter {
-    /// The name used in reports: `a|alpha|d|theta|direction|base|tool`.
+    /// The name used in reports:
+    /// `a|alpha|d|theta|direction|base|tool|type|fk_position|fk_orientation`.
     pub fn as_str(self) -> &'static str {
         match self {
             Parameter::A => "a",
@@ -57,6 +79,9 @@ impl Parameter {
             Parameter::Direction => "direction",
             Parameter::Base => "base",
             Parameter::Tool => "tool",
+            Parameter::Type => "type",
+            Parameter::FkPosition => "fk_position",
+            Parameter::FkOrientation => "fk_orientation",
         }
     }
 }
@@ -96,185 +121,6 @@ pub struct Freedom {
     pub base_free: bool,
     /// The sheet gives no tool transform: any tool is accepted.
     pub tool_free: bool,
-}
-
-/// A motion along the z axis: `Tz(t) Rz(phi) Rx(pi)^flip`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct AxisMotion {
-    t: f64,
-    phi: f64,
-    flip: bool,
-}
-
-impl AxisMotion {
-    fn iso(&self) -> Isometry3<f64> {
-        trans_z(self.t)
-            * rot_z(self.phi)
-            * if self.flip {
-                rot_x(PI)
-            } else {
-                Isometry3::identity()
-            }
-    }
-
-    /// The nearest motion along z to `y` and what is left over: (motion, tilt of y's z axis
-    /// from ±z in radians, distance of y's origin from the z axis in metres).
-    fn project(y: &Isometry3<f64>) -> (AxisMotion, f64, f64) {
-        let r: Matrix3<f64> = *y.rotation.to_rotation_matrix().matrix();
-        let flip = r[(2, 2)] < 0.0;
-        let tilt = (r[(0, 2)].powi(2) + r[(1, 2)].powi(2))
-            .sqrt()
-            .atan2(r[(2, 2)].abs());
-        let t = y.translation.vector;
-        (
-            AxisMotion {
-                t: t.z,
-                phi: r[(1, 0)].atan2(r[(0, 0)]),
-                flip,
-            },
-            tilt,
-            t.xy().norm(),
-        )
-    }
-}
-
-/// Row geometry of the sheet.
-#[derive(Clone, Copy, Debug)]
-struct SheetRow {
-    theta: f64,
-    d: f64,
-    a: f64,
-    alpha: f64,
-}
-
-/// What one row's solve found.
-#[derive(Clone, Copy, Debug)]
-struct RowFit {
-    psi: f64,
-    cost: f64,
-}
-
-fn wrap(a: f64) -> f64 {
-    let w = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if w <= -PI + 1e-15 {
-        PI
-    } else {
-        w
-    }
-}
-
-/// `M⁻¹ Tz(−delta) Rz(−psi) X` with `M = Tz(d) Tx(a) Rx(alpha)`, and the `delta` that puts its
-/// origin on its z axis (when the axes are not parallel; else 0).
-fn residual_frame(
-    x: &Isometry3<f64>,
-    s: &SheetRow,
-    psi: f64,
-    parallel: bool,
-) -> (Isometry3<f64>, f64) {
-    let w = rot_z(-psi) * x;
-    let (sa, ca) = s.alpha.sin_cos();
-    let delta = if parallel {
-        0.0
-    } else {
-        let v = w.translation.vector;
-        v.z - s.d + ca / sa * v.y
-    };
-    let y = rot_x(-s.alpha) * Isometry3::translation(-s.a, 0.0, -s.d - delta) * w;
-    (y, delta)
-}
-
-fn cost(y: &Isometry3<f64>, scale: f64) -> f64 {
-    let r = y.rotation.to_rotation_matrix();
-    let m = r.matrix();
-    let t = y.translation.vector;
-    (scale * m[(0, 2)]).powi(2) + (scale * m[(1, 2)]).powi(2) + t.x * t.x + t.y * t.y
-}
-
-/// Solves one row: the rotations `psi` about the current axis (with the shift `delta` along it)
-/// that make `X = C·A_ref(0)` agree with the sheet's row.
-fn solve_row(
-    x: &Isometry3<f64>,
-    s: &SheetRow,
-    parallel: bool,
-    scale: f64,
-    tol: Tolerance,
-) -> Vec<RowFit> {
-    const STEPS: usize = 720;
-    let eval = |psi: f64| {
-        let (y, _) = residual_frame(x, s, psi, parallel);
-        RowFit {
-            psi,
-            cost: cost(&y, scale),
-        }
-    };
-    let grid: Vec<RowFit> = (0..STEPS)
-        .map(|k| eval(s.theta - PI + 2.0 * PI * k as f64 / STEPS as f64))
-        .collect();
-    let mut minima = Vec::new();
-    for k in 0..STEPS {
-        let (prev, here, next) = (
-            &grid[(k + STEPS - 1) % STEPS],
-            &grid[k],
-            &grid[(k + 1) % STEPS],
-        );
-        if here.cost <= prev.cost && here.cost <= next.cost {
-            // Golden-section refinement inside the bracket.
-            let (mut lo, mut hi) = (
-                here.psi - 2.0 * PI / STEPS as f64,
-                here.psi + 2.0 * PI / STEPS as f64,
-            );
-            let g = 0.5 * (5f64.sqrt() - 1.0);
-            let (mut c, mut d) = (hi - g * (hi - lo), lo + g * (hi - lo));
-            let (mut fc, mut fd) = (eval(c).cost, eval(d).cost);
-            for _ in 0..80 {
-                if fc < fd {
-                    hi = d;
-                    d = c;
-                    fd = fc;
-                    c = hi - g * (hi - lo);
-                    fc = eval(c).cost;
-                } else {
-                    lo = c;
-                    c = d;
-                    fc = fd;
-                    d = lo + g * (hi - lo);
-                    fd = eval(d).cost;
-                }
-            }
-            minima.push(eval(0.5 * (lo + hi)));
-        }
-    }
-    // A row "holds" when its residual is within the tolerances; every holding solution is a
-    // candidate (x flipped at intersecting axes, or the next joint reversed, are different
-    // descriptions, to be told apart by the rows after); with none, the best fit is.
-    let good = (tol.linear.max(scale * tol.angular)).powi(2);
-    let mut holding: Vec<RowFit> = Vec::new();
-    // The sheet's own theta first: where the row leaves x free (coincident axes) the cost is
-    // flat and its minima are rounding noise.
-    let own = eval(s.theta);
-    if own.cost <= good {
-        holding.push(own);
-    }
-    for f in minima.iter().filter(|f| f.cost <= good) {
-        if !holding.iter().any(|h| wrap(h.psi - f.psi).abs() < 1e-6) {
-            holding.push(*f);
-        }
-    }
-    if holding.is_empty() {
-        // Nothing holds: a parameter differs. Keep the few best descriptions anyway, since the
-        // best fit of this row alone may not lead to the fewest differences overall.
-        let mut sorted = minima.clone();
-        sorted.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-        for f in sorted {
-            if holding.len() == MAX_CANDIDATES {
-                break;
-            }
-            if !holding.iter().any(|h| wrap(h.psi - f.psi).abs() < 1e-6) {
-                holding.push(f);
-            }
-        }
-    }
-    holding
 }
 
 /// Compares `sheet` with `reference`, a table known to be exact for the robot (extracted from
@@ -317,6 +163,7 @@ pub fn compare_tables(
             signs: vec![],
             offsets: vec![],
             parallel_run: vec![],
+            free_run: freedom.base_free,
         })
         .collect();
     if !freedom.base_free {
@@ -352,7 +199,7 @@ pub fn compare_tables(
         next.truncate(BEAM);
         beam = next;
     }
-    match beam.into_iter().next() {
+    let mut found = match beam.into_iter().next() {
         Some(st) => Equivalence {
             differences: st.differences,
             signs: st.signs,
@@ -363,11 +210,22 @@ pub fn compare_tables(
             signs: vec![],
             offsets: vec![],
         },
+    };
+    // The walk compares the zero pose only; a joint that slides where the other turns moves
+    // differently however its row is placed.
+    for (i, (r, s)) in reference.rows.iter().zip(&sheet.rows).enumerate() {
+        if r.kind != s.kind {
+            found.differences.push(Difference {
+                row: Some(i),
+                parameter: Parameter::Type,
+                reference: kind_code(r.kind),
+                sheet: kind_code(s.kind),
+                aliases: vec![],
+            });
+        }
     }
+    found
 }
-
-/// Descriptions of one row kept when none holds.
-const MAX_CANDIDATES: usize = 4;
 
 /// Partial descriptions kept while walking the rows: the fewest differences win, ties go to
 /// the smallest offsets.
@@ -382,6 +240,10 @@ struct State {
     offsets: Vec<f64>,
     /// Rows whose `d` cannot be told apart from the next one's (parallel axes), pending.
     parallel_run: Vec<usize>,
+    /// Still on the run of parallel axes that starts at joint 1 under a free base: a free base
+    /// may slide along that run's common direction, so no `d` on it is observable, up to and
+    /// including the row whose common normal ends the run.
+    free_run: bool,
 }
 
 impl State {
@@ -415,6 +277,7 @@ fn step(
     let parallel = s.alpha.sin().abs() <= tol.angular.sin();
     let first_free = i == 0 && freedom.base_free;
     let last_free = i + 1 == n && freedom.tool_free;
+    let d_free = first_free || st.free_run;
     let prismatic = srow.kind == JointKind::Prismatic;
     if i + 1 == n && !freedom.tool_free {
         return vec![last_with_tool(st, i, &x, reference, std, first_free, tol)];
@@ -446,7 +309,7 @@ fn step(
                     aliases: vec![],
                 });
             }
-            if delta.abs() > tol.linear {
+            if delta.abs() > tol.linear && !d_free {
                 let aliases = st
                     .parallel_run
                     .iter()
@@ -501,6 +364,7 @@ fn step(
         } else {
             next.parallel_run.clear();
         }
+        next.free_run = st.free_run && parallel;
         next.c = AxisMotion::project(&y).0;
         out.push(next);
     }
@@ -550,7 +414,7 @@ fn last_with_tool(
                 aliases: vec![],
             });
         }
-        if delta.abs() > tol.linear {
+        if delta.abs() > tol.linear && !st.free_run {
             next.differences.push(Difference {
                 row: Some(i),
                 parameter: Parameter::D,
@@ -579,8 +443,138 @@ fn last_with_tool(
     next
 }
 
-/// Helper for tests and callers: a pose from a translation and unit quaternion.
-#[allow(dead_code)]
-fn pose(t: Vector3<f64>, r: UnitQuaternion<f64>) -> Isometry3<f64> {
-    Isometry3::from_parts(Translation3::from(t), r)
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::table::DhRow;
+
+    /// Axes 1, 2 antiparallel, 2 and 3 coincident, 4 and 5 antiparallel (the repro `antico`
+    /// shape), with a base and tool far from identity.
+    fn antico() -> DhTable {
+        DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::new(Vector3::new(0.2, -0.1, 0.4), Vector3::new(2.0, 0.9, -1.3)),
+            tool: Isometry3::new(Vector3::new(0.01, 0.02, 0.15), Vector3::new(-0.3, 1.4, 0.2)),
+            rows: vec![
+                DhRow::revolute("j1", 0.22, PI, 0.11, 0.0),
+                DhRow::revolute("j2", 0.0, 0.0, 0.15, 0.6),
+                DhRow::revolute("j3", 0.28, PI / 2.0, 0.0, 0.0),
+                DhRow::revolute("j4", 0.13, -PI, 0.02, PI / 2.0),
+                DhRow::revolute("j5", 0.0, PI / 2.0, 0.24, 0.0),
+            ],
+        }
+    }
+
+    fn tol() -> Tolerance {
+        Tolerance::new(1e-4, 2e-4).unwrap()
+    }
+
+    fn named(e: &Equivalence) -> Vec<(Option<usize>, Parameter)> {
+        e.differences.iter().map(|d| (d.row, d.parameter)).collect()
+    }
+
+    /// Under a free base the run of parallel axes that starts at joint 1 has no observable `d`,
+    /// including the row whose common normal ends it (the sheet's `d` there was reported).
+    #[test]
+    fn a_free_base_frees_the_d_of_the_leading_parallel_run() {
+        let truth = antico();
+        let mut sheet = truth.clone();
+        sheet.base = Isometry3::identity();
+        sheet.tool = Isometry3::identity();
+        let free = Freedom {
+            base_free: true,
+            tool_free: true,
+        };
+        assert_eq!(named(&compare_tables(&truth, &sheet, free, tol())), []);
+        // Another split of the run's d, and a shift the free base absorbs: still the same.
+        sheet.rows[0].d += 0.05;
+        sheet.rows[1].d -= 0.03;
+        sheet.rows[2].d += 0.2;
+        assert_eq!(named(&compare_tables(&truth, &sheet, free, tol())), []);
+        // Joints 4 and 5 are a run under a free tool: their d are free as well.
+        sheet.rows[3].d += 0.01;
+        sheet.rows[4].d -= 0.07;
+        assert_eq!(named(&compare_tables(&truth, &sheet, free, tol())), []);
+        // Where joint 4's common normals point is observable.
+        sheet.rows[3].theta += 0.01;
+        assert_eq!(
+            named(&compare_tables(&truth, &sheet, free, tol())),
+            [(Some(3), Parameter::Theta)]
+        );
+    }
+
+    /// All axes parallel (a SCARA with its quill), base free, tool given: the free base slides
+    /// along the whole run, so no `d` is observable; `a` still is.
+    #[test]
+    fn a_free_base_frees_every_d_of_an_all_parallel_chain() {
+        let truth = DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.3, -0.2, 0.1)),
+            tool: Isometry3::new(Vector3::new(0.0, 0.01, 0.05), Vector3::new(0.0, 0.0, 0.4)),
+            rows: vec![
+                DhRow::revolute("j1", 0.325, 0.0, 0.387, 0.0),
+                DhRow::revolute("j2", 0.275, PI, 0.0, 0.0),
+                DhRow::prismatic("j3", 0.0, 0.0, 0.0, 0.0),
+                DhRow::revolute("j4", 0.0, 0.0, 0.0, 0.0),
+            ],
+        };
+        let free = Freedom {
+            base_free: true,
+            tool_free: false,
+        };
+        let mut sheet = truth.clone();
+        sheet.base = Isometry3::identity();
+        sheet.rows[0].d = 0.0;
+        sheet.rows[1].d = 0.1;
+        sheet.rows[3].d = -0.05;
+        assert_eq!(named(&compare_tables(&truth, &sheet, free, tol())), []);
+        sheet.rows[1].a += 0.001;
+        assert_eq!(
+            named(&compare_tables(&truth, &sheet, free, tol())),
+            [(Some(1), Parameter::A)]
+        );
+    }
+
+    /// With the base given only the signed sum of `d` along the run is observable: moving d
+    /// between antiparallel joints 1 and 2 takes the same sign on both; a wrong sum is named
+    /// with the run's other joints as aliases.
+    #[test]
+    fn a_given_base_compares_the_signed_sum_along_the_run() {
+        let truth = antico();
+        let fixed = Freedom {
+            base_free: false,
+            tool_free: false,
+        };
+        let mut same = truth.clone();
+        same.rows[0].d += 0.05;
+        same.rows[1].d += 0.05;
+        same.rows[2].d -= 0.02;
+        same.rows[1].d += 0.02;
+        assert_eq!(named(&compare_tables(&truth, &same, fixed, tol())), []);
+        let mut wrong = truth.clone();
+        wrong.rows[0].d += 0.05;
+        wrong.rows[1].d -= 0.05;
+        let e = compare_tables(&truth, &wrong, fixed, tol());
+        assert_eq!(named(&e), [(Some(2), Parameter::D)]);
+        assert_eq!(e.differences[0].aliases, [0, 1]);
+        assert!((e.differences[0].reference - e.differences[0].sheet - 0.1).abs() < 1e-9);
+    }
+
+    /// A joint that slides where the other turns is named, whatever the zero pose says.
+    #[test]
+    fn a_different_joint_type_is_named() {
+        let truth = antico();
+        let mut sheet = truth.clone();
+        sheet.rows[2].kind = JointKind::Prismatic;
+        let free = Freedom {
+            base_free: true,
+            tool_free: true,
+        };
+        let e = compare_tables(&truth, &sheet, free, tol());
+        assert_eq!(named(&e), [(Some(2), Parameter::Type)]);
+        assert_eq!(
+            (e.differences[0].reference, e.differences[0].sheet),
+            (0.0, 1.0)
+        );
+    }
 }
