@@ -230,6 +230,60 @@ mod tests {
         assert!(entries(&sub).is_empty());
     }
 
+    #[test]
+    fn a_set_of_files_is_written_whole_or_not_at_all() {
+        let dir = tempfile::tempdir().unwrap();
+        let first = dir.path().join("model.yaml");
+        std::fs::write(&first, b"old model").unwrap();
+        // The second destination's directory is missing: staging fails before any rename.
+        let e = write_all(&[
+            (&first, b"new model".as_slice()),
+            (&dir.path().join("missing/plot.svg"), b"<svg/>".as_slice()),
+        ])
+        .unwrap_err();
+        assert!(format!("{e:#}").contains("plot.svg"), "{e:#}");
+        assert_eq!(std::fs::read(&first).unwrap(), b"old model");
+        assert_eq!(entries(dir.path()), ["model.yaml"]);
+        let second = dir.path().join("plot.svg");
+        write_all(&[
+            (&first, b"new model".as_slice()),
+            (&second, b"<svg/>".as_slice()),
+        ])
+        .unwrap();
+        assert_eq!(std::fs::read(&first).unwrap(), b"new model");
+        assert_eq!(entries(dir.path()), ["model.yaml", "plot.svg"]);
+    }
+
+    #[test]
+    fn outputs_are_compared_with_inputs_and_each_other() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("d.csv");
+        std::fs::write(&data, b"x").unwrap();
+        let d = data.to_string_lossy().into_owned();
+        let dotted = dir
+            .path()
+            .join(".")
+            .join("d.csv")
+            .to_string_lossy()
+            .into_owned();
+        let e = check_destinations(&[("--data", &d)], &[("--out", &dotted)]).unwrap_err();
+        assert!(e.to_string().contains("found the input --data"), "{e}");
+        // Two new files of one name.
+        let a = dir.path().join("r.yaml").to_string_lossy().into_owned();
+        let b = dir.path().join("sub/../r.yaml");
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        let b = b.to_string_lossy().into_owned();
+        let e = check_destinations(&[], &[("--out", &a), ("--plot", &b)]).unwrap_err();
+        assert!(e.to_string().contains("found the output --out"), "{e}");
+        check_destinations(&[("--data", &d)], &[("--out", &a)]).unwrap();
+        check_destinations(&[("--data", "-")], &[("--out", &a)]).unwrap();
+        assert_eq!(
+            entries(dir.path()),
+            ["d.csv", "sub"],
+            "the probe leaves nothing"
+        );
+    }
+
     #[cfg(unix)]
     #[test]
     fn keeps_permissions_and_follows_links() {

@@ -531,7 +531,7 @@ pub(crate) fn row_of(
         bail!(
             "{origin}: joint '{}': expected a name without control or bidi characters, found \
              U+{:04X} at character {}",
-            j.name.escape_debug(),
+            crate::guard::escape(&j.name),
             u32::from(c),
             k + 1
         );

@@ -398,7 +398,7 @@ impl TreeSheet {
                 bail!(
                     "{here}: branch {}: expected a name of printable characters, found '{}'",
                     k + 1,
-                    b.name.escape_debug()
+                    crate::guard::escape(&b.name)
                 );
             }
             if b.name.contains('/') {

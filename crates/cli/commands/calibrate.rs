@@ -653,7 +653,7 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
 /// estimates each target's position (3 parameters) and the device frame (6), and each sample
 /// gives 3 coordinates, so fewer than `targets + 3` calibration samples fit nothing (200 rows
 /// of 200 targets took minutes to say so).
-fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
+pub(crate) fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
     let cal: Vec<&Sample> = data
         .samples
         .iter()

@@ -303,6 +303,7 @@ pub fn calibrate_tree(
             "give a serial sheet of the chain that made the contacts",
         ));
     }
+    crate::commands::calibrate::enough_samples(&data, &data_name)?;
     let targets = target_branches(tree, &data, &data_name)?;
     // Link masses: --inertials, else the sheet's own.
     let inertials_doc = match &args.inertials {
