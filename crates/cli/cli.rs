@@ -187,9 +187,11 @@ struct ExtractCli {
     angle_unit: AngleUnit,
     #[command(flatten)]
     tol: ToleranceCli,
-    /// Random joint-value samples of the self-check (the zero pose is always the first).
-    #[arg(long, value_name = "N", default_value_t = 1000, value_parser = guard::samples)]
-    samples: usize,
+    /// Random joint-value samples of the self-check (the zero pose is always the first)
+    /// [default: 1000, fewer beyond 10 000 joints: at most 1e7 joint evaluations in all, and
+    /// never fewer than 10].
+    #[arg(long, value_name = "N", value_parser = guard::samples)]
+    samples: Option<usize>,
     /// Seed of the self-check's sampler.
     #[arg(long, value_name = "S", default_value_t = 0)]
     seed: u64,

@@ -28,7 +28,7 @@ fn round_trip(urdf: &Path, base: &str, tip: &str, convention: Convention) -> Opt
         length_unit: LengthUnit::M,
         angle_unit: AngleUnit::Rad,
         tolerance: dh_core::Tolerance::default(),
-        samples: 50,
+        samples: Some(50),
         seed: 0,
         svg: None,
         q: None,
