@@ -586,6 +586,7 @@ pub(crate) fn row_of(
         alpha: j.alpha * au,
         d: j.d * lu,
         theta: j.theta * au,
+        beta: j.beta.map_or(0.0, |b| b * au),
         limits,
         mimic,
     })

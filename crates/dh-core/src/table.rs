@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
-use crate::pose::{rot_x, trans_x};
+use crate::pose::{rot_x, rot_y, rot_z, trans_x, trans_z};
 use crate::CoreError;
 
 /// Where a row's link parameters sit.
@@ -18,7 +18,8 @@ use crate::CoreError;
 ///   row `i` holds `alpha_{i-1}`, `a_{i-1}` in its own `alpha`, `a` fields, and frame `i` has
 ///   its z axis along joint `i`.
 ///
-/// In both, `FK(q) = base · A_1(q_1) ⋯ A_n(q_n) · tool`.
+/// In both, `FK(q) = base · A_1(q_1) ⋯ A_n(q_n) · tool`. A row with a Hayati-Mirmirani tilt
+/// `beta` (see [`DhRow::beta`]) adds `Ry(beta)` right after its `Rx(alpha)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Convention {
     /// Standard (distal) DH.
@@ -102,6 +103,15 @@ pub struct DhRow {
     pub d: f64,
     /// Joint angle offset (radians); the joint value adds to it for revolute joints.
     pub theta: f64,
+    /// Hayati-Mirmirani tilt about y (radians, 0 for a plain DH row), held by the row that
+    /// holds the link's `a` and `alpha`: standard
+    /// `A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)`, modified
+    /// `A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Ry(beta_{i-1}) Rz(theta_i + q_i) Tz(d_i)`. It turns
+    /// about the y axis of the frame at the far end of the common normal, on the next joint's
+    /// axis, so that a pair of nearly parallel axes is written with a small tilt instead of a
+    /// common normal kilometres away (S. Hayati and M. Mirmirani, J. Robotic Systems 2(4),
+    /// 1985, eq. 3). The placement is the one `dh-calib`'s model estimates.
+    pub beta: f64,
     /// Joint limits, `None` for a continuous joint.
     pub limits: Option<Limits>,
     /// Set when the joint follows another one.
@@ -118,6 +128,7 @@ impl DhRow {
             alpha,
             d,
             theta,
+            beta: 0.0,
             limits: None,
             mimic: None,
         }
@@ -139,11 +150,14 @@ impl DhRow {
         }
     }
 
-    /// The row's transform at joint value `q` in `convention` (see [`Convention`]).
+    /// The row's transform at joint value `q` in `convention` (see [`Convention`]), its tilt
+    /// `beta` included.
     ///
     /// Closed form from half-angle quaternions: `Rz(theta) Rx(alpha)` is the quaternion
     /// `(c_t c_a, c_t s_a, s_t s_a, s_t c_a)` with `c_t = cos(theta/2)` etc., and
-    /// `Rx(alpha) Rz(theta)` is `(c_a c_t, s_a c_t, −s_a s_t, c_a s_t)`.
+    /// `Rx(alpha) Rz(theta)` is `(c_a c_t, s_a c_t, −s_a s_t, c_a s_t)`. A row without a tilt
+    /// takes exactly that path (bit for bit as before tilts existed); a tilted row composes
+    /// its elementary transforms.
     pub fn transform(&self, convention: Convention, q: f64) -> Isometry3<f64> {
         self.transform_with_twist(convention, q, (0.5 * self.alpha).sin_cos())
     }
@@ -157,6 +171,17 @@ impl DhRow {
         (sa, ca): (f64, f64),
     ) -> Isometry3<f64> {
         let (theta, d) = self.moved(q);
+        if self.beta != 0.0 {
+            let tilt = rot_y(self.beta);
+            return match convention {
+                Convention::Standard => {
+                    rot_z(theta) * trans_z(d) * trans_x(self.a) * rot_x(self.alpha) * tilt
+                }
+                Convention::Modified => {
+                    rot_x(self.alpha) * trans_x(self.a) * tilt * rot_z(theta) * trans_z(d)
+                }
+            };
+        }
         let (st, ct) = (0.5 * theta).sin_cos();
         match convention {
             Convention::Standard => {
@@ -277,9 +302,11 @@ impl DhTable {
         }
     }
 
-    /// The same kinematics in the other convention, exactly: `a` and `alpha` move one row along
-    /// (standard row `i` holds what modified row `i + 1` holds) and the base or tool takes the
-    /// pair that falls off the end. `theta`, `d`, joint directions and zero pose stay as they are.
+    /// The same kinematics in the other convention, exactly: `a`, `alpha` and the tilt `beta`
+    /// move one row along (standard row `i` holds what modified row `i + 1` holds: `Tx(a)` and
+    /// `Rx(alpha)` commute, and `Ry(beta)` follows both in either convention) and the base or
+    /// tool takes the triple that falls off the end. `theta`, `d`, joint directions and zero
+    /// pose stay as they are.
     pub fn to_convention(&self, convention: Convention) -> DhTable {
         if convention == self.convention || self.rows.is_empty() {
             return DhTable {
@@ -294,27 +321,30 @@ impl DhTable {
             Convention::Modified => {
                 // Standard: ... Rz Tz Tx(a_i) Rx(alpha_i) Rz Tz ...; Tx and Rx commute.
                 let last = &self.rows[n - 1];
-                tool = trans_x(last.a) * rot_x(last.alpha) * tool;
+                tool = tilted(trans_x(last.a) * rot_x(last.alpha), last.beta) * tool;
                 for i in (0..n).rev() {
-                    let (a, alpha) = if i == 0 {
-                        (0.0, 0.0)
+                    let (a, alpha, beta) = if i == 0 {
+                        (0.0, 0.0, 0.0)
                     } else {
-                        (self.rows[i - 1].a, self.rows[i - 1].alpha)
+                        let r = &self.rows[i - 1];
+                        (r.a, r.alpha, r.beta)
                     };
                     rows[i].a = a;
                     rows[i].alpha = alpha;
+                    rows[i].beta = beta;
                 }
             }
             Convention::Standard => {
                 let first = &self.rows[0];
-                base = base * rot_x(first.alpha) * trans_x(first.a);
+                base = tilted(base * rot_x(first.alpha) * trans_x(first.a), first.beta);
                 for (i, row) in rows.iter_mut().enumerate() {
-                    let (a, alpha) = self
+                    let (a, alpha, beta) = self
                         .rows
                         .get(i + 1)
-                        .map_or((0.0, 0.0), |next| (next.a, next.alpha));
+                        .map_or((0.0, 0.0, 0.0), |next| (next.a, next.alpha, next.beta));
                     row.a = a;
                     row.alpha = alpha;
+                    row.beta = beta;
                 }
             }
         }
@@ -324,6 +354,11 @@ impl DhTable {
             tool,
             rows,
         }
+    }
+
+    /// `true` when a row carries a Hayati-Mirmirani tilt (see [`DhRow::beta`]).
+    pub fn has_tilts(&self) -> bool {
+        self.rows.iter().any(|r| r.beta != 0.0)
     }
 
     /// A length that bounds the chain's size (metres, at least 1 mm): the sum of `|a|`, `|d|`,
@@ -341,6 +376,16 @@ impl DhTable {
             .sum();
         (links + self.base.translation.vector.norm() + self.tool.translation.vector.norm())
             .max(1e-3)
+    }
+}
+
+/// `pose · Ry(beta)`, and `pose` untouched for no tilt (so untilted tables convert bit for bit
+/// as before tilts existed).
+fn tilted(pose: Isometry3<f64>, beta: f64) -> Isometry3<f64> {
+    if beta == 0.0 {
+        pose
+    } else {
+        pose * rot_y(beta)
     }
 }
 
