@@ -10,3 +10,4 @@ mod extract;
 mod invalid;
 mod measured;
 mod tree;
+mod written;

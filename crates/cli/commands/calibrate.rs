@@ -30,6 +30,7 @@ use serde::Serialize;
 
 use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
 use crate::commands::to_urdf::urdf_of;
+use crate::commands::written::{self, WrittenDoc};
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{
@@ -37,7 +38,7 @@ use crate::measured::{
 };
 use crate::output::write_atomically;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
-use crate::sheet::{ConventionDoc, SheetDoc};
+use crate::sheet::{ConventionDoc, EffectDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Which non-geometric effects to estimate after the geometric step.
@@ -473,10 +474,11 @@ pub struct CalibrationDoc {
     pub device: PoseSi,
     /// Estimated targets in the tip frame.
     pub targets: Vec<TargetDoc>,
-    /// Hayati tilts that could not be folded into the calibrated table (name, radians).
-    pub unfolded: Vec<(String, f64)>,
     /// Remarks.
     pub notes: Vec<String>,
+    /// The proof on the written model (`--out`), see [`crate::commands::written`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub written: Option<WrittenDoc>,
 }
 
 /// Units of the JSON report.
@@ -729,15 +731,33 @@ pub fn calibrate(
             effects,
         ),
     };
-    let doc = document(args, &inputs, &report);
+    let mut doc = document(args, &inputs, &report);
+    let artefact = match &args.out {
+        Some(path) => {
+            let (text, proof) = model_text(path, &inputs, &report, &doc)?;
+            doc.written = Some(proof);
+            Some((path, text))
+        }
+        None => None,
+    };
     match args.format {
         CalibrateFormat::Json => {
             out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
         }
         CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
     }
-    if let Some(path) = &args.out {
-        write_model(path, &inputs, &report, &doc)?;
+    let proved = doc.written.as_ref().is_none_or(|w| w.passed);
+    if let (Some((path, text)), true) = (&artefact, proved) {
+        if path.to_ascii_lowercase().ends_with(".urdf") && !report.selected_effects.is_empty() {
+            writeln!(
+                err,
+                "urdf-dh: warning: {}: a URDF cannot express the estimated effects {}; it holds the geometric part (write a sheet to keep them)",
+                display_name(path),
+                report.selected_effects.iter().map(|e| format!("'{e}'")).collect::<Vec<_>>().join(", ")
+            )?;
+        }
+        write_atomically(Path::new(path.as_str()), text.as_bytes())
+            .with_context(|| format!("writing the calibrated model to {}", display_name(path)))?;
     }
     if let Some(path) = &args.plot {
         // Residuals are millimetres or less on any arm: the chart reads best in mm whatever
@@ -751,7 +771,11 @@ pub fn calibrate(
         )?;
         write_atomically(Path::new(path), residuals_svg(&chart).as_bytes())?;
     }
-    Ok(Outcome::Pass)
+    Ok(if proved {
+        Outcome::Pass
+    } else {
+        Outcome::Differs
+    })
 }
 
 fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> CalibrationDoc {
@@ -851,8 +875,8 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
                 xyz: [p.x, p.y, p.z],
             })
             .collect(),
-        unfolded: report.unfolded.clone(),
         notes: report.notes.clone(),
+        written: None,
     }
 }
 
@@ -1148,19 +1172,11 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             );
         }
     }
-    if !doc.unfolded.is_empty() {
-        let _ = writeln!(
-            s,
-            "tilts not folded into the written DH table: {}",
-            doc.unfolded
-                .iter()
-                .map(|(n, v)| format!("{n} = {} rad", value(*v, "rad", DataUnits::default())))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
     for n in &doc.notes {
         let _ = writeln!(s, "note: {n}");
+    }
+    if let Some(w) = &doc.written {
+        let _ = writeln!(s, "{}", crate::commands::written::line(w));
     }
     let _ = writeln!(
         s,
@@ -1185,8 +1201,17 @@ fn absorbed(aliases: &[String]) -> String {
     }
 }
 
-/// Writes the calibrated model: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
-fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDoc) -> Result<()> {
+/// The calibrated model's text for `path` (a URDF for `.urdf`, a JSON sheet for `.json`, else
+/// YAML) and the proof on it (see [`crate::commands::written`]).
+///
+/// # Errors
+/// Serialisation failures, and an artefact that does not read back.
+fn model_text(
+    path: &str,
+    inputs: &Inputs,
+    report: &Report,
+    doc: &CalibrationDoc,
+) -> Result<(String, WrittenDoc)> {
     let calibration = CalibrationSection {
         data: doc.data.clone(),
         rms_before: doc.rms_before,
@@ -1208,18 +1233,48 @@ fn write_model(path: &str, inputs: &Inputs, report: &Report, doc: &CalibrationDo
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     );
-    write_calibrated(
+    let effects: Vec<EffectDoc> = doc
+        .parameters
+        .iter()
+        .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+        .map(|p| EffectDoc {
+            name: p.name.clone(),
+            value: p.estimate,
+            unit: p.unit.to_string(),
+            std_error: p.std_error,
+        })
+        .collect();
+    let text = calibrated_text(
         path,
         inputs,
         &report.calibrated,
         source,
         serde_yaml::to_value(&calibration)?,
-    )
+        effects,
+    )?;
+    let q = row_values(&report.calibrated, &inputs.data)?;
+    let target: Vec<usize> = inputs.data.samples.iter().map(|s| s.target).collect();
+    let targets: Vec<Vector3<f64>> = report.targets.iter().map(|(_, p)| *p).collect();
+    let proof = written::prove(
+        path,
+        &text,
+        &report.calibrated,
+        inputs.table.size(),
+        (&inputs.links.0, &inputs.links.1),
+        &written::Predictions {
+            q: &q,
+            target: &target,
+            targets: &targets,
+            device: report.device,
+        },
+    )?;
+    Ok((text, proof))
 }
 
-/// Writes `table` as the calibrated model of `inputs` (its robot name, links, units and
-/// coupled joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with
-/// `source` and the `calibration` section, atomically.
+/// Writes `table` as the calibrated model of `inputs` (see [`calibrated_text`]), atomically.
+///
+/// # Errors
+/// Serialisation and write failures.
 pub(crate) fn write_calibrated(
     path: &str,
     inputs: &Inputs,
@@ -1227,6 +1282,25 @@ pub(crate) fn write_calibrated(
     source: String,
     calibration: serde_yaml::Value,
 ) -> Result<()> {
+    let bytes = calibrated_text(path, inputs, table, source, calibration, Vec::new())?;
+    write_atomically(Path::new(path), bytes.as_bytes())
+        .with_context(|| format!("writing the calibrated model to {}", display_name(path)))
+}
+
+/// `table` as the calibrated model of `inputs` (its robot name, links, units and coupled
+/// joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with `source`, the
+/// `calibration` section and the estimated `effects`.
+///
+/// # Errors
+/// Serialisation failures.
+fn calibrated_text(
+    path: &str,
+    inputs: &Inputs,
+    table: &DhTable,
+    source: String,
+    calibration: serde_yaml::Value,
+    effects: Vec<EffectDoc>,
+) -> Result<String> {
     let lower = path.to_ascii_lowercase();
     let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
     let bytes = if lower.ends_with(".urdf") {
@@ -1246,14 +1320,14 @@ pub(crate) fn write_calibrated(
         }
         sheet.source = Some(source);
         sheet.calibration = Some(calibration);
+        sheet.effects = (!effects.is_empty()).then_some(effects);
         if lower.ends_with(".json") {
             serde_json::to_string_pretty(&sheet)? + "\n"
         } else {
             serde_yaml::to_string(&sheet)?
         }
     };
-    write_atomically(Path::new(path), bytes.as_bytes())
-        .with_context(|| format!("writing the calibrated model to {}", display_name(path)))
+    Ok(bytes)
 }
 
 /// The `calibration` section of a calibrated sheet (metres, radians): what the table was

@@ -125,6 +125,9 @@ pub fn check(args: &CheckArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resu
     let (_, chain) = load_chain(&args.robot, args.base.as_deref(), args.tip.as_deref())?;
     let sheet_name = display_name(&args.sheet);
     let sheet = Sheet::parse(&read_text(&args.sheet)?, &sheet_name)?;
+    if let Some(w) = sheet.effects_warning(&sheet_name, "check compares the DH kinematics alone") {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     let report = compare(&chain, &sheet, args.tolerance)?;
     for w in &report.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
@@ -210,7 +213,26 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
         base_free: !sheet.has_base,
         tool_free: !sheet.has_tool,
     };
-    let eq = compare_tables(&reference.table, &sheet.table, freedom, tol);
+    // Row by row, a tilted sheet is compared as the plain DH table of its own kinematics.
+    let plain = if sheet.table.has_tilts() {
+        warnings.push(
+            "the sheet's beta tilts are compared row by row as the plain DH values they stand for (exact; a common normal may lie far away)"
+                .into(),
+        );
+        let zero = vec![0.0; sheet.table.rows.len()];
+        let exact = Tolerance::new(1e-12, 1e-12).map_err(|e| anyhow::anyhow!("{e}"))?;
+        dh_core::extract(
+            &sheet.table.axes()?,
+            &sheet.table.fk(&zero)?,
+            exact,
+            sheet.table.convention,
+        )
+        .context("folding the sheet's beta tilts into plain DH")?
+        .table
+    } else {
+        sheet.table.clone()
+    };
+    let eq = compare_tables(&reference.table, &plain, freedom, tol);
     let name = |row: Option<usize>| {
         row.and_then(|r| sheet.table.rows.get(r))
             .map(|r| r.name.clone())

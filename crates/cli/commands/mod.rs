@@ -10,3 +10,4 @@ pub mod import;
 pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
+pub mod written;

@@ -356,6 +356,36 @@ impl DhTable {
         }
     }
 
+    /// The joint axis lines at the zero pose, in the base link frame, with each row's name,
+    /// kind, limits and mimic: what [`crate::extract()`] takes, so that
+    /// `extract(&t.axes()?, &t.fk(&zeros)?, ..)` gives the plain DH table of `t`'s kinematics
+    /// (its tilts, if any, folded into `theta`, `d`, `a`, `alpha`: exact, but a small tilt puts
+    /// the common normal far away).
+    ///
+    /// # Errors
+    /// [`CoreError::NonFinite`] for non-finite frames (a table of non-finite values).
+    pub fn axes(&self) -> Result<Vec<crate::JointAxis>, CoreError> {
+        let frames = self.frames(&vec![0.0; self.rows.len()])?;
+        let shift = usize::from(self.convention == Convention::Modified);
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let f = frames[i + shift];
+                Ok(crate::JointAxis {
+                    name: r.name.clone(),
+                    kind: r.kind,
+                    line: crate::Line::through(
+                        f.translation.vector,
+                        f.rotation * nalgebra::Vector3::z(),
+                    )?,
+                    limits: r.limits,
+                    mimic: r.mimic.clone(),
+                })
+            })
+            .collect()
+    }
+
     /// `true` when a row carries a Hayati-Mirmirani tilt (see [`DhRow::beta`]).
     pub fn has_tilts(&self) -> bool {
         self.rows.iter().any(|r| r.beta != 0.0)

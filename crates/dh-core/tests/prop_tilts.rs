@@ -46,8 +46,12 @@ fn oracle(table: &DhTable, q: &[f64]) -> Matrix4<f64> {
             JointKind::Prismatic => (r.theta, r.d + qi),
         };
         m *= match table.convention {
-            Convention::Standard => rz(theta) * tr(0.0, d) * tr(r.a, 0.0) * rx(r.alpha) * ry(r.beta),
-            Convention::Modified => rx(r.alpha) * tr(r.a, 0.0) * ry(r.beta) * rz(theta) * tr(0.0, d),
+            Convention::Standard => {
+                rz(theta) * tr(0.0, d) * tr(r.a, 0.0) * rx(r.alpha) * ry(r.beta)
+            }
+            Convention::Modified => {
+                rx(r.alpha) * tr(r.a, 0.0) * ry(r.beta) * rz(theta) * tr(0.0, d)
+            }
         };
     }
     m * table.tool.to_homogeneous()
@@ -170,8 +174,14 @@ fn an_untilted_row_is_bit_identical_to_plain_dh() {
     }
     let mut tilted = plain.clone();
     tilted.beta = 1e-3;
-    let p = tilted.transform(Convention::Standard, 0.0).translation.vector;
-    let q = plain.transform(Convention::Standard, 0.0).translation.vector;
+    let p = tilted
+        .transform(Convention::Standard, 0.0)
+        .translation
+        .vector;
+    let q = plain
+        .transform(Convention::Standard, 0.0)
+        .translation
+        .vector;
     // The tilt turns about y at the far end of the link: it moves no origin.
     assert!((p - q).norm() < 1e-15);
     let z = tilted.transform(Convention::Standard, 0.0).rotation * Vector3::z();
