@@ -156,6 +156,7 @@ fn text(doc: &SheetDoc) -> String {
         ),
         None => format!("{name:<5} {what}: not given\n"),
     };
+    s += &tilts_and_effects(doc, "");
     let n = doc.joints.len();
     let base_link = doc.base_link.as_deref().unwrap_or("base link");
     let tip_link = doc.tip_link.as_deref().unwrap_or("tip link");
@@ -212,6 +213,38 @@ fn text(doc: &SheetDoc) -> String {
     s
 }
 
+/// The rows' Hayati-Mirmirani tilts and the sheet's effects, one line each with `prefix`
+/// (empty when the sheet has neither).
+fn tilts_and_effects(doc: &SheetDoc, prefix: &str) -> String {
+    let a = doc.angle_unit.symbol();
+    let mut s = String::new();
+    let tilts: Vec<String> = doc
+        .joints
+        .iter()
+        .filter_map(|j| j.beta.map(|b| format!("{} {} {a}", j.name, num(b, a))))
+        .collect();
+    if !tilts.is_empty() {
+        let _ = writeln!(
+            s,
+            "{prefix}beta (Hayati-Mirmirani tilt, Ry(beta) right after the row's Rx(alpha)): {}",
+            tilts.join(", ")
+        );
+    }
+    for e in doc.effects.iter().flatten() {
+        let _ = writeln!(
+            s,
+            "{prefix}effect {} = {:e} {}{}",
+            e.name,
+            e.value,
+            e.unit,
+            e.std_error
+                .map(|u| format!(" +- {u:.1e}"))
+                .unwrap_or_default()
+        );
+    }
+    s
+}
+
 fn csv(doc: &SheetDoc) -> String {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let mut s = String::new();
@@ -226,6 +259,7 @@ fn csv(doc: &SheetDoc) -> String {
             );
         }
     }
+    s += &tilts_and_effects(doc, "# ");
     let _ = writeln!(
         s,
         "joint,type,a,alpha,d,theta,lower,upper,mimic_joint,mimic_multiplier,mimic_offset"
@@ -302,6 +336,9 @@ fn markdown(doc: &SheetDoc) -> String {
                 num(p.rpy[2], a)
             );
         }
+    }
+    for line in tilts_and_effects(doc, "").lines() {
+        let _ = writeln!(s, "\n{line}");
     }
     if let Some(v) = &doc.verification {
         let _ = writeln!(

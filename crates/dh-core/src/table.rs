@@ -386,6 +386,69 @@ impl DhTable {
             .collect()
     }
 
+    /// The same kinematics with every pair of consecutive revolute or prismatic axes within
+    /// `max_angle` (radians) of parallel or antiparallel written in the Hayati-Mirmirani form
+    /// of [`DhRow::beta`]: standard row `i` becomes `Rz(theta) Tx(a) Rx(alpha) Ry(beta)` with
+    /// `d_i = 0`, `x` from the origin of frame `i - 1` to where axis `i + 1` crosses that
+    /// frame's `xy` plane, and the screw between the old and new frame `i` (both on axis
+    /// `i + 1`) absorbed by row `i + 1`'s `theta`, `d` (or the tool). Plain DH puts the common
+    /// normal of a pair `beta` off parallel about `a / beta` away; this form keeps every length
+    /// near the link's. A modified table is converted to standard and back (both exact).
+    /// Exact up to rounding of the lengths it replaces (a kilometre `d` loses ~1e-13 m).
+    pub fn hayati_form(&self, max_angle: f64) -> DhTable {
+        if self.convention == Convention::Modified {
+            return self
+                .to_convention(Convention::Standard)
+                .hayati_form(max_angle)
+                .to_convention(Convention::Modified);
+        }
+        let mut t = self.clone();
+        let n = t.rows.len();
+        for i in 0..n.saturating_sub(1) {
+            if t.rows[i].kind == JointKind::Prismatic {
+                // Its joint value moves d, which the form sets to zero.
+                continue;
+            }
+            let zero = vec![0.0; n];
+            let Ok(frames) = t.frames(&zero) else {
+                return self.clone();
+            };
+            // Frame i - 1 (z along joint i) and the old frame i (z along joint i + 1).
+            let (before, old) = (frames[i], frames[i + 1]);
+            let local = before.inverse() * old;
+            let u = local.rotation * nalgebra::Vector3::z();
+            let angle = u.z.abs().min(1.0).acos();
+            if !(angle <= max_angle) || u.z.abs() < 1e-12 {
+                continue;
+            }
+            // Where axis i + 1 crosses the plane z = 0 of frame i - 1.
+            let o = local.translation.vector;
+            let p = o - u * (o.z / u.z);
+            let (theta, a) = if p.x.hypot(p.y) > 0.0 {
+                (p.y.atan2(p.x), p.x.hypot(p.y))
+            } else {
+                (0.0, 0.0)
+            };
+            let w = rot_z(-theta).rotation * u;
+            let beta = w.x.clamp(-1.0, 1.0).asin();
+            let alpha = (-w.y).atan2(w.z);
+            let row = &mut t.rows[i];
+            // The joint value adds to theta: keep the row's zero offset relative to it.
+            row.theta = theta;
+            row.d = 0.0;
+            row.a = a;
+            row.alpha = alpha;
+            row.beta = beta;
+            let new = before * row.transform(Convention::Standard, 0.0);
+            let screw = new.inverse() * old;
+            let x = screw.rotation * nalgebra::Vector3::x();
+            let (phi, s) = (x.y.atan2(x.x), screw.translation.vector.z);
+            t.rows[i + 1].theta += phi;
+            t.rows[i + 1].d += s;
+        }
+        t
+    }
+
     /// `true` when a row carries a Hayati-Mirmirani tilt (see [`DhRow::beta`]).
     pub fn has_tilts(&self) -> bool {
         self.rows.iter().any(|r| r.beta != 0.0)
@@ -499,6 +562,38 @@ mod tests {
         }
         assert_eq!(md.rows[2].a, -0.425);
         assert_eq!(md.rows[0].a, 0.0);
+    }
+
+    #[test]
+    fn the_hayati_form_keeps_the_kinematics_and_drops_the_far_common_normal() {
+        // A pair 2e-4 rad off parallel written in plain DH: its common normal 2 km away.
+        let plain = DhTable {
+            convention: Convention::Standard,
+            base: from_xyz_rpy([0.1, 0.0, 0.3], [0.0, 0.0, 0.2]),
+            tool: from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.0, 0.0]),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, FRAC_PI_2, 0.4, 0.0),
+                DhRow::revolute("j2", 0.6, 2e-4, 2000.0, 0.3),
+                DhRow::revolute("j3", 0.1, -FRAC_PI_2, -2000.0, 0.1),
+                DhRow::revolute("j4", 0.0, FRAC_PI_2, 0.6, 0.0),
+            ],
+        };
+        for convention in [Convention::Standard, Convention::Modified] {
+            let t = plain.to_convention(convention);
+            let h = t.hayati_form(1e-2);
+            for q in [[0.0; 4], [0.3, -1.2, 2.0, 0.5], [-2.0, 0.7, -0.4, 3.0]] {
+                let (dp, dr) = pose_error(&t.fk(&q).unwrap(), &h.fk(&q).unwrap());
+                assert!(dp < 1e-11 && dr < 1e-12, "{convention}: {dp} {dr}");
+            }
+            assert!(h.rows.iter().all(|r| r.d.abs() < 1.0), "{:?}", h.rows);
+            let tilted: Vec<&DhRow> = h.rows.iter().filter(|r| r.beta != 0.0).collect();
+            assert_eq!(tilted.len(), 1, "{convention}: {:?}", h.rows);
+            // The pair's angle: `Rx(alpha) Ry(beta)` turns z by acos(cos alpha cos beta).
+            let r = tilted[0];
+            assert!(((r.alpha.cos() * r.beta.cos()).acos() - 2e-4).abs() < 1e-9);
+            // A pair beyond the threshold stays as it was.
+            assert_eq!(t.hayati_form(1e-5), t);
+        }
     }
 
     #[test]
