@@ -216,3 +216,31 @@ fn a_parallel_pair_is_written_with_beta_and_the_artefact_reproduces_the_fit() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("'gear_ratio:joint_3'"), "{err}");
 }
+
+#[test]
+fn measured_near_parallel_axes_are_written_with_beta_and_proved_against_the_axes() {
+    let Some(shared) =
+        crate::common::skip_without_shared("measured_near_parallel_axes_are_written_with_beta")
+    else {
+        return;
+    };
+    let set = shared.join("measured/boby_klimchik_laser_tracker_cpa/N1N2N3Jval.csv");
+    let dir = tempfile::tempdir().unwrap();
+    let data = path(dir.path(), "boby.csv");
+    ok(&["import", &set.to_string_lossy(), "--out", &data]);
+    let doc: Value = serde_json::from_str(&ok(&["cpa", &data, "--format", "json"])).unwrap();
+    // J2 and J3 are 1.8e-4 rad from antiparallel: the tilt is written on J2's row.
+    let beta = doc["joints"][1]["beta"].as_f64().expect("joint_2 has beta");
+    assert!((beta.abs() - 1.8e-4).abs() < 1e-5, "{beta}");
+    let lengths = lengths(&doc);
+    assert!(lengths.iter().all(|l| l.abs() < 5.0), "{lengths:?}");
+    // The written table against the measured axes: the orientation is exact, and what is
+    // left in position is the J4/J5 intersection snap within the 0.1 mm linear tolerance;
+    // snapping J2/J3 would cost a quarter of a millimetre and 1.7e-4 rad.
+    let proof = &doc["cpa"]["proof"];
+    let (written, snapped) = (&proof["written"], &proof["snapped"]);
+    assert!(written[1].as_f64().unwrap() < 1e-12, "{proof}");
+    assert!(written[0].as_f64().unwrap() < 1e-4, "{proof}");
+    assert!(snapped[1].as_f64().unwrap() > 1e-4, "{proof}");
+    assert!(snapped[0].as_f64().unwrap() > 2e-4, "{proof}");
+}

@@ -418,7 +418,8 @@ impl DhTable {
             let local = before.inverse() * old;
             let u = local.rotation * nalgebra::Vector3::z();
             let angle = u.z.abs().min(1.0).acos();
-            if !(angle <= max_angle) || u.z.abs() < 1e-12 {
+            // A NaN angle (a table of non-finite values) and a perpendicular pair stay as they are.
+            if angle.is_nan() || angle > max_angle || u.z == 0.0 {
                 continue;
             }
             // Where axis i + 1 crosses the plane z = 0 of frame i - 1.
