@@ -244,3 +244,56 @@ fn measured_near_parallel_axes_are_written_with_beta_and_proved_against_the_axes
     assert!(snapped[1].as_f64().unwrap() > 1e-4, "{proof}");
     assert!(snapped[0].as_f64().unwrap() > 2e-4, "{proof}");
 }
+
+#[test]
+fn a_urdf_model_is_written_as_a_minimal_edit_of_itself() {
+    let model = "fixtures/robots/franka_panda/robot.urdf";
+    let dir = tempfile::tempdir().unwrap();
+    let data = path(dir.path(), "p.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        model,
+        "--poses",
+        "60",
+        "--noise",
+        "1e-5",
+        "--targets",
+        "2",
+        "--random-errors",
+        "0.001",
+        "0.001",
+        "--seed",
+        "3",
+        "--out",
+        &data,
+    ]);
+    let (urdf, sheet) = (path(dir.path(), "p.urdf"), path(dir.path(), "p.yaml"));
+    for out in [&urdf, &sheet] {
+        ok(&["calibrate", "--model", model, "--data", &data, "--out", out]);
+    }
+    let before = std::fs::read_to_string(crate::common::root().join(model)).unwrap();
+    let after = std::fs::read_to_string(&urdf).unwrap();
+    // The same document line for line; only `<origin>` lines of joints differ, and some do.
+    let (b, a): (Vec<&str>, Vec<&str>) = (before.lines().collect(), after.lines().collect());
+    assert_eq!(b.len(), a.len());
+    let changed: Vec<(&str, &str)> = b
+        .iter()
+        .zip(&a)
+        .filter(|(x, y)| x != y)
+        .map(|(x, y)| (*x, *y))
+        .collect();
+    assert!(changed.len() >= 5, "{changed:?}");
+    for (x, y) in &changed {
+        assert!(
+            x.trim_start().starts_with("<origin") && y.trim_start().starts_with("<origin"),
+            "{x} -> {y}"
+        );
+    }
+    // Extracting the written URDF reproduces the calibrated model: check against the sheet the
+    // same fit wrote (base and tool given) finds no difference.
+    ok(&["check", &urdf, "--sheet", &sheet]);
+    // And the nominal URDF differs from it.
+    let (code, _, _) = exec(&["check", model, "--sheet", &sheet]);
+    assert_eq!(code, 1);
+}

@@ -734,7 +734,7 @@ pub fn calibrate(
     let mut doc = document(args, &inputs, &report);
     let artefact = match &args.out {
         Some(path) => {
-            let (text, proof) = model_text(path, &inputs, &report, &doc)?;
+            let (text, proof) = model_text(path, args.model.as_deref(), &inputs, &report, &doc)?;
             doc.written = Some(proof);
             Some((path, text))
         }
@@ -1208,6 +1208,7 @@ fn absorbed(aliases: &[String]) -> String {
 /// Serialisation failures, and an artefact that does not read back.
 fn model_text(
     path: &str,
+    model_path: Option<&str>,
     inputs: &Inputs,
     report: &Report,
     doc: &CalibrationDoc,
@@ -1244,14 +1245,31 @@ fn model_text(
             std_error: p.std_error,
         })
         .collect();
-    let text = calibrated_text(
-        path,
-        inputs,
-        &report.calibrated,
-        source,
-        serde_yaml::to_value(&calibration)?,
-        effects,
-    )?;
+    let urdf = |p: &str| p.to_ascii_lowercase().ends_with(".urdf");
+    // A URDF model written as a URDF: a minimal edit of the user's own file.
+    let text = match model_path.filter(|m| urdf(m) && urdf(path) && *m != "-") {
+        Some(m) => crate::commands::urdf_edit::minimal_edit(
+            &crate::input::read_text(m)?,
+            &inputs.table,
+            &report.calibrated,
+            &inputs.links.0,
+            &inputs.links.1,
+        )
+        .with_context(|| {
+            format!(
+                "{}: writing the calibrated model as an edit of the model URDF",
+                display_name(path)
+            )
+        })?,
+        None => calibrated_text(
+            path,
+            inputs,
+            &report.calibrated,
+            source,
+            serde_yaml::to_value(&calibration)?,
+            effects,
+        )?,
+    };
     let q = row_values(&report.calibrated, &inputs.data)?;
     let target: Vec<usize> = inputs.data.samples.iter().map(|s| s.target).collect();
     let targets: Vec<Vector3<f64>> = report.targets.iter().map(|(_, p)| *p).collect();

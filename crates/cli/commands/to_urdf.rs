@@ -53,7 +53,8 @@ fn xml(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
-fn origin(p: &Isometry3<f64>) -> String {
+/// A URDF `<origin>` element of `p`, values rounded to 1e-15.
+pub(crate) fn origin(p: &Isometry3<f64>) -> String {
     let (xyz, rpy) = to_xyz_rpy(p);
     let n = |v: f64| {
         let v = crate::units::round_decimals(crate::units::clean(v), 15);
