@@ -297,3 +297,61 @@ fn a_urdf_model_is_written_as_a_minimal_edit_of_itself() {
     let (code, _, _) = exec(&["check", model, "--sheet", &sheet]);
     assert_eq!(code, 1);
 }
+
+#[test]
+fn a_urdf_whose_extraction_puts_a_common_normal_kilometres_away_is_written_bounded() {
+    // The arm with J3's axis 2e-4 rad off J2's: a URDF of it (to-urdf writes the tilt into the
+    // joint origins) extracts to a plain DH row kilometres long.
+    let dir = tempfile::tempdir().unwrap();
+    let tilted = path(dir.path(), "tilted.yaml");
+    std::fs::write(
+        &tilted,
+        ARM.replace("d: 0, theta: -90,", "d: 0, theta: -90, beta: 0.0114592,"),
+    )
+    .unwrap();
+    let urdf = path(dir.path(), "arm.urdf");
+    std::fs::write(&urdf, ok(&["to-urdf", &tilted])).unwrap();
+    let extracted: Value =
+        serde_json::from_str(&ok(&["extract", &urdf, "--format", "json"])).unwrap();
+    assert!(
+        lengths(&extracted).iter().any(|l| l.abs() > 1000.0),
+        "{extracted}"
+    );
+    let data = path(dir.path(), "d.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        &tilted,
+        "--poses",
+        "60",
+        "--noise",
+        "1e-5",
+        "--targets",
+        "3",
+        "--error",
+        "joint_3.a=1e-3",
+        "--seed",
+        "5",
+        "--out",
+        &data,
+    ]);
+    let out = path(dir.path(), "cal.json");
+    let r: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        &urdf,
+        "--data",
+        &data,
+        "--format",
+        "json",
+        "--out",
+        &out,
+    ]))
+    .unwrap();
+    assert_eq!(r["written"]["passed"], true, "{}", r["written"]);
+    let sheet: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    for l in lengths(&sheet) {
+        assert!(l.abs() <= LENGTH_BOUND, "a written length of {l} m");
+    }
+    assert!(sheet["joints"][1]["beta"].as_f64().is_some(), "{sheet}");
+}

@@ -1245,12 +1245,30 @@ fn model_text(
             std_error: p.std_error,
         })
         .collect();
+    // A model whose own rows put a near-parallel pair's common normal far away (an URDF
+    // extracted beyond its angular tolerance) is written in the Hayati form: the same
+    // kinematics, bounded lengths. The length bound is the size of the model in that form.
+    let hayati = ModelOptions::DEFAULT_HAYATI_THRESHOLD;
+    let size = inputs.table.hayati_form(hayati).size();
+    let longest = |t: &DhTable| {
+        t.rows
+            .iter()
+            .flat_map(|r| [r.a.abs(), r.d.abs()])
+            .fold(0.0, f64::max)
+    };
+    let table = if longest(&report.calibrated) > size + written::LENGTH_MARGIN {
+        report.calibrated.hayati_form(hayati)
+    } else {
+        report.calibrated.clone()
+    };
     let urdf = |p: &str| p.to_ascii_lowercase().ends_with(".urdf");
     // A URDF model written as a URDF: a minimal edit of the user's own file.
     let text = match model_path.filter(|m| urdf(m) && urdf(path) && *m != "-") {
         Some(m) => crate::commands::urdf_edit::minimal_edit(
             &crate::input::read_text(m)?,
             &inputs.table,
+            // Row for row the nominal table's counterpart, so each joint frame moves by the
+            // fit's small change, whatever the rows' form.
             &report.calibrated,
             &inputs.links.0,
             &inputs.links.1,
@@ -1264,7 +1282,7 @@ fn model_text(
         None => calibrated_text(
             path,
             inputs,
-            &report.calibrated,
+            &table,
             source,
             serde_yaml::to_value(&calibration)?,
             effects,
@@ -1277,7 +1295,7 @@ fn model_text(
         path,
         &text,
         &report.calibrated,
-        inputs.table.size(),
+        size,
         (&inputs.links.0, &inputs.links.1),
         &written::Predictions {
             q: &q,
