@@ -238,12 +238,17 @@ pub fn load_model(
             ));
         }
         let sheet = Sheet::parse(text.as_deref().unwrap_or_default(), &origin)?;
+        let mut warnings = sheet.warnings.clone();
+        warnings.extend(sheet.effects_warning(
+            &origin,
+            "the model is its DH values; name effects with --effects (calibrate) or --effect (simulate)",
+        ));
         return Ok(LoadedModel {
             table: sheet.table,
             origin,
             robot: sheet.robot,
             units: (sheet.length_unit, sheet.angle_unit),
-            warnings: sheet.warnings,
+            warnings,
             links: ("base_link".into(), "tool0".into()),
             coupled: sheet.coupled,
         });

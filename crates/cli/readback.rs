@@ -338,6 +338,9 @@ fn read_text(text: &str) -> Result<SheetDoc> {
             tool = pose_of_line(line)?;
             break;
         }
+        if line.starts_with(crate::render::TILTS_LINE) || line.starts_with("effect ") {
+            continue;
+        }
         let mut tokens: Vec<&str> = line.split_whitespace().collect();
         let mimic = match tokens.iter().rposition(|t| *t == "=") {
             Some(k) => {
@@ -362,8 +365,10 @@ fn read_text(text: &str) -> Result<SheetDoc> {
             lower,
             upper,
             mimic,
+            beta: None,
         });
     }
+    apply_tilts(text, &mut joints)?;
     Ok(doc_of(
         convention_of_header(header)?,
         length,
@@ -403,7 +408,40 @@ fn doc_of(
         cpa: None,
         calibration: None,
         truth: None,
+        effects: None,
     }
+}
+
+/// Reads the tilts line ([`crate::render::TILTS_LINE`], after an optional `# `) of `text` into
+/// the rows it names: entries `NAME VALUE UNIT` separated by `, `, in row order.
+fn apply_tilts(text: &str, joints: &mut [JointDoc]) -> Result<()> {
+    let Some(line) = text.lines().find_map(|l| {
+        l.trim_start_matches("# ")
+            .strip_prefix(crate::render::TILTS_LINE)
+    }) else {
+        return Ok(());
+    };
+    let mut rest = line.trim_end();
+    for j in joints.iter_mut() {
+        let Some(after) = rest
+            .strip_prefix(j.name.as_str())
+            .and_then(|r| r.strip_prefix(' '))
+        else {
+            continue;
+        };
+        let mut parts = after.splitn(3, ' ');
+        let (Some(value), Some(unit)) = (parts.next(), parts.next()) else {
+            continue;
+        };
+        let unit = unit.trim_end_matches(',');
+        if angle_unit(unit).is_err() {
+            continue;
+        }
+        j.beta = Some(number(value, "beta")?);
+        rest = parts.next().unwrap_or("").trim_start_matches(", ");
+    }
+    ensure!(rest.is_empty(), "a tilt names no row in order: '{rest}'");
+    Ok(())
 }
 
 /// Cells of a Markdown table row, `\|` unescaped.
@@ -474,6 +512,7 @@ fn read_markdown(text: &str) -> Result<SheetDoc> {
                 } else {
                     Some(coupling_of(&tokens)?)
                 },
+                beta: None,
             });
         } else if line.starts_with("base: ") {
             base = pose_of_line(line)?;
@@ -483,6 +522,7 @@ fn read_markdown(text: &str) -> Result<SheetDoc> {
     }
     let (length, angle) = units.ok_or_else(|| anyhow!("no table header"))?;
     let header = header.trim_matches('*');
+    apply_tilts(text, &mut joints)?;
     Ok(doc_of(
         convention_of_header(header)?,
         length,
@@ -593,9 +633,11 @@ fn read_csv(text: &str) -> Result<SheetDoc> {
                         offset: number(&f[10], "mimic offset")?,
                     })
                 },
+                beta: None,
             });
         }
     }
+    apply_tilts(text, &mut joints)?;
     Ok(doc_of(convention, length, angle, base, tool, joints))
 }
 
@@ -622,6 +664,9 @@ mod tests {
             lower: -0.2,
             upper: 0.5,
         });
+        // A Hayati tilt on a row with spaces in its neighbour's name, written on its own line.
+        rows[1].beta = 3.1e-4;
+        rows[3].beta = -2e-3;
         rows[3].mimic = Some(Mimic {
             joint: "j,2\"".into(),
             multiplier: -1.5,
@@ -679,6 +724,10 @@ mod tests {
                 let back = read_back(&text, format).unwrap_or_else(|e| panic!("{e:#}"));
                 assert_eq!(back.joints.len(), 4);
                 assert_eq!(back.joints[0].name, "j 1|a", "{format:?}");
+                assert!(
+                    back.joints[1].beta.is_some() && back.joints[3].beta.is_some(),
+                    "{format:?}"
+                );
                 assert_eq!(
                     back.joints[3].mimic.as_ref().map(|m| m.joint.as_str()),
                     Some(back.joints[1].name.as_str()),

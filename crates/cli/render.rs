@@ -167,6 +167,7 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
         ),
         None => format!("{name:<5} {what}: not given\n"),
     };
+    s += &tilts_and_effects(doc, "", Some(extra));
     let n = doc.joints.len();
     let base_link = doc.base_link.as_deref().unwrap_or("base link");
     let tip_link = doc.tip_link.as_deref().unwrap_or("tip link");
@@ -226,6 +227,45 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
     s
 }
 
+/// How the line of the rows' tilts starts (after the CSV's `# `); [`crate::readback`] reads it.
+pub(crate) const TILTS_LINE: &str =
+    "beta (Hayati-Mirmirani tilt, Ry(beta) right after the row's Rx(alpha)): ";
+
+/// The rows' Hayati-Mirmirani tilts and the sheet's effects, one line each with `prefix`
+/// (empty when the sheet has neither).
+/// Tilts are written with the table's decimals (`Some(extra)` more than the unit's) or in full
+/// (`None`, the CSV).
+fn tilts_and_effects(doc: &SheetDoc, prefix: &str, extra: Option<usize>) -> String {
+    let a = doc.angle_unit.symbol();
+    let mut s = String::new();
+    let tilts: Vec<String> = doc
+        .joints
+        .iter()
+        .filter_map(|j| {
+            j.beta.map(|b| {
+                let v = extra.map_or_else(|| b.to_string(), |k| num_at(b, a, k));
+                format!("{} {v} {a}", j.name)
+            })
+        })
+        .collect();
+    if !tilts.is_empty() {
+        let _ = writeln!(s, "{prefix}{TILTS_LINE}{}", tilts.join(", "));
+    }
+    for e in doc.effects.iter().flatten() {
+        let _ = writeln!(
+            s,
+            "{prefix}effect {} = {:e} {}{}",
+            e.name,
+            e.value,
+            e.unit,
+            e.std_error
+                .map(|u| format!(" +- {u:.1e}"))
+                .unwrap_or_default()
+        );
+    }
+    s
+}
+
 fn csv(doc: &SheetDoc) -> String {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let mut s = String::new();
@@ -240,6 +280,7 @@ fn csv(doc: &SheetDoc) -> String {
             );
         }
     }
+    s += &tilts_and_effects(doc, "# ", None);
     let _ = writeln!(
         s,
         "joint,type,a,alpha,d,theta,lower,upper,mimic_joint,mimic_multiplier,mimic_offset"
@@ -332,6 +373,9 @@ fn markdown(doc: &SheetDoc, extra: usize) -> String {
                 num_at(p.rpy[2], a, extra)
             );
         }
+    }
+    for line in tilts_and_effects(doc, "", Some(extra)).lines() {
+        let _ = writeln!(s, "\n{line}");
     }
     if let Some(v) = &doc.verification {
         let _ = writeln!(

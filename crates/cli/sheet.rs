@@ -80,6 +80,12 @@ pub struct JointDoc {
     pub d: f64,
     /// Joint angle offset.
     pub theta: f64,
+    /// Hayati-Mirmirani tilt about y (angle unit), written only where nonzero: standard rows
+    /// `Rz(theta + q) Tz(d) Tx(a) Rx(alpha) Ry(beta)`, modified rows
+    /// `Rx(alpha) Tx(a) Ry(beta) Rz(theta + q) Tz(d)` (see `dh_core::DhRow::beta`). A
+    /// calibrated pair of nearly parallel axes carries it instead of a far common normal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beta: Option<f64>,
     /// Lower joint limit (absent for continuous joints).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lower: Option<f64>,
@@ -89,6 +95,21 @@ pub struct JointDoc {
     /// Coupling to another joint.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mimic: Option<MimicDoc>,
+}
+
+/// One estimated effect parameter (see `dh_calib::effects` for the names).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EffectDoc {
+    /// Parameter name, e.g. `gear_ratio:joint_2`, `compliance:joint_3`, `scale`.
+    pub name: String,
+    /// Estimate, in `unit` (SI: effect units do not follow the sheet's length and angle unit).
+    pub value: f64,
+    /// Unit of the value, e.g. `rad/rad`, `rad/(N m)`.
+    pub unit: String,
+    /// Standard uncertainty of the estimate, in `unit`, where the fit gave one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_error: Option<f64>,
 }
 
 /// Tolerances echoed in outputs (metres, radians, whatever the sheet's units).
@@ -176,6 +197,11 @@ pub struct SheetDoc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coupled:
         Option<std::collections::BTreeMap<String, std::collections::BTreeMap<String, f64>>>,
+    /// Estimated non-geometric effects (`calibrate --out`): what the fit used besides the DH
+    /// values. No DH table can hold them; every command reads them, and one that cannot use
+    /// them says so naming each.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub effects: Option<Vec<EffectDoc>>,
     /// Branches of a kinematic tree: the sheet's own `joints` are then the trunk and its
     /// `tool` the branch point (see [`crate::tree_sheet`]). Only `calibrate` reads trees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -256,6 +282,25 @@ pub struct Sheet {
     /// Coupled joints (see [`SheetDoc::coupled`]): `(joint, [(driver, coefficient)])`, in row
     /// order.
     pub coupled: Vec<(String, Vec<(String, f64)>)>,
+    /// Estimated effects the sheet carries (see [`SheetDoc::effects`]).
+    pub effects: Vec<EffectDoc>,
+}
+
+impl Sheet {
+    /// The warning a command that cannot use the sheet's effects gives (`what` says what it
+    /// does instead), naming each; `None` without effects.
+    pub fn effects_warning(&self, origin: &str, what: &str) -> Option<String> {
+        (!self.effects.is_empty()).then(|| {
+            format!(
+                "{origin}: effects: {} cannot be represented here and are ignored: {what}",
+                self.effects
+                    .iter()
+                    .map(|e| format!("'{}' = {:e} {}", e.name, e.value, e.unit))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
+    }
 }
 
 /// Largest magnitude of a sheet value, in its own unit: an overflow guard (found by fuzzing the
@@ -425,8 +470,10 @@ impl SheetDoc {
             rows,
         };
         let coupled = coupled_of(self.coupled.as_ref(), &table.rows, origin)?;
+        let effects = effects_of(self.effects, origin)?;
         Ok(Sheet {
             coupled,
+            effects,
             table,
             has_base: self.base.is_some(),
             has_tool: self.tool.is_some(),
@@ -465,6 +512,7 @@ impl SheetDoc {
                     alpha: angle.from_si(r.alpha),
                     d: length.from_si(r.d),
                     theta: angle.from_si(r.theta),
+                    beta: (r.beta != 0.0).then(|| angle.from_si_unwrapped(r.beta)),
                     lower: r.limits.map(|l| limit(l.lower)),
                     upper: r.limits.map(|l| limit(l.upper)),
                     mimic: r.mimic.as_ref().map(|m| MimicDoc {
@@ -487,6 +535,7 @@ impl SheetDoc {
             tool: Some(pose(&table.tool)),
             joints,
             coupled: None,
+            effects: None,
             branches: None,
             inertials: None,
             pairs: None,
@@ -548,6 +597,7 @@ pub(crate) fn row_of(
         ("theta", j.theta, au),
     ]
     .into_iter()
+    .chain(j.beta.map(|v| ("beta", v, au)))
     .chain(j.lower.map(|v| ("lower", v, limit_scale)))
     .chain(j.upper.map(|v| ("upper", v, limit_scale)))
     {
@@ -566,6 +616,15 @@ pub(crate) fn row_of(
         if matches!(field, "alpha" | "theta") && (v * scale).abs() > MAX_ANGLE {
             bail!(
                 "{origin}: joint '{}': {field}: expected an angle of at most {MAX_ANGLE:e} rad, found {v:e} {} (a double holds no angle that large)",
+                j.name,
+                angle_unit.symbol()
+            );
+        }
+    }
+    if let Some(b) = j.beta {
+        if (b * au).abs() > MAX_TILT {
+            bail!(
+                "{origin}: joint '{}': beta: expected a tilt of at most 90 degrees, found {b} {}",
                 j.name,
                 angle_unit.symbol()
             );
@@ -637,9 +696,50 @@ pub(crate) fn row_of(
         alpha: j.alpha * au,
         d: j.d * lu,
         theta: j.theta * au,
+        beta: j.beta.map_or(0.0, |b| b * au),
         limits,
         mimic,
     })
+}
+
+/// The largest tilt a row may carry (radians): a Hayati tilt is a small correction of a
+/// nearly parallel pair, and beyond a right angle the pair is no such pair.
+const MAX_TILT: f64 = std::f64::consts::FRAC_PI_2;
+
+/// Checks a sheet's `effects` (finite values and uncertainties, distinct non-empty names).
+///
+/// # Errors
+/// A bad value, uncertainty or name, naming the effect.
+pub(crate) fn effects_of(given: Option<Vec<EffectDoc>>, origin: &str) -> Result<Vec<EffectDoc>> {
+    let effects = given.unwrap_or_default();
+    let mut seen = std::collections::HashSet::new();
+    for e in &effects {
+        if e.name.is_empty() || e.name.chars().any(char::is_control) {
+            bail!(
+                "{origin}: effects: expected a printable effect name, found '{}'",
+                e.name.escape_debug()
+            );
+        }
+        if !seen.insert(e.name.as_str()) {
+            bail!("{origin}: effects: '{}' appears twice", e.name);
+        }
+        if !(e.value.is_finite() && e.value.abs() <= MAX_MAGNITUDE) {
+            bail!(
+                "{origin}: effects: '{}': expected a finite value, found {}",
+                e.name,
+                e.value
+            );
+        }
+        if let Some(s) = e.std_error {
+            if !(s.is_finite() && s >= 0.0) {
+                bail!(
+                    "{origin}: effects: '{}': expected a finite std_error >= 0, found {s}",
+                    e.name
+                );
+            }
+        }
+    }
+    Ok(effects)
 }
 
 /// A sheet's pose in SI units (identity when absent); `what` names it in errors.

@@ -205,6 +205,10 @@ const CASES: &[Case] = &[
     sheet!("nan_value", "nan_value.yaml"),
     sheet!("infinite_value", "infinite_value.yaml"),
     sheet!("huge_value", "huge_value.yaml"),
+    sheet!(
+        "beta_beyond_a_right_angle",
+        "beta_beyond_a_right_angle.yaml"
+    ),
     sheet!("text_value", "text_value.yaml"),
     sheet!("duplicate_joint", "duplicate_joint.yaml"),
     sheet!("reversed_limits", "reversed_limits.yaml"),

@@ -17,3 +17,4 @@ mod outputs;
 mod roundtrip;
 mod tree;
 mod writers;
+mod written;

@@ -30,6 +30,7 @@ use serde::Serialize;
 
 use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
 use crate::commands::to_urdf::{check_urdf, urdf_of};
+use crate::commands::written::{self, WrittenDoc};
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{
@@ -37,7 +38,7 @@ use crate::measured::{
 };
 use crate::output::write_all;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
-use crate::sheet::{ConventionDoc, SheetDoc};
+use crate::sheet::{ConventionDoc, EffectDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Which non-geometric effects to estimate after the geometric step.
@@ -474,10 +475,11 @@ pub struct CalibrationDoc {
     pub device: PoseSi,
     /// Estimated targets in the tip frame.
     pub targets: Vec<TargetDoc>,
-    /// Hayati tilts that could not be folded into the calibrated table (name, radians).
-    pub unfolded: Vec<(String, f64)>,
     /// Remarks.
     pub notes: Vec<String>,
+    /// The proof on the written model (`--out`), see [`crate::commands::written`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub written: Option<WrittenDoc>,
 }
 
 /// Units of the JSON report.
@@ -761,12 +763,27 @@ pub fn calibrate(
             effects,
         ),
     };
-    let doc = document(args, &inputs, &report);
-    // Every output file is built before any is written, and all are written or none.
+    let mut doc = document(args, &inputs, &report);
+    // Every output file is built (and the model proved as written) before any is written, and
+    // all are written or none.
     let mut files = Vec::new();
     if let Some(path) = &args.out {
-        files.push((Path::new(path), model_bytes(path, &inputs, &report, &doc)?));
+        let (text, proof) = model_text(path, args.model.as_deref(), &inputs, &report, &doc)?;
+        let passed = proof.passed;
+        doc.written = Some(proof);
+        if passed {
+            if path.to_ascii_lowercase().ends_with(".urdf") && !report.selected_effects.is_empty() {
+                writeln!(
+                    err,
+                    "urdf-dh: warning: {}: a URDF cannot express the estimated effects {}; it holds the geometric part (write a sheet to keep them)",
+                    display_name(path),
+                    report.selected_effects.iter().map(|e| format!("'{e}'")).collect::<Vec<_>>().join(", ")
+                )?;
+            }
+            files.push((Path::new(path), text));
+        }
     }
+    let proved = doc.written.as_ref().is_none_or(|w| w.passed);
     if let Some(path) = &args.plot {
         // Residuals are millimetres or less on any arm: the chart reads best in mm whatever
         // the report's unit.
@@ -779,15 +796,22 @@ pub fn calibrate(
         )?;
         files.push((Path::new(path), residuals_svg(&chart)));
     }
-    let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
-    write_all(&files)?;
+    // A model that fails its proof is not written, and neither is anything else.
+    if proved {
+        let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
+        write_all(&files)?;
+    }
     match args.format {
         CalibrateFormat::Json => {
             out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
         }
         CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
     }
-    Ok(Outcome::Pass)
+    Ok(if proved {
+        Outcome::Pass
+    } else {
+        Outcome::Differs
+    })
 }
 
 fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> CalibrationDoc {
@@ -887,8 +911,8 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
                 xyz: [p.x, p.y, p.z],
             })
             .collect(),
-        unfolded: report.unfolded.clone(),
         notes: report.notes.clone(),
+        written: None,
     }
 }
 
@@ -1178,19 +1202,11 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             );
         }
     }
-    if !doc.unfolded.is_empty() {
-        let _ = writeln!(
-            s,
-            "tilts not folded into the written DH table: {}",
-            doc.unfolded
-                .iter()
-                .map(|(n, v)| format!("{n} = {} rad", value(*v, "rad", DataUnits::default())))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
     for n in &doc.notes {
         let _ = writeln!(s, "note: {n}");
+    }
+    if let Some(w) = &doc.written {
+        let _ = writeln!(s, "{}", crate::commands::written::line(w));
     }
     let _ = writeln!(
         s,
@@ -1215,13 +1231,18 @@ fn absorbed(aliases: &[String]) -> String {
     }
 }
 
-/// The calibrated model's file: a URDF for `.urdf`, a JSON sheet for `.json`, else YAML.
-fn model_bytes(
+/// The calibrated model's text for `path` (a URDF for `.urdf`, a JSON sheet for `.json`, else
+/// YAML) and the proof on it (see [`crate::commands::written`]).
+///
+/// # Errors
+/// Serialisation failures, and an artefact that does not read back.
+fn model_text(
     path: &str,
+    model_path: Option<&str>,
     inputs: &Inputs,
     report: &Report,
     doc: &CalibrationDoc,
-) -> Result<String> {
+) -> Result<(String, WrittenDoc)> {
     let calibration = CalibrationSection {
         data: doc.data.clone(),
         rms_before: doc.rms_before,
@@ -1243,24 +1264,107 @@ fn model_bytes(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     );
-    calibrated_bytes(
+    let effects: Vec<EffectDoc> = doc
+        .parameters
+        .iter()
+        .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+        .map(|p| EffectDoc {
+            name: p.name.clone(),
+            value: p.estimate,
+            unit: p.unit.to_string(),
+            std_error: p.std_error,
+        })
+        .collect();
+    // A model whose own rows put a near-parallel pair's common normal far away (an URDF
+    // extracted beyond its angular tolerance) is written in the Hayati form: the same
+    // kinematics, bounded lengths. The length bound is the size of the model in that form.
+    let hayati = ModelOptions::DEFAULT_HAYATI_THRESHOLD;
+    let size = inputs.table.hayati_form(hayati).size();
+    let longest = |t: &DhTable| {
+        t.rows
+            .iter()
+            .flat_map(|r| [r.a.abs(), r.d.abs()])
+            .fold(0.0, f64::max)
+    };
+    let table = if longest(&report.calibrated) > size + written::LENGTH_MARGIN {
+        report.calibrated.hayati_form(hayati)
+    } else {
+        report.calibrated.clone()
+    };
+    let urdf = |p: &str| p.to_ascii_lowercase().ends_with(".urdf");
+    // A URDF model written as a URDF: a minimal edit of the user's own file.
+    let text = match model_path.filter(|m| urdf(m) && urdf(path) && *m != "-") {
+        Some(m) => crate::commands::urdf_edit::minimal_edit(
+            &crate::input::read_text(m)?,
+            &inputs.table,
+            // Row for row the nominal table's counterpart, so each joint frame moves by the
+            // fit's small change, whatever the rows' form.
+            &report.calibrated,
+            &inputs.links.0,
+            &inputs.links.1,
+        )
+        .with_context(|| {
+            format!(
+                "{}: writing the calibrated model as an edit of the model URDF",
+                display_name(path)
+            )
+        })?,
+        None => calibrated_text(
+            path,
+            inputs,
+            &table,
+            source,
+            serde_yaml::to_value(&calibration)?,
+            effects,
+        )?,
+    };
+    let q = row_values(&report.calibrated, &inputs.data)?;
+    let target: Vec<usize> = inputs.data.samples.iter().map(|s| s.target).collect();
+    let targets: Vec<Vector3<f64>> = report.targets.iter().map(|(_, p)| *p).collect();
+    let proof = written::prove(
         path,
-        inputs,
+        &text,
         &report.calibrated,
-        source,
-        serde_yaml::to_value(&calibration)?,
-    )
+        size,
+        (&inputs.links.0, &inputs.links.1),
+        &written::Predictions {
+            q: &q,
+            target: &target,
+            targets: &targets,
+            device: report.device,
+        },
+    )?;
+    Ok((text, proof))
 }
 
-/// Writes `table` as the calibrated model of `inputs` (its robot name, links, units and
-/// coupled joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with
-/// `source` and the `calibration` section.
+/// `table` as the calibrated model of `inputs` without effects (see [`calibrated_text`]), for
+/// the contact and tree paths.
+///
+/// # Errors
+/// Serialisation failures, and names or values a URDF cannot hold.
 pub(crate) fn calibrated_bytes(
     path: &str,
     inputs: &Inputs,
     table: &DhTable,
     source: String,
     calibration: serde_yaml::Value,
+) -> Result<String> {
+    calibrated_text(path, inputs, table, source, calibration, Vec::new())
+}
+
+/// `table` as the calibrated model of `inputs` (its robot name, links, units and coupled
+/// joints): a URDF for `.urdf`, else a sheet (JSON for `.json`, else YAML) with `source`, the
+/// `calibration` section and the estimated `effects`.
+///
+/// # Errors
+/// Serialisation failures, and names or values a URDF cannot hold.
+fn calibrated_text(
+    path: &str,
+    inputs: &Inputs,
+    table: &DhTable,
+    source: String,
+    calibration: serde_yaml::Value,
+    effects: Vec<EffectDoc>,
 ) -> Result<String> {
     let lower = path.to_ascii_lowercase();
     let robot = inputs.robot.clone().unwrap_or_else(|| "robot".into());
@@ -1282,6 +1386,7 @@ pub(crate) fn calibrated_bytes(
         }
         sheet.source = Some(source);
         sheet.calibration = Some(calibration);
+        sheet.effects = (!effects.is_empty()).then_some(effects);
         if lower.ends_with(".json") {
             serde_json::to_string_pretty(&sheet)? + "\n"
         } else {

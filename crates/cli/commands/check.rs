@@ -127,11 +127,14 @@ pub struct CheckReport {
 /// Unreadable or invalid URDF or sheet.
 pub fn check(args: &CheckArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let (model, chain) = load_chain(&args.robot, args.base.as_deref(), args.tip.as_deref())?;
-    for w in crate::commands::extract::urdf_warnings(&args.robot, &model, &chain) {
+    for w in crate::commands::extract::urdf_warnings(&display_name(&args.robot), &model, &chain) {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let sheet_name = display_name(&args.sheet);
     let sheet = Sheet::parse(&read_text(&args.sheet)?, &sheet_name)?;
+    if let Some(w) = sheet.effects_warning(&sheet_name, "check compares the DH kinematics alone") {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     let report = compare(&chain, &sheet, args.tolerance)?;
     for w in &report.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
@@ -219,10 +222,27 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
         base_free: !sheet.has_base,
         tool_free: !sheet.has_tool,
     };
-    let verdict = check_sheet(&reference.table, &sheet.table, freedom, tol, |q| {
-        chain.fk(q)
-    })
-    .context("comparing the sheet with the URDF")?;
+    // Row by row, a tilted sheet is compared as the plain DH table of its own kinematics.
+    let plain = if sheet.table.has_tilts() {
+        warnings.push(
+            "the sheet's beta tilts are compared row by row as the plain DH values they stand for (exact; a common normal may lie far away)"
+                .into(),
+        );
+        let zero = vec![0.0; sheet.table.rows.len()];
+        let exact = Tolerance::new(1e-12, 1e-12).map_err(|e| anyhow::anyhow!("{e}"))?;
+        dh_core::extract(
+            &sheet.table.axes()?,
+            &sheet.table.fk(&zero)?,
+            exact,
+            sheet.table.convention,
+        )
+        .context("folding the sheet's beta tilts into plain DH")?
+        .table
+    } else {
+        sheet.table.clone()
+    };
+    let verdict = check_sheet(&reference.table, &plain, freedom, tol, |q| chain.fk(q))
+        .context("comparing the sheet with the URDF")?;
     let name = |row: Option<usize>| {
         row.and_then(|r| sheet.table.rows.get(r))
             .map(|r| r.name.clone())

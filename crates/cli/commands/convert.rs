@@ -53,6 +53,8 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     );
     doc.robot = sheet.robot.clone();
     doc.source = sheet.source.clone();
+    // Effects do not depend on the convention: they pass through unchanged.
+    doc.effects = (!sheet.effects.is_empty()).then(|| sheet.effects.clone());
     // A transform the sheet left free stays free: whatever the conversion moves into it (the
     // last row's a, alpha; the first row's) is absorbed by a free transform anyway.
     if !sheet.has_base {

@@ -10,6 +10,7 @@ use anyhow::Result;
 use dh_calib::cpa::{analyse, CpaOptions, CpaResult, JointCpa};
 use dh_calib::model::NEAR_PARALLEL;
 use dh_core::{classify, Convention, DhTable, JointKind, Line, Tolerance};
+use nalgebra::Isometry3;
 use serde::Serialize;
 
 use crate::error::{hinted, Outcome};
@@ -195,6 +196,46 @@ pub struct CpaDoc {
     /// Nominal against measured axis pairs (with `--model`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub pairs: Vec<PairComparisonDoc>,
+    /// The written table proved against the measured axes (see [`AxesProofDoc`]).
+    pub proof: AxesProofDoc,
+}
+
+/// Forward kinematics of a table against the measured axes' own (the product of exponentials
+/// of the zero-pose axis lines and the measured tip), at every measured joint vector: the
+/// largest tip position and orientation differences (metres, radians), for the written table
+/// and for the table that snaps every pair within the angular tolerance to parallel.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AxesProofDoc {
+    /// Joint vectors compared.
+    pub poses: usize,
+    /// The written table: `[position, orientation]`.
+    pub written: [f64; 2],
+    /// The snapped table: `[position, orientation]`.
+    pub snapped: [f64; 2],
+}
+
+/// `[max position, max orientation]` difference between `table`'s FK and the measured axes'.
+fn against_axes(table: &DhTable, result: &CpaResult, qs: &[Vec<f64>]) -> [f64; 2] {
+    let mut worst = [0.0f64; 2];
+    for q in qs {
+        let Ok(fk) = table.fk(q) else { continue };
+        let mut t = Isometry3::identity();
+        for (ax, &qi) in result.axes.iter().zip(q) {
+            let e = ax.line.direction();
+            t *= match ax.kind {
+                JointKind::Revolute => {
+                    let c = ax.line.point();
+                    Isometry3::translation(c.x, c.y, c.z)
+                        * Isometry3::rotation(e * qi)
+                        * Isometry3::translation(-c.x, -c.y, -c.z)
+                }
+                JointKind::Prismatic => Isometry3::translation(e.x * qi, e.y * qi, e.z * qi),
+            };
+        }
+        let (dp, dr) = dh_core::pose::pose_error(&fk, &(t * result.tip));
+        worst = [worst[0].max(dp), worst[1].max(dr)];
+    }
+    worst
 }
 
 fn arr(v: &nalgebra::Vector3<f64>) -> [f64; 3] {
@@ -441,6 +482,21 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
             .collect(),
         joints: result.joints.iter().map(joint_doc).collect(),
         pairs,
+        proof: {
+            let qs: Vec<Vec<f64>> = data.samples.iter().map(|s| s.q.clone()).collect();
+            let snapped = dh_core::extract(
+                &result.axes,
+                &result.tip,
+                options.tolerance,
+                options.convention,
+            )
+            .map_or_else(|_| table.clone(), |e| e.table);
+            AxesProofDoc {
+                poses: qs.len(),
+                written: against_axes(table, &result, &qs),
+                snapped: against_axes(&snapped, &result, &qs),
+            }
+        },
     };
     match args.format {
         CpaFormat::Text => {
@@ -585,6 +641,11 @@ fn text(doc: &CpaDoc, sheet: &SheetDoc) -> String {
             );
         }
     }
+    let _ = writeln!(
+        s,
+        "table against the measured axes (FK at the {} measured joint vectors): max {:.3e} m, {:.3e} rad (snapping near-parallel pairs would give {:.3e} m, {:.3e} rad)",
+        doc.proof.poses, doc.proof.written[0], doc.proof.written[1], doc.proof.snapped[0], doc.proof.snapped[1]
+    );
     let _ = writeln!(s, "extracted DH table (base: DH frame 0 in the device frame; tool: the tip frame at the last joint's circle centre):");
     s.push_str(&render_sheet(sheet, Format::Text).unwrap_or_default());
     s

@@ -11,3 +11,5 @@ pub mod import;
 pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
+pub mod urdf_edit;
+pub mod written;

@@ -105,7 +105,6 @@ struct TruthSection {
     targets: Vec<TargetDoc>,
     errors: Vec<(String, f64)>,
     effects: Vec<(String, f64)>,
-    unfolded: Vec<(String, f64)>,
 }
 
 /// Adds the effects to the simulated points: the difference between the true model with and
@@ -351,7 +350,6 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
             .collect(),
         errors: truth.errors.clone(),
         effects: applied,
-        unfolded: truth.unfolded.clone(),
     };
     sheet.truth = Some(serde_yaml::to_value(&section)?);
     let truth_text = serde_yaml::to_string(&sheet)?;

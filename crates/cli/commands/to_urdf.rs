@@ -1,8 +1,9 @@
 //! `urdf-dh to-urdf`: a URDF whose kinematics equal a DH sheet.
 //!
 //! Every row `A_i(q) = pre_i · M(q) · post_i` with `M` a rotation about (or translation along)
-//! z: standard rows have `pre = Rz(theta)`, `post = Tz(d) Tx(a) Rx(alpha)`; modified rows
-//! `pre = Rx(alpha) Tx(a) Rz(theta)`, `post = Tz(d)`. Joint `i`'s origin is then
+//! z: standard rows have `pre = Rz(theta)`, `post = Tz(d) Tx(a) Rx(alpha) Ry(beta)`; modified
+//! rows `pre = Rx(alpha) Tx(a) Ry(beta) Rz(theta)`, `post = Tz(d)` (`beta` the row's
+//! Hayati-Mirmirani tilt, 0 in plain DH). Joint `i`'s origin is then
 //! `post_(i-1) · pre_i` (the first one `base · pre_1`), its axis `0 0 1`, and a fixed joint
 //! `post_n · tool` carries the tip link. Links sit on the joint axes, as vendor URDFs place them.
 
@@ -10,7 +11,7 @@ use std::fmt::Write as _;
 use std::io::Write;
 
 use anyhow::Result;
-use dh_core::pose::{rot_x, rot_z, to_xyz_rpy, trans_x, trans_z};
+use dh_core::pose::{rot_x, rot_y, rot_z, to_xyz_rpy, trans_x, trans_z};
 use dh_core::{Convention, DhRow, DhTable, JointKind};
 use nalgebra::Isometry3;
 
@@ -39,10 +40,10 @@ fn split(row: &DhRow, convention: Convention) -> (Isometry3<f64>, Isometry3<f64>
     match convention {
         Convention::Standard => (
             rot_z(row.theta),
-            trans_z(row.d) * trans_x(row.a) * rot_x(row.alpha),
+            trans_z(row.d) * trans_x(row.a) * rot_x(row.alpha) * rot_y(row.beta),
         ),
         Convention::Modified => (
-            rot_x(row.alpha) * trans_x(row.a) * rot_z(row.theta),
+            rot_x(row.alpha) * trans_x(row.a) * rot_y(row.beta) * rot_z(row.theta),
             trans_z(row.d),
         ),
     }
@@ -56,7 +57,8 @@ fn xml(s: &str) -> String {
         .replace('>', "&gt;")
 }
 
-fn origin(p: &Isometry3<f64>) -> String {
+/// A URDF `<origin>` element of `p`, values rounded to 1e-15.
+pub(crate) fn origin(p: &Isometry3<f64>) -> String {
     let (xyz, rpy) = to_xyz_rpy(p);
     let n = |v: f64| {
         let v = crate::units::round_decimals(crate::units::clean(v), 15);
@@ -319,6 +321,9 @@ pub fn to_urdf(args: &ToUrdfArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     let name = display_name(&args.sheet);
     let sheet = Sheet::parse(&read_text(&args.sheet)?, &name)?;
     for w in &sheet.warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
+    if let Some(w) = sheet.effects_warning(&name, "a URDF holds the DH kinematics alone") {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let robot = args

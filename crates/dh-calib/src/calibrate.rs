@@ -246,10 +246,8 @@ pub struct Report {
     pub fixed: Vec<FixedParameter>,
     /// Classic DH or Hayati-Mirmirani for each consecutive pair of joints.
     pub parametrisation: Vec<PairParametrisation>,
-    /// The calibrated table (see [`Model::table_at`] for how `beta` is folded in).
+    /// The calibrated table, Hayati tilts in their rows' `beta` (see [`Model::table_at`]).
     pub calibrated: DhTable,
-    /// Tilts that could not be folded into the table (name, radians).
-    pub unfolded: Vec<(String, f64)>,
     /// Estimated `T_device_base`.
     pub device: Isometry3<f64>,
     /// Estimated target positions in the tip frame.
@@ -882,14 +880,7 @@ impl<'a> Session<'a> {
             .map(|p| p.name.as_str())
             .collect();
         parameters.retain(|p| !hidden_names.contains(&p.name.as_str()));
-        let (tree, unfolded) = model.tree_at(&x);
-        if !unfolded.is_empty() {
-            notes.push(
-                "some beta tilts could not be folded into DH values exactly; the calibrated table \
-                 omits them and is an approximation"
-                    .into(),
-            );
-        }
+        let tree = model.tree_at(&x);
         let effect_free = last
             .free
             .iter()
@@ -936,7 +927,6 @@ impl<'a> Session<'a> {
             fixed,
             parametrisation: model.pairs().to_vec(),
             calibrated: tree.trunk().clone(),
-            unfolded,
             device: model.device_at(&x),
             targets: (0..model.targets().len())
                 .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
@@ -1151,6 +1141,7 @@ fn estimates(
                     crate::model::Field::Alpha => row.alpha,
                     crate::model::Field::D => row.d,
                     crate::model::Field::Theta => row.theta,
+                    crate::model::Field::Beta => row.beta,
                     _ => 0.0,
                 };
                 out.push(ParameterEstimate {

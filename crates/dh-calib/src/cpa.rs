@@ -95,7 +95,9 @@ use nalgebra::{
 };
 use thiserror::Error;
 
-use dh_core::{extract, Convention, CoreError, Extraction, JointAxis, JointKind, Line, Tolerance};
+use dh_core::{
+    extract, Convention, CoreError, Extraction, JointAxis, JointKind, Line, Tolerance, Warning,
+};
 
 use crate::data::Measurements;
 
@@ -507,7 +509,8 @@ pub fn analyse(m: &Measurements, opts: &CpaOptions) -> Result<CpaResult, CpaErro
             mimic: None,
         })
         .collect();
-    let extraction = extract(&axes, &tip, opts.tolerance, opts.convention)?;
+    let snapped = extract(&axes, &tip, opts.tolerance, opts.convention)?;
+    let extraction = measured_parallels(snapped, &axes, &tip, opts)?;
     Ok(CpaResult {
         sweeps,
         joints,
@@ -516,6 +519,39 @@ pub fn analyse(m: &Measurements, opts: &CpaOptions) -> Result<CpaResult, CpaErro
         extraction,
     })
 }
+
+/// Nearly parallel measured axes are the measurement, not noise to snap away: when the
+/// extraction snapped a pair that is not exactly parallel, the table is extracted again without
+/// angular snapping (only the linear tolerance decides) and every pair within
+/// [`ModelOptions::DEFAULT_HAYATI_THRESHOLD`](crate::model::ModelOptions) of parallel is
+/// written in the Hayati-Mirmirani form ([`dh_core::DhTable::hayati_form`]): a small `beta`
+/// and bounded lengths, the placement `calibrate` estimates. The ill-conditioned warnings of
+/// the pairs so written are dropped: their rows are no longer ill conditioned.
+fn measured_parallels(
+    snapped: Extraction,
+    axes: &[JointAxis],
+    tip: &Isometry3<f64>,
+    opts: &CpaOptions,
+) -> Result<Extraction, CpaError> {
+    let tilted_snap = snapped.warnings.iter().any(
+        |w| matches!(w, Warning::SnappedParallel { angle_deviation, .. } if *angle_deviation > 0.0),
+    );
+    if !tilted_snap {
+        return Ok(snapped);
+    }
+    let threshold = crate::model::ModelOptions::DEFAULT_HAYATI_THRESHOLD;
+    let exact_tol = Tolerance::new(opts.tolerance.linear, EXACT_ANGLE)?;
+    let mut exact = extract(axes, tip, exact_tol, opts.convention)?;
+    exact.table = exact.table.hayati_form(threshold);
+    exact.warnings.retain(
+        |w| !matches!(w, Warning::IllConditioned { angle_from_parallel, .. } if *angle_from_parallel <= threshold),
+    );
+    Ok(exact)
+}
+
+/// Angular tolerance (radians) of the extraction that keeps measured near-parallel pairs as
+/// they are: far below any measurement, so only exactly parallel axes snap.
+const EXACT_ANGLE: f64 = 1e-12;
 
 fn check_input(m: &Measurements, opts: &CpaOptions) -> Result<(), CpaError> {
     if m.samples.is_empty() || m.joint_names.is_empty() {

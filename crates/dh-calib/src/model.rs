@@ -56,13 +56,16 @@
 //!   `<joint_i>.d` is dropped.
 //!
 //! In both, `beta` turns about the y axis of the frame that sits on the later joint's axis
-//! just before that joint, at the far end of the common normal.
+//! just before that joint, at the far end of the common normal. The parameter is named after
+//! the row that holds it (`<joint_i>.beta` standard, `<joint_{i+1}>.beta` modified), and it is
+//! exactly [`dh_core::DhRow::beta`] of that row: a table whose rows carry tilts is modelled
+//! with them as nominal values, and [`Model::table_at`] writes the estimate there.
 
 use std::fmt;
 use std::ops::Range;
 use std::sync::Arc;
 
-use dh_core::{Convention, DhTable, JointKind, JointSampler};
+use dh_core::{Convention, DhTable, JointKind};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::fit::{CalibError, Problem};
@@ -312,16 +315,6 @@ pub struct Observed {
     pub observation: Observation,
 }
 
-/// A calibrated table, and what could not be put in it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FoldedTable {
-    /// Nominal values plus errors, `beta` folded into exact DH values where possible.
-    pub table: DhTable,
-    /// `(parameter name, beta)` of the tilts that could not be folded exactly (the table then
-    /// lacks them and is an approximation; see [`Model::table_at`]).
-    pub unfolded: Vec<(String, f64)>,
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Axis {
     X = 0,
@@ -420,15 +413,6 @@ const POSE_FIELDS: [(Field, &str, OpKind); 6] = [
     (Field::Ry, "ry", OpKind::Rot(Axis::Y)),
     (Field::Rz, "rz", OpKind::Rot(Axis::Z)),
 ];
-
-/// Largest position deviation (metres) and orientation deviation (radians) accepted between a
-/// table with `beta` folded into DH values and the model it stands for; beyond it (a tilt so
-/// small that the equivalent `d` loses its digits) the tilt is left unfolded.
-pub const FOLD_TOLERANCE: f64 = 1e-9;
-
-/// A tilt below this (radians) is no tilt: folding it would put the common normal beyond any
-/// representable distance.
-const MIN_FOLD_TILT: f64 = 1e-12;
 
 /// Consecutive axes within this angle of parallel (radians, 5 degrees) that do not use
 /// Hayati-Mirmirani get a tilt about `y` held at zero, which an [`EffectField::Beta`] effect
@@ -660,8 +644,9 @@ impl Model {
         let alpha = (OpKind::Rot(Axis::X), row.alpha, None, Some(Field::Alpha));
         let a = (OpKind::Trans(Axis::X), row.a, None, Some(Field::A));
         let beta_field = plan.beta.then_some(Field::Beta);
-        let beta = (OpKind::Rot(Axis::Y), 0.0, None, beta_field);
-        let with_beta = plan.beta || plan.placeholder;
+        // A tilt the table already carries is the nominal value its `beta` error adds to.
+        let beta = (OpKind::Rot(Axis::Y), row.beta, None, beta_field);
+        let with_beta = plan.beta || plan.placeholder || row.beta != 0.0;
         let theta = (
             OpKind::Rot(Axis::Z),
             row.theta,
@@ -1255,34 +1240,23 @@ impl Model {
     }
 
     /// The calibrated table at `x`: nominal values plus errors, base and tool with their small
-    /// motions, and every Hayati tilt folded into exact DH values.
+    /// motions, and every Hayati tilt in its row's [`dh_core::DhRow::beta`] (the placement
+    /// this model uses, so the table's FK is the model's exactly). Effects cannot be expressed
+    /// in DH and are never in the table.
     ///
-    /// Folding (standard row `i`): `Tz(d) Tx(a) Rx(alpha) Ry(beta)` is rewritten as
-    /// `Rz(δθ) Tz(d') Tx(a') Rx(alpha') · Rz(φ) Tz(s)`, i.e. frame `i` is moved along the tilted
-    /// axis to the foot of the true common normal; `θ_i += δθ`, and `Rz(φ) Tz(s)` is absorbed by
-    /// the next row (`θ_{i+1} += φ`, `d_{i+1} += s`). Modified row `i+1`:
-    /// `Rx(alpha) Tx(a) Ry(beta)` is rewritten as `Rz(δθ) Tz(δd) · Rx(alpha') Tx(a') · Rz(φ) Tz(s)`
-    /// with the first screw absorbed by row `i` and the last by row `i+1`'s own `theta`, `d`.
-    /// The result is exact (checked against the model within [`FOLD_TOLERANCE`] at sampled
-    /// joint values) but a small tilt gives a large `d` (a tilt `beta` at link length `a` puts
-    /// the common normal about `a / beta` away): that is the ill conditioning Hayati avoids,
-    /// and it is the form vendors' calibration files use. When the check fails (tilts so small
-    /// that the digits are lost) the tilts are left out of the table and listed in
-    /// [`FoldedTable::unfolded`]. Effects cannot be expressed in DH and are never in the table.
+    /// Tilts are not folded into plain DH values: that is exact too, but a tilt `beta` at link
+    /// length `a` puts the common normal about `a / beta` away (kilometres for a tenth of a
+    /// milliradian), the ill conditioning Hayati avoids.
     ///
     /// For a tree this is the trunk (its tool the nominal branch point); see
     /// [`Model::tree_at`] for the whole tree.
-    pub fn table_at(&self, x: &[f64]) -> FoldedTable {
-        let (tree, unfolded) = self.tree_at(x);
-        FoldedTable {
-            table: tree.trunk().clone(),
-            unfolded,
-        }
+    pub fn table_at(&self, x: &[f64]) -> DhTable {
+        self.tree_at(x).trunk().clone()
     }
 
-    /// The calibrated tree at `x`, folded as [`Model::table_at`] describes, with the tilts that
-    /// could not be folded (name, radians). Branch mounts carry their small motions.
-    pub fn tree_at(&self, x: &[f64]) -> (DhTree, Vec<(String, f64)>) {
+    /// The calibrated tree at `x`, as [`Model::table_at`] describes. Branch mounts carry their
+    /// small motions.
+    pub fn tree_at(&self, x: &[f64]) -> DhTree {
         let mut trunk = self.tree.trunk().clone();
         trunk.base = self.pose_at(x, Block::Base);
         if self.tree.branches().is_empty() {
@@ -1292,7 +1266,6 @@ impl Model {
         for (b, br) in branches.iter_mut().enumerate() {
             br.table.base = self.pose_at(x, Block::Mount(b));
         }
-        let mut betas = Vec::new();
         for (c, p) in self.parameters.iter().enumerate() {
             let v = x.get(c).copied().unwrap_or(0.0);
             if let Block::Joint(g) = p.block {
@@ -1307,57 +1280,17 @@ impl Model {
                     Field::Alpha => row.alpha += v,
                     Field::D => row.d += v,
                     Field::Theta => row.theta += v,
-                    Field::Beta if v != 0.0 => betas.push((t, i, p.name.clone(), v)),
+                    Field::Beta => row.beta += v,
                     _ => {}
                 }
             }
         }
-        let build = |trunk: DhTable, branches: Vec<Branch>| {
-            if branches.is_empty() {
-                Some(DhTree::serial(&trunk))
-            } else {
-                DhTree::new(trunk, branches).ok()
-            }
-        };
-        let approx = build(trunk.clone(), branches.clone()).unwrap_or_else(|| self.tree.clone());
-        if betas.is_empty() {
-            return (approx, vec![]);
+        if branches.is_empty() {
+            DhTree::serial(&trunk)
+        } else {
+            // The rows and names are the nominal tree's, which was valid.
+            DhTree::new(trunk, branches).unwrap_or_else(|_| self.tree.clone())
         }
-        let unfolded: Vec<(String, f64)> =
-            betas.iter().map(|(_, _, n, v)| (n.clone(), *v)).collect();
-        let mut ok = true;
-        for (t, i, _, beta) in &betas {
-            let table = match t {
-                None => &mut trunk,
-                Some(b) => &mut branches[*b].table,
-            };
-            if !fold_beta(table, *i, *beta) {
-                ok = false;
-            }
-        }
-        match build(trunk, branches) {
-            Some(folded) if ok && self.matches(&folded, x) => (folded, vec![]),
-            _ => (approx, unfolded),
-        }
-    }
-
-    fn matches(&self, tree: &DhTree, x: &[f64]) -> bool {
-        let mut sampler = JointSampler::new(tree.rows(), tree.size(), 0x5eed);
-        let mut q = Vec::new();
-        for _ in 0..8 {
-            sampler.next_into(&mut q);
-            let Ok(frames) = tree.frames(&q) else {
-                return false;
-            };
-            for (c, a) in frames.tips.iter().enumerate() {
-                let b = self.robot_fk_of(x, &q, c);
-                let (dp, dr) = dh_core::pose::pose_error(a, &b);
-                if !(dp <= FOLD_TOLERANCE && dr <= FOLD_TOLERANCE) {
-                    return false;
-                }
-            }
-        }
-        true
     }
 }
 
@@ -1405,105 +1338,6 @@ fn classify_pairs(table: &DhTable, threshold: f64) -> Result<Vec<PairParametrisa
         });
     }
     Ok(out)
-}
-
-fn tz(d: f64) -> Isometry3<f64> {
-    Isometry3::translation(0.0, 0.0, d)
-}
-fn tx(a: f64) -> Isometry3<f64> {
-    Isometry3::translation(a, 0.0, 0.0)
-}
-fn rx(v: f64) -> Isometry3<f64> {
-    Isometry3::rotation(Vector3::x() * v)
-}
-fn ry(v: f64) -> Isometry3<f64> {
-    Isometry3::rotation(Vector3::y() * v)
-}
-
-/// The DH split of `m` (a transform from a frame `G` to a frame whose z axis is a line `L`):
-/// `m = Rz(δθ) Tz(δd) Tx(a) Rx(alpha) Rz(φ) Tz(s)`, returned as `[δθ, δd, a, alpha, φ, s]`.
-/// `None` when `L` is parallel to `G`'s z axis.
-fn dh_split(m: &Isometry3<f64>) -> Option<[f64; 6]> {
-    let ez = Vector3::z();
-    let o = m.translation.vector;
-    let u = m.rotation * ez;
-    let c = ez.cross(&u);
-    let sn = c.norm();
-    if sn < MIN_FOLD_TILT {
-        return None;
-    }
-    let n = c / sn;
-    let b = u.z;
-    let s2 = (o.z * b - o.dot(&u)) / (1.0 - b * b);
-    let s1 = o.z + s2 * b;
-    let foot2 = o + u * s2;
-    let v = foot2 - ez * s1;
-    let hint = m.rotation * Vector3::x();
-    let dot = n.dot(&hint);
-    let sign = if dot.abs() > 1e-9 {
-        dot.signum()
-    } else if n.dot(&v) >= 0.0 {
-        1.0
-    } else {
-        -1.0
-    };
-    let x = n * sign;
-    let dtheta = x.y.atan2(x.x);
-    let a = v.dot(&x);
-    let alpha = (sn * sign).atan2(b);
-    let frame = dh_core::pose::rot_z(dtheta) * tz(s1) * tx(a) * rx(alpha);
-    let rest = frame.inverse() * m;
-    let rx_ = rest.rotation * Vector3::x();
-    let phi = rx_.y.atan2(rx_.x);
-    Some([dtheta, s1, a, alpha, phi, rest.translation.vector.z])
-}
-
-/// Folds row `i`'s tilt `beta` into exact DH values of `table` (see [`Model::table_at`]).
-fn fold_beta(table: &mut DhTable, i: usize, beta: f64) -> bool {
-    let n = table.rows.len();
-    match table.convention {
-        Convention::Standard => {
-            let r = &table.rows[i];
-            if r.kind == JointKind::Prismatic {
-                // The joint value moves d, so the split would depend on it.
-                return false;
-            }
-            let m = tz(r.d) * tx(r.a) * rx(r.alpha) * ry(beta);
-            let Some([dth, dd, a, alpha, phi, s]) = dh_split(&m) else {
-                return false;
-            };
-            let r = &mut table.rows[i];
-            r.theta += dth;
-            r.d = dd;
-            r.a = a;
-            r.alpha = alpha;
-            if i + 1 < n {
-                table.rows[i + 1].theta += phi;
-                table.rows[i + 1].d += s;
-            } else {
-                table.tool = dh_core::pose::rot_z(phi) * tz(s) * table.tool;
-            }
-        }
-        Convention::Modified => {
-            let r = &table.rows[i];
-            let m = rx(r.alpha) * tx(r.a) * ry(beta);
-            let Some([dth, dd, a, alpha, phi, s]) = dh_split(&m) else {
-                return false;
-            };
-            if i == 0 {
-                table.base = table.base * dh_core::pose::rot_z(dth) * tz(dd);
-            } else {
-                table.rows[i - 1].theta += dth;
-                table.rows[i - 1].d += dd;
-            }
-            let r = &mut table.rows[i];
-            r.a = a;
-            r.alpha = alpha;
-            r.theta += phi;
-            r.d += s;
-        }
-    }
-    true
 }
 
 /// A model with observations: the [`Problem`] that [`crate::fit::solve`] minimises.

@@ -110,10 +110,8 @@ impl Default for SimulationOptions {
 /// What the simulated data was generated from, for the CLI's side file and for tests.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Truth {
-    /// The true table (errors applied, `beta` folded as [`Model::table_at`] describes).
+    /// The true table (errors applied, tilts in their rows' `beta`, see [`Model::table_at`]).
     pub table: DhTable,
-    /// Tilts that could not be folded into `table` (name, radians).
-    pub unfolded: Vec<(String, f64)>,
     /// True `T_device_base`.
     pub device: Isometry3<f64>,
     /// True target positions in the tip frame (metres).
@@ -285,7 +283,7 @@ pub fn simulate(
             }
         }
     }
-    let folded = model.table_at(&x);
+    let table = model.table_at(&x);
     let errors = model
         .parameters()
         .iter()
@@ -299,8 +297,7 @@ pub fn simulate(
         samples,
     };
     let truth = Truth {
-        table: folded.table,
-        unfolded: folded.unfolded,
+        table,
         device,
         targets: names.into_iter().zip(target_pos).collect(),
         errors,

@@ -311,10 +311,8 @@ pub struct SocketReport {
     pub parameters: Vec<ParameterEstimate>,
     /// Parameters held at their start because the data cannot identify them, with aliases.
     pub fixed: Vec<FixedParameter>,
-    /// The calibrated table (tilts folded, see [`Model::table_at`]).
+    /// The calibrated table, tilts in their rows' `beta` (see [`Model::table_at`]).
     pub calibrated: DhTable,
-    /// Tilts that could not be folded (name, radians).
-    pub unfolded: Vec<(String, f64)>,
     /// Estimated target positions in the tip frame.
     pub targets: Vec<(String, Vector3<f64>)>,
     /// Condition number of the scaled Jacobian of the last step's free parameters.
@@ -997,14 +995,7 @@ fn run_sockets(
             "no distance between sockets is known: the scale of the robot is not observable".into(),
         );
     }
-    let (tree_at, unfolded) = run.model.tree_at(&x);
-    if !unfolded.is_empty() {
-        notes.push(
-            "some beta tilts could not be folded into DH values exactly; the calibrated table \
-             omits them and is an approximation"
-                .into(),
-        );
-    }
+    let tree_at = run.model.tree_at(&x);
     let fixed: Vec<FixedParameter> = fixed
         .iter()
         .filter(|f| {
@@ -1062,7 +1053,6 @@ fn run_sockets(
         parameters,
         fixed,
         calibrated: tree_at.trunk().clone(),
-        unfolded,
         targets: (0..run.model.targets().len())
             .map(|k| (run.model.targets()[k].0.clone(), run.model.target_at(&x, k)))
             .collect(),
@@ -1346,6 +1336,7 @@ fn estimates(
                     Field::Alpha => row.alpha,
                     Field::D => row.d,
                     Field::Theta => row.theta,
+                    Field::Beta => row.beta,
                     _ => 0.0,
                 };
                 (nom, nom + x[c])

@@ -293,7 +293,7 @@ pub struct TreeFrames {
 impl TreeFrames {
     /// Row `i`'s joint axis: a point on it and its unit direction (the DH `z` of the frame the
     /// joint turns or slides about: `before · Rz…` in the standard convention, the frame after
-    /// `Rx(alpha) Tx(a)` in the modified one).
+    /// `Rx(alpha) Tx(a) Ry(beta)` in the modified one).
     pub fn axis(
         &self,
         row: usize,
@@ -307,7 +307,8 @@ impl TreeFrames {
             Convention::Modified => {
                 let f = self.before[row]
                     * Isometry3::rotation(nalgebra::Vector3::x() * table_row.alpha)
-                    * Isometry3::translation(table_row.a, 0.0, 0.0);
+                    * Isometry3::translation(table_row.a, 0.0, 0.0)
+                    * Isometry3::rotation(nalgebra::Vector3::y() * table_row.beta);
                 (f.translation.vector, f.rotation * nalgebra::Vector3::z())
             }
         }

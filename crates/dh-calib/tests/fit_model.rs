@@ -197,7 +197,7 @@ fn ur5_parallel_pairs_use_hayati_and_kr_uses_classic_dh() {
 }
 
 #[test]
-fn folded_table_reproduces_the_model_exactly() {
+fn calibrated_table_reproduces_the_model_exactly_with_bounded_lengths() {
     for table in [
         fit_support::ur5(),
         fit_support::ur5().to_convention(Convention::Modified),
@@ -207,31 +207,49 @@ fn folded_table_reproduces_the_model_exactly() {
         for i in m.indices(|b| matches!(b, Block::Effect(_))) {
             x[i] = 0.0;
         }
-        let folded = m.table_at(&x);
-        assert!(folded.unfolded.is_empty(), "{:?}", folded.unfolded);
+        let calibrated = m.table_at(&x);
         let mut sampler = JointSampler::new(&table.rows, 1.0, 9);
         let mut q = Vec::new();
         for _ in 0..20 {
             sampler.next_into(&mut q);
             let (dp, dr) =
-                dh_core::pose::pose_error(&folded.table.fk(&q).unwrap(), &m.robot_fk(&x, &q));
-            assert!(dp < 1e-9 && dr < 1e-9, "{dp} {dr}");
+                dh_core::pose::pose_error(&calibrated.fk(&q).unwrap(), &m.robot_fk(&x, &q));
+            assert!(dp < 1e-12 && dr < 1e-12, "{dp} {dr}");
         }
-        // A 0.57 degree tilt over a 0.4 m link: the common normal is tens of metres away.
-        assert!(folded.table.rows.iter().any(|r| r.d.abs() > 10.0));
+        // A 0.57 degree tilt over a 0.4 m link would put a plain DH common normal tens of
+        // metres away; the tilt stays a tilt and every length stays near the nominal one.
+        let tilted: Vec<&str> = calibrated
+            .rows
+            .iter()
+            .filter(|r| r.beta != 0.0)
+            .map(|r| r.name.as_str())
+            .collect();
+        assert!(!tilted.is_empty());
+        for (r, n) in calibrated.rows.iter().zip(&table.rows) {
+            assert!((r.d - n.d).abs() < 0.1 && (r.a - n.a).abs() < 0.1, "{r:?}");
+        }
+        // A model of the calibrated table (its tilts as nominal values) predicts the same.
+        let mut again = Model::new(&calibrated, &["t".into()], &ModelOptions::default()).unwrap();
+        again.set_device(&m.device_at(&x));
+        let y = vec![0.0; again.parameter_count()];
+        sampler.next_into(&mut q);
+        let (dp, dr) = dh_core::pose::pose_error(&again.robot_fk(&y, &q), &m.robot_fk(&x, &q));
+        assert!(dp < 1e-12 && dr < 1e-12, "{dp} {dr}");
     }
 }
 
 #[test]
-fn a_tilt_too_small_to_fold_is_reported_unfolded() {
+fn a_tiny_tilt_is_kept_as_it_is() {
     let table = fit_support::ur5();
     let m = Model::new(&table, &["t".into()], &ModelOptions::default()).unwrap();
     let mut x = vec![0.0; m.parameter_count()];
     x[m.index_of("j2.beta").unwrap()] = 1e-14;
-    let folded = m.table_at(&x);
-    assert_eq!(folded.unfolded, vec![("j2.beta".to_string(), 1e-14)]);
-    // The table without the tilt is the nominal one.
-    assert_eq!(folded.table.rows, table.rows);
+    let t = m.table_at(&x);
+    assert_eq!(t.rows[1].beta, 1e-14);
+    assert_eq!(
+        (t.rows[1].a, t.rows[1].d),
+        (table.rows[1].a, table.rows[1].d)
+    );
 }
 
 #[test]

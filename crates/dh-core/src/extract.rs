@@ -301,6 +301,7 @@ pub fn extract(
             alpha: step.alpha,
             d: step.d,
             theta: step.theta,
+            beta: 0.0,
             limits: ax.limits,
             mimic: ax.mimic.clone(),
         };

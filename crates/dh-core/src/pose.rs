@@ -51,6 +51,11 @@ pub fn rot_x(angle: f64) -> Isometry3<f64> {
     Isometry3::rotation(Vector3::x() * angle)
 }
 
+/// A rotation about the y axis by `angle` (radians).
+pub fn rot_y(angle: f64) -> Isometry3<f64> {
+    Isometry3::rotation(Vector3::y() * angle)
+}
+
 /// A translation along x by `a` (metres).
 pub fn trans_x(a: f64) -> Isometry3<f64> {
     Isometry3::translation(a, 0.0, 0.0)

@@ -70,6 +70,9 @@ pub fn written_bound(table: &DhTable, precision: Precision) -> Bound {
         lengths.push(r.d);
         angles.push(r.alpha);
         angles.push(r.theta);
+        if r.beta != 0.0 {
+            angles.push(r.beta);
+        }
     }
     let range = |kind: JointKind, limits: Option<crate::table::Limits>| match (kind, limits) {
         (_, Some(l)) => l.lower.abs().max(l.upper.abs()),

@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 
-use crate::pose::{rot_x, trans_x};
+use crate::pose::{rot_x, rot_y, rot_z, trans_x, trans_z};
 use crate::CoreError;
 
 /// Where a row's link parameters sit.
@@ -18,7 +18,8 @@ use crate::CoreError;
 ///   row `i` holds `alpha_{i-1}`, `a_{i-1}` in its own `alpha`, `a` fields, and frame `i` has
 ///   its z axis along joint `i`.
 ///
-/// In both, `FK(q) = base · A_1(q_1) ⋯ A_n(q_n) · tool`.
+/// In both, `FK(q) = base · A_1(q_1) ⋯ A_n(q_n) · tool`. A row with a Hayati-Mirmirani tilt
+/// `beta` (see [`DhRow::beta`]) adds `Ry(beta)` right after its `Rx(alpha)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Convention {
     /// Standard (distal) DH.
@@ -102,6 +103,15 @@ pub struct DhRow {
     pub d: f64,
     /// Joint angle offset (radians); the joint value adds to it for revolute joints.
     pub theta: f64,
+    /// Hayati-Mirmirani tilt about y (radians, 0 for a plain DH row), held by the row that
+    /// holds the link's `a` and `alpha`: standard
+    /// `A_i = Rz(theta_i + q_i) Tz(d_i) Tx(a_i) Rx(alpha_i) Ry(beta_i)`, modified
+    /// `A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Ry(beta_{i-1}) Rz(theta_i + q_i) Tz(d_i)`. It turns
+    /// about the y axis of the frame at the far end of the common normal, on the next joint's
+    /// axis, so that a pair of nearly parallel axes is written with a small tilt instead of a
+    /// common normal kilometres away (S. Hayati and M. Mirmirani, J. Robotic Systems 2(4),
+    /// 1985, eq. 3). The placement is the one `dh-calib`'s model estimates.
+    pub beta: f64,
     /// Joint limits, `None` for a continuous joint.
     pub limits: Option<Limits>,
     /// Set when the joint follows another one.
@@ -118,6 +128,7 @@ impl DhRow {
             alpha,
             d,
             theta,
+            beta: 0.0,
             limits: None,
             mimic: None,
         }
@@ -139,11 +150,14 @@ impl DhRow {
         }
     }
 
-    /// The row's transform at joint value `q` in `convention` (see [`Convention`]).
+    /// The row's transform at joint value `q` in `convention` (see [`Convention`]), its tilt
+    /// `beta` included.
     ///
     /// Closed form from half-angle quaternions: `Rz(theta) Rx(alpha)` is the quaternion
     /// `(c_t c_a, c_t s_a, s_t s_a, s_t c_a)` with `c_t = cos(theta/2)` etc., and
-    /// `Rx(alpha) Rz(theta)` is `(c_a c_t, s_a c_t, −s_a s_t, c_a s_t)`.
+    /// `Rx(alpha) Rz(theta)` is `(c_a c_t, s_a c_t, −s_a s_t, c_a s_t)`. A row without a tilt
+    /// takes exactly that path (bit for bit as before tilts existed); a tilted row composes
+    /// its elementary transforms.
     pub fn transform(&self, convention: Convention, q: f64) -> Isometry3<f64> {
         self.transform_with_twist(convention, q, (0.5 * self.alpha).sin_cos())
     }
@@ -157,6 +171,17 @@ impl DhRow {
         (sa, ca): (f64, f64),
     ) -> Isometry3<f64> {
         let (theta, d) = self.moved(q);
+        if self.beta != 0.0 {
+            let tilt = rot_y(self.beta);
+            return match convention {
+                Convention::Standard => {
+                    rot_z(theta) * trans_z(d) * trans_x(self.a) * rot_x(self.alpha) * tilt
+                }
+                Convention::Modified => {
+                    rot_x(self.alpha) * trans_x(self.a) * tilt * rot_z(theta) * trans_z(d)
+                }
+            };
+        }
         let (st, ct) = (0.5 * theta).sin_cos();
         match convention {
             Convention::Standard => {
@@ -277,9 +302,11 @@ impl DhTable {
         }
     }
 
-    /// The same kinematics in the other convention, exactly: `a` and `alpha` move one row along
-    /// (standard row `i` holds what modified row `i + 1` holds) and the base or tool takes the
-    /// pair that falls off the end. `theta`, `d`, joint directions and zero pose stay as they are.
+    /// The same kinematics in the other convention, exactly: `a`, `alpha` and the tilt `beta`
+    /// move one row along (standard row `i` holds what modified row `i + 1` holds: `Tx(a)` and
+    /// `Rx(alpha)` commute, and `Ry(beta)` follows both in either convention) and the base or
+    /// tool takes the triple that falls off the end. `theta`, `d`, joint directions and zero
+    /// pose stay as they are.
     pub fn to_convention(&self, convention: Convention) -> DhTable {
         if convention == self.convention || self.rows.is_empty() {
             return DhTable {
@@ -294,27 +321,30 @@ impl DhTable {
             Convention::Modified => {
                 // Standard: ... Rz Tz Tx(a_i) Rx(alpha_i) Rz Tz ...; Tx and Rx commute.
                 let last = &self.rows[n - 1];
-                tool = trans_x(last.a) * rot_x(last.alpha) * tool;
+                tool = tilted(trans_x(last.a) * rot_x(last.alpha), last.beta) * tool;
                 for i in (0..n).rev() {
-                    let (a, alpha) = if i == 0 {
-                        (0.0, 0.0)
+                    let (a, alpha, beta) = if i == 0 {
+                        (0.0, 0.0, 0.0)
                     } else {
-                        (self.rows[i - 1].a, self.rows[i - 1].alpha)
+                        let r = &self.rows[i - 1];
+                        (r.a, r.alpha, r.beta)
                     };
                     rows[i].a = a;
                     rows[i].alpha = alpha;
+                    rows[i].beta = beta;
                 }
             }
             Convention::Standard => {
                 let first = &self.rows[0];
-                base = base * rot_x(first.alpha) * trans_x(first.a);
+                base = tilted(base * rot_x(first.alpha) * trans_x(first.a), first.beta);
                 for (i, row) in rows.iter_mut().enumerate() {
-                    let (a, alpha) = self
+                    let (a, alpha, beta) = self
                         .rows
                         .get(i + 1)
-                        .map_or((0.0, 0.0), |next| (next.a, next.alpha));
+                        .map_or((0.0, 0.0, 0.0), |next| (next.a, next.alpha, next.beta));
                     row.a = a;
                     row.alpha = alpha;
+                    row.beta = beta;
                 }
             }
         }
@@ -324,6 +354,105 @@ impl DhTable {
             tool,
             rows,
         }
+    }
+
+    /// The joint axis lines at the zero pose, in the base link frame, with each row's name,
+    /// kind, limits and mimic: what [`crate::extract()`] takes, so that
+    /// `extract(&t.axes()?, &t.fk(&zeros)?, ..)` gives the plain DH table of `t`'s kinematics
+    /// (its tilts, if any, folded into `theta`, `d`, `a`, `alpha`: exact, but a small tilt puts
+    /// the common normal far away).
+    ///
+    /// # Errors
+    /// [`CoreError::NonFinite`] for non-finite frames (a table of non-finite values).
+    pub fn axes(&self) -> Result<Vec<crate::JointAxis>, CoreError> {
+        let frames = self.frames(&vec![0.0; self.rows.len()])?;
+        let shift = usize::from(self.convention == Convention::Modified);
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let f = frames[i + shift];
+                Ok(crate::JointAxis {
+                    name: r.name.clone(),
+                    kind: r.kind,
+                    line: crate::Line::through(
+                        f.translation.vector,
+                        f.rotation * nalgebra::Vector3::z(),
+                    )?,
+                    limits: r.limits,
+                    mimic: r.mimic.clone(),
+                })
+            })
+            .collect()
+    }
+
+    /// The same kinematics with every pair of consecutive revolute or prismatic axes within
+    /// `max_angle` (radians) of parallel or antiparallel written in the Hayati-Mirmirani form
+    /// of [`DhRow::beta`]: standard row `i` becomes `Rz(theta) Tx(a) Rx(alpha) Ry(beta)` with
+    /// `d_i = 0`, `x` from the origin of frame `i - 1` to where axis `i + 1` crosses that
+    /// frame's `xy` plane, and the screw between the old and new frame `i` (both on axis
+    /// `i + 1`) absorbed by row `i + 1`'s `theta`, `d` (or the tool). Plain DH puts the common
+    /// normal of a pair `beta` off parallel about `a / beta` away; this form keeps every length
+    /// near the link's. A modified table is converted to standard and back (both exact).
+    /// Exact up to rounding of the lengths it replaces (a kilometre `d` loses ~1e-13 m).
+    pub fn hayati_form(&self, max_angle: f64) -> DhTable {
+        if self.convention == Convention::Modified {
+            return self
+                .to_convention(Convention::Standard)
+                .hayati_form(max_angle)
+                .to_convention(Convention::Modified);
+        }
+        let mut t = self.clone();
+        let n = t.rows.len();
+        for i in 0..n.saturating_sub(1) {
+            if t.rows[i].kind == JointKind::Prismatic {
+                // Its joint value moves d, which the form sets to zero.
+                continue;
+            }
+            let zero = vec![0.0; n];
+            let Ok(frames) = t.frames(&zero) else {
+                return self.clone();
+            };
+            // Frame i - 1 (z along joint i) and the old frame i (z along joint i + 1).
+            let (before, old) = (frames[i], frames[i + 1]);
+            let local = before.inverse() * old;
+            let u = local.rotation * nalgebra::Vector3::z();
+            let angle = u.z.abs().min(1.0).acos();
+            // A NaN angle (a table of non-finite values) and a perpendicular pair stay as they are.
+            if angle.is_nan() || angle > max_angle || u.z == 0.0 {
+                continue;
+            }
+            // Where axis i + 1 crosses the plane z = 0 of frame i - 1.
+            let o = local.translation.vector;
+            let p = o - u * (o.z / u.z);
+            let (theta, a) = if p.x.hypot(p.y) > 0.0 {
+                (p.y.atan2(p.x), p.x.hypot(p.y))
+            } else {
+                (0.0, 0.0)
+            };
+            let w = rot_z(-theta).rotation * u;
+            let beta = w.x.clamp(-1.0, 1.0).asin();
+            let alpha = (-w.y).atan2(w.z);
+            let row = &mut t.rows[i];
+            // The joint value adds to theta: keep the row's zero offset relative to it.
+            row.theta = theta;
+            row.d = 0.0;
+            row.a = a;
+            row.alpha = alpha;
+            row.beta = beta;
+            let new = before * row.transform(Convention::Standard, 0.0);
+            let screw = new.inverse() * old;
+            let x = screw.rotation * nalgebra::Vector3::x();
+            let (phi, s) = (x.y.atan2(x.x), screw.translation.vector.z);
+            t.rows[i + 1].theta += phi;
+            t.rows[i + 1].d += s;
+        }
+        t
+    }
+
+    /// `true` when a row carries a Hayati-Mirmirani tilt (see [`DhRow::beta`]).
+    pub fn has_tilts(&self) -> bool {
+        self.rows.iter().any(|r| r.beta != 0.0)
     }
 
     /// A length that bounds the chain's size (metres, at least 1 mm): the sum of `|a|`, `|d|`,
@@ -341,6 +470,16 @@ impl DhTable {
             .sum();
         (links + self.base.translation.vector.norm() + self.tool.translation.vector.norm())
             .max(1e-3)
+    }
+}
+
+/// `pose · Ry(beta)`, and `pose` untouched for no tilt (so untilted tables convert bit for bit
+/// as before tilts existed).
+fn tilted(pose: Isometry3<f64>, beta: f64) -> Isometry3<f64> {
+    if beta == 0.0 {
+        pose
+    } else {
+        pose * rot_y(beta)
     }
 }
 
@@ -424,6 +563,38 @@ mod tests {
         }
         assert_eq!(md.rows[2].a, -0.425);
         assert_eq!(md.rows[0].a, 0.0);
+    }
+
+    #[test]
+    fn the_hayati_form_keeps_the_kinematics_and_drops_the_far_common_normal() {
+        // A pair 2e-4 rad off parallel written in plain DH: its common normal 2 km away.
+        let plain = DhTable {
+            convention: Convention::Standard,
+            base: from_xyz_rpy([0.1, 0.0, 0.3], [0.0, 0.0, 0.2]),
+            tool: from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.0, 0.0]),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, FRAC_PI_2, 0.4, 0.0),
+                DhRow::revolute("j2", 0.6, 2e-4, 2000.0, 0.3),
+                DhRow::revolute("j3", 0.1, -FRAC_PI_2, -2000.0, 0.1),
+                DhRow::revolute("j4", 0.0, FRAC_PI_2, 0.6, 0.0),
+            ],
+        };
+        for convention in [Convention::Standard, Convention::Modified] {
+            let t = plain.to_convention(convention);
+            let h = t.hayati_form(1e-2);
+            for q in [[0.0; 4], [0.3, -1.2, 2.0, 0.5], [-2.0, 0.7, -0.4, 3.0]] {
+                let (dp, dr) = pose_error(&t.fk(&q).unwrap(), &h.fk(&q).unwrap());
+                assert!(dp < 1e-11 && dr < 1e-12, "{convention}: {dp} {dr}");
+            }
+            assert!(h.rows.iter().all(|r| r.d.abs() < 1.0), "{:?}", h.rows);
+            let tilted: Vec<&DhRow> = h.rows.iter().filter(|r| r.beta != 0.0).collect();
+            assert_eq!(tilted.len(), 1, "{convention}: {:?}", h.rows);
+            // The pair's angle: `Rx(alpha) Ry(beta)` turns z by acos(cos alpha cos beta).
+            let r = tilted[0];
+            assert!(((r.alpha.cos() * r.beta.cos()).acos() - 2e-4).abs() < 1e-9);
+            // A pair beyond the threshold stays as it was.
+            assert_eq!(t.hayati_form(1e-5), t);
+        }
     }
 
     #[test]

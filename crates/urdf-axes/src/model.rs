@@ -309,6 +309,17 @@ impl UrdfModel {
         self.robot.joints.get(k).map(|j| j.line)
     }
 
+    /// The joint whose child is `link`: its name, its parent link and its `<origin>` (the pose
+    /// of the joint frame in the parent link's frame; metres, radians), or `None` for the root
+    /// link or an unknown one. For callers that walk or edit the document's own joints (a
+    /// calibrated URDF written as a minimal edit of the user's file).
+    pub fn parent_joint(&self, link: &str) -> Option<(&str, &str, nalgebra::Isometry3<f64>)> {
+        let &i = self.link_index.get(link)?;
+        let j = self.robot.joints.get((*self.parent_joint.get(i)?)?)?;
+        let origin = dh_core::pose::from_xyz_rpy(j.origin.xyz, j.origin.rpy);
+        Some((j.name.as_str(), j.parent.as_str(), origin))
+    }
+
     /// Chooses a serial chain from `base` down to `tip` (link names).
     ///
     /// `base` defaults to the root link. `tip` defaults to the end of the arm below the base:
