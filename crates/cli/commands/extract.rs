@@ -89,8 +89,21 @@ pub fn prove_extracted(
 /// Unreadable file, invalid URDF, unknown or ambiguous base/tip.
 pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(UrdfModel, Chain)> {
     let bytes = read_robot(path)?;
-    let name = display_name(path);
-    let model = UrdfModel::from_bytes(&bytes).with_context(|| format!("{name}: invalid URDF"))?;
+    load_chain_bytes(&bytes, &display_name(path), base, tip)
+}
+
+/// Loads the chain of a URDF given as bytes; `name` names it in error messages (a file name, or
+/// `<string>` for XML text a library caller passed).
+///
+/// # Errors
+/// Invalid URDF, unknown or ambiguous base/tip.
+pub fn load_chain_bytes(
+    bytes: &[u8],
+    name: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> Result<(UrdfModel, Chain)> {
+    let model = UrdfModel::from_bytes(bytes).with_context(|| format!("{name}: invalid URDF"))?;
     let chain = model
         .chain(base, tip)
         .with_context(|| format!("{name}: cannot choose the chain"))?;
@@ -102,14 +115,24 @@ pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(
 /// # Errors
 /// As [`load_chain`], plus geometry errors (a chain without moving joints).
 pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
-    let (model, chain) = load_chain(&args.path, args.base.as_deref(), args.tip.as_deref())?;
+    let bytes = read_robot(&args.path)?;
+    run_extract_bytes(&bytes, &display_name(&args.path), args)
+}
+
+/// [`run_extract`] on a URDF given as bytes (`args.path` is not read); `name` names it in
+/// error messages.
+///
+/// # Errors
+/// As [`load_chain_bytes`], plus geometry errors (a chain without moving joints).
+pub fn run_extract_bytes(bytes: &[u8], name: &str, args: &ExtractArgs) -> Result<Extracted> {
+    let (model, chain) = load_chain_bytes(bytes, name, args.base.as_deref(), args.tip.as_deref())?;
     let extraction = dh_core::extract(
         chain.axes(),
         &chain.tip_pose(),
         args.tolerance,
         args.convention,
     )
-    .with_context(|| format!("{}: extraction failed", display_name(&args.path)))?;
+    .with_context(|| format!("{name}: extraction failed"))?;
     let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
     sheet.robot = Some(model.robot_name().to_string());
     sheet.base_link = Some(chain.base().to_string());
