@@ -1,9 +1,7 @@
 """urdf_dh.extract / check: the CLI's results, numpy out, the CLI's messages as exceptions."""
 
 import math
-import os
 import pathlib
-import shutil
 import subprocess
 
 import numpy as np
@@ -67,10 +65,11 @@ def test_pathlike_and_str_agree():
 
 
 def cli_binary():
-    """The urdf-dh binary (PATH, else target/release or target/debug), or skip."""
-    for exe in [shutil.which("urdf-dh"), REPO / "target" / "release" / "urdf-dh",
-                REPO / "target" / "debug" / "urdf-dh"]:
-        if exe is not None and pathlib.Path(exe).exists():
+    """The urdf-dh binary of this checkout (target/debug, else target/release), or skip."""
+    # debug first: `cargo test --workspace` (CI) builds it fresh
+    for exe in [REPO / "target" / "debug" / "urdf-dh",
+                REPO / "target" / "release" / "urdf-dh"]:
+        if exe.exists():
             return str(exe)
     pytest.skip("the urdf-dh binary is not built (cargo build): cannot compare with the CLI")
 
