@@ -36,6 +36,30 @@ fn extract_in_process(c: &mut Criterion) {
     );
 }
 
+/// The same in YAML, the format the Python package's `urdf_dh.extract` writes and proves
+/// (`crates/python/bench.py` compares with this figure).
+fn extract_yaml_in_process(c: &mut Criterion) {
+    let path = panda();
+    let args = [
+        "urdf-dh",
+        "extract",
+        path.as_str(),
+        "--samples",
+        "1000",
+        "--format",
+        "yaml",
+    ];
+    let (mut out, mut err) = (Vec::new(), Vec::new());
+    assert_eq!(urdf_dh::cli::run(args, &mut out, &mut err), 0);
+    c.bench_function("extract panda --format yaml (in process)", |b| {
+        b.iter(|| {
+            let (mut out, mut err) = (Vec::with_capacity(4096), Vec::new());
+            let code = urdf_dh::cli::run(black_box(args), &mut out, &mut err);
+            black_box((code, out))
+        })
+    });
+}
+
 fn extract_process(c: &mut Criterion) {
     // Cargo builds the binary for the package's benches and says where.
     let exe = env!("CARGO_BIN_EXE_urdf-dh");
@@ -55,5 +79,10 @@ fn extract_process(c: &mut Criterion) {
     );
 }
 
-criterion_group!(benches, extract_in_process, extract_process);
+criterion_group!(
+    benches,
+    extract_in_process,
+    extract_yaml_in_process,
+    extract_process
+);
 criterion_main!(benches);

@@ -98,9 +98,22 @@ pub fn default_samples(joints: usize) -> usize {
 /// Unreadable file, invalid URDF, unknown or ambiguous base/tip.
 pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(UrdfModel, Chain)> {
     let bytes = read_robot(path)?;
-    let name = display_name(path);
-    let model = UrdfModel::from_bytes(&bytes).with_context(|| format!("{name}: invalid URDF"))?;
-    let chain = model.chain(base, tip).map_err(|e| chain_error(&name, e))?;
+    load_chain_bytes(&bytes, &display_name(path), base, tip)
+}
+
+/// Loads the chain of a URDF given as bytes; `name` names it in error messages (a file name, or
+/// `<string>` for XML text a library caller passed).
+///
+/// # Errors
+/// Invalid URDF, unknown or ambiguous base/tip.
+pub fn load_chain_bytes(
+    bytes: &[u8],
+    name: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> Result<(UrdfModel, Chain)> {
+    let model = UrdfModel::from_bytes(bytes).with_context(|| format!("{name}: invalid URDF"))?;
+    let chain = model.chain(base, tip).map_err(|e| chain_error(name, e))?;
     Ok((model, chain))
 }
 
@@ -130,8 +143,18 @@ pub fn urdf_warnings(name: &str, model: &UrdfModel, chain: &Chain) -> Vec<String
 /// # Errors
 /// As [`load_chain`], plus geometry errors (a chain without moving joints).
 pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
-    let (model, chain) = load_chain(&args.path, args.base.as_deref(), args.tip.as_deref())?;
-    extract_chain(&model, chain, &display_name(&args.path), &args.options())
+    let bytes = read_robot(&args.path)?;
+    run_extract_bytes(&bytes, &display_name(&args.path), args)
+}
+
+/// [`run_extract`] on a URDF given as bytes (`args.path` is not read); `name` names it in
+/// error messages.
+///
+/// # Errors
+/// As [`load_chain_bytes`], plus geometry errors (a chain without moving joints).
+pub fn run_extract_bytes(bytes: &[u8], name: &str, args: &ExtractArgs) -> Result<Extracted> {
+    let (model, chain) = load_chain_bytes(bytes, name, args.base.as_deref(), args.tip.as_deref())?;
+    extract_chain(&model, chain, name, &args.options())
 }
 
 /// What an extraction of one chain needs besides the chain.

@@ -1,0 +1,265 @@
+"""Denavit-Hartenberg parameters of serial manipulators from URDF, verified.
+
+The computations are the ``urdf-dh`` command line's own (a Rust extension, ``urdf_dh._native``);
+this module turns their results into numpy arrays and small Python objects. Units are SI:
+metres and radians. Poses are 4x4 homogeneous matrices (numpy ``float64``).
+
+>>> import urdf_dh
+>>> table = urdf_dh.extract("robot.urdf")          # doctest: +SKIP
+>>> table.fk([0.0] * len(table.rows))               # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass
+from typing import Any, Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _native
+from ._native import UrdfDhError
+
+__all__ = [
+    "CheckReport",
+    "Mimic",
+    "Row",
+    "Table",
+    "UrdfDhError",
+    "check",
+    "extract",
+]
+
+UrdfSource = Union[str, "os.PathLike[str]"]
+
+UrdfDhError.hint = None  # class default; instances carry the CLI's `hint:` line when it has one
+
+
+@dataclass(frozen=True)
+class Mimic:
+    """A joint that follows another: ``q = multiplier * q_driver + offset`` (URDF ``<mimic>``)."""
+
+    joint: str
+    multiplier: float
+    offset: float
+
+
+@dataclass(frozen=True)
+class Row:
+    """One DH row: joint ``name``, ``type`` (``"revolute"``/``"prismatic"``), ``a`` and ``d``
+    (metres), ``alpha`` and ``theta`` (radians), joint limits ``lower``/``upper`` in the joint's
+    unit (``None`` for a continuous joint) and ``mimic`` (``None`` unless the joint follows
+    another). The joint value adds to ``theta`` (revolute) or ``d`` (prismatic)."""
+
+    name: str
+    type: str
+    a: float
+    alpha: float
+    d: float
+    theta: float
+    lower: Optional[float]
+    upper: Optional[float]
+    mimic: Optional[Mimic]
+
+
+def _source(path_or_xml: UrdfSource) -> "tuple[str, bool]":
+    if isinstance(path_or_xml, str) and path_or_xml.lstrip().startswith("<"):
+        return path_or_xml, True
+    if isinstance(path_or_xml, (bytes, bytearray)):
+        raise TypeError("expected a path or URDF text (str), found bytes: decode them first")
+    return os.fspath(path_or_xml), False
+
+
+class Table:
+    """A DH table extracted from a URDF chain, with its verification.
+
+    Attributes:
+        rows: one :class:`Row` per moving joint, base to tip.
+        base: DH frame 0 in the base link frame (4x4).
+        tool: the tip link frame in the last DH frame (4x4).
+        convention: ``"standard"`` or ``"modified"``.
+        verification: the forward-kinematics proof of the YAML sheet as written
+            (``samples``, ``seed``, ``max_position_error`` (m), ``max_orientation_error`` (rad),
+            ``position_bound``, ``orientation_bound``, ``passed``).
+        warnings: the extraction's warnings (what ``urdf-dh extract`` prints as warnings).
+    """
+
+    def __init__(self, native: Any) -> None:
+        self._native = native
+        self.rows: List[Row] = [
+            Row(n, k, a, al, d, th, lo, up, None if m is None else Mimic(*m))
+            for (n, k, a, al, d, th, lo, up, m) in native.rows()
+        ]
+        self.base: np.ndarray = np.array(native.base())
+        self.tool: np.ndarray = np.array(native.tool())
+        self.convention: str = native.convention()
+        self.verification: Dict[str, Any] = json.loads(native.verification_json())
+        self.warnings: List[str] = native.warnings()
+
+    def __repr__(self) -> str:
+        names = ", ".join(r.name for r in self.rows)
+        passed = "passed" if self.verification.get("passed") else "FAILED"
+        return f"<urdf_dh.Table {self.convention}, {len(self.rows)} rows ({names}), verification {passed}>"
+
+    def fk(self, q: Union[Sequence[float], np.ndarray]) -> np.ndarray:
+        """The tip link in the base link frame (4x4) at joint values ``q``, one per row
+        (radians for revolute, metres for prismatic rows).
+
+        Raises:
+            UrdfDhError: ``q`` does not have one value per row.
+        """
+        values = np.asarray(q, dtype=float).reshape(-1).tolist()
+        return np.array(self._native.fk(values))
+
+    def to_yaml(self) -> str:
+        """The YAML sheet ``urdf-dh extract --format yaml`` writes (verification included)."""
+        return str(self._native.yaml())
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The same sheet as a dict (the keys of ``urdf-dh extract --format json``)."""
+        return dict(json.loads(self._native.sheet_json()))
+
+    def to_roboticstoolbox(self) -> Any:
+        """The table as a Robotics Toolbox ``DHRobot`` (needs ``roboticstoolbox-python``).
+
+        Links are ``RevoluteDH``/``PrismaticDH`` (standard) or ``RevoluteMDH``/``PrismaticMDH``
+        (modified) with ``theta`` (revolute) or ``d`` (prismatic) as the joint offset and the
+        limits as ``qlim``; ``base`` and ``tool`` are the table's, so ``robot.fkine(q).A`` equals
+        :meth:`fk`.
+
+        Raises:
+            ImportError: roboticstoolbox-python is not installed.
+        """
+        try:
+            import roboticstoolbox as rtb
+            from spatialmath import SE3
+        except ImportError as e:
+            raise ImportError(
+                "Table.to_roboticstoolbox needs roboticstoolbox-python: "
+                "pip install roboticstoolbox-python"
+            ) from e
+        standard = self.convention == "standard"
+        revolute = rtb.RevoluteDH if standard else rtb.RevoluteMDH
+        prismatic = rtb.PrismaticDH if standard else rtb.PrismaticMDH
+        links = []
+        for r in self.rows:
+            qlim = None if r.lower is None else [r.lower, r.upper]
+            if r.type == "revolute":
+                link = revolute(d=r.d, a=r.a, alpha=r.alpha, offset=r.theta, qlim=qlim)
+            else:
+                link = prismatic(theta=r.theta, a=r.a, alpha=r.alpha, offset=r.d, qlim=qlim)
+            link.name = r.name
+            links.append(link)
+        name = self.to_dict().get("robot") or "robot"
+        return rtb.DHRobot(
+            links,
+            name=name,
+            base=SE3(self.base, check=False),
+            tool=SE3(self.tool, check=False),
+        )
+
+
+def extract(
+    path_or_xml: UrdfSource,
+    base: Optional[str] = None,
+    tip: Optional[str] = None,
+    convention: str = "standard",
+    samples: int = 1000,
+    seed: int = 0,
+    linear_tolerance: float = _native.DEFAULT_LINEAR,
+    angular_tolerance: float = _native.DEFAULT_ANGULAR,
+) -> Table:
+    """Extracts the DH table of a URDF chain, as ``urdf-dh extract`` does.
+
+    Args:
+        path_or_xml: a path (str or os.PathLike; ``.xacro`` needs the ``xacro`` command), or URDF
+            XML text (a string starting with ``<`` after whitespace).
+        base: base link (default: the root link).
+        tip: tip link (default: the only leaf).
+        convention: ``"standard"`` or ``"modified"``.
+        samples: random joint-value samples of the verification.
+        seed: seed of the sampler.
+        linear_tolerance: metres, for the axis classification.
+        angular_tolerance: radians, likewise.
+
+    The table written as YAML is read back and its forward kinematics compared with the URDF's;
+    ``Table.verification["passed"]`` says whether it stayed within the bound (the CLI exits 1
+    when it did not).
+
+    Raises:
+        FileNotFoundError: the file does not exist.
+        UrdfDhError: invalid URDF, unknown or ambiguous base/tip, a chain without moving joints
+            (the CLI's message; ``.hint`` its hint).
+    """
+    source, is_xml = _source(path_or_xml)
+    native = _native.extract(
+        source,
+        is_xml,
+        base,
+        tip,
+        convention,
+        int(samples),
+        int(seed),
+        float(linear_tolerance),
+        float(angular_tolerance),
+    )
+    return Table(native)
+
+
+class CheckReport:
+    """The report of :func:`check` (the JSON of ``urdf-dh check --format json``).
+
+    Attributes:
+        matches: no difference found.
+        verdict: ``"match"`` or ``"mismatch"``.
+        differences: one dict per difference (``joint``, ``parameter``, ``urdf``, ``sheet``,
+            ``difference``, ``note``; SI units).
+        max_position_error: metres (sheet taken literally, base/tool fitted), or None.
+        max_orientation_error: radians, or None.
+        warnings: remarks (joint names that differ, suspicious units).
+    """
+
+    def __init__(self, report: Dict[str, Any]) -> None:
+        self._report = report
+        self.matches: bool = bool(report["matches"])
+        self.verdict: str = "match" if self.matches else "mismatch"
+        self.differences: List[Dict[str, Any]] = list(report["differences"])
+        self.max_position_error: Optional[float] = report.get("max_position_error")
+        self.max_orientation_error: Optional[float] = report.get("max_orientation_error")
+        self.warnings: List[str] = list(report.get("warnings", []))
+
+    def __repr__(self) -> str:
+        return f"<urdf_dh.CheckReport {self.verdict}, {len(self.differences)} differences>"
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The report as ``urdf-dh check --format json`` prints it."""
+        return json.loads(json.dumps(self._report))
+
+
+def check(
+    urdf: UrdfSource,
+    sheet: Union[str, "os.PathLike[str]"],
+    base: Optional[str] = None,
+    tip: Optional[str] = None,
+    linear_tolerance: float = _native.CHECK_LINEAR,
+    angular_tolerance: float = _native.CHECK_ANGULAR,
+) -> CheckReport:
+    """Compares a URDF chain with a vendor DH sheet (a YAML/JSON sheet file), as
+    ``urdf-dh check`` does: names every joint and parameter that differs.
+
+    Raises:
+        FileNotFoundError: a file does not exist.
+        UrdfDhError: invalid URDF or sheet (the CLI's message).
+    """
+    source, is_xml = _source(urdf)
+    text = _native.check(
+        source,
+        is_xml,
+        os.fspath(sheet),
+        base,
+        tip,
+        float(linear_tolerance),
+        float(angular_tolerance),
+    )
+    return CheckReport(json.loads(text))
