@@ -202,7 +202,7 @@ fn extract(
             length_unit: LengthUnit::M,
             angle_unit: AngleUnit::Rad,
             tolerance: Tolerance::new(linear, angular)?,
-            samples,
+            samples: Some(samples),
             seed,
             svg: None,
             q: None,
