@@ -214,9 +214,10 @@ fn extract(
             .verification
             .as_ref()
             .context("the proof attached no verification")?;
-        let Extraction {
-            table, warnings, ..
-        } = ex.extraction;
+        // The table Python sees is the proved artefact: the YAML read back (1e-12 m / rad), not
+        // the numbers in memory.
+        let table = Sheet::parse(&yaml, "written output")?.table;
+        let Extraction { warnings, .. } = ex.extraction;
         Ok(NativeTable {
             yaml,
             sheet_json: serde_json::to_string(&ex.sheet)?,
