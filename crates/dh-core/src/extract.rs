@@ -214,8 +214,12 @@ pub struct Extraction {
     /// Tolerance used.
     pub tolerance: Tolerance,
     /// How far forward kinematics of the table may stray from the source: floating-point
-    /// rounding over the chain plus the cost of every snap.
+    /// rounding over the chain plus the cost of every snap, capped at [`Bound::MAX_POSITION`]
+    /// and [`Bound::MAX_ORIENTATION`] (a table beyond them fails its verification).
     pub bound: Bound,
+    /// The same before the cap: what the snaps can cost at most (a bound whatever the
+    /// tolerances, not a promise that the table verifies).
+    pub cost: Bound,
 }
 
 /// Pairs farther than this from parallel (radians, about 6°) are never ill-conditioned.
@@ -394,6 +398,7 @@ pub fn extract(
             });
         }
     }
+    let cost = bound;
     bound.position = bound.position.min(Bound::MAX_POSITION);
     bound.orientation = bound.orientation.min(Bound::MAX_ORIENTATION);
     Ok(Extraction {
@@ -402,6 +407,7 @@ pub fn extract(
         warnings,
         tolerance: tol,
         bound,
+        cost,
     })
 }
 

@@ -263,9 +263,17 @@ proptest! {
                     prop_assert!(r.d.abs() < reach, "{p:?} {r:?}");
                 }
             }
+            // Within what the snaps can cost; the verification bound is that, capped at 1 mm /
+            // 1 mrad, beyond which the table (rightly) fails its verification.
             let dev = compare(&ex.table, |q| poe(&chain, q), 50, 11).unwrap();
-            prop_assert!(dev.max_position_error <= ex.bound.position, "{dev:?} > {:?}", ex.bound);
-            prop_assert!(dev.max_orientation_error <= ex.bound.orientation, "{dev:?} > {:?}", ex.bound);
+            prop_assert!(dev.max_position_error <= ex.cost.position, "{dev:?} > {:?}", ex.cost);
+            prop_assert!(dev.max_orientation_error <= ex.cost.orientation, "{dev:?} > {:?}", ex.cost);
+            let within = dev.max_position_error <= ex.bound.position
+                && dev.max_orientation_error <= ex.bound.orientation;
+            prop_assert!(
+                within || ex.cost.position > ex.bound.position || ex.cost.orientation > ex.bound.orientation,
+                "{dev:?} beyond an uncapped bound {:?}", ex.bound
+            );
         }
     }
 
