@@ -20,8 +20,10 @@
 //! and the next round fits without it.
 //!
 //! Validation samples are judged against the fit of the kept calibration points with the
-//! bound over their own number; they never move the fit, but one far-off point spoils the
-//! validation figures, so a flagged one is left out of them too.
+//! bound over their own number, and with a scale no smaller than the robust one of the
+//! validation residuals themselves (a fit that extrapolates badly to every held-out pose is a
+//! finding of the validation, not a set of outliers); they never move the fit, but one far-off
+//! point spoils the validation figures, so a flagged one is left out of them too.
 
 use std::collections::BTreeSet;
 
@@ -40,6 +42,10 @@ pub const DEFAULT_LEVEL: f64 = 0.01;
 
 /// Most fit-and-flag rounds; the flagged set is usually stable after two or three.
 pub const MAX_ROUNDS: usize = 10;
+
+/// Smallest per-axis scale (metres, 1 nm): residuals below it are the rounding of a noise-free
+/// fit, not measurement, and no point is an outlier against them.
+pub const MIN_SCALE: f64 = 1e-9;
 
 /// Median of the chi-square distribution with 3 degrees of freedom.
 const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
@@ -257,16 +263,19 @@ pub fn screen(
             .map(|(_, (_, k))| cal_r[*k].norm())
             .collect();
         let correction = (1.0 - p / (3.0 * n_kept)).max(0.1).sqrt();
-        let robust = median(kept_norms).unwrap_or(0.0) / CHI2_3_MEDIAN.sqrt() / correction;
-        let standardised = |i: usize, r: &Vector3<f64>| -> (f64, ScaleSource) {
+        let robust =
+            (median(kept_norms).unwrap_or(0.0) / CHI2_3_MEDIAN.sqrt() / correction).max(MIN_SCALE);
+        // Predictions of poses the fit never saw may all be off (an extrapolation): the
+        // validation points are judged against their own bulk too, so that only a point far
+        // from both is named and a uniformly bad validation stays in the figures.
+        let val_robust =
+            median(val_r.iter().map(|r| r.norm()).collect()).unwrap_or(0.0) / CHI2_3_MEDIAN.sqrt();
+        let standardised = |i: usize, r: &Vector3<f64>, floor: f64| -> (f64, ScaleSource) {
             match known[i] {
-                Some(s) if s.norm() / 3f64.sqrt() >= robust => {
+                Some(s) if s.norm() / 3f64.sqrt() >= floor => {
                     (r.component_div(&s).norm(), ScaleSource::Known)
                 }
-                _ => (
-                    r.norm() / robust.max(f64::MIN_POSITIVE),
-                    ScaleSource::Robust,
-                ),
+                _ => (r.norm() / floor, ScaleSource::Robust),
             }
         };
         let mut now = BTreeSet::new();
@@ -274,8 +283,13 @@ pub fn screen(
         let mut source = ScaleSource::Robust;
         for (i, &(v, k)) in place.iter().enumerate() {
             let r = if v { &val_r[k] } else { &cal_r[k] };
-            let (t, src) = standardised(i, r);
-            source = src;
+            let t = if v {
+                standardised(i, r, robust.max(val_robust)).0
+            } else {
+                let (t, src) = standardised(i, r, robust);
+                source = src;
+                t
+            };
             if t > if v { t_val } else { t_cal } {
                 now.insert(i);
                 let s = &data.samples[i];
