@@ -577,6 +577,16 @@ pub fn diagnose_tree(
             match accepted {
                 Some((e, mut step, f2, fixed2)) => {
                     selected.push(e);
+                    // The trial identified only the free columns and the effect's: what an
+                    // earlier step held stays held and must stay listed.
+                    let now_held: Vec<usize> = fixed2.iter().map(|g| g.index).collect();
+                    let mut fixed2: Vec<crate::fit::Fixed> = fixed
+                        .iter()
+                        .filter(|f| !f2.contains(&f.index) && !now_held.contains(&f.index))
+                        .cloned()
+                        .chain(fixed2)
+                        .collect();
+                    fixed2.sort_by_key(|f| f.index);
                     step.report.fixed = session.named(&fixed2);
                     steps.push(step.report);
                     last = step.outcome;
