@@ -474,3 +474,66 @@ fn bad_input_exits_2_naming_the_line_and_column() {
         );
     });
 }
+
+/// A point planted a metre off in the CSV is named by its file line, left out (the fit and the
+/// validation sit on the noise), kept with `--keep-outliers`, and the verdict is in the JSON.
+#[test]
+fn a_far_point_is_named_by_its_line_and_the_verdict_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = path(dir.path(), "far.csv");
+    ok(&[
+        "simulate", "--model", UR5, "--poses", "150", "--noise", "1e-4", "--seed", "5", "--out",
+        &data,
+    ]);
+    // Move the x of the 40th data row by 1 m; its 1-based file line is remembered.
+    let text = std::fs::read_to_string(&data).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header = lines.iter().position(|l| l.contains(",x,y,z,")).unwrap();
+    let at = header + 40;
+    let mut fields: Vec<String> = lines[at].split(',').map(String::from).collect();
+    let x = lines[header].split(',').position(|c| c == "x").unwrap();
+    fields[x] = format!("{}", fields[x].parse::<f64>().unwrap() + 1.0);
+    lines[at] = fields.join(",");
+    std::fs::write(&data, lines.join("\n") + "\n").unwrap();
+    let json = |extra: &[&str]| -> Value {
+        let mut args = vec![
+            "calibrate",
+            "--model",
+            UR5,
+            "--data",
+            &data,
+            "--format",
+            "json",
+        ];
+        args.extend_from_slice(extra);
+        serde_json::from_str(&ok(&args)).unwrap()
+    };
+    let r = json(&[]);
+    let points = r["outliers"]["points"].as_array().unwrap();
+    assert_eq!(points.len(), 1, "{:#}", r["outliers"]);
+    assert_eq!(points[0]["line"], at + 1);
+    assert_eq!(points[0]["split"], "calibration");
+    assert!((points[0]["residual"].as_f64().unwrap() - 1.0).abs() < 0.01);
+    assert!(points[0]["sigmas"].as_f64().unwrap() > 1000.0);
+    assert_eq!(r["outliers"]["kept"], false);
+    assert!(r["outliers"]["rms_with"].as_f64().unwrap() > 0.01);
+    assert!(r["rms_after"].as_f64().unwrap() < 2e-4);
+    assert_eq!(r["verdict"]["summary"], "model complete");
+    assert_eq!(r["verdict"]["test"]["kind"], "chi-square");
+    assert_eq!(r["verdict"]["complete"], true);
+    let k = json(&["--keep-outliers"]);
+    assert_eq!(k["outliers"]["kept"], true);
+    assert_eq!(k["outliers"]["points"].as_array().unwrap().len(), 1);
+    assert!(k["rms_after"].as_f64().unwrap() > 0.01);
+    assert_eq!(k["verdict"]["complete"], false);
+    assert!(k["verdict"]["summary"]
+        .as_str()
+        .unwrap()
+        .starts_with("residual remains: "));
+    let text = ok(&["calibrate", "--model", UR5, "--data", &data]);
+    assert!(
+        text.contains(&format!("  line {}, config ", at + 1)),
+        "{text}"
+    );
+    assert!(text.contains("verdict: model complete ("), "{text}");
+}

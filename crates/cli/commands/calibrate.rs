@@ -22,6 +22,7 @@ use dh_calib::diagnose::{diagnose, DiagnoseOptions};
 use dh_calib::effects::{label_of, parse_label_in, EffectContext};
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
 use dh_calib::model::{Effect, Model, ModelOptions};
+use dh_calib::outliers::OutlierOptions;
 use dh_calib::tree::DhTree;
 use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
 use dh_core::{Convention, DhTable, Tolerance};
@@ -118,6 +119,8 @@ pub struct CalibrateArgs {
     pub payload: Option<Vec<f64>>,
     /// Most effects `--effects auto` adds (`dh_calib::diagnose::DiagnoseOptions::max_effects`).
     pub max_effects: usize,
+    /// Fit the outliers with the rest (they are still named).
+    pub keep_outliers: bool,
 }
 
 /// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
@@ -480,6 +483,13 @@ pub struct CalibrationDoc {
     /// The proof on the written model (`--out`), see [`crate::commands::written`].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub written: Option<WrittenDoc>,
+    /// The outlier screen; `null` when it did not run.
+    pub outliers: Option<super::calibrate_findings::OutliersDoc>,
+    /// The test of the final model and what it means.
+    pub verdict: super::calibrate_findings::VerdictDoc,
+    /// The rounds of `--effects` (every candidate's scores, every refit and why it was taken
+    /// or not, the final structure); `null` without a diagnosis.
+    pub diagnosis: Option<super::calibrate_findings::DiagnosisDoc>,
 }
 
 /// Units of the JSON report.
@@ -726,6 +736,10 @@ pub fn calibrate(
         effects: effects.clone(),
         // The CPA table is already in the device frame: its base is DH frame 0 there.
         device_guess: inputs.cpa.then(Isometry3::identity),
+        outliers: OutlierOptions {
+            keep: args.keep_outliers,
+            ..OutlierOptions::default()
+        },
         ..CalibrationOptions::default()
     };
     let cal = inputs
@@ -841,6 +855,7 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
         .iter()
         .filter(|s| s.split == Split::Validation)
         .count();
+    let (outliers, verdict, diagnosis) = super::calibrate_findings::documents(report);
     CalibrationDoc {
         model: inputs.model_name.clone(),
         data: display_name(&args.data),
@@ -913,6 +928,9 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
             .collect(),
         notes: report.notes.clone(),
         written: None,
+        outliers,
+        verdict,
+        diagnosis,
     }
 }
 
@@ -1205,6 +1223,10 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
     for n in &doc.notes {
         let _ = writeln!(s, "note: {n}");
     }
+    s.push_str(&super::calibrate_findings::text(
+        doc.outliers.as_ref(),
+        &doc.verdict,
+    ));
     if let Some(w) = &doc.written {
         let _ = writeln!(s, "{}", crate::commands::written::line(w));
     }
@@ -1722,6 +1744,10 @@ pub struct CalibrateCli {
     /// stopped the selection).
     #[arg(long, value_name = "N", default_value_t = 12, value_parser = crate::guard::max_effects)]
     max_effects: usize,
+    /// Fit every point: the outliers (points beyond a Bonferroni bound over the standardised
+    /// residuals, see dh_calib::outliers) are still named but not left out.
+    #[arg(long)]
+    keep_outliers: bool,
 }
 
 impl CalibrateCli {
@@ -1749,6 +1775,7 @@ impl CalibrateCli {
             gravity: self.gravity,
             payload: self.payload,
             max_effects: self.max_effects,
+            keep_outliers: self.keep_outliers,
         }
     }
 }

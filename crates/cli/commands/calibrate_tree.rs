@@ -385,6 +385,10 @@ pub fn calibrate_tree(
             .iter()
             .map(|(t, b)| (t.clone(), tree.branches()[*b].name.clone()))
             .collect(),
+        outliers: dh_calib::outliers::OutlierOptions {
+            keep: args.keep_outliers,
+            ..dh_calib::outliers::OutlierOptions::default()
+        },
         ..CalibrationOptions::default()
     };
     let cal = data

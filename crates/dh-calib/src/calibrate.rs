@@ -56,6 +56,9 @@ pub struct CalibrationOptions {
     /// rides on. A target without an entry rides on the branch of its own name, or on the only
     /// chain of a serial robot.
     pub target_branches: Vec<(String, String)>,
+    /// Outlier screening before the fit ([`crate::outliers`]): on by default, flagged points
+    /// left out unless `keep`.
+    pub outliers: crate::outliers::OutlierOptions,
 }
 
 impl Default for CalibrationOptions {
@@ -69,6 +72,7 @@ impl Default for CalibrationOptions {
             sigma: None,
             effects: Vec::new(),
             target_branches: Vec::new(),
+            outliers: crate::outliers::OutlierOptions::default(),
         }
     }
 }
@@ -263,6 +267,10 @@ pub struct Report {
     pub selected_effects: Vec<String>,
     /// What the automatic diagnosis found; `None` when it did not run.
     pub diagnosis: Option<crate::diagnose::Diagnosis>,
+    /// What the outlier screen found; `None` when it did not run.
+    pub outliers: Option<crate::outliers::OutlierReport>,
+    /// The test of the final model against the noise, and what it means.
+    pub verdict: crate::diagnose::Verdict,
 }
 
 /// Calibration samples, validation samples and the pose group of each calibration sample.
@@ -909,7 +917,15 @@ impl<'a> Session<'a> {
                 !hidden.contains(e) && range.clone().any(|c| last.free.contains(&c))
             })
             .map(|(_, (effect, _))| crate::effects::label_of(effect.as_ref()))
-            .collect();
+            .collect::<Vec<_>>();
+        let verdict = crate::diagnose::verdict(
+            self,
+            last,
+            crate::diagnose::DEFAULT_ALPHA,
+            noise_floor.as_ref(),
+            final_.rms,
+            &selected_effects,
+        );
         Report {
             rms_before: first.rms,
             rms_after: final_.rms,
@@ -936,6 +952,8 @@ impl<'a> Session<'a> {
             candidates: vec![],
             selected_effects,
             diagnosis: None,
+            outliers: None,
+            verdict,
         }
     }
 }
@@ -1017,6 +1035,8 @@ pub fn calibrate_tree(
     data: &Measurements,
     options: &CalibrationOptions,
 ) -> Result<Report, CalibError> {
+    let (scan, cleaned) = screen_outliers(tree, data, options)?;
+    let data = cleaned.as_ref().unwrap_or(data);
     let mut session = Session::new(tree, data, options, &options.effects)?;
     let Geometric {
         mut steps,
@@ -1040,7 +1060,28 @@ pub fn calibrate_tree(
         .iter()
         .map(|e| crate::effects::label_of(e.as_ref()))
         .collect();
+    attach_outliers(&mut report, scan);
     Ok(report)
+}
+
+/// The outlier screen of `options.outliers` ([`crate::outliers::screen`]) and, unless the
+/// outliers are kept, the data without them (`None` when nothing is left out).
+pub(crate) fn screen_outliers(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+) -> Result<(Option<crate::outliers::OutlierReport>, Option<Measurements>), CalibError> {
+    if !options.outliers.screen {
+        return Ok((None, None));
+    }
+    let scan = crate::outliers::screen(tree, data, options)?;
+    let cleaned = (!scan.kept && !scan.outliers.is_empty()).then(|| scan.without(data));
+    Ok((Some(scan), cleaned))
+}
+
+/// Stores the screen's findings in `report`.
+pub(crate) fn attach_outliers(report: &mut Report, scan: Option<crate::outliers::OutlierReport>) {
+    report.outliers = scan;
 }
 
 /// Identifiability of `columns` at `x`; returns the free parameter indices and the fixed ones

@@ -72,6 +72,96 @@ one-sided Wilcoxon signed-rank test at alpha, paired over pose groups, of the he
 (validation split, else cross-validation); stop when none of the tried candidates passes; aliased \
 candidates (sine < 1e-3) are never selected";
 
+/// Significance level of the tests by default (the diagnosis's and the final verdict's).
+pub const DEFAULT_ALPHA: f64 = 0.01;
+
+/// The verdict on the final model: its residual tested against the noise (chi-square with a
+/// known sigma, lack of fit against the pure error of repeated poses; neither: no test), what
+/// that means, and the structure the residual still has.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Verdict {
+    /// The test of the final model's residual (the same tests as the diagnosis's step 1).
+    pub test: ResidualTest,
+    /// Its level.
+    pub alpha: f64,
+    /// `Some(true)` when nothing significant remains, `Some(false)` when something does,
+    /// `None` when no test is possible.
+    pub complete: Option<bool>,
+    /// Final calibration RMS over the noise floor, when there is a floor.
+    pub ratio: Option<f64>,
+    /// `model complete`, `residual remains: N x the floor` (or `residual remains` without a
+    /// floor), or `no test possible`.
+    pub summary: String,
+    /// Residual structure of the final model against each joint and the pose order (see the
+    /// module docs, step 5).
+    pub structure: Vec<StructureCheck>,
+    /// What the verdict means for the selected effects and the residual's structure.
+    pub notes: Vec<String>,
+}
+
+/// The verdict on the fit `fit` of `session` (final calibration RMS `rms`, noise floor
+/// `floor`, effects `selected` estimated in it).
+pub(crate) fn verdict(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    alpha: f64,
+    floor: Option<&crate::calibrate::NoiseFloor>,
+    rms: f64,
+    selected: &[String],
+) -> Verdict {
+    let test = residual_test(session, fit, alpha);
+    let structure = structure_checks(session, fit, alpha);
+    let ratio = floor.filter(|f| f.rms > 0.0).map(|f| rms / f.rms);
+    let complete = (test.kind != NoiseTest::None).then_some(!test.significant);
+    let summary = match (complete, ratio) {
+        (Some(true), _) => "model complete".to_string(),
+        (Some(false), Some(r)) => format!("residual remains: {r:.2} x the floor"),
+        (Some(false), None) => "residual remains".to_string(),
+        (None, _) => "no test possible".to_string(),
+    };
+    let mut notes = Vec::new();
+    let significant: Vec<&str> = structure
+        .iter()
+        .filter(|s| s.significant)
+        .map(|s| s.variable.as_str())
+        .collect();
+    let shape = if significant.is_empty() {
+        "no structure against the joints or the pose order that the tests resolve".to_string()
+    } else {
+        format!(
+            "structure against {} (see the bins)",
+            significant.join(", ")
+        )
+    };
+    match complete {
+        None => notes.push(
+            "no test of the final model is possible: no known sigma and no repeated poses \
+             (give --sigma or repeat poses under one config)"
+                .into(),
+        ),
+        Some(false) => {
+            if !selected.is_empty() {
+                notes.push(format!(
+                    "the residual is still above the noise with the selected effects ({}): they \
+                     may stand in for something unmodelled rather than be its cause",
+                    selected.join(", ")
+                ));
+            }
+            notes.push(format!("the final residual has {shape}"));
+        }
+        Some(true) => {}
+    }
+    Verdict {
+        test,
+        alpha,
+        complete,
+        ratio,
+        summary,
+        structure,
+        notes,
+    }
+}
+
 /// Which effects to consider.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub enum EffectSelection {
@@ -108,7 +198,7 @@ impl Default for DiagnoseOptions {
             effects: EffectSelection::Auto,
             inertials: None,
             gravity: GravityModel::default_gravity(),
-            alpha: 0.01,
+            alpha: DEFAULT_ALPHA,
             max_effects: 12,
             trials: 3,
         }
@@ -355,6 +445,8 @@ pub fn diagnose_tree(
             (v, true)
         }
     };
+    let (scan, cleaned) = crate::calibrate::screen_outliers(tree, data, options)?;
+    let data = cleaned.as_ref().unwrap_or(data);
     let mut session = Session::new(tree, data, options, &pool)?;
     let geo = session.geometric()?;
     let mut steps = geo.steps;
@@ -485,6 +577,16 @@ pub fn diagnose_tree(
             match accepted {
                 Some((e, mut step, f2, fixed2)) => {
                     selected.push(e);
+                    // The trial identified only the free columns and the effect's: what an
+                    // earlier step held stays held and must stay listed.
+                    let now_held: Vec<usize> = fixed2.iter().map(|g| g.index).collect();
+                    let mut fixed2: Vec<crate::fit::Fixed> = fixed
+                        .iter()
+                        .filter(|f| !f2.contains(&f.index) && !now_held.contains(&f.index))
+                        .cloned()
+                        .chain(fixed2)
+                        .collect();
+                    fixed2.sort_by_key(|f| f.index);
                     step.report.fixed = session.named(&fixed2);
                     steps.push(step.report);
                     last = step.outcome;
@@ -543,6 +645,17 @@ pub fn diagnose_tree(
         .collect();
     let mut report = session.report(&last, steps, fixed, &hidden);
     report.selected_effects = selected.iter().map(|&e| pool[e].label()).collect();
+    if diag.alpha != DEFAULT_ALPHA {
+        report.verdict = verdict(
+            &session,
+            &last,
+            diag.alpha,
+            report.noise_floor.as_ref(),
+            report.rms_after,
+            &report.selected_effects,
+        );
+    }
+    crate::calibrate::attach_outliers(&mut report, scan);
     report.candidates = first_table;
     // The report's notes carry the diagnosis's findings too, for readers of the report alone.
     if !pool.is_empty() {

@@ -21,6 +21,7 @@ pub mod fit;
 pub mod gravity;
 pub mod import;
 pub mod model;
+pub mod outliers;
 pub mod simulate;
 pub mod socket;
 mod stats;
