@@ -160,11 +160,7 @@ where
     let mut sampler = JointSampler::new(&source.rows, source.size(), seed);
     let prepared = written.prepare();
     let (mut q, mut qw) = (Vec::with_capacity(n), vec![0.0; n]);
-    let mut dev = Deviation {
-        samples: 0,
-        max_position_error: 0.0,
-        max_orientation_error: 0.0,
-    };
+    let mut dev = Deviation::new();
     for _ in 0..samples.max(1) {
         sampler.next_into(&mut q);
         let mut done = vec![true; n];
@@ -188,18 +184,7 @@ where
                 break;
             }
         }
-        let (dp, dr) = pose_error(&prepared.fk(&qw)?, &oracle(&q));
-        dev.max_position_error = if dp.is_nan() {
-            f64::INFINITY
-        } else {
-            dev.max_position_error.max(dp)
-        };
-        dev.max_orientation_error = if dr.is_nan() {
-            f64::INFINITY
-        } else {
-            dev.max_orientation_error.max(dr)
-        };
-        dev.samples += 1;
+        dev.record(pose_error(&prepared.fk(&qw)?, &oracle(&q)));
     }
     Ok(dev)
 }

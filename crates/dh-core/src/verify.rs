@@ -20,6 +20,38 @@ pub struct Deviation {
     pub max_orientation_error: f64,
 }
 
+impl Deviation {
+    /// No sample yet.
+    pub fn new() -> Deviation {
+        Deviation {
+            samples: 0,
+            max_position_error: 0.0,
+            max_orientation_error: 0.0,
+        }
+    }
+
+    /// Counts one sample's position and orientation errors (metres, radians). A NaN counts as
+    /// infinite: it must never pass as "small", and `max` would drop it.
+    pub fn record(&mut self, (dp, dr): (f64, f64)) {
+        let worse = |max: f64, e: f64| {
+            if e.is_nan() {
+                f64::INFINITY
+            } else {
+                max.max(e)
+            }
+        };
+        self.max_position_error = worse(self.max_position_error, dp);
+        self.max_orientation_error = worse(self.max_orientation_error, dr);
+        self.samples += 1;
+    }
+}
+
+impl Default for Deviation {
+    fn default() -> Self {
+        Deviation::new()
+    }
+}
+
 /// How one row's value is drawn.
 #[derive(Clone, Copy, Debug)]
 enum Draw {
@@ -175,26 +207,10 @@ where
     let mut sampler = JointSampler::new(&table.rows, table.size(), seed);
     let mut q = Vec::with_capacity(table.rows.len());
     let prepared = table.prepare();
-    let mut dev = Deviation {
-        samples: 0,
-        max_position_error: 0.0,
-        max_orientation_error: 0.0,
-    };
+    let mut dev = Deviation::new();
     for _ in 0..samples.max(1) {
         sampler.next_into(&mut q);
-        let (dp, dr) = pose_error(&prepared.fk(&q)?, &oracle(&q));
-        // NaN must never pass as "small": max() would drop it.
-        dev.max_position_error = if dp.is_nan() {
-            f64::INFINITY
-        } else {
-            dev.max_position_error.max(dp)
-        };
-        dev.max_orientation_error = if dr.is_nan() {
-            f64::INFINITY
-        } else {
-            dev.max_orientation_error.max(dr)
-        };
-        dev.samples += 1;
+        dev.record(pose_error(&prepared.fk(&q)?, &oracle(&q)));
     }
     Ok(dev)
 }
