@@ -165,6 +165,18 @@ pub fn random_error(s: &str) -> Result<f64, String> {
     ranged(s, "a length (m) or angle (rad)", 0.0, 1.0, false)
 }
 
+/// `--random-errors LENGTH,ANGLE`: exactly two numbers, each as [`random_error`].
+pub fn random_errors(s: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    match parts.as_slice() {
+        [l, a] => Ok((random_error(l)?, random_error(a)?)),
+        _ => Err(format!(
+            "expected LENGTH,ANGLE (two numbers, e.g. 0.001,0.002), found {} value(s)",
+            parts.len()
+        )),
+    }
+}
+
 /// Largest `--samples` of `extract`'s self-check.
 pub const MAX_SAMPLES: usize = 1_000_000;
 /// `--samples`: `[1, 1 000 000]`.

@@ -116,3 +116,31 @@ fn completions_and_the_manual_page_are_generated() {
         "{help}"
     );
 }
+
+#[test]
+fn random_errors_take_the_documented_length_comma_angle() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.csv");
+    let out = out.to_str().unwrap();
+    let model = "fixtures/robots/ur5/vendor.yaml";
+    let args = |errors: &'static str| {
+        vec![
+            "simulate",
+            "--model",
+            model,
+            "--poses",
+            "5",
+            "--random-errors",
+            errors,
+            "--out",
+            out,
+        ]
+    };
+    let ok = run(&args("0.001,0.002"), None);
+    assert!(ok.starts_with("exit: 0\n"), "{ok}");
+    let four = run(&args("0.001,0.002,0.3,0.4"), None);
+    assert!(
+        four.starts_with("exit: 2\n") && four.contains("found 4 value(s)"),
+        "{four}"
+    );
+}

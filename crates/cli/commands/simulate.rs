@@ -426,8 +426,8 @@ pub struct SimulateCli {
     #[arg(long = "error", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     errors: Vec<String>,
     /// Random errors on every DH parameter, uniform within LENGTH metres and ANGLE radians.
-    #[arg(long, value_name = "LENGTH,ANGLE", value_delimiter = ',', num_args = 2, value_parser = crate::guard::random_error)]
-    random_errors: Option<Vec<f64>>,
+    #[arg(long, value_name = "LENGTH,ANGLE", value_parser = crate::guard::random_errors)]
+    random_errors: Option<(f64, f64)>,
     /// Targets (reflectors) on the tool, placed at random within 0.1 m of the tip.
     #[arg(long, value_name = "K", default_value_t = 1, value_parser = crate::guard::small_count)]
     targets: usize,
@@ -462,10 +462,7 @@ impl SimulateCli {
             arc: self.arc,
             effects: self.effects,
             errors: self.errors,
-            random_errors: self.random_errors.and_then(|v| match v.as_slice() {
-                [l, a] => Some((*l, *a)),
-                _ => None,
-            }),
+            random_errors: self.random_errors,
             targets: self.targets,
             repeats: self.repeats,
             validation: self.validation,
