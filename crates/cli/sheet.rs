@@ -353,8 +353,9 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
             bail!("{origin}: the sheet is empty; expected YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'");
         }
         check_nesting(text, origin)?;
+        not_a_sheet(text, origin)?;
         let doc: SheetDoc = serde_yaml::from_str(text).map_err(|e| {
-            let mut message = e.to_string();
+            let mut message = shortened(&e.to_string());
             let at = match e.location() {
                 Some(l) => {
                     // serde_yaml repeats the position in its message; say it once, up front.
@@ -374,6 +375,51 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
         })?;
         Ok(doc)
     }
+}
+
+/// Longest error message quoted from the YAML parser: it may quote a whole document (a CSV file
+/// reads as one long string), and one line of it says enough.
+const MAX_MESSAGE: usize = 200;
+
+/// `message` cut at [`MAX_MESSAGE`] characters, saying so.
+fn shortened(message: &str) -> String {
+    match message.char_indices().nth(MAX_MESSAGE) {
+        Some((k, _)) => format!("{}... (cut)", &message[..k]),
+        None => message.to_string(),
+    }
+}
+
+/// Refuses a file whose first line of content cannot start a sheet (a mapping in YAML, `{` in
+/// JSON), saying what it looks like and quoting that line (at most 80 characters), instead of the
+/// YAML parser's "expected struct" with the whole file quoted.
+fn not_a_sheet(text: &str, origin: &str) -> Result<()> {
+    let Some((k, first)) = text.lines().enumerate().find(|(_, l)| {
+        let t = l.trim();
+        !t.is_empty() && !t.starts_with('#') && t != "---" && !t.starts_with('%')
+    }) else {
+        return Ok(());
+    };
+    let t = first.trim();
+    if t.starts_with('{') || t.contains(": ") || t.ends_with(':') {
+        return Ok(());
+    }
+    let looks = if t.contains(',') || t.contains(';') || t.contains('\t') {
+        "a CSV table (a measurement file?)"
+    } else if t.starts_with('<') {
+        "XML (a URDF?)"
+    } else {
+        "text without YAML keys"
+    };
+    let quoted: String = t.chars().take(80).collect();
+    let cut = if t.chars().count() > 80 { "..." } else { "" };
+    Err(crate::error::hinted(
+        format!(
+            "{origin} (line {}): expected a DH sheet (YAML or JSON with 'convention', 'length_unit', 'angle_unit' and 'joints'), found what looks like {looks}: '{}{cut}'",
+            k + 1,
+            crate::guard::escape(&quoted)
+        ),
+        "measurements go to calibrate --data; a URDF goes to extract or check as the robot",
+    ))
 }
 
 /// Where the key named in serde's "duplicate field `KEY`" message is given the second time at

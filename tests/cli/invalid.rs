@@ -192,6 +192,8 @@ const CASES: &[Case] = &[
     // Sheets, read by `check` against the valid arm.
     sheet!("empty", "empty.yaml"),
     sheet!("not_yaml", "not_yaml.yaml"),
+    // A measurement CSV given as a sheet: what it looks like and one line, not the whole file.
+    sheet!("measurements_as_sheet", "measurements_as_sheet.csv"),
     sheet!("truncated_json", "truncated.json"),
     sheet!("not_utf8", "not_utf8.yaml"),
     sheet!("not_a_mapping", "not_a_mapping.yaml"),
