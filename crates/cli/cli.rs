@@ -290,6 +290,15 @@ where
     match dispatch(cli, out, err) {
         Ok(Outcome::Pass) => 0,
         Ok(Outcome::Differs) => 1,
+        // The reader of stdout went away (`| head`): stop quietly, as other Unix tools do.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            0
+        }
         Err(e) => {
             // One line each: a line feed inside a quoted name is escaped too.
             let message = format!("{e:#}");
