@@ -46,7 +46,7 @@ pub fn precision_at(
     }
 }
 
-/// Reads text that [`render_sheet`] wrote in `format` back into a sheet document (units,
+/// Reads text that [`crate::render::render_sheet`] wrote in `format` back into a sheet document (units,
 /// convention, base, tool, rows and couplings; the facts around them are not read back).
 ///
 /// # Errors
