@@ -14,6 +14,7 @@ pub mod measured;
 pub mod output;
 pub mod plot;
 pub mod readback;
+pub mod readback_parse;
 pub mod render;
 pub mod sheet;
 pub mod svg;
