@@ -163,6 +163,18 @@ fn extra_decimals(table: &DhTable, format: Format, l: LengthUnit, a: AngleUnit) 
         .unwrap_or(9)
 }
 
+/// The error line of a written table that failed its proof: what (`table`) strayed how far from
+/// what (`source`), against which bound.
+pub fn failure_line(table: &str, source: &str, v: Option<&VerificationDoc>) -> String {
+    format!(
+        "urdf-dh: error: verification failed: forward kinematics of {table} as written strays {:.3e} m, {:.3e} rad from {source} (bound {:.3e} m, {:.3e} rad)",
+        v.map_or(f64::INFINITY, |v| v.max_position_error),
+        v.map_or(f64::INFINITY, |v| v.max_orientation_error),
+        v.map_or(0.0, |v| v.position_bound),
+        v.map_or(0.0, |v| v.orientation_bound)
+    )
+}
+
 /// The base and tool to use where a written sheet leaves them out (free transforms).
 pub struct Isometry3Pair {
     /// Base (DH frame 0 in the base link frame).

@@ -8,7 +8,7 @@ use nalgebra::Isometry3;
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_text};
-use crate::readback::{prove, Isometry3Pair, Source};
+use crate::readback::{failure_line, prove, Isometry3Pair, Source};
 use crate::render::{render_sheet, Format};
 use crate::sheet::{Sheet, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -97,14 +97,10 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     if passed {
         return Ok(Outcome::Pass);
     }
-    let v = doc.verification.as_ref();
     writeln!(
         err,
-        "urdf-dh: error: verification failed: forward kinematics of the converted table as written strays {:.3e} m, {:.3e} rad from {name} (bound {:.3e} m, {:.3e} rad)",
-        v.map_or(f64::INFINITY, |v| v.max_position_error),
-        v.map_or(f64::INFINITY, |v| v.max_orientation_error),
-        v.map_or(0.0, |v| v.position_bound),
-        v.map_or(0.0, |v| v.orientation_bound)
+        "{}",
+        failure_line("the converted table", &name, doc.verification.as_ref())
     )?;
     Ok(Outcome::Differs)
 }

@@ -6,7 +6,7 @@ use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_robot};
-use crate::readback::{prove, Isometry3Pair, Source};
+use crate::readback::{failure_line, prove, Isometry3Pair, Source};
 use crate::render::Format;
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -285,14 +285,10 @@ pub fn extract(
     if passed {
         Ok(Outcome::Pass)
     } else {
-        let v = ex.sheet.verification.as_ref();
         writeln!(
             err,
-            "urdf-dh: error: verification failed: forward kinematics of the table as written strays {:.3e} m, {:.3e} rad from the URDF (bound {:.3e} m, {:.3e} rad)",
-            v.map_or(f64::INFINITY, |v| v.max_position_error),
-            v.map_or(f64::INFINITY, |v| v.max_orientation_error),
-            v.map_or(0.0, |v| v.position_bound),
-            v.map_or(0.0, |v| v.orientation_bound)
+            "{}",
+            failure_line("the table", "the URDF", ex.sheet.verification.as_ref())
         )?;
         Ok(Outcome::Differs)
     }
