@@ -6,15 +6,13 @@
 use std::path::Path;
 
 use dh_core::Convention;
-use serde_json::Value;
-use urdf_axes::UrdfModel;
 use urdf_dh::commands::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
 use urdf_dh::commands::extract::{run_extract, ExtractArgs};
 use urdf_dh::render::{render_sheet, Format};
 use urdf_dh::sheet::Sheet;
 use urdf_dh::units::{AngleUnit, LengthUnit};
 
-use crate::common::skip_without_shared;
+use crate::common::{corpus_chains, skip_without_shared};
 
 /// Extracts `urdf` (`base` → `tip`) in `convention`, writes the YAML sheet, reads it back and
 /// checks it against the same URDF. `None` for a match, else what went wrong.
@@ -79,64 +77,12 @@ fn round_trip(urdf: &Path, base: &str, tip: &str, convention: Convention) -> Opt
     }
 }
 
-/// Every chain of the two corpora: (label, URDF, base, tip).
-fn chains(shared: &Path) -> Vec<(String, std::path::PathBuf, String, String)> {
-    let mut out = Vec::new();
-    let mut dirs: Vec<_> = std::fs::read_dir(shared.join("robots"))
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.join("robot.urdf").is_file())
-        .collect();
-    dirs.sort();
-    for dir in dirs {
-        let id = dir.file_name().unwrap().to_string_lossy().into_owned();
-        let urdf = dir.join("robot.urdf");
-        let model = UrdfModel::from_bytes(&std::fs::read(&urdf).unwrap())
-            .unwrap_or_else(|e| panic!("{id}: {e}"));
-        let root = model.root_link().to_string();
-        for leaf in model.leaves() {
-            let Ok(chain) = model.chain(Some(&root), Some(leaf)) else {
-                continue;
-            };
-            if !chain.axes().is_empty() {
-                out.push((
-                    format!("robots/{id} -> {leaf}"),
-                    urdf.clone(),
-                    root.clone(),
-                    leaf.to_string(),
-                ));
-            }
-        }
-    }
-    let manifest: Value = serde_json::from_str(
-        &std::fs::read_to_string(shared.join("robots-ext/manifest.json")).unwrap(),
-    )
-    .unwrap();
-    for c in manifest["chains"].as_array().unwrap() {
-        if c["expect"].as_str() == Some("refuse") {
-            continue;
-        }
-        let field = |k: &str| c[k].as_str().unwrap().to_string();
-        out.push((
-            format!("robots-ext/{}", field("id")),
-            shared
-                .join("robots-ext")
-                .join(field("robot"))
-                .join("robot.urdf"),
-            field("base"),
-            field("tip"),
-        ));
-    }
-    out
-}
-
 #[test]
 fn extracted_sheets_check_as_a_match_across_the_corpus() {
     let Some(shared) = skip_without_shared("check round trip") else {
         return;
     };
-    let chains = chains(&shared);
+    let chains = corpus_chains(&shared);
     assert!(
         chains.len() >= 300,
         "expected both corpora, found {} chains",

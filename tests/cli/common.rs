@@ -112,3 +112,61 @@ pub fn ok(args: &[&str]) -> String {
     assert_eq!(code, 0, "urdf-dh {}: exit {code}\n{err}", args.join(" "));
     out
 }
+
+/// The robot folders of `shared/<folder>` that hold a `robot.urdf`, sorted.
+pub fn robot_dirs(shared: &std::path::Path, folder: &str) -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(shared.join(folder))
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.join("robot.urdf").is_file())
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+/// One real chain: (label, URDF, base link, tip link).
+pub type CorpusChain = (String, PathBuf, String, String);
+
+/// Every real chain: `shared/robots` from the root link to every leaf with a moving joint on
+/// the way, and the chains of `shared/robots-ext/manifest.json` (less the files it expects to be
+/// refused).
+pub fn corpus_chains(shared: &std::path::Path) -> Vec<CorpusChain> {
+    let mut out = Vec::new();
+    for dir in robot_dirs(shared, "robots") {
+        let id = dir.file_name().unwrap().to_string_lossy().into_owned();
+        let urdf = dir.join("robot.urdf");
+        let model = urdf_axes::UrdfModel::from_bytes(&std::fs::read(&urdf).unwrap())
+            .unwrap_or_else(|e| panic!("{id}: {e}"));
+        let root = model.root_link().to_string();
+        for leaf in model.leaves() {
+            let moving = model
+                .chain(Some(&root), Some(leaf))
+                .map_or(0, |c| c.axes().len());
+            if moving > 0 {
+                let label = format!("robots/{id} -> {leaf}");
+                out.push((label, urdf.clone(), root.clone(), leaf.to_string()));
+            }
+        }
+    }
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(shared.join("robots-ext/manifest.json")).unwrap())
+            .unwrap();
+    for c in manifest["chains"].as_array().unwrap() {
+        if c["expect"].as_str() == Some("refuse") {
+            continue;
+        }
+        let field = |k: &str| c[k].as_str().unwrap().to_string();
+        let urdf = shared
+            .join("robots-ext")
+            .join(field("robot"))
+            .join("robot.urdf");
+        out.push((
+            format!("robots-ext/{}", field("id")),
+            urdf,
+            field("base"),
+            field("tip"),
+        ));
+    }
+    out
+}

@@ -4,20 +4,14 @@
 use dh_core::{compare, extract, Convention, Tolerance};
 use urdf_axes::UrdfModel;
 
-use crate::common::skip_without_shared;
+use crate::common::{robot_dirs, skip_without_shared};
 
 #[test]
 fn every_shared_urdf_extracts_with_fk_agreement() {
     let Some(shared) = skip_without_shared("corpus") else {
         return;
     };
-    let mut dirs: Vec<_> = std::fs::read_dir(shared.join("robots"))
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.join("robot.urdf").is_file())
-        .collect();
-    dirs.sort();
+    let dirs = robot_dirs(&shared, "robots");
     assert!(
         dirs.len() >= 40,
         "expected the shared corpus, found {} robots",

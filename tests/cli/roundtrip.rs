@@ -4,9 +4,7 @@
 //! `extract` gives the same table; `convert` to the other convention and back is the identity.
 //! Needs ../shared; skips with a reason without it.
 
-use std::path::{Path, PathBuf};
-
-use crate::common::skip_without_shared;
+use crate::common::{corpus_chains, robot_dirs, skip_without_shared};
 
 /// Joint-value samples per check: enough to catch a wrong table, few enough for 558 tables.
 const SAMPLES: &str = "100";
@@ -26,68 +24,6 @@ fn cli(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out).into_owned(),
         String::from_utf8_lossy(&err).into_owned(),
     )
-}
-
-/// Every chain: (id, urdf, base, tip).
-fn chains(shared: &Path) -> Vec<(String, PathBuf, String, String)> {
-    let mut all = Vec::new();
-    let mut dirs: Vec<_> = std::fs::read_dir(shared.join("robots"))
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.join("robot.urdf").is_file())
-        .collect();
-    dirs.sort();
-    for dir in dirs {
-        let urdf = dir.join("robot.urdf");
-        let model = urdf_axes::UrdfModel::from_bytes(&std::fs::read(&urdf).unwrap()).unwrap();
-        let root = model.root_link().to_string();
-        for leaf in model.leaves() {
-            let moving = model
-                .chain(Some(&root), Some(leaf))
-                .map_or(0, |c| c.axes().len());
-            if moving > 0 {
-                let id = format!(
-                    "robots/{}->{leaf}",
-                    dir.file_name().unwrap().to_string_lossy()
-                );
-                all.push((id, urdf.clone(), root.clone(), leaf.to_string()));
-            }
-        }
-    }
-    // The reproductions of defects: rounded URDF angles with a tool near pitch ±90°,
-    // antiparallel and coincident axes (chain base -> tip).
-    let mut repro: Vec<_> = std::fs::read_dir(shared.join("repro"))
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .filter(|p| p.join("robot.urdf").is_file())
-        .collect();
-    repro.sort();
-    assert!(
-        repro.len() >= 4,
-        "expected the repro cases, found {}",
-        repro.len()
-    );
-    for dir in repro {
-        let id = format!("repro/{}", dir.file_name().unwrap().to_string_lossy());
-        all.push((id, dir.join("robot.urdf"), "base".into(), "tip".into()));
-    }
-    let manifest: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(shared.join("robots-ext/manifest.json")).unwrap())
-            .unwrap();
-    for c in manifest["chains"].as_array().unwrap() {
-        if c.get("expect").is_some() {
-            continue;
-        }
-        let s = |k: &str| c[k].as_str().unwrap().to_string();
-        let urdf = shared
-            .join("robots-ext")
-            .join(s("robot"))
-            .join("robot.urdf");
-        all.push((format!("robots-ext/{}", s("id")), urdf, s("base"), s("tip")));
-    }
-    all
 }
 
 /// `t` with the pair of DH values that a change of convention moves into a transform folded
@@ -149,7 +85,19 @@ fn every_real_chain_round_trips_in_every_format() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let all = chains(&shared);
+    let mut all = corpus_chains(&shared);
+    // The reproductions of defects: rounded URDF angles with a tool near pitch ±90°,
+    // antiparallel and coincident axes (chain base -> tip).
+    let repro = robot_dirs(&shared, "repro");
+    assert!(
+        repro.len() >= 4,
+        "expected the repro cases, found {}",
+        repro.len()
+    );
+    for dir in repro {
+        let id = format!("repro/{}", dir.file_name().unwrap().to_string_lossy());
+        all.push((id, dir.join("robot.urdf"), "base".into(), "tip".into()));
+    }
     assert!(
         all.len() >= 300,
         "expected both corpora, found {} chains",
