@@ -192,7 +192,7 @@ fn read_text(text: &str) -> Result<SheetDoc> {
         });
     }
     apply_tilts(text, &mut joints)?;
-    Ok(doc_of(
+    Ok(SheetDoc::new(
         convention_of_header(header)?,
         length,
         angle,
@@ -200,39 +200,6 @@ fn read_text(text: &str) -> Result<SheetDoc> {
         tool,
         joints,
     ))
-}
-
-fn doc_of(
-    convention: ConventionDoc,
-    length_unit: LengthUnit,
-    angle_unit: AngleUnit,
-    base: Option<PoseDoc>,
-    tool: Option<PoseDoc>,
-    joints: Vec<JointDoc>,
-) -> SheetDoc {
-    SheetDoc {
-        robot: None,
-        source: None,
-        base_link: None,
-        tip_link: None,
-        convention,
-        length_unit,
-        angle_unit,
-        base,
-        tool,
-        joints,
-        coupled: None,
-        branches: None,
-        inertials: None,
-        pairs: None,
-        tolerances: None,
-        warnings: None,
-        verification: None,
-        cpa: None,
-        calibration: None,
-        truth: None,
-        effects: None,
-    }
 }
 
 /// Reads the tilts line ([`crate::render::TILTS_LINE`], after an optional `# `) of `text` into
@@ -346,7 +313,7 @@ fn read_markdown(text: &str) -> Result<SheetDoc> {
     let (length, angle) = units.ok_or_else(|| anyhow!("no table header"))?;
     let header = header.trim_matches('*');
     apply_tilts(text, &mut joints)?;
-    Ok(doc_of(
+    Ok(SheetDoc::new(
         convention_of_header(header)?,
         length,
         angle,
@@ -461,5 +428,5 @@ fn read_csv(text: &str) -> Result<SheetDoc> {
         }
     }
     apply_tilts(text, &mut joints)?;
-    Ok(doc_of(convention, length, angle, base, tool, joints))
+    Ok(SheetDoc::new(convention, length, angle, base, tool, joints))
 }

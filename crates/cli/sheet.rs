@@ -531,6 +531,40 @@ impl SheetDoc {
         })
     }
 
+    /// A sheet of just these: convention, units, base, tool and rows (no facts attached).
+    pub fn new(
+        convention: ConventionDoc,
+        length_unit: LengthUnit,
+        angle_unit: AngleUnit,
+        base: Option<PoseDoc>,
+        tool: Option<PoseDoc>,
+        joints: Vec<JointDoc>,
+    ) -> SheetDoc {
+        SheetDoc {
+            robot: None,
+            source: None,
+            base_link: None,
+            tip_link: None,
+            convention,
+            length_unit,
+            angle_unit,
+            base,
+            tool,
+            joints,
+            coupled: None,
+            effects: None,
+            branches: None,
+            inertials: None,
+            pairs: None,
+            tolerances: None,
+            warnings: None,
+            verification: None,
+            cpa: None,
+            calibration: None,
+            truth: None,
+        }
+    }
+
     /// A sheet of `table` in the given units (no extraction facts attached).
     pub fn from_table(table: &DhTable, length: LengthUnit, angle: AngleUnit) -> SheetDoc {
         let pose = |p: &Isometry3<f64>| {
@@ -569,29 +603,14 @@ impl SheetDoc {
                 }
             })
             .collect();
-        SheetDoc {
-            robot: None,
-            source: None,
-            base_link: None,
-            tip_link: None,
-            convention: table.convention.into(),
-            length_unit: length,
-            angle_unit: angle,
-            base: Some(pose(&table.base)),
-            tool: Some(pose(&table.tool)),
+        SheetDoc::new(
+            table.convention.into(),
+            length,
+            angle,
+            Some(pose(&table.base)),
+            Some(pose(&table.tool)),
             joints,
-            coupled: None,
-            effects: None,
-            branches: None,
-            inertials: None,
-            pairs: None,
-            tolerances: None,
-            warnings: None,
-            verification: None,
-            cpa: None,
-            calibration: None,
-            truth: None,
-        }
+        )
     }
 }
 
