@@ -32,7 +32,7 @@ use nalgebra::{Isometry3, Vector3};
 
 use crate::pose::{from_axes, rot_z};
 use crate::relation::{classify, PairGeometry, Relation};
-use crate::table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic};
+use crate::table::{standard_from_halves, Convention, DhRow, DhTable, JointKind, Limits, Mimic};
 use crate::tolerance::NOISE_RELATIVE;
 use crate::{CoreError, Line, Tolerance};
 
@@ -237,7 +237,26 @@ struct Step {
     geometry: PairGeometry,
     /// Tilt (radians) and displacement (metres) between the table's next axis and the given one.
     snap: Option<(f64, f64)>,
+    /// `(sin, cos)` of `theta / 2` and of `alpha / 2`, from the unit vectors the angles were
+    /// read from (see [`half_angle`]), so that advancing the frame needs no trigonometry.
+    halves: ((f64, f64), (f64, f64)),
 }
+
+/// `(sin, cos)` of `angle / 2` for `angle = atan2(s, c)` with `(c, s)` a unit vector, by the
+/// half-angle identities with no cancellation: `cos(angle/2) = sqrt((1 + c)/2)` for `c ≥ 0`,
+/// else `sin(angle/2) = ±sqrt((1 − c)/2)`, the other from `sin(angle) = 2 sin cos`.
+fn half_angle(c: f64, s: f64) -> (f64, f64) {
+    if c >= 0.0 {
+        let ch = (0.5 * (1.0 + c)).sqrt();
+        (s / (2.0 * ch), ch)
+    } else {
+        let sh = (0.5 * (1.0 - c)).sqrt().copysign(s);
+        (sh, s / (2.0 * sh))
+    }
+}
+
+/// `(sin, cos)` of the half of an angle that is exactly 0.
+const HALF_OF_ZERO: (f64, f64) = (0.0, 1.0);
 
 /// Extracts a DH table from joint axis lines and the tip link's pose, all in the base link
 /// frame at `q = 0` (paper §3.1, eq. 16-24, generalised as the module docs say).
@@ -309,11 +328,13 @@ pub fn extract(
             limits: ax.limits,
             mimic: ax.mimic.clone(),
         };
+        let (mut half_theta, half_alpha) = step.halves;
         if i == 0 {
             // Absorb theta_1 into the base so that the table starts at theta_1 = 0.
             base = frame * rot_z(row.theta);
             frame = base;
             row.theta = 0.0;
+            half_theta = HALF_OF_ZERO;
         }
         if let Some(next) = axes.get(i + 1) {
             pairs.push(PairReport {
@@ -341,7 +362,9 @@ pub fn extract(
             }
         }
         last_standard_frame = frame;
-        frame *= row.transform(Convention::Standard, 0.0);
+        // `row.transform(Convention::Standard, 0.0)` (rows of an extraction have no tilt), from
+        // the halves the step kept.
+        frame *= standard_from_halves(row.a, row.d, half_theta, half_alpha);
         rows.push(row);
     }
 
@@ -419,18 +442,20 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
     let u = next.direction();
     match geometry.relation {
         Relation::Parallel | Relation::Antiparallel | Relation::Coincident { .. } => {
-            let alpha = if u.z < 0.0 { PI } else { 0.0 };
+            let (alpha, half_alpha) = if u.z < 0.0 {
+                (PI, (1.0, 0.0))
+            } else {
+                (0.0, HALF_OF_ZERO)
+            };
             let foot = next.point();
-            let (theta, a) = match geometry.relation {
-                Relation::Coincident { .. } => (0.0, 0.0),
+            let (x, theta, a) = match geometry.relation {
+                Relation::Coincident { .. } => (Vector3::x(), 0.0, 0.0),
                 _ => {
                     let radial = foot.xy().norm();
-                    let (_, theta, a) =
-                        orient(Vector3::new(foot.x, foot.y, 0.0) / radial, radial, tol);
-                    (theta, a)
+                    orient(Vector3::new(foot.x, foot.y, 0.0) / radial, radial, tol)
                 }
             };
-            let origin = Vector3::new(a * theta.cos(), a * theta.sin(), 0.0);
+            let origin = x * a;
             Step {
                 theta,
                 d: 0.0,
@@ -438,6 +463,7 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
                 alpha,
                 geometry,
                 snap: Some((geometry.angle_deviation, next.distance_to_point(&origin))),
+                halves: (half_angle(x.x, x.y), half_alpha),
             }
         }
         Relation::Intersecting | Relation::Skew => {
@@ -457,8 +483,11 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             // eq. (24): alpha = atan2((z_i × z_{i+1}) · x_{i+1}, z_i · z_{i+1}). With x_{i+1} the
             // unit common normal, |(z_i × z_{i+1}) · x_{i+1}| = sin(angle), so alpha is the
             // pair's angle (from `classify`, in (0, π)) with the sign of that triple product.
-            let alpha = geometry.angle.copysign(-u.y * x.x + u.x * x.y);
+            let sign = -u.y * x.x + u.x * x.y;
+            let alpha = geometry.angle.copysign(sign);
             Step {
+                // cos(alpha) = z · u, sin(alpha) = ±|z × u| = ±s.
+                halves: (half_angle(x.x, x.y), half_angle(u.z, s.copysign(sign))),
                 // eq. (22) with x_i = (1, 0, 0) in the current frame.
                 theta,
                 // eq. (21): the foot on the current axis.
@@ -477,8 +506,12 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
 fn last_step(tip: &Isometry3<f64>, tol: Tolerance) -> Step {
     let t = tip.translation.vector;
     let radial = t.xy().norm();
-    let (theta, a) = if radial > tol.linear {
-        (t.y.atan2(t.x), radial)
+    let (theta, a, half_theta) = if radial > tol.linear {
+        (
+            t.y.atan2(t.x),
+            radial,
+            half_angle(t.x / radial, t.y / radial),
+        )
     } else {
         let tx = tip.rotation * Vector3::x();
         let axis = if tx.xy().norm() >= FRAC_1_SQRT_2 {
@@ -486,9 +519,15 @@ fn last_step(tip: &Isometry3<f64>, tol: Tolerance) -> Step {
         } else {
             tip.rotation * Vector3::y()
         };
-        (axis.y.atan2(axis.x), 0.0)
+        let r = axis.xy().norm();
+        (
+            axis.y.atan2(axis.x),
+            0.0,
+            half_angle(axis.x / r, axis.y / r),
+        )
     };
     Step {
+        halves: (half_theta, HALF_OF_ZERO),
         theta,
         d: t.z,
         a,

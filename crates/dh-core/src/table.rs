@@ -184,14 +184,7 @@ impl DhRow {
         }
         let (st, ct) = (0.5 * theta).sin_cos();
         match convention {
-            Convention::Standard => {
-                let (cos_t, sin_t) = (ct * ct - st * st, 2.0 * st * ct);
-                let rot = Quaternion::new(ct * ca, ct * sa, st * sa, st * ca);
-                Isometry3::from_parts(
-                    Translation3::new(self.a * cos_t, self.a * sin_t, d),
-                    UnitQuaternion::new_unchecked(rot),
-                )
-            }
+            Convention::Standard => standard_from_halves(self.a, d, (st, ct), (sa, ca)),
             Convention::Modified => {
                 let (cos_a, sin_a) = (ca * ca - sa * sa, 2.0 * sa * ca);
                 let rot = Quaternion::new(ca * ct, sa * ct, -sa * st, ca * st);
@@ -202,6 +195,23 @@ impl DhRow {
             }
         }
     }
+}
+
+/// The untilted standard row transform `Rz(theta) Tz(d) Tx(a) Rx(alpha)` from `(sin, cos)` of
+/// `theta / 2` and of `alpha / 2` (the closed form of [`DhRow::transform`]); the extraction
+/// gets those halves from its unit vectors without trigonometry.
+pub(crate) fn standard_from_halves(
+    a: f64,
+    d: f64,
+    (st, ct): (f64, f64),
+    (sa, ca): (f64, f64),
+) -> Isometry3<f64> {
+    let (cos_t, sin_t) = (ct * ct - st * st, 2.0 * st * ct);
+    let rot = Quaternion::new(ct * ca, ct * sa, st * sa, st * ca);
+    Isometry3::from_parts(
+        Translation3::new(a * cos_t, a * sin_t, d),
+        UnitQuaternion::new_unchecked(rot),
+    )
 }
 
 /// A [`DhTable`] with every row's half-twist sine and cosine computed once, for verification
