@@ -390,6 +390,10 @@ pub struct ValidationDoc {
     /// Pose groups (k-fold).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub groups: Option<usize>,
+    /// Training samples each fold is fitted on, when the data are too many to fit every
+    /// fold on all of its training samples (k-fold beyond `dh_calib::calibrate::CV_TRAINING_MAX`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub training_subsample: Option<usize>,
 }
 
 /// Where the noise level comes from.
@@ -835,18 +839,25 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
             samples: Some(*samples),
             folds: None,
             groups: None,
+            training_subsample: None,
         },
-        Validation::CrossValidation { folds, groups } => ValidationDoc {
+        Validation::CrossValidation {
+            folds,
+            groups,
+            training_subsample,
+        } => ValidationDoc {
             method: "k-fold",
             samples: None,
             folds: Some(*folds),
             groups: Some(*groups),
+            training_subsample: *training_subsample,
         },
         Validation::None => ValidationDoc {
             method: "none",
             samples: None,
             folds: None,
             groups: None,
+            training_subsample: None,
         },
     };
     let val_count = inputs
@@ -1010,9 +1021,13 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
                 .unwrap_or_default()
         ),
         "k-fold" => format!(
-            "{}-fold cross-validation over {} poses",
+            "{}-fold cross-validation over {} poses{}",
             doc.validation.folds.unwrap_or(0),
-            doc.validation.groups.unwrap_or(0)
+            doc.validation.groups.unwrap_or(0),
+            doc.validation
+                .training_subsample
+                .map(|n| format!(" (each fold fitted on {n} evenly spaced training samples)"))
+                .unwrap_or_default()
         ),
         _ => "no validation (fewer than 2 poses)".to_string(),
     };

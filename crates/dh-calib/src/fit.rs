@@ -116,8 +116,9 @@ pub enum CalibError {
 /// A least-squares problem `min ½ Σ_b ‖r_b(x)‖²` over blocks `b` of residuals.
 ///
 /// `x` always holds every parameter; solvers ask only for the Jacobian columns of the free ones.
-/// Implementations must be deterministic and return finite numbers for finite `x`.
-pub trait Problem {
+/// Implementations must be deterministic and return finite numbers for finite `x`; they are
+/// shared between threads (`Sync`) when a problem has more than [`SEGMENT_BLOCKS`] blocks.
+pub trait Problem: Sync {
     /// Number of parameters (length of `x`).
     fn parameter_count(&self) -> usize;
     /// Number of residual blocks.
@@ -343,13 +344,109 @@ pub fn factor<P: Problem + ?Sized>(
     let n = problem.parameter_count();
     check_columns(n, columns, scales)?;
     let p = columns.len();
+    let blocks = problem.block_count();
+    if blocks <= SEGMENT_BLOCKS {
+        let (full, ssr, rows) = factor_blocks(problem, x, columns, scales, 0..blocks)?;
+        return Ok(split_factor(&full, p, ssr, rows));
+    }
+    // Segments in parallel, their factors stacked in segment order: the same result whatever
+    // the number of threads.
+    let parts = segments(blocks, |range| {
+        factor_blocks(problem, x, columns, scales, range)
+    })?;
+    let mut tsqr = Tsqr::new(p + 1);
+    let (mut ssr, mut rows) = (0.0, 0);
+    let mut row = vec![0.0; p + 1];
+    for (r, s, m) in parts {
+        for i in 0..r.nrows() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = r[(i, j)];
+            }
+            tsqr.push(&row);
+        }
+        ssr += s;
+        rows += m;
+    }
+    Ok(split_factor(&tsqr.finish(), p, ssr, rows))
+}
+
+/// Blocks per segment of a problem factored (or summed) in parallel: problems of at most this
+/// many blocks take the serial path, bit for bit as before threads were used.
+pub const SEGMENT_BLOCKS: usize = 16_384;
+
+/// Runs `work` on consecutive ranges of [`SEGMENT_BLOCKS`] blocks on up to
+/// `available_parallelism` threads; returns the results in range order (the first error in
+/// that order, if any).
+fn segments<T: Send>(
+    blocks: usize,
+    work: impl Fn(std::ops::Range<usize>) -> Result<T, CalibError> + Sync,
+) -> Result<Vec<T>, CalibError> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
+    let count = blocks.div_ceil(SEGMENT_BLOCKS);
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(count);
+    let next = AtomicUsize::new(0);
+    let slots: Mutex<Vec<Option<Result<T, CalibError>>>> =
+        Mutex::new((0..count).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= count {
+                    break;
+                }
+                let range = k * SEGMENT_BLOCKS..((k + 1) * SEGMENT_BLOCKS).min(blocks);
+                let out = work(range);
+                if let Ok(mut s) = slots.lock() {
+                    s[k] = Some(out);
+                }
+            });
+        }
+    });
+    let slots = slots.into_inner().map_err(|_| CalibError::NonFinite {
+        what: "a worker thread panicked".into(),
+    })?;
+    slots
+        .into_iter()
+        .map(|s| {
+            s.unwrap_or_else(|| {
+                Err(CalibError::NonFinite {
+                    what: "a worker thread panicked".into(),
+                })
+            })
+        })
+        .collect()
+}
+
+/// `(r_factor, qtr)` out of the `(p + 1) × (p + 1)` factor of `[J | r]`.
+fn split_factor(full: &DMatrix<f64>, p: usize, ssr: f64, rows: usize) -> Factor {
+    Factor {
+        r: full.view((0, 0), (p, p)).clone_owned(),
+        qtr: full.view((0, p), (p, 1)).column(0).clone_owned(),
+        ssr,
+        rows,
+    }
+}
+
+/// The triangular factor of `[J·diag(s) | r]` over `range` of blocks, its sum of squared
+/// residuals and its number of rows.
+fn factor_blocks<P: Problem + ?Sized>(
+    problem: &P,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+    range: std::ops::Range<usize>,
+) -> Result<(DMatrix<f64>, f64, usize), CalibError> {
+    let p = columns.len();
     let mut tsqr = Tsqr::new(p + 1);
     let mut res = [0.0; MAX_BLOCK];
     let mut jac = vec![0.0; MAX_BLOCK * p];
     let mut row = vec![0.0; p + 1];
     let mut ssr = 0.0;
     let mut rows = 0;
-    for b in 0..problem.block_count() {
+    for b in range {
         let m = problem.block_size(b).min(MAX_BLOCK);
         problem.jacobian(x, b, columns, &mut res[..m], &mut jac[..m * p]);
         for i in 0..m {
@@ -367,27 +464,34 @@ pub fn factor<P: Problem + ?Sized>(
         }
         rows += m;
     }
-    let full = tsqr.finish();
-    Ok(Factor {
-        r: full.view((0, 0), (p, p)).clone_owned(),
-        qtr: full.view((0, p), (p, 1)).column(0).clone_owned(),
-        ssr,
-        rows,
-    })
+    Ok((tsqr.finish(), ssr, rows))
 }
 
 /// Sum of squared residuals at `x`, or `None` when one is not finite.
 pub fn sum_of_squares<P: Problem + ?Sized>(problem: &P, x: &[f64]) -> Option<f64> {
+    let blocks = problem.block_count();
+    let ssr = if blocks <= SEGMENT_BLOCKS {
+        sum_blocks(problem, x, 0..blocks)
+    } else {
+        segments(blocks, |range| Ok(sum_blocks(problem, x, range)))
+            .ok()?
+            .into_iter()
+            .sum()
+    };
+    ssr.is_finite().then_some(ssr)
+}
+
+fn sum_blocks<P: Problem + ?Sized>(problem: &P, x: &[f64], range: std::ops::Range<usize>) -> f64 {
     let mut res = [0.0; MAX_BLOCK];
     let mut ssr = 0.0;
-    for b in 0..problem.block_count() {
+    for b in range {
         let m = problem.block_size(b).min(MAX_BLOCK);
         problem.residuals(x, b, &mut res[..m]);
         for v in &res[..m] {
             ssr += v * v;
         }
     }
-    ssr.is_finite().then_some(ssr)
+    ssr
 }
 
 /// Number of SVD sweeps allowed before giving up (nalgebra's default is unbounded).

@@ -358,6 +358,9 @@ impl Frame {
 
     fn apply(&mut self, kind: OpKind, v: f64, fixed: &Frame) {
         match kind {
+            // A zero motion is the identity (bit for bit: `sin 0 = 0`, `cos 0 = 1`): most ops
+            // of a model (tilts, device and tool angles, untouched offsets) sit at zero.
+            OpKind::Trans(_) | OpKind::Rot(_) if v == 0.0 => {}
             OpKind::Trans(a) => self.t += self.r.column(a as usize) * v,
             OpKind::Rot(a) => {
                 let (i, j) = match a {
@@ -1376,6 +1379,58 @@ impl Problem for ModelProblem<'_> {
         jacobian: &mut [f64],
     ) {
         if let Some(o) = self.observations.get(block) {
+            self.model.jacobian(x, o, columns, residuals, jacobian);
+        }
+    }
+}
+
+/// Some of a model's observations, by index (a cross-validation fold's training samples): the
+/// [`Problem`] of [`ModelProblem`] over `observations[i]` for `i` in `subset`, without copies.
+#[derive(Clone, Copy, Debug)]
+pub struct SubsetProblem<'a> {
+    /// The model.
+    pub model: &'a Model,
+    /// All samples.
+    pub observations: &'a [Observed],
+    /// Indices into `observations` of the samples in the problem, one block each.
+    pub subset: &'a [usize],
+}
+
+impl SubsetProblem<'_> {
+    fn get(&self, block: usize) -> Option<&Observed> {
+        self.subset
+            .get(block)
+            .and_then(|&i| self.observations.get(i))
+    }
+}
+
+impl Problem for SubsetProblem<'_> {
+    fn parameter_count(&self) -> usize {
+        self.model.parameter_count()
+    }
+    fn block_count(&self) -> usize {
+        self.subset.len()
+    }
+    fn block_size(&self, block: usize) -> usize {
+        match self.get(block).map(|o| &o.observation) {
+            Some(Observation::Pose(_)) => 6,
+            _ => 3,
+        }
+    }
+    fn residuals(&self, x: &[f64], block: usize, out: &mut [f64]) {
+        if let Some(o) = self.get(block) {
+            self.model.residuals(x, o, out);
+        }
+    }
+    fn jacobian(
+        &self,
+        x: &[f64],
+        block: usize,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+    ) {
+        if let Some(o) = self.get(block) {
             self.model.jacobian(x, o, columns, residuals, jacobian);
         }
     }

@@ -398,7 +398,8 @@ fn noise_floor_from_repeats() {
         r.validation,
         Validation::CrossValidation {
             folds: 5,
-            groups: 80
+            groups: 80,
+            training_subsample: None,
         }
     );
 }
