@@ -1103,11 +1103,14 @@ impl Model {
 
     /// Residuals of one observation (model minus measured) into `out` (3 or 6 values).
     pub fn residuals(&self, x: &[f64], obs: &Observed, out: &mut [f64]) {
-        let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, &obs.q, &mut v);
-        let f = self.chain(&v, None, self.chain_ops(self.observation_chain(obs)));
-        let s = self.scale_factor(x, &obs.q);
-        self.write_residuals(x, &f, s, obs, out);
+        SCRATCH.with(|scratch| {
+            let mut scratch = scratch.borrow_mut();
+            let v = &mut scratch.values;
+            self.op_values(x, &obs.q, v);
+            let f = self.chain(v, None, self.chain_ops(self.observation_chain(obs)));
+            let s = self.scale_factor(x, &obs.q);
+            self.write_residuals(x, &f, s, obs, out);
+        });
     }
 
     fn observation_chain(&self, obs: &Observed) -> usize {
@@ -1163,12 +1166,37 @@ impl Model {
         residuals: &mut [f64],
         jacobian: &mut [f64],
     ) {
-        let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, &obs.q, &mut v);
-        let mut before = Vec::with_capacity(self.ops.len());
-        let mut on = Vec::with_capacity(self.ops.len());
+        SCRATCH.with(|scratch| {
+            let mut scratch = scratch.borrow_mut();
+            let Scratch {
+                values,
+                before,
+                on,
+                grad,
+            } = &mut *scratch;
+            self.jacobian_with(
+                x, obs, columns, residuals, jacobian, values, before, on, grad,
+            );
+        });
+    }
+
+    /// [`Model::jacobian`] with its work space (reused between calls on one thread).
+    #[allow(clippy::too_many_arguments)]
+    fn jacobian_with(
+        &self,
+        x: &[f64],
+        obs: &Observed,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+        v: &mut Vec<f64>,
+        before: &mut Vec<Frame>,
+        on: &mut Vec<bool>,
+        grad: &mut Vec<f64>,
+    ) {
+        self.op_values(x, &obs.q, v);
         let ops = self.chain_ops(self.observation_chain(obs));
-        let f = self.chain(&v, Some((&mut before, &mut on)), ops);
+        let f = self.chain(v, Some((before, on)), ops);
         let scale = self.scale_factor(x, &obs.q);
         let phi = self.write_residuals(x, &f, scale, obs, residuals);
         let (point, target, pose) = match &obs.observation {
@@ -1184,7 +1212,6 @@ impl Model {
         };
         let nc = columns.len();
         let rows = if pose { 6 } else { 3 };
-        let mut grad = Vec::new();
         for (k, &c) in columns.iter().enumerate() {
             let mut dp = Vector3::zeros();
             let mut dw = Vector3::zeros();
@@ -1214,7 +1241,7 @@ impl Model {
                     let slot = &self.effects[e];
                     grad.resize(slot.params.len(), 0.0);
                     let params = x.get(slot.params.clone()).unwrap_or(&[]);
-                    slot.effect.gradient(&obs.q, params, &mut grad);
+                    slot.effect.gradient(&obs.q, params, grad);
                     let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
                     match slot.op {
                         Some(op) => op_motion(op, g, &mut dp, &mut dw),
@@ -1382,6 +1409,20 @@ impl Problem for ModelProblem<'_> {
             self.model.jacobian(x, o, columns, residuals, jacobian);
         }
     }
+}
+
+/// Work space of [`Model::residuals`] and [`Model::jacobian`], one per thread, so that the
+/// millions of calls of a large fit allocate nothing.
+#[derive(Default)]
+struct Scratch {
+    values: Vec<f64>,
+    before: Vec<Frame>,
+    on: Vec<bool>,
+    grad: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
 /// Some of a model's observations, by index (a cross-validation fold's training samples): the

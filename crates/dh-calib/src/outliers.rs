@@ -235,16 +235,22 @@ pub fn screen(
     let mut rounds = 0;
     loop {
         rounds += 1;
-        let kept = Measurements {
-            joint_names: data.joint_names.clone(),
-            targets: data.targets.clone(),
-            samples: data
-                .samples
-                .iter()
-                .enumerate()
-                .filter(|(i, s)| s.split == Split::Calibration && !flagged.contains(i))
-                .map(|(_, s)| s.clone())
-                .collect(),
+        // The data themselves while nothing is left out and all are calibration samples (no
+        // copy of millions of samples), else the calibration samples not flagged.
+        let kept = if flagged.is_empty() && nv == 0 {
+            std::borrow::Cow::Borrowed(data)
+        } else {
+            std::borrow::Cow::Owned(Measurements {
+                joint_names: data.joint_names.clone(),
+                targets: data.targets.clone(),
+                samples: data
+                    .samples
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, s)| s.split == Split::Calibration && !flagged.contains(i))
+                    .map(|(_, s)| s.clone())
+                    .collect(),
+            })
         };
         let mut session = Session::new(tree, &kept, &screen_options, &[])?;
         session.validation = Validation::None;
