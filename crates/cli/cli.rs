@@ -195,7 +195,8 @@ struct ExtractCli {
     /// Seed of the self-check's sampler.
     #[arg(long, value_name = "S", default_value_t = 0)]
     seed: u64,
-    /// Also draw the DH frames (isometric and side view) into this SVG file.
+    /// Also draw the DH frames (isometric and side view) into this SVG file (`-`: standard
+    /// output, the table then goes to standard error).
     #[arg(long, value_name = "FILE")]
     svg: Option<String>,
     /// Joint values for the drawing, comma-separated, radians (metres for prismatic joints)

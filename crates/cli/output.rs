@@ -26,6 +26,32 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     write_all(&[(path, bytes)])
 }
 
+/// The path that means standard output (or input): `-`.
+pub const STDIO: &str = "-";
+
+/// Whether any of `paths` is [`STDIO`]: the artefact then goes to standard output, and the
+/// report that would go there goes to standard error instead (so a pipe carries the artefact
+/// alone).
+pub fn any_stdout<'a>(paths: impl IntoIterator<Item = Option<&'a str>>) -> bool {
+    paths.into_iter().flatten().any(|p| p == STDIO)
+}
+
+/// [`write_all`], with a path of `-` written to `stdout` once every file is in place.
+///
+/// # Errors
+/// As [`write_all`], and a failed write to `stdout`.
+pub fn write_all_or_stdout(files: &[(&Path, &[u8])], stdout: &mut dyn Write) -> Result<()> {
+    let (piped, real): (Vec<_>, Vec<_>) = files
+        .iter()
+        .copied()
+        .partition(|(p, _)| p.as_os_str() == STDIO);
+    write_all(&real)?;
+    for (_, bytes) in piped {
+        stdout.write_all(bytes)?;
+    }
+    Ok(())
+}
+
 /// Writes several files as one: every file is staged (written in full and synced to a
 /// temporary beside its target) before the first rename, so a failure while writing (a full
 /// disk, a vanished directory) leaves every target as it was. Only a failure of a rename itself
@@ -120,11 +146,24 @@ fn identity(path: &str) -> Option<Identity> {
 /// new file or a plain file, in a directory that exists and can be written, and no output may
 /// be one of the inputs or another output, however spelled (`./d.csv`, a symbolic or hard
 /// link). `inputs` and `outputs` are `(option, path)`; `-` (standard input or output) is never
-/// a clash.
+/// a clash with a file, but at most one output may be `-` (standard output).
 ///
 /// # Errors
 /// A usage error naming both options and the file, or the output that cannot be written.
 pub fn check_destinations(inputs: &[(&str, &str)], outputs: &[(&str, &str)]) -> Result<()> {
+    let piped: Vec<&str> = outputs
+        .iter()
+        .filter(|(_, p)| *p == STDIO)
+        .map(|(o, _)| *o)
+        .collect();
+    if let [first, second, ..] = piped.as_slice() {
+        return Err(hinted(
+            format!(
+                "{second} -: expected a file, found standard output already taken by {first} -"
+            ),
+            "at most one output can go to standard output; give the others file names",
+        ));
+    }
     let ids: Vec<Option<Identity>> = inputs
         .iter()
         .chain(outputs)

@@ -273,3 +273,131 @@ fn text_tables_take_names_of_any_length() {
     assert_eq!(code, 2);
     assert!(!err.contains("panicked"));
 }
+
+/// Runs the binary in `dir` with `stdin`: (exit code, stdout bytes, stderr).
+fn exec_piped(dir: &Path, args: &[&str], stdin: &[u8]) -> (i32, Vec<u8>, String) {
+    use std::io::Write;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(args)
+        .current_dir(dir)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run urdf-dh");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(stdin)
+        .expect("write stdin");
+    let out = child.wait_with_output().expect("wait");
+    (
+        out.status.code().unwrap_or(-1),
+        out.stdout,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn a_dash_writes_the_artefact_to_stdout_and_the_report_to_stderr() {
+    let dir = scratch();
+    let p = dir.path();
+    let before = names(p);
+
+    // calibrate --out -: the calibrated sheet alone on stdout, readable by every command; the
+    // report on stderr.
+    let (code, sheet, err) = exec_piped(
+        p,
+        &[
+            "calibrate",
+            "--model",
+            "a.urdf",
+            "--data",
+            "d.csv",
+            "--out",
+            "-",
+        ],
+        b"",
+    );
+    assert_eq!(code, 0, "{err}");
+    let sheet_text = String::from_utf8(sheet.clone()).unwrap();
+    assert!(sheet_text.contains("joints:"), "{sheet_text}");
+    assert!(!sheet_text.contains("result: RMS"), "{sheet_text}");
+    assert!(err.contains("result: RMS"), "{err}");
+    let (code, converted, err) = exec_piped(p, &["convert", "-", "--to", "modified"], &sheet);
+    assert_eq!(code, 0, "{err}");
+    assert!(String::from_utf8_lossy(&converted).contains("passed: true"));
+
+    // --plot -: the SVG on stdout; the report on stderr.
+    let (code, svg, err) = exec_piped(
+        p,
+        &[
+            "calibrate",
+            "--model",
+            "a.urdf",
+            "--data",
+            "d.csv",
+            "--plot",
+            "-",
+        ],
+        b"",
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(svg.starts_with(b"<svg") || svg.starts_with(b"<?xml"));
+    assert!(err.contains("result: RMS"), "{err}");
+
+    // Two outputs on stdout: a usage error before any work.
+    let (code, out, err) = exec_piped(
+        p,
+        &[
+            "calibrate",
+            "--model",
+            "a.urdf",
+            "--data",
+            "d.csv",
+            "--out",
+            "-",
+            "--plot",
+            "-",
+        ],
+        b"",
+    );
+    assert_eq!(code, 2);
+    assert!(out.is_empty());
+    assert!(
+        err.contains("--plot -: expected a file, found standard output already taken by --out -"),
+        "{err}"
+    );
+
+    // extract --svg -: the picture on stdout, the table on stderr.
+    let (code, svg, err) = exec_piped(p, &["extract", "a.urdf", "--svg", "-"], b"");
+    assert_eq!(code, 0, "{err}");
+    assert!(String::from_utf8_lossy(&svg).contains("</svg>"));
+    assert!(err.contains("PASS"), "{err}");
+
+    // simulate --out - needs --truth, and then pipes into calibrate --data -.
+    let (code, _, err) = exec_piped(p, &["simulate", "--model", "a.urdf", "--out", "-"], b"");
+    assert_eq!(code, 2);
+    assert!(err.contains("expected --truth FILE"), "{err}");
+    let (code, csv, err) = exec_piped(
+        p,
+        &[
+            "simulate", "--model", "a.urdf", "--out", "-", "--truth", "t.yaml", "--poses", "40",
+            "--noise", "1e-5", "--seed", "3",
+        ],
+        b"",
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(p.join("t.yaml").is_file());
+    let (code, report, err) =
+        exec_piped(p, &["calibrate", "--model", "a.urdf", "--data", "-"], &csv);
+    assert_eq!(code, 0, "{err}");
+    assert!(String::from_utf8_lossy(&report).contains("result: RMS"));
+
+    // No file named '-' anywhere.
+    let mut expected = before;
+    expected.push("t.yaml".into());
+    expected.sort();
+    assert_eq!(names(p), expected);
+}

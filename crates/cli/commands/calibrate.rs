@@ -37,7 +37,6 @@ use crate::input::display_name;
 use crate::measured::{
     header_joints, load_model, parse_effect, read_measurements, DataFile, DataUnits, LoadedModel,
 };
-use crate::output::write_all;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::sheet::{ConventionDoc, EffectDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -704,7 +703,7 @@ pub fn calibrate(
 ) -> Result<Outcome> {
     let inputs = load_inputs(args, err)?;
     if inputs.data.samples.iter().any(|s| s.socket.is_some()) {
-        return crate::commands::sockets::calibrate_contacts(args, &inputs, out);
+        return crate::commands::sockets::calibrate_contacts(args, &inputs, out, err);
     }
     enough_samples(&inputs.data, &display_name(&args.data))?;
     let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
@@ -815,15 +814,18 @@ pub fn calibrate(
         files.push((Path::new(path), residuals_svg(&chart)));
     }
     // A model that fails its proof is not written, and neither is anything else.
+    // `--out -` or `--plot -`: that artefact on standard output, the report on standard error.
+    let piped = crate::output::any_stdout([args.out.as_deref(), args.plot.as_deref()]);
     if proved {
         let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
-        write_all(&files)?;
+        crate::output::write_all_or_stdout(&files, out)?;
     }
+    let report_sink: &mut dyn Write = if piped { err } else { out };
     match args.format {
         CalibrateFormat::Json => {
-            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+            report_sink.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
         }
-        CalibrateFormat::Text => out.write_all(text(&doc, &inputs).as_bytes())?,
+        CalibrateFormat::Text => report_sink.write_all(text(&doc, &inputs).as_bytes())?,
     }
     Ok(if proved {
         Outcome::Pass
@@ -1725,10 +1727,12 @@ pub struct CalibrateCli {
     /// Output format (JSON: metres and radians).
     #[arg(long, value_enum, default_value_t = CalibrateFormat::Text)]
     format: CalibrateFormat,
-    /// Write the calibrated model here: a DH sheet (.yaml, .json) or a URDF (.urdf).
+    /// Write the calibrated model here: a DH sheet (.yaml, .json) or a URDF (.urdf); `-` writes
+    /// a YAML sheet to standard output and the report to standard error.
     #[arg(long, value_name = "FILE")]
     out: Option<String>,
-    /// Write an SVG chart of the residuals per pose, before and after.
+    /// Write an SVG chart of the residuals per pose, before and after (`-`: standard output,
+    /// the report then goes to standard error).
     #[arg(long, value_name = "FILE.svg")]
     plot: Option<String>,
     /// Link masses for the compliance effects: YAML with `links: [{joint, mass, com}]` (kg,

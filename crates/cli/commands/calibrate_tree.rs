@@ -27,7 +27,6 @@ use crate::commands::calibrate::{
 };
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_text};
-use crate::output::write_atomically;
 use crate::sheet::parse_doc;
 use crate::tree_sheet::{InertialsDoc, TreeSheet};
 
@@ -433,8 +432,15 @@ pub fn calibrate_tree(
             &doc,
             &targets,
             inertials_doc.map(|(d, _, _)| d),
+            out,
         )?;
     }
+    // `--out -`: the tree sheet on standard output, the report on standard error.
+    let out: &mut dyn Write = if crate::output::any_stdout([args.out.as_deref()]) {
+        err
+    } else {
+        out
+    };
     match args.format {
         CalibrateFormat::Json => {
             let doc = TreeCalibrationDoc {
@@ -487,6 +493,7 @@ fn write_tree(
     doc: &CalibrationDoc,
     targets: &[(String, usize)],
     inertials: Option<InertialsDoc>,
+    stdout: &mut dyn Write,
 ) -> Result<()> {
     let mut out = TreeSheet::to_doc(
         calibrated,
@@ -534,7 +541,7 @@ fn write_tree(
     } else {
         serde_yaml::to_string(&out)?
     };
-    write_atomically(Path::new(path), bytes.as_bytes())
+    crate::output::write_all_or_stdout(&[(Path::new(path), bytes.as_bytes())], stdout)
         .with_context(|| format!("writing the calibrated tree to {}", display_name(path)))
 }
 

@@ -251,6 +251,7 @@ pub fn extract(
     for w in &ex.extraction.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
+    let mut piped_svg = None;
     if let Some(path) = &args.svg {
         let n = ex.extraction.table.rows.len();
         let q = args.q.clone().unwrap_or_else(|| vec![0.0; n]);
@@ -275,13 +276,24 @@ pub fn extract(
         );
         let svg = crate::svg::frames_svg(&ex.extraction.table, &q, &title)
             .ok_or_else(|| anyhow::anyhow!("--q: the joint values do not fit the table"))?;
-        crate::output::write_atomically(std::path::Path::new(path), svg.as_bytes())?;
+        if path == crate::output::STDIO {
+            piped_svg = Some(svg);
+        } else {
+            crate::output::write_atomically(std::path::Path::new(path), svg.as_bytes())?;
+        }
     }
     let samples = args
         .samples
         .unwrap_or_else(|| default_samples(ex.extraction.table.rows.len()));
     let (text, passed) = prove_extracted(&mut ex, args.format, samples, args.seed)?;
-    out.write_all(text.as_bytes())?;
+    // `--svg -`: the picture on standard output, the table on standard error.
+    match piped_svg {
+        Some(svg) => {
+            out.write_all(svg.as_bytes())?;
+            err.write_all(text.as_bytes())?;
+        }
+        None => out.write_all(text.as_bytes())?,
+    }
     if passed {
         Ok(Outcome::Pass)
     } else {

@@ -11,7 +11,7 @@ use dh_calib::import::{import as import_layout, mukca, Layout, Source};
 
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_text};
-use crate::output::{check_destinations, write_atomically};
+use crate::output::check_destinations;
 
 /// Everything `import` needs.
 #[derive(Clone, Debug)]
@@ -163,7 +163,7 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
     text.push_str(&write_measurements(&data));
     match &args.out {
         Some(path) => {
-            write_atomically(Path::new(path), text.as_bytes())?;
+            crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
             writeln!(
                 err,
                 "urdf-dh: {}: {} samples ({} for validation) of {} target(s) {}, joints {}",
@@ -190,7 +190,7 @@ pub struct ImportCli {
     /// The dataset's files as published (a directory stands for all its files).
     #[arg(required = true, value_name = "FILE")]
     files: Vec<String>,
-    /// Write the CSV here (atomically) instead of standard output.
+    /// Write the CSV here (atomically) instead of standard output (`-` is standard output too).
     #[arg(long, value_name = "D.csv")]
     out: Option<String>,
 }

@@ -19,7 +19,7 @@ use crate::commands::calibrate::{PoseSi, TargetDoc};
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{load_model, parse_effect};
-use crate::output::{check_destinations, write_all};
+use crate::output::check_destinations;
 use crate::sheet::SheetDoc;
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -202,7 +202,13 @@ pub fn truth_path(out: &str) -> String {
 ///
 /// # Errors
 /// A bad model, option or effect; failed writes.
-pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
+    if args.out == crate::output::STDIO && args.truth.is_none() {
+        return Err(hinted(
+            "--out -: the measurements go to standard output, so the truth needs a file of its own: expected --truth FILE, found none".to_string(),
+            "urdf-dh simulate --model M --out - --truth truth.yaml | ...",
+        ));
+    }
     let truth_file = args.truth.clone().unwrap_or_else(|| truth_path(&args.out));
     check_destinations(
         &[("--model", &args.model)],
@@ -354,10 +360,13 @@ pub fn simulate(args: &SimulateArgs, _out: &mut dyn Write, err: &mut dyn Write) 
     sheet.truth = Some(serde_yaml::to_value(&section)?);
     let truth_text = serde_yaml::to_string(&sheet)?;
     // Both files or neither.
-    write_all(&[
-        (Path::new(&args.out), csv.as_bytes()),
-        (Path::new(&truth_path), truth_text.as_bytes()),
-    ])?;
+    crate::output::write_all_or_stdout(
+        &[
+            (Path::new(&args.out), csv.as_bytes()),
+            (Path::new(&truth_path), truth_text.as_bytes()),
+        ],
+        out,
+    )?;
     writeln!(
         err,
         "urdf-dh: {out_name}: {} samples at {poses} poses of {} target(s); truth in {}",
@@ -440,7 +449,7 @@ pub struct SimulateCli {
     /// Seed of the random stream (a seed reproduces a data set exactly).
     #[arg(long, value_name = "S", default_value_t = 1)]
     seed: u64,
-    /// The measurement CSV to write.
+    /// The measurement CSV to write (`-`: standard output; --truth is then required).
     #[arg(long, value_name = "D.csv")]
     out: String,
     /// The truth file [default: D.truth.yaml beside --out].

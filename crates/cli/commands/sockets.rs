@@ -29,7 +29,6 @@ use crate::commands::calibrate::{
 use crate::error::Outcome;
 use crate::input::display_name;
 use crate::measured::parse_effect;
-use crate::output::write_all;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::units::LengthUnit;
 
@@ -333,6 +332,7 @@ pub(crate) fn calibrate_contacts(
     args: &CalibrateArgs,
     inputs: &Inputs,
     out: &mut dyn Write,
+    err: &mut dyn Write,
 ) -> Result<Outcome> {
     let table = &inputs.table;
     if let Some(s) = args.sigma {
@@ -391,7 +391,14 @@ pub(crate) fn calibrate_contacts(
         files.push((Path::new(path), residuals_svg(&chart)));
     }
     let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
-    write_all(&files)?;
+    crate::output::write_all_or_stdout(&files, out)?;
+    // `--out -` or `--plot -`: that artefact on standard output, the report on standard error.
+    let out: &mut dyn Write =
+        if crate::output::any_stdout([args.out.as_deref(), args.plot.as_deref()]) {
+            err
+        } else {
+            out
+        };
     match args.format {
         CalibrateFormat::Json => {
             out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
