@@ -851,6 +851,7 @@ fn score(
             jv: DMatrix<f64>,
             rv: DVector<f64>,
             starts: Vec<usize>,
+            locate: Vec<(Vec<usize>, Vec<nalgebra::Matrix3<f64>>)>,
         },
         Folds(Vec<(Projector, Vec<usize>)>),
         None,
@@ -858,7 +859,13 @@ fn score(
     let held = match &session.validation {
         Validation::Split { .. } => {
             let (jv, rv, sv) = dense(model, &prep.val, x, &columns, &session.scales);
-            Held::Split { jv, rv, starts: sv }
+            let locate = crate::calibrate::validation_locations(model, x, prep);
+            Held::Split {
+                jv,
+                rv,
+                starts: sv,
+                locate,
+            }
         }
         Validation::CrossValidation { folds, .. } => {
             let mut v = Vec::with_capacity(*folds);
@@ -887,11 +894,28 @@ fn score(
                    fit: &(DVector<f64>, DVector<f64>, f64, f64)|
      -> Option<f64> {
         match &held {
-            Held::Split { jv, rv, starts } => {
+            Held::Split {
+                jv,
+                rv,
+                starts,
+                locate,
+            } => {
                 let (df, dc) = (&fit.0, &fit.1);
                 let mut pred = rv + jv.columns(0, p) * df;
                 if let Some(s) = &c_span {
                     pred += jv.columns(s.start, s.len()) * dc;
+                }
+                // Targets only the validation measured: located from their own samples first.
+                for (samples, rotations) in locate {
+                    let mut sum = Vector3::zeros();
+                    for (&i, rot) in samples.iter().zip(rotations) {
+                        sum += rot.transpose() * pred.fixed_rows::<3>(starts[i]);
+                    }
+                    let offset = sum / samples.len() as f64;
+                    for (&i, rot) in samples.iter().zip(rotations) {
+                        let mut row = pred.fixed_rows_mut::<3>(starts[i]);
+                        row -= rot * offset;
+                    }
                 }
                 let idx: Vec<usize> = (0..starts.len()).collect();
                 rms(&distances_of(&pred, starts, &idx))

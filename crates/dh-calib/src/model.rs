@@ -1070,6 +1070,12 @@ impl Model {
         (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q)
     }
 
+    /// `1 + s` of the device scale effect at `x` and `q` (1 without one): what multiplies a
+    /// modelled position in the device frame.
+    pub fn scale_at(&self, x: &[f64], q: &[f64]) -> f64 {
+        self.scale_factor(x, q)
+    }
+
     /// The first chain's tip frame in the device frame at `x` and `q` (its position scaled by
     /// the device scale).
     pub fn tip(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {

@@ -487,3 +487,44 @@ fn too_few_samples_for_the_geometric_model_say_how_many() {
     assert!(e.to_string().contains("identifiable parameters"), "{e}");
     assert!(calibrate(&table, &data(*needed + 5), &CalibrationOptions::default()).is_ok());
 }
+
+/// A test point that no calibration sample measured (another reflector, mounted for the test
+/// set only) is located on the tip from its own validation samples before they are compared:
+/// the validation figure is then at the noise, not the reflector's offset from the tip.
+#[test]
+fn a_validation_only_target_is_located_before_it_is_compared() {
+    use dh_calib::data::Split;
+    let table = fit_support::ur5();
+    let (mut data, _) = simulate(
+        &table,
+        &SimulationOptions {
+            poses: 120,
+            sigma: 2e-5,
+            target_count: 2,
+            target_offset: 0.05,
+            validation_fraction: 0.3,
+            errors: dh_calib::simulate::Errors::Random {
+                length: 1e-3,
+                angle: 2e-3,
+            },
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    // Target 0 calibrates, target 1 only validates.
+    data.samples.retain(|s| match s.split {
+        Split::Calibration => s.target == 0,
+        Split::Validation => s.target == 1,
+    });
+    let r = calibrate(&table, &data, &CalibrationOptions::default()).unwrap();
+    let val = r.val_rms_after.unwrap();
+    // Noise floor: sqrt(3) * 2e-5 = 3.5e-5 m RMS.
+    assert!(val < 6e-5, "validation RMS {val}");
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("located from its own") && n.contains("validation samples")),
+        "{:?}",
+        r.notes
+    );
+}
