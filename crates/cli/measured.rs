@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use dh_calib::csv::{parse_measurements, CsvOptions};
+use dh_calib::csv::CsvOptions;
 use dh_calib::data::Measurements;
 use dh_calib::model::Effect;
 use dh_core::{Convention, DhTable, JointKind, Tolerance};
@@ -340,9 +340,15 @@ pub fn read_measurements(
     joints: &[String],
     prismatic: &[String],
     units: DataUnits,
+    err: &mut dyn std::io::Write,
 ) -> Result<Measurements> {
     let name = &file.name;
-    parse_measurements(&file.text, joints, &units.csv_options(prismatic)).map_err(|e| {
+    let (data, notes) = dh_calib::csv::parse_measurements_noting(
+        &file.text,
+        joints,
+        &units.csv_options(prismatic),
+    )
+    .map_err(|e| {
         let hint = match &e {
             dh_calib::csv::DataError::MissingJoints { .. } => Some(
                 "the joint columns must be named as the model's joints (see README, 'Measurement files')",
@@ -353,7 +359,11 @@ pub fn read_measurements(
             Some(h) => hinted(format!("{name}: {e}"), h),
             None => anyhow::anyhow!("{name}: {e}"),
         }
-    })
+    })?;
+    for n in notes {
+        writeln!(err, "urdf-dh: warning: {name}: {n}")?;
+    }
+    Ok(data)
 }
 
 /// The joint columns of a measurement file without a model: every header column that is not

@@ -499,6 +499,17 @@ const CASES: &[Case] = &[
         0,
     ),
     warns(
+        "csv_zero_sigma",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            "fixtures/invalid/csv/zero_sigma.csv",
+        ],
+        0,
+    ),
+    warns(
         "csv_deg_below_four_turns",
         &[
             "calibrate",

@@ -603,9 +603,9 @@ fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
         }
         None => (None, header_joints(&file)?, Vec::new()),
     };
-    let mut data = read_measurements(&file, &joints, &prismatic, args.units)?;
+    let mut data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
     if let Some(v) = &args.validate {
-        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units)?;
+        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
         merge_validation(&mut data, extra);
     }
     if let Some(m) = &model {
@@ -1892,7 +1892,11 @@ mod chart_tests {
 ///
 /// # Errors
 /// As the data of [`calibrate`].
-pub(crate) fn read_data_for(args: &CalibrateArgs, model: &LoadedModel) -> Result<Measurements> {
+pub(crate) fn read_data_for(
+    args: &CalibrateArgs,
+    model: &LoadedModel,
+    err: &mut dyn Write,
+) -> Result<Measurements> {
     let data_name = display_name(&args.data);
     let (joints, prismatic) = (model.measured_joints(), model.prismatic());
     let mut data = read_measurements(
@@ -1900,9 +1904,10 @@ pub(crate) fn read_data_for(args: &CalibrateArgs, model: &LoadedModel) -> Result
         &joints,
         &prismatic,
         args.units,
+        err,
     )?;
     if let Some(v) = &args.validate {
-        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units)?;
+        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
         merge_validation(&mut data, extra);
     }
     model

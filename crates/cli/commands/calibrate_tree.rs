@@ -295,7 +295,7 @@ pub fn calibrate_tree(
     let tree = &sheet.tree;
     let model = sheet.loaded(origin);
     let data_name = display_name(&args.data);
-    let data = read_data_for(args, &model)?;
+    let data = read_data_for(args, &model, err)?;
     if data.samples.iter().any(|s| s.socket.is_some()) {
         return Err(hinted(
             format!("{data_name}: contact data (a 'socket' column) is calibrated for serial models only; {origin} is a tree"),

@@ -399,7 +399,7 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         Some(m) => (m.measured_joints(), m.prismatic(), m.table.convention),
         None => (header_joints(&file)?, Vec::new(), args.convention),
     };
-    let data = read_measurements(&file, &joints, &prismatic, args.units)?;
+    let data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
     let options = CpaOptions {
         prismatic,
         convention,

@@ -675,7 +675,7 @@ fn header_columns(header: &Record, joint_names: &[String]) -> Result<Columns, Da
 /// # Errors
 /// A [`DataError`] naming the line and column for: no header or no data rows, a missing joint
 /// or point column, duplicate or conflicting columns, a row with the wrong number of fields, a
-/// cell that is not a finite number, a standard deviation ≤ 0, an unknown `set` value, and
+/// cell that is not a finite number, a standard deviation < 0 (0 is floored at [`SIGMA_FLOOR`]), an unknown `set` value, and
 /// values that look like another unit (a revolute joint beyond 8π rad, a coordinate beyond
 /// 100 m).
 pub fn parse_measurements(
@@ -683,6 +683,26 @@ pub fn parse_measurements(
     joint_names: &[String],
     opts: &CsvOptions,
 ) -> Result<Measurements, DataError> {
+    parse_measurements_noting(text, joint_names, opts).map(|(m, _)| m)
+}
+
+/// Standard deviation (metres) given to a point whose `sigma` cell is 0: trackers export
+/// coordinates rounded to 1 µm, and some write a 0 for "exact". A zero would weight the point
+/// infinitely; 1 µm is the rounding step, a conservative bound on the rounding error (whose
+/// standard deviation is the step over √12).
+pub const SIGMA_FLOOR: f64 = 1e-6;
+
+/// [`parse_measurements`], with the warnings a reader should see: standard deviations of 0
+/// floored at [`SIGMA_FLOOR`] (how many, and the first line).
+///
+/// # Errors
+/// As [`parse_measurements`].
+pub fn parse_measurements_noting(
+    text: &str,
+    joint_names: &[String],
+    opts: &CsvOptions,
+) -> Result<(Measurements, Vec<String>), DataError> {
+    let mut zero_sigmas: Vec<usize> = Vec::new();
     // Row by row: the rows' cells are never all held at once.
     let mut rows = Records::new(text, ',', true).peekable();
     let header = rows.next().ok_or(DataError::Empty {
@@ -866,13 +886,19 @@ pub fn parse_measurements(
             }
         }
 
-        let sigma_cell = |col: usize| -> Result<Option<f64>, DataError> {
+        let mut sigma_cell = |col: usize| -> Result<Option<f64>, DataError> {
             let text = cell(col);
             if text.is_empty() {
                 return Ok(None);
             }
             let value = number(text, line, name(col))?;
-            if value <= 0.0 {
+            if value == 0.0 {
+                if zero_sigmas.last() != Some(&line) {
+                    zero_sigmas.push(line);
+                }
+                return Ok(Some(SIGMA_FLOOR));
+            }
+            if value < 0.0 {
                 return Err(DataError::BadSigma {
                     line,
                     column: name(col).into(),
@@ -947,7 +973,14 @@ pub fn parse_measurements(
             socket,
         });
     }
-    Ok(m)
+    let mut notes = Vec::new();
+    if let Some(first) = zero_sigmas.first() {
+        notes.push(format!(
+            "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
+            zero_sigmas.len()
+        ));
+    }
+    Ok((m, notes))
 }
 
 fn parse_split(text: &str) -> Option<Split> {
