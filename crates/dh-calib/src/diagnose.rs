@@ -205,6 +205,10 @@ impl Default for DiagnoseOptions {
     }
 }
 
+/// A joint that moved less than this over the calibration samples (radians, or metres for a
+/// prismatic joint) takes part in no coupling candidate.
+pub const MIN_JOINT_MOTION: f64 = 1e-3;
+
 /// What became of a candidate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CandidateStatus {
@@ -216,7 +220,8 @@ pub enum CandidateStatus {
     Rejected,
     /// Not added (score too small, not tried, or selection stopped).
     NotSelected,
-    /// Its columns are zero on these data (e.g. a coupling to a joint that never moves).
+    /// Its columns are zero on these data, or it couples two joints one of which moved less
+    /// than [`MIN_JOINT_MOTION`] in them: never selected.
     Inert,
 }
 
@@ -941,12 +946,34 @@ fn score(
     };
     let empty = DMatrix::zeros(r.len(), 0);
     let baseline_val = predict(None, &empty, &full.solve(&empty));
+    // How far each row's joint moved in the calibration data (radians or metres).
+    let rows = model.tree().rows();
+    let mut travel = vec![(f64::INFINITY, f64::NEG_INFINITY); rows.len()];
+    for o in &prep.cal {
+        for (t, &q) in travel.iter_mut().zip(&o.q) {
+            *t = (t.0.min(q), t.1.max(q));
+        }
+    }
+    let still = |name: &str| {
+        rows.iter()
+            .position(|r| r.name == name)
+            .and_then(|k| travel.get(k))
+            .is_some_and(|(lo, hi)| hi - lo < MIN_JOINT_MOTION)
+    };
     let mut out = Vec::with_capacity(remaining.len());
     for (&e, span) in remaining.iter().zip(&spans) {
         let c = j.columns(span.start, span.len()).into_owned();
         let fit = full.solve(&c);
         let (reduction, independence) = (fit.2, fit.3);
-        let inert = independence.is_nan();
+        // A coupling between joints of which one hardly moves is no coupling these data can
+        // show (a torso held still would "couple" with whatever stands in for its deflection).
+        let static_coupling = effects.get(e).is_some_and(|(eff, _)| {
+            eff.label()
+                .strip_prefix("coupling:")
+                .and_then(|rest| rest.split_once(':'))
+                .is_some_and(|(joint, driver)| still(joint) || still(driver))
+        });
+        let inert = independence.is_nan() || static_coupling;
         let aliased = !inert && independence < ALIAS_SINE;
         let val_rms = if aliased || inert {
             None

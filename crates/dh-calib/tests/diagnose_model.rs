@@ -396,3 +396,46 @@ fn a_drift_no_candidate_explains_is_reported_not_fitted() {
     );
     let _ = EffectSelection::Auto;
 }
+
+/// A coupling with a joint that (nearly) never moves in the data is no candidate: a torso held
+/// within 1e-4 rad would otherwise "couple" with whatever stands in for its deflection.
+#[test]
+fn a_coupling_with_a_joint_that_does_not_move_is_inert() {
+    let mut arm = diagnose_support::ur_sized();
+    let still = arm.table.rows[0].name.clone();
+    arm.table.rows[0].limits = Some(dh_core::Limits {
+        lower: 0.0,
+        upper: 1e-4,
+    });
+    let sim = diagnose_support::simulate(&arm, None, 77);
+    let diag = DiagnoseOptions {
+        inertials: Some(arm.inertials.clone()),
+        ..DiagnoseOptions::default()
+    };
+    let r = diagnose(&arm.table, &sim.data, &CalibrationOptions::default(), &diag).unwrap();
+    let d = r.diagnosis.as_ref().unwrap();
+    let first = &d.rounds[0].candidates;
+    let with_still: Vec<_> = first
+        .iter()
+        .filter(|c| {
+            c.label.starts_with("coupling:") && c.label.split(':').any(|part| part == still)
+        })
+        .collect();
+    assert!(
+        !with_still.is_empty(),
+        "coupling candidates with {still} are listed"
+    );
+    for c in &with_still {
+        assert_eq!(
+            c.status,
+            dh_calib::diagnose::CandidateStatus::Inert,
+            "{}: {:?}",
+            c.label,
+            c.status
+        );
+    }
+    assert!(!r.selected_effects.iter().any(|e| e.contains(&still)));
+    // Couplings between joints that move are still scored.
+    assert!(first.iter().any(|c| c.label.starts_with("coupling:")
+        && c.status != dh_calib::diagnose::CandidateStatus::Inert));
+}
