@@ -13,6 +13,7 @@ pub mod input;
 pub mod measured;
 pub mod output;
 pub mod plot;
+pub mod progress;
 pub mod readback;
 pub mod readback_parse;
 pub mod render;

@@ -120,6 +120,8 @@ pub struct CalibrateArgs {
     pub max_effects: usize,
     /// Fit the outliers with the rest (they are still named).
     pub keep_outliers: bool,
+    /// No progress line on standard error.
+    pub quiet: bool,
 }
 
 /// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
@@ -765,6 +767,19 @@ pub fn calibrate(
     let failed = |e: dh_calib::CalibError| {
         anyhow::anyhow!("{}: calibration failed: {e}", display_name(&args.data))
     };
+    let progress = crate::progress::Progress::start(
+        &format!(
+            "calibrating {} against {} ({cal} samples{})",
+            inputs.model_name,
+            display_name(&args.data),
+            if args.effects == EffectsChoice::Auto {
+                ", effects searched"
+            } else {
+                ""
+            }
+        ),
+        args.quiet,
+    );
     let (report, effects) = match &args.effects {
         EffectsChoice::Auto => {
             let diag = DiagnoseOptions {
@@ -780,6 +795,7 @@ pub fn calibrate(
             effects,
         ),
     };
+    drop(progress);
     let mut doc = document(args, &inputs, &report);
     // Every output file is built (and the model proved as written) before any is written, and
     // all are written or none.
@@ -1767,6 +1783,10 @@ pub struct CalibrateCli {
     /// residuals, see dh_calib::outliers) are still named but not left out.
     #[arg(long)]
     keep_outliers: bool,
+    /// No progress line: a terminal otherwise shows what a run over a second is doing, and
+    /// for how long, on standard error (never in pipes, logs or the report).
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 impl CalibrateCli {
@@ -1795,6 +1815,7 @@ impl CalibrateCli {
             payload: self.payload,
             max_effects: self.max_effects,
             keep_outliers: self.keep_outliers,
+            quiet: self.quiet,
         }
     }
 }

@@ -406,6 +406,10 @@ pub fn calibrate_tree(
         )?;
     }
     let failed = |e: dh_calib::CalibError| anyhow::anyhow!("{data_name}: calibration failed: {e}");
+    let progress = crate::progress::Progress::start(
+        &format!("calibrating {origin} against {data_name} ({cal} samples)"),
+        args.quiet,
+    );
     let report: Report = match &args.effects {
         EffectsChoice::Auto => {
             let diag = DiagnoseOptions {
@@ -420,6 +424,7 @@ pub fn calibrate_tree(
             fit_tree(tree, &data, &options).map_err(failed)?
         }
     };
+    drop(progress);
     let calibrated = report.tree.clone().unwrap_or_else(|| tree.clone());
     let (doc, text) = report_for(args, &model, &data, &report);
     let tables = tables(tree, &calibrated, &doc, &targets);
