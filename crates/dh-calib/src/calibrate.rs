@@ -518,6 +518,27 @@ fn initialise(
     Ok(())
 }
 
+/// The `d` of every Hayati pair of `model`, held at nominal and named with the `beta` that
+/// replaces it.
+fn replaced_by_beta(model: &Model) -> Vec<FixedParameter> {
+    model
+        .pairs()
+        .iter()
+        .filter(|p| p.hayati)
+        .filter_map(|p| {
+            let d = p.dropped_d.as_ref()?;
+            Some(FixedParameter {
+                name: format!("{d}.d"),
+                aliases: p
+                    .beta_row
+                    .as_ref()
+                    .map(|b| vec![format!("{b}.beta")])
+                    .unwrap_or_default(),
+            })
+        })
+        .collect()
+}
+
 /// Calibration samples beyond which a cross-validation fold is fitted on a subsample of its
 /// training samples (see [`Validation::CrossValidation`]): 100 000 points fix a few dozen
 /// kinematic parameters far below any tracker's noise, and the folds then cost one fit of the
@@ -921,6 +942,15 @@ impl<'a> Session<'a> {
             .collect()
     }
 
+    /// [`Session::named`] for a step that estimates the geometry, with the `d` of every
+    /// Hayati pair: the model has no parameter for it (its row's `beta` takes its place, see
+    /// [`PairParametrisation`]), so it stays at nominal too.
+    pub(crate) fn named_geometric(&self, fixed: &[fit::Fixed]) -> Vec<FixedParameter> {
+        let mut out = self.named(fixed);
+        out.extend(replaced_by_beta(&self.model));
+        out
+    }
+
     /// The `nominal` step (the identifiable device and target coordinates; the others stay at
     /// the closed-form start), then the `geometric` one (every identifiable geometric
     /// parameter). Returns the steps, the geometric fit and its free and fixed parameters.
@@ -946,7 +976,7 @@ impl<'a> Session<'a> {
         let (free, fixed) = self.identify(&x, &geometric)?;
         self.enough_for(&x, &geometric, free.len())?;
         let mut step = self.step("geometric", &x, &free, steps.last())?;
-        step.report.fixed = self.named(&fixed);
+        step.report.fixed = self.named_geometric(&fixed);
         steps.push(step.report.clone());
         Ok(Geometric {
             steps,
@@ -1059,6 +1089,7 @@ impl<'a> Session<'a> {
                     .map(|&a| model.parameters()[a].name.clone())
                     .collect(),
             })
+            .chain(replaced_by_beta(model))
             .collect();
         let (first, final_) = (&steps[0], &steps[steps.len() - 1]);
         let selected_effects = model
@@ -1202,7 +1233,7 @@ pub fn calibrate_tree(
         let (free, fixed2) = session.identify(&last.x, &all)?;
         fixed = fixed2;
         let mut step = session.step("effects", &last.x, &free, steps.last())?;
-        step.report.fixed = session.named(&fixed);
+        step.report.fixed = session.named_geometric(&fixed);
         last = step.outcome;
         steps.push(step.report);
     }

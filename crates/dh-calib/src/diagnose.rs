@@ -592,7 +592,7 @@ pub fn diagnose_tree(
                         .chain(fixed2)
                         .collect();
                     fixed2.sort_by_key(|f| f.index);
-                    step.report.fixed = session.named(&fixed2);
+                    step.report.fixed = session.named_geometric(&fixed2);
                     steps.push(step.report);
                     last = step.outcome;
                     held = step.held_out;
