@@ -704,8 +704,8 @@ pub(crate) fn held_out(
             training_subsample,
             ..
         } => {
-            let mut d = vec![0.0; prep.cal.len()];
-            for f in 0..*folds {
+            // The folds are independent fits: run on every core, gathered in fold order.
+            let per_fold = fit::parallel_map(*folds, |f| {
                 let (mut train, mut at) = (Vec::new(), Vec::new());
                 for (i, g) in prep.groups.iter().enumerate() {
                     if g % folds == f {
@@ -723,7 +723,12 @@ pub(crate) fn held_out(
                     subset: &train,
                 };
                 let fold = fit::solve(&p, x, free, scales, fit_options)?;
-                for (&i, v) in at.iter().zip(distances_at(model, &fold.x, &prep.cal, &at)) {
+                let d = distances_at(model, &fold.x, &prep.cal, &at);
+                Ok((at, d))
+            })?;
+            let mut d = vec![0.0; prep.cal.len()];
+            for (at, fold) in per_fold {
+                for (i, v) in at.into_iter().zip(fold) {
                     d[i] = v;
                 }
             }

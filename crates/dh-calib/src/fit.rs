@@ -381,12 +381,26 @@ fn segments<T: Send>(
     blocks: usize,
     work: impl Fn(std::ops::Range<usize>) -> Result<T, CalibError> + Sync,
 ) -> Result<Vec<T>, CalibError> {
+    parallel_map(blocks.div_ceil(SEGMENT_BLOCKS), |k| {
+        work(k * SEGMENT_BLOCKS..((k + 1) * SEGMENT_BLOCKS).min(blocks))
+    })
+}
+
+/// `work(0..count)` on up to `available_parallelism` threads, results in index order (the
+/// first error in that order, if any): the same results whatever the number of threads, as
+/// long as `work(k)` depends on `k` alone.
+pub(crate) fn parallel_map<T: Send>(
+    count: usize,
+    work: impl Fn(usize) -> Result<T, CalibError> + Sync,
+) -> Result<Vec<T>, CalibError> {
     use std::sync::atomic::{AtomicUsize, Ordering};
     use std::sync::Mutex;
-    let count = blocks.div_ceil(SEGMENT_BLOCKS);
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(count);
+    if threads <= 1 {
+        return (0..count).map(work).collect();
+    }
     let next = AtomicUsize::new(0);
     let slots: Mutex<Vec<Option<Result<T, CalibError>>>> =
         Mutex::new((0..count).map(|_| None).collect());
@@ -397,8 +411,7 @@ fn segments<T: Send>(
                 if k >= count {
                     break;
                 }
-                let range = k * SEGMENT_BLOCKS..((k + 1) * SEGMENT_BLOCKS).min(blocks);
-                let out = work(range);
+                let out = work(k);
                 if let Ok(mut s) = slots.lock() {
                     s[k] = Some(out);
                 }
