@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Runs shorter than this draw nothing.
-const SHOW_AFTER: Duration = Duration::from_secs(1);
+pub const SHOW_AFTER: Duration = Duration::from_secs(1);
 
 /// A spinner that appears after [`SHOW_AFTER`]; dropping it clears it.
 pub struct Progress {
