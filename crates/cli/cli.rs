@@ -390,7 +390,7 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             out,
             err,
         ),
-        Command::Import(a) => import::import(&a.into_args(), out, err),
+        Command::Import(a) => import::import(&a.into_args()?, out, err),
         Command::Calibrate(a) => {
             let args = a.into_args();
             let inputs: Vec<(&str, &str)> = [

@@ -11,6 +11,7 @@ mod corpus;
 mod cpa;
 mod default_tip;
 mod extract;
+mod import_columns;
 mod invalid;
 mod measured;
 mod outputs;

@@ -18,6 +18,8 @@ use crate::output::check_destinations;
 pub struct ImportArgs {
     /// The dataset's layout; `None` detects it from the file names.
     pub layout: Option<Layout>,
+    /// `--layout columns`: the user's own export, read by this column map (one file).
+    pub columns: Option<dh_calib::import::columns::ColumnMap>,
     /// The dataset's files (a directory stands for every file in it).
     pub files: Vec<String>,
     /// Where to write the CSV; `None` is standard output.
@@ -105,6 +107,17 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
         let inputs: Vec<(&str, &str)> = args.files.iter().map(|f| ("FILE", f.as_str())).collect();
         check_destinations(&inputs, &[("--out", path)])?;
     }
+    if let Some(map) = &args.columns {
+        let path = &args.files[0];
+        let text = read_text(path)?;
+        let data = dh_calib::import::columns::parse(&text, map)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", display_name(path)))?;
+        let header = format!(
+            "# imported by urdf-dh import --layout columns from {}\n# metres and radians; points in the measuring device's frame\n",
+            display_name(path)
+        );
+        return write_import(args, &data, header, out, err);
+    }
     let files = gather(&args.files)?;
     let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
     let layouts = || {
@@ -151,16 +164,29 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
             ),
         )
     })?;
+    let header = format!(
+        "# imported by urdf-dh import --layout {layout} from {}\n# metres and radians; points in the measuring device's frame\n",
+        names.join(" ")
+    );
+    write_import(args, &data, header, out, err)
+}
+
+/// Writes the imported `data` (after the comment lines `header`) to `--out` or standard output,
+/// with a summary on standard error.
+fn write_import(
+    args: &ImportArgs,
+    data: &dh_calib::data::Measurements,
+    header: String,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<Outcome> {
     let validation = data
         .samples
         .iter()
         .filter(|s| s.split == Split::Validation)
         .count();
-    let mut text = format!(
-        "# imported by urdf-dh import --layout {layout} from {}\n# metres and radians; points in the measuring device's frame\n",
-        names.join(" ")
-    );
-    text.push_str(&write_measurements(&data));
+    let mut text = header;
+    text.push_str(&write_measurements(data));
     match &args.out {
         Some(path) => {
             crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
@@ -183,10 +209,47 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
 /// Command-line arguments of `import`.
 #[derive(Debug, clap::Args)]
 pub struct ImportCli {
-    /// The dataset's layout: innopolis, boby, dlr, liaowu, hilti, mukca [default: detected from
-    /// the file names].
+    /// The dataset's layout: innopolis, boby, dlr, liaowu, hilti, mukca, or columns (your own
+    /// export, mapped by --joints and --points) [default: detected from the file names].
     #[arg(long, value_parser = parse_layout)]
-    layout: Option<Layout>,
+    layout: Option<LayoutChoice>,
+    /// `--layout columns`: the joint columns, in the model's order: 1-based numbers, ranges
+    /// or header names (`2-7`, `q1,q2,q3`).
+    #[arg(long, value_name = "COLS")]
+    joints: Option<String>,
+    /// `--layout columns`: the x, y, z columns of the measured point.
+    #[arg(long, value_name = "COLS")]
+    points: Option<String>,
+    /// `--layout columns`: the joint names to write [default: the header's, else joint_1..n].
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    joint_names: Vec<String>,
+    /// `--layout columns`: the target (reflector, marker) column [default: one target, t1].
+    #[arg(long, value_name = "COL")]
+    target: Option<String>,
+    /// `--layout columns`: the point's standard deviation column (its length unit).
+    #[arg(long, value_name = "COL")]
+    sigma: Option<String>,
+    /// `--layout columns`: the pose identifier column (repeats of a pose share it).
+    #[arg(long, value_name = "COL")]
+    config: Option<String>,
+    /// `--layout columns`: the split column (calibration/train, validation/test).
+    #[arg(long, value_name = "COL")]
+    set: Option<String>,
+    /// `--layout columns`: the separator [default: `,`, `;` or tab, detected].
+    #[arg(long, value_enum)]
+    delimiter: Option<Delimiter>,
+    /// `--layout columns`: the first line is data, not a header.
+    #[arg(long)]
+    no_header: bool,
+    /// `--layout columns`: unit of the points, sigmas and prismatic joints.
+    #[arg(long, value_enum, default_value_t = crate::units::LengthUnit::M)]
+    length_unit: crate::units::LengthUnit,
+    /// `--layout columns`: unit of the revolute joints.
+    #[arg(long, value_enum, default_value_t = crate::units::AngleUnit::Rad)]
+    angle_unit: crate::units::AngleUnit,
+    /// `--layout columns`: the prismatic joints (by written name).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    prismatic: Vec<String>,
     /// The dataset's files as published (a directory stands for all its files).
     #[arg(required = true, value_name = "FILE")]
     files: Vec<String>,
@@ -195,17 +258,113 @@ pub struct ImportCli {
     out: Option<String>,
 }
 
-fn parse_layout(s: &str) -> Result<Layout, String> {
-    s.parse()
+/// A published dataset's layout, or the user's own columns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayoutChoice {
+    /// One of the published layouts.
+    Known(Layout),
+    /// `--layout columns`.
+    Columns,
+}
+
+/// The separator of `--layout columns`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Delimiter {
+    /// `,`
+    Comma,
+    /// `;`
+    Semicolon,
+    /// A tab.
+    Tab,
+}
+
+fn parse_layout(s: &str) -> Result<LayoutChoice, String> {
+    if s == "columns" {
+        return Ok(LayoutChoice::Columns);
+    }
+    s.parse().map(LayoutChoice::Known)
 }
 
 impl ImportCli {
     /// The arguments of [`import`].
-    pub fn into_args(self) -> ImportArgs {
-        ImportArgs {
-            layout: self.layout,
+    ///
+    /// # Errors
+    /// Column options without `--layout columns`, or `--layout columns` without `--joints` and
+    /// `--points` (three columns), or a malformed column list.
+    pub fn into_args(self) -> Result<ImportArgs> {
+        use dh_calib::import::columns::{ColumnMap, ColumnRef};
+        let given_columns = self.joints.is_some() || self.points.is_some();
+        let columns = match self.layout {
+            Some(LayoutChoice::Columns) => {
+                let list = |option: &str, v: &Option<String>| -> Result<Vec<ColumnRef>> {
+                    let text = v.as_deref().ok_or_else(|| {
+                        hinted(
+                            format!("--layout columns: expected {option}, found none"),
+                            "urdf-dh import --layout columns --joints 1-6 --points 7-9 export.csv",
+                        )
+                    })?;
+                    ColumnRef::parse_list(text).map_err(|e| anyhow::anyhow!("{option}: {e}"))
+                };
+                let one = |option: &str, v: &Option<String>| -> Result<Option<ColumnRef>> {
+                    match v {
+                        None => Ok(None),
+                        Some(_) => {
+                            let l = list(option, v)?;
+                            match <[ColumnRef; 1]>::try_from(l) {
+                                Ok([c]) => Ok(Some(c)),
+                                Err(l) => anyhow::bail!(
+                                    "{option}: expected one column, found {}",
+                                    l.len()
+                                ),
+                            }
+                        }
+                    }
+                };
+                let points = list("--points", &self.points)?;
+                let point = <[ColumnRef; 3]>::try_from(points).map_err(|p| {
+                    anyhow::anyhow!("--points: expected 3 columns (x, y, z), found {}", p.len())
+                })?;
+                if self.files.len() != 1 {
+                    anyhow::bail!(
+                        "--layout columns: expected one file, found {}",
+                        self.files.len()
+                    );
+                }
+                Some(ColumnMap {
+                    joints: list("--joints", &self.joints)?,
+                    joint_names: self.joint_names,
+                    point,
+                    target: one("--target", &self.target)?,
+                    sigma: one("--sigma", &self.sigma)?,
+                    config: one("--config", &self.config)?,
+                    set: one("--set", &self.set)?,
+                    delimiter: self.delimiter.map(|d| match d {
+                        Delimiter::Comma => ',',
+                        Delimiter::Semicolon => ';',
+                        Delimiter::Tab => '\t',
+                    }),
+                    header: !self.no_header,
+                    length_scale: self.length_unit.metres(),
+                    angle_scale: self.angle_unit.radians(),
+                    prismatic: self.prismatic,
+                })
+            }
+            _ if given_columns => {
+                return Err(hinted(
+                    "--joints/--points: expected --layout columns, found another layout".to_string(),
+                    "column options map your own export: urdf-dh import --layout columns --joints 1-6 --points 7-9 export.csv",
+                ))
+            }
+            _ => None,
+        };
+        Ok(ImportArgs {
+            layout: match self.layout {
+                Some(LayoutChoice::Known(l)) => Some(l),
+                _ => None,
+            },
+            columns,
             files: self.files,
             out: self.out,
-        }
+        })
     }
 }

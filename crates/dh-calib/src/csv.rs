@@ -63,7 +63,7 @@ pub fn is_spoofing(c: char) -> bool {
 
 /// A name cell (`target`, `config`, `socket`, a header column) without [`is_spoofing`]
 /// characters.
-fn check_name(text: &str, line: usize, column: &str) -> Result<(), DataError> {
+pub(crate) fn check_name(text: &str, line: usize, column: &str) -> Result<(), DataError> {
     match text.chars().enumerate().find(|(_, c)| is_spoofing(*c)) {
         None => Ok(()),
         Some((k, c)) => Err(DataError::Format {

@@ -13,6 +13,9 @@
 //! | [`Layout::Hilti`] | one of the `*.yaml` stationing files | from the file | `prism` | 1 per waypoint |
 //! | [`Layout::Mukca`] | `hole_0.csv`, `hole_1.csv` (or `<placement>/hole_*.csv`) | `joint_1..joint_n` | `ball` | 1 contact per row |
 //!
+//! A user's own export, whatever its columns, separators and units, goes through
+//! [`columns::parse`] with a [`columns::ColumnMap`] instead.
+//!
 //! Joint names must match the model's joint names when the set is fitted; the robots' names are
 //! `joint_1..joint_n` unless the dataset names its joints itself (Hilti). Each layout's own module
 //! documents its columns, units, splits and the choices made.
@@ -64,6 +67,7 @@ pub fn too_deep_at(text: &str) -> Option<usize> {
 }
 
 pub mod boby;
+pub mod columns;
 pub mod dlr;
 pub mod hilti;
 pub mod innopolis;

@@ -1,0 +1,158 @@
+//! `import --layout columns`: a user's own export (its separators, units, names and column
+//! order) read into the canonical measurement CSV, checked against the set it was laid out from.
+
+use crate::common::{exec, root};
+
+const EXPORT: &str = "fixtures/import/export_semicolon_mm_deg.csv";
+const ORIGINAL: &str = "fixtures/invalid/csv/valid_arm.csv";
+const ARM: &str = "fixtures/invalid/urdf/valid_arm.urdf";
+
+/// The data rows of a canonical measurement CSV as (numbers, texts).
+fn rows(text: &str) -> Vec<(Vec<f64>, Vec<String>)> {
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .map(|l| {
+            let (mut nums, mut texts) = (Vec::new(), Vec::new());
+            for cell in l.split(',') {
+                match cell.parse::<f64>() {
+                    Ok(v) => nums.push(v),
+                    Err(_) => texts.push(cell.to_string()),
+                }
+            }
+            (nums, texts)
+        })
+        .collect()
+}
+
+const MAP: &[&str] = &[
+    "--layout",
+    "columns",
+    "--joints",
+    "5-6",
+    "--joint-names",
+    "joint_1,joint_2",
+    "--points",
+    "2-4",
+    "--target",
+    "7",
+    "--config",
+    "Pose",
+    "--sigma",
+    "Sigma [mm]",
+    "--length-unit",
+    "mm",
+    "--angle-unit",
+    "deg",
+];
+
+#[test]
+fn a_relaid_export_reads_back_as_the_set_it_came_from() {
+    let mut args = vec!["import"];
+    args.extend_from_slice(MAP);
+    args.push(EXPORT);
+    let (code, imported, err) = exec(&args);
+    assert_eq!(code, 0, "{err}");
+    let original = std::fs::read_to_string(root().join(ORIGINAL)).unwrap();
+    let (a, b) = (rows(&imported), rows(&original));
+    assert_eq!(a.len(), 8);
+    assert_eq!(a.len(), b.len());
+    for ((na, ta), (nb, tb)) in a.iter().zip(&b) {
+        assert_eq!(ta, tb);
+        assert_eq!(na.len(), nb.len());
+        for (x, y) in na.iter().zip(nb) {
+            assert!((x - y).abs() <= 1e-12 * y.abs().max(1e-3), "{x} vs {y}");
+        }
+    }
+    // The import calibrates as the original does.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("imported.csv");
+    std::fs::write(&path, &imported).unwrap();
+    let report = |data: &str| {
+        let (code, out, err) = exec(&["calibrate", "--model", ARM, "--data", data]);
+        assert_eq!(code, 0, "{err}");
+        out.lines()
+            .filter(|l| l.starts_with("result:") || l.starts_with("geometric"))
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(report(path.to_str().unwrap()), report(ORIGINAL));
+}
+
+#[test]
+fn column_maps_that_do_not_fit_are_usage_errors() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["import", "--layout", "columns", "--points", "2-4", EXPORT],
+            "--layout columns: expected --joints, found none",
+        ),
+        (
+            &[
+                "import", "--layout", "columns", "--joints", "5-6", "--points", "2-3", EXPORT,
+            ],
+            "--points: expected 3 columns (x, y, z), found 2",
+        ),
+        (
+            &["import", "--joints", "5-6", "--points", "2-4", EXPORT],
+            "expected --layout columns",
+        ),
+        (
+            &[
+                "import", "--layout", "columns", "--joints", "5-6", "--points", "2-4,Q", EXPORT,
+            ],
+            "--points: expected 3 columns",
+        ),
+        (
+            &[
+                "import", "--layout", "columns", "--joints", "5-6", "--points", "2-4", "--target",
+                "X", EXPORT,
+            ],
+            "expected a column named 'X'",
+        ),
+        (
+            // Degrees read as radians: 89 "rad" is beyond four turns.
+            &[
+                "import",
+                "--layout",
+                "columns",
+                "--joints",
+                "5-6",
+                "--points",
+                "2-4",
+                "--length-unit",
+                "mm",
+                EXPORT,
+            ],
+            "is the angle unit right?",
+        ),
+        (
+            // Millimetres read as metres: 1933 m is beyond 100 m.
+            &[
+                "import",
+                "--layout",
+                "columns",
+                "--joints",
+                "5-6",
+                "--points",
+                "2-4",
+                "--angle-unit",
+                "deg",
+                EXPORT,
+            ],
+            "is the length unit right?",
+        ),
+    ];
+    for (args, expected) in cases {
+        let (code, out, err) = exec(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty(), "{args:?}: {out}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert_eq!(
+            err.lines()
+                .filter(|l| l.starts_with("urdf-dh: error:"))
+                .count(),
+            1,
+            "{err}"
+        );
+    }
+}
