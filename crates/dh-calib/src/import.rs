@@ -255,17 +255,47 @@ impl<'a> Files<'_, 'a> {
         parse: impl Fn(&str) -> Result<Measurements, DataError>,
     ) -> Result<Measurements, DataError> {
         let spec = self.layout.files()[0];
-        let source = match self.sources {
-            [only] => only,
-            _ => self
+        // `*.yaml`: the files of that kind among those given (a dataset directory holds others).
+        let matching: Vec<&Source<'_>> = match spec.name.strip_prefix('*') {
+            Some(ext) => self
                 .sources
                 .iter()
-                .find(|s| s.name == spec.name)
-                .ok_or_else(|| DataError::MissingFile {
+                .filter(|s| s.name.to_ascii_lowercase().ends_with(ext))
+                .collect(),
+            None => self
+                .sources
+                .iter()
+                .filter(|s| s.name == spec.name)
+                .collect(),
+        };
+        let source = match (self.sources, matching.as_slice()) {
+            ([only], _) => only,
+            (_, [only]) => *only,
+            (_, []) => {
+                return Err(DataError::MissingFile {
                     layout: self.layout.name(),
                     file: spec.name,
                     given: self.given(),
-                })?,
+                })
+            }
+            (_, several) => {
+                return Err(DataError::Content {
+                    expected: format!(
+                        "one {} file for layout '{}' (each is a measurement session of its own)",
+                        spec.name,
+                        self.layout.name()
+                    ),
+                    found: format!(
+                        "{}: {}; name the one to import",
+                        several.len(),
+                        several
+                            .iter()
+                            .map(|s| format!("'{}'", s.name))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                })
+            }
         };
         parse(source.text).map_err(|e| in_file(source.name, e))
     }

@@ -177,3 +177,31 @@ fn hilti_every_dataset_file_imports_every_waypoint() {
         assert!(count(&m, Split::Calibration) > 0 && count(&m, Split::Validation) > 0);
     }
 }
+
+/// A dataset directory's other files (notes, the URDF) do not hide its one stationing file;
+/// several stationing files are several sessions, and the error lists them.
+#[test]
+fn hilti_picks_its_one_yaml_among_other_files_and_lists_several() {
+    let Some(m) = load(
+        Layout::Hilti,
+        "hilti_trailblazer_total_station",
+        &["SOURCE.md", "flat.yaml", "trailblazer.urdf"],
+    ) else {
+        return;
+    };
+    assert_eq!(m.samples.len(), 444);
+    let dir = Path::new(MEASURED).join("hilti_trailblazer_total_station");
+    let texts: Vec<(&str, String)> = ["SOURCE.md", "flat.yaml", "pallet.yaml"]
+        .iter()
+        .map(|n| (*n, std::fs::read_to_string(dir.join(n)).unwrap()))
+        .collect();
+    let sources: Vec<Source<'_>> = texts
+        .iter()
+        .map(|(name, text)| Source { name, text })
+        .collect();
+    let e = import(Layout::Hilti, &sources).unwrap_err().to_string();
+    assert!(
+        e.contains("found 2: 'flat.yaml', 'pallet.yaml'; name the one to import"),
+        "{e}"
+    );
+}
