@@ -981,6 +981,21 @@ fn len(v: f64, unit: LengthUnit) -> String {
 }
 
 /// A parameter value in its unit (lengths and angles in the report's units).
+/// A standard error as [`value`] prints it, or in scientific notation in the same unit when
+/// that would print only zeros (a fit of millions of points pins lengths below a micrometre).
+fn std_error(e: f64, unit: &str, units: DataUnits) -> String {
+    let fixed = value(e, unit, units);
+    if e == 0.0 || !fixed.chars().all(|c| c == '0' || c == '.') {
+        return fixed;
+    }
+    let shown = match (unit, units.angle) {
+        ("m", _) => e / units.length.metres(),
+        ("rad", AngleUnit::Deg) => e.to_degrees(),
+        _ => e,
+    };
+    format!("{shown:.1e}")
+}
+
 fn value(v: f64, unit: &str, units: DataUnits) -> String {
     let s = match unit {
         "m" => return len(v, units.length),
@@ -1164,7 +1179,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             value(p.nominal, p.unit, units),
             value(p.estimate, p.unit, units),
             p.std_error
-                .map_or_else(|| "-".into(), |e| value(e, p.unit, units))
+                .map_or_else(|| "-".into(), |e| std_error(e, p.unit, units))
         );
     }
     let rpy = |r: [f64; 3]| {
@@ -1672,6 +1687,23 @@ fn chart(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn standard_errors_below_the_printed_digits_switch_to_scientific() {
+        let units = DataUnits {
+            length: LengthUnit::M,
+            angle: AngleUnit::Rad,
+        };
+        assert_eq!(std_error(2.5e-5, "m", units), "0.000025");
+        assert_eq!(std_error(1.3e-7, "m", units), "1.3e-7");
+        assert_eq!(std_error(0.0, "m", units), "0.000000");
+        assert_eq!(std_error(4e-9, "rad", units), "4.0e-9");
+        let mm = DataUnits {
+            length: LengthUnit::Mm,
+            angle: AngleUnit::Deg,
+        };
+        assert_eq!(std_error(1.3e-7, "m", mm), "1.3e-4");
+    }
 
     #[test]
     fn effects_choice_parses() {
