@@ -1385,22 +1385,42 @@ pub struct ModelProblem<'a> {
     pub observations: &'a [Observed],
 }
 
-impl Problem for ModelProblem<'_> {
-    fn parameter_count(&self) -> usize {
-        self.model.parameter_count()
+/// A model with samples reachable by block: [`ModelProblem`] (all of them) and
+/// [`SubsetProblem`] (some, by index) share one [`Problem`] implementation through it.
+trait Samples: Sync {
+    fn model(&self) -> &Model;
+    fn count(&self) -> usize;
+    fn sample(&self, block: usize) -> Option<&Observed>;
+}
+
+impl Samples for ModelProblem<'_> {
+    fn model(&self) -> &Model {
+        self.model
     }
-    fn block_count(&self) -> usize {
+    fn count(&self) -> usize {
         self.observations.len()
     }
+    fn sample(&self, block: usize) -> Option<&Observed> {
+        self.observations.get(block)
+    }
+}
+
+impl<S: Samples> Problem for S {
+    fn parameter_count(&self) -> usize {
+        self.model().parameter_count()
+    }
+    fn block_count(&self) -> usize {
+        self.count()
+    }
     fn block_size(&self, block: usize) -> usize {
-        match self.observations.get(block).map(|o| &o.observation) {
+        match self.sample(block).map(|o| &o.observation) {
             Some(Observation::Pose(_)) => 6,
             _ => 3,
         }
     }
     fn residuals(&self, x: &[f64], block: usize, out: &mut [f64]) {
-        if let Some(o) = self.observations.get(block) {
-            self.model.residuals(x, o, out);
+        if let Some(o) = self.sample(block) {
+            self.model().residuals(x, o, out);
         }
     }
     fn jacobian(
@@ -1411,8 +1431,8 @@ impl Problem for ModelProblem<'_> {
         residuals: &mut [f64],
         jacobian: &mut [f64],
     ) {
-        if let Some(o) = self.observations.get(block) {
-            self.model.jacobian(x, o, columns, residuals, jacobian);
+        if let Some(o) = self.sample(block) {
+            self.model().jacobian(x, o, columns, residuals, jacobian);
         }
     }
 }
@@ -1443,43 +1463,17 @@ pub struct SubsetProblem<'a> {
     pub subset: &'a [usize],
 }
 
-impl SubsetProblem<'_> {
-    fn get(&self, block: usize) -> Option<&Observed> {
+impl Samples for SubsetProblem<'_> {
+    fn model(&self) -> &Model {
+        self.model
+    }
+    fn count(&self) -> usize {
+        self.subset.len()
+    }
+    fn sample(&self, block: usize) -> Option<&Observed> {
         self.subset
             .get(block)
             .and_then(|&i| self.observations.get(i))
-    }
-}
-
-impl Problem for SubsetProblem<'_> {
-    fn parameter_count(&self) -> usize {
-        self.model.parameter_count()
-    }
-    fn block_count(&self) -> usize {
-        self.subset.len()
-    }
-    fn block_size(&self, block: usize) -> usize {
-        match self.get(block).map(|o| &o.observation) {
-            Some(Observation::Pose(_)) => 6,
-            _ => 3,
-        }
-    }
-    fn residuals(&self, x: &[f64], block: usize, out: &mut [f64]) {
-        if let Some(o) = self.get(block) {
-            self.model.residuals(x, o, out);
-        }
-    }
-    fn jacobian(
-        &self,
-        x: &[f64],
-        block: usize,
-        columns: &[usize],
-        residuals: &mut [f64],
-        jacobian: &mut [f64],
-    ) {
-        if let Some(o) = self.get(block) {
-            self.model.jacobian(x, o, columns, residuals, jacobian);
-        }
     }
 }
 
