@@ -11,16 +11,8 @@ const CSV: &str = "fixtures/invalid/csv/valid_arm.csv";
 
 /// Runs the binary in `dir`: (exit code, stdout, stderr).
 fn exec_in(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run urdf-dh");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let (code, out, err) = exec_piped(dir, args, b"");
+    (code, String::from_utf8_lossy(&out).into_owned(), err)
 }
 
 fn names(dir: &Path) -> Vec<String> {

@@ -110,8 +110,11 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
     if let Some(map) = &args.columns {
         let path = &args.files[0];
         let text = read_text(path)?;
-        let data = dh_calib::import::columns::parse(&text, map)
+        let (data, notes) = dh_calib::import::columns::parse(&text, map)
             .map_err(|e| anyhow::anyhow!("{}: {e}", display_name(path)))?;
+        for n in notes {
+            writeln!(err, "urdf-dh: warning: {}: {n}", display_name(path))?;
+        }
         let header = format!(
             "# imported by urdf-dh import --layout columns from {}\n# metres and radians; points in the measuring device's frame\n",
             display_name(path)

@@ -559,21 +559,17 @@ fn distances_at(model: &Model, x: &[f64], obs: &[Observed], at: &[usize]) -> Vec
         model.residuals(x, &obs[*i], &mut r);
         Vector3::new(r[0], r[1], r[2]).norm()
     };
-    if at.len() <= fit::SEGMENT_BLOCKS {
+    let parts: Vec<&[usize]> = at.chunks(fit::SEGMENT_BLOCKS).collect();
+    if parts.len() <= 1 {
         return at.iter().map(one).collect();
     }
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let chunk = at.len().div_ceil(threads);
-    std::thread::scope(|scope| {
-        let handles: Vec<_> = at
-            .chunks(chunk)
-            .map(|part| scope.spawn(move || part.iter().map(one).collect::<Vec<f64>>()))
-            .collect();
-        handles
-            .into_iter()
-            .flat_map(|h| h.join().unwrap_or_default())
-            .collect()
-    })
+    match fit::parallel_map(parts.len(), |k| {
+        Ok(parts[k].iter().map(one).collect::<Vec<f64>>())
+    }) {
+        Ok(d) => d.concat(),
+        // Only a worker's panic gets here: compute on this thread instead.
+        Err(_) => at.iter().map(one).collect(),
+    }
 }
 
 /// Distances of the validation samples at `x`. A target that no calibration sample measured

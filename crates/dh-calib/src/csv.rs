@@ -44,10 +44,10 @@ use crate::data::{Measurements, Sample, Socket, SocketDistance, Split};
 pub const DEFAULT_TARGET: &str = "tip";
 
 /// A revolute joint value beyond this many radians (four turns) is taken for degrees.
-const MAX_PLAUSIBLE_RADIANS: f64 = 8.0 * std::f64::consts::PI;
+pub(crate) const MAX_PLAUSIBLE_RADIANS: f64 = 8.0 * std::f64::consts::PI;
 /// A point coordinate beyond this many metres is taken for millimetres: no laser tracker,
 /// camera system or total station used for arm calibration measures 100 m away.
-const MAX_PLAUSIBLE_METRES: f64 = 100.0;
+pub(crate) const MAX_PLAUSIBLE_METRES: f64 = 100.0;
 
 /// Is `c` a character that changes how a terminal or table shows the text around it: a control
 /// character (C0, DEL, C1) or a bidirectional override, embedding, isolate or mark (U+202A to
@@ -983,7 +983,7 @@ pub fn parse_measurements_noting(
     Ok((m, notes))
 }
 
-fn parse_split(text: &str) -> Option<Split> {
+pub(crate) fn parse_split(text: &str) -> Option<Split> {
     match text.to_ascii_lowercase().as_str() {
         "train" | "calibration" => Some(Split::Calibration),
         "test" | "validation" => Some(Split::Validation),

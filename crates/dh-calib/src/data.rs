@@ -67,3 +67,21 @@ pub struct Measurements {
     /// The samples, in file order.
     pub samples: Vec<Sample>,
 }
+
+impl Measurements {
+    /// The same set with only the samples `keep(index, sample)` accepts (names and targets
+    /// kept, sample order kept).
+    pub fn filtered(&self, keep: impl Fn(usize, &Sample) -> bool) -> Measurements {
+        Measurements {
+            joint_names: self.joint_names.clone(),
+            targets: self.targets.clone(),
+            samples: self
+                .samples
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| keep(*i, s))
+                .map(|(_, s)| s.clone())
+                .collect(),
+        }
+    }
+}

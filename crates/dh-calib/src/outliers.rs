@@ -130,17 +130,7 @@ impl OutlierReport {
     /// `data` without the flagged samples.
     pub fn without(&self, data: &Measurements) -> Measurements {
         let drop: BTreeSet<usize> = self.outliers.iter().map(|o| o.sample).collect();
-        Measurements {
-            joint_names: data.joint_names.clone(),
-            targets: data.targets.clone(),
-            samples: data
-                .samples
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| !drop.contains(i))
-                .map(|(_, s)| s.clone())
-                .collect(),
-        }
+        data.filtered(|i, _| !drop.contains(&i))
     }
 }
 
@@ -240,17 +230,9 @@ pub fn screen(
         let kept = if flagged.is_empty() && nv == 0 {
             std::borrow::Cow::Borrowed(data)
         } else {
-            std::borrow::Cow::Owned(Measurements {
-                joint_names: data.joint_names.clone(),
-                targets: data.targets.clone(),
-                samples: data
-                    .samples
-                    .iter()
-                    .enumerate()
-                    .filter(|(i, s)| s.split == Split::Calibration && !flagged.contains(i))
-                    .map(|(_, s)| s.clone())
-                    .collect(),
-            })
+            std::borrow::Cow::Owned(
+                data.filtered(|i, s| s.split == Split::Calibration && !flagged.contains(&i)),
+            )
         };
         let mut session = Session::new(tree, &kept, &screen_options, &[])?;
         session.validation = Validation::None;

@@ -15,7 +15,10 @@
 
 use nalgebra::Vector3;
 
-use crate::csv::{check_name, number, DataError, Records};
+use crate::csv::{
+    check_name, number, parse_split, DataError, Records, MAX_PLAUSIBLE_METRES as MAX_METRES,
+    MAX_PLAUSIBLE_RADIANS as MAX_RADIANS, SIGMA_FLOOR,
+};
 use crate::data::{Measurements, Sample, Split};
 
 /// A column by 1-based number or by header name.
@@ -91,11 +94,6 @@ pub struct ColumnMap {
     pub prismatic: Vec<String>,
 }
 
-/// Joint values beyond this many radians (four turns) look like another unit.
-const MAX_RADIANS: f64 = 8.0 * std::f64::consts::PI;
-/// Coordinates and prismatic values beyond this many metres look like another unit.
-const MAX_METRES: f64 = 100.0;
-
 /// The separator of `text`: the first of `,` `;` tab that occurs most on its first non-comment
 /// line.
 fn detect_delimiter(text: &str) -> char {
@@ -110,13 +108,16 @@ fn detect_delimiter(text: &str) -> char {
         .unwrap_or(',')
 }
 
-/// Reads `text` laid out as `map` says (see the [module docs](self)).
+/// Reads `text` laid out as `map` says (see the [module docs](self)), with the warnings a
+/// reader should see: standard deviations of 0 floored at [`SIGMA_FLOOR`], as the canonical
+/// reader floors them.
 ///
 /// # Errors
 /// A [`DataError`] naming the line and column: no data rows, a column that is not there (by
 /// number or name), a cell that is not a finite number, a negative standard deviation, values
 /// that look like another unit, an unknown split, a name with control or bidi characters.
-pub fn parse(text: &str, map: &ColumnMap) -> Result<Measurements, DataError> {
+pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>), DataError> {
+    let mut zero_sigmas: Vec<usize> = Vec::new();
     let delimiter = map.delimiter.unwrap_or_else(|| detect_delimiter(text));
     let mut rows = Records::new(text, delimiter, true).peekable();
     let header = if map.header {
@@ -276,7 +277,12 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<Measurements, DataError> {
                         found: format!("'{}'", cell(c)),
                     });
                 }
-                let s = (s * map.length_scale).max(crate::csv::SIGMA_FLOOR);
+                let s = if s == 0.0 {
+                    zero_sigmas.push(line);
+                    SIGMA_FLOOR
+                } else {
+                    s * map.length_scale
+                };
                 Some(Vector3::repeat(s))
             }
             _ => None,
@@ -289,21 +295,17 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<Measurements, DataError> {
             _ => None,
         };
         let split = match set_col {
-            Some(c) => match cell(c).to_ascii_lowercase().as_str() {
-                "" | "calibration" | "train" => Split::Calibration,
-                "validation" | "test" => Split::Validation,
-                other => {
-                    return Err(DataError::Format {
-                        line,
-                        expected: format!(
-                            "calibration, train, validation or test in column '{}'",
-                            column_name(c)
-                        ),
-                        found: format!("'{other}'"),
-                    })
-                }
-            },
-            None => Split::Calibration,
+            Some(c) if !cell(c).is_empty() => {
+                parse_split(cell(c)).ok_or_else(|| DataError::Format {
+                    line,
+                    expected: format!(
+                        "calibration, train, validation or test in column '{}'",
+                        column_name(c)
+                    ),
+                    found: format!("'{}'", cell(c)),
+                })?
+            }
+            _ => Split::Calibration,
         };
         m.samples.push(Sample {
             q,
@@ -325,7 +327,17 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<Measurements, DataError> {
             },
         });
     }
-    Ok(m)
+    let notes = zero_sigmas
+        .first()
+        .map(|first| {
+            format!(
+                "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
+                zero_sigmas.len()
+            )
+        })
+        .into_iter()
+        .collect();
+    Ok((m, notes))
 }
 
 #[cfg(test)]
@@ -372,13 +384,30 @@ mod tests {
     #[test]
     fn separators_units_and_header_names() {
         let text = "# export\nA1;A2;X;Y;Z\n90;-45;1000;2000;3000\n0;0;1;2;3\n";
-        let m = parse(text, &map()).unwrap();
+        let (m, notes) = parse(text, &map()).unwrap();
+        assert!(notes.is_empty());
         assert_eq!(m.joint_names, vec!["A1", "A2"]);
         assert!((m.samples[0].q[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!((m.samples[0].point - Vector3::new(1.0, 2.0, 3.0)).norm() < 1e-15);
         assert_eq!(m.samples[1].line, 4);
         let tabbed = text.replace(';', "\t");
-        assert_eq!(parse(&tabbed, &map()).unwrap(), m);
+        assert_eq!(parse(&tabbed, &map()).unwrap().0, m);
+    }
+
+    #[test]
+    fn only_a_zero_sigma_is_floored_and_said() {
+        let mut with_sigma = map();
+        with_sigma.sigma = Some(ColumnRef::Number(6));
+        let text = "a,b,x,y,z,s\n0,0,1,2,3,0.0005\n0,0,1,2,3,0\n";
+        let (m, notes) = parse(text, &with_sigma).unwrap();
+        // 0.5 µm is a sigma, not a rounding: it stays.
+        assert!((m.samples[0].sigma.unwrap().x - 5e-7).abs() < 1e-18);
+        assert_eq!(m.samples[1].sigma.unwrap().x, SIGMA_FLOOR);
+        assert_eq!(notes.len(), 1);
+        assert!(
+            notes[0].contains("1 sample(s)") && notes[0].contains("line 3"),
+            "{notes:?}"
+        );
     }
 
     #[test]
