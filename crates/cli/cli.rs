@@ -12,7 +12,7 @@ use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK
 use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
 use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
-use crate::commands::{calibrate, calibrate_tree, cpa, import, simulate};
+use crate::commands::{calibrate, calibrate_tree, compensate, cpa, import, predict, simulate};
 use crate::error::Outcome;
 use crate::guard;
 use crate::output::check_destinations;
@@ -69,6 +69,18 @@ enum Command {
         after_help = "EXAMPLES:\n  urdf-dh calibrate --model nominal.yaml --data measured.csv\n  urdf-dh calibrate --model nominal.yaml --data measured.csv --effects auto --out calibrated.yaml"
     )]
     Calibrate(calibrate::CalibrateCli),
+    /// Predict a calibrated model's target positions (or tool poses) at given joint values,
+    /// with each prediction's standard uncertainty.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh predict --model calibrated.yaml --joints poses.csv --out predicted.csv\n  urdf-dh predict --model calibrated.yaml --joints poses.csv --targets tool --frame base --length-unit mm --angle-unit deg"
+    )]
+    Predict(predict::PredictCli),
+    /// Correct a robot program's joint values so that the calibrated robot puts its tool where
+    /// the nominal model does; exit 1 naming any pose that cannot be compensated.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh compensate --nominal vendor.yaml --model calibrated.yaml --joints program.csv --out corrected.csv\n  urdf-dh compensate --nominal robot.urdf --tip tool0 --model calibrated.yaml --joints program.csv --position-only"
+    )]
+    Compensate(compensate::CompensateCli),
     /// Circle-point analysis: joint axes from sweeps of one joint at a time, and their DH table.
     #[command(after_help = "EXAMPLES:\n  urdf-dh cpa sweeps.csv --format yaml > measured-dh.yaml")]
     Cpa(cpa::CpaCli),
@@ -413,6 +425,30 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
                 }
                 None => calibrate::calibrate(&args, out, err),
             }
+        }
+        Command::Predict(a) => {
+            let args = a.into_args();
+            let outputs: Vec<(&str, &str)> =
+                args.out.iter().map(|o| ("--out", o.as_str())).collect();
+            check_destinations(
+                &[("--model", &args.model), ("--joints", &args.joints)],
+                &outputs,
+            )?;
+            predict::predict(&args, out, err)
+        }
+        Command::Compensate(a) => {
+            let args = a.into_args();
+            let outputs: Vec<(&str, &str)> =
+                args.out.iter().map(|o| ("--out", o.as_str())).collect();
+            check_destinations(
+                &[
+                    ("--nominal", &args.nominal),
+                    ("--model", &args.model),
+                    ("--joints", &args.joints),
+                ],
+                &outputs,
+            )?;
+            compensate::compensate(&args, out, err)
         }
         Command::Cpa(a) => cpa::cpa(&a.into_args()?, out, err),
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),

@@ -188,7 +188,7 @@ pub fn prismatic(table: &DhTable) -> Vec<String> {
 
 /// Whether `path` names a URDF rather than a sheet: by extension, else by the first character
 /// of `text` (`<` for XML).
-fn is_urdf(path: &str, text: &str) -> bool {
+pub(crate) fn is_urdf(path: &str, text: &str) -> bool {
     let lower = path.to_ascii_lowercase();
     if lower.ends_with(".urdf") || lower.ends_with(".xacro") || lower.ends_with(".xml") {
         return true;
@@ -199,6 +199,38 @@ fn is_urdf(path: &str, text: &str) -> bool {
     text.trim_start_matches('\u{feff}')
         .trim_start()
         .starts_with('<')
+}
+
+/// A DH sheet as a model, and the warning for a command that cannot use its effects.
+pub struct SheetModel {
+    /// The model.
+    pub loaded: LoadedModel,
+    /// The warning naming the sheet's effects, `None` without effects.
+    pub effects_warning: Option<String>,
+}
+
+/// The model of a DH sheet's `text` (`origin` names it in messages).
+///
+/// # Errors
+/// As [`Sheet::parse`].
+pub fn sheet_model(text: &str, origin: &str) -> Result<SheetModel> {
+    let sheet = Sheet::parse(text, origin)?;
+    let effects_warning = sheet.effects_warning(
+        origin,
+        "the model is its DH values; name effects with --effects (calibrate) or --effect (simulate)",
+    );
+    Ok(SheetModel {
+        loaded: LoadedModel {
+            table: sheet.table,
+            origin: origin.to_string(),
+            robot: sheet.robot,
+            units: (sheet.length_unit, sheet.angle_unit),
+            warnings: sheet.warnings,
+            links: ("base_link".into(), "tool0".into()),
+            coupled: sheet.coupled,
+        },
+        effects_warning,
+    })
 }
 
 /// Loads `--model`: a URDF (chain from `base` to `tip`, extracted in `convention` and verified
@@ -237,21 +269,12 @@ pub fn load_model(
                 "drop --base/--tip, or give the URDF as --model",
             ));
         }
-        let sheet = Sheet::parse(text.as_deref().unwrap_or_default(), &origin)?;
-        let mut warnings = sheet.warnings.clone();
-        warnings.extend(sheet.effects_warning(
-            &origin,
-            "the model is its DH values; name effects with --effects (calibrate) or --effect (simulate)",
-        ));
-        return Ok(LoadedModel {
-            table: sheet.table,
-            origin,
-            robot: sheet.robot,
-            units: (sheet.length_unit, sheet.angle_unit),
-            warnings,
-            links: ("base_link".into(), "tool0".into()),
-            coupled: sheet.coupled,
-        });
+        let SheetModel {
+            mut loaded,
+            effects_warning,
+        } = sheet_model(text.as_deref().unwrap_or_default(), &origin)?;
+        loaded.warnings.extend(effects_warning);
+        return Ok(loaded);
     }
     let (urdf_model, chain) = load_chain(path, base, tip)?;
     let extraction = dh_core::extract(
@@ -293,7 +316,7 @@ pub struct DataUnits {
 }
 
 impl DataUnits {
-    fn csv_options(self, prismatic: &[String]) -> CsvOptions {
+    pub fn csv_options(self, prismatic: &[String]) -> CsvOptions {
         CsvOptions {
             length_unit: match self.length {
                 LengthUnit::M => dh_calib::csv::LengthUnit::Metre,

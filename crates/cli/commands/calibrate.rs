@@ -1329,6 +1329,10 @@ fn model_text(
             .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
+        covariance: report
+            .covariance
+            .as_ref()
+            .map(crate::calibrated::CovarianceDoc::of),
     };
     let source = format!(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
@@ -1478,6 +1482,9 @@ struct CalibrationSection {
     device: PoseSi,
     targets: Vec<TargetDoc>,
     effects: Vec<(String, f64)>,
+    /// Covariance of the last step's free parameters: what `predict` propagates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    covariance: Option<crate::calibrated::CovarianceDoc>,
 }
 
 /// Joint values of every sample in `table`'s row order (mimic rows follow their drivers).

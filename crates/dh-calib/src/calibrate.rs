@@ -276,6 +276,9 @@ pub struct Report {
     pub outliers: Option<crate::outliers::OutlierReport>,
     /// The test of the final model against the noise, and what it means.
     pub verdict: crate::diagnose::Verdict,
+    /// Covariance of the last step's free parameters (see [`crate::predict`]); `None` when
+    /// the residual's sigma is unknown (no more coordinates than parameters).
+    pub covariance: Option<crate::predict::Covariance>,
 }
 
 /// Calibration samples, validation samples and the pose group of each calibration sample.
@@ -1102,6 +1105,14 @@ impl<'a> Session<'a> {
             })
             .map(|(_, (effect, _))| crate::effects::label_of(effect.as_ref()))
             .collect::<Vec<_>>();
+        let covariance = last.covariance.as_ref().and_then(|c| {
+            let names = last
+                .free
+                .iter()
+                .map(|&i| model.parameters()[i].name.clone())
+                .collect();
+            crate::predict::Covariance::new(names, c.clone()).ok()
+        });
         let verdict = crate::diagnose::verdict(
             self,
             last,
@@ -1138,6 +1149,7 @@ impl<'a> Session<'a> {
             diagnosis: None,
             outliers: None,
             verdict,
+            covariance,
         }
     }
 }

@@ -12,6 +12,7 @@
 )]
 
 pub mod calibrate;
+pub mod compensate;
 pub mod cpa;
 pub mod csv;
 pub mod data;
@@ -20,8 +21,10 @@ pub mod effects;
 pub mod fit;
 pub mod gravity;
 pub mod import;
+pub mod joints;
 pub mod model;
 pub mod outliers;
+pub mod predict;
 pub mod simulate;
 pub mod socket;
 mod stats;

@@ -1,0 +1,298 @@
+//! `urdf-dh compensate`: the joint values with which the calibrated robot puts its tool where
+//! the nominal model puts it at the commanded values (`dh_calib::compensate`), with the error
+//! that remains per pose.
+//!
+//! The output is a joint-value CSV in the input's units (readable by `predict` and
+//! `compensate` itself), with `config` and the per-pose errors before and after.
+
+use std::io::Write;
+use std::path::Path;
+
+use anyhow::Result;
+use dh_calib::compensate::{compensate as solve, CompensateOptions};
+use dh_core::Convention;
+
+use crate::calibrated::{load_calibrated, CalibratedModel};
+use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
+use crate::error::{hinted, Outcome};
+use crate::input::display_name;
+use crate::measured::{load_model, DataUnits};
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Command-line arguments of `compensate`.
+#[derive(Debug, clap::Args)]
+pub struct CompensateCli {
+    /// The nominal model the robot program was computed with (URDF with --base/--tip, or a
+    /// DH sheet).
+    #[arg(long, value_name = "NOMINAL")]
+    nominal: String,
+    /// Base link of a URDF nominal model.
+    #[arg(long)]
+    base: Option<String>,
+    /// Tip link of a URDF nominal model.
+    #[arg(long)]
+    tip: Option<String>,
+    /// The calibrated model (`calibrate --out`), with the nominal model's joints.
+    #[arg(long, value_name = "CALIBRATED")]
+    model: String,
+    /// The commanded joint values: a CSV with one column per measured joint; `config` is
+    /// carried over, other columns are ignored.
+    #[arg(long, value_name = "Q.csv")]
+    joints: String,
+    /// Match the tool's position only, not its orientation.
+    #[arg(long)]
+    position_only: bool,
+    /// Unit of lengths in the joint file and the output.
+    #[arg(long, value_enum, default_value_t = LengthUnit::M)]
+    length_unit: LengthUnit,
+    /// Unit of angles in the joint file and the output.
+    #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
+    angle_unit: AngleUnit,
+    /// The CSV to write (`-` or absent: standard output).
+    #[arg(long, value_name = "C.csv")]
+    out: Option<String>,
+}
+
+/// What the CLI passes to [`compensate`].
+#[derive(Clone, Debug)]
+pub struct CompensateArgs {
+    /// The nominal model.
+    pub nominal: String,
+    /// URDF base link of the nominal model.
+    pub base: Option<String>,
+    /// URDF tip link of the nominal model.
+    pub tip: Option<String>,
+    /// The calibrated model.
+    pub model: String,
+    /// Commanded joint values.
+    pub joints: String,
+    /// Position only.
+    pub position_only: bool,
+    /// Units of the joint file and the output.
+    pub units: DataUnits,
+    /// Output path (`None` or `-`: standard output).
+    pub out: Option<String>,
+}
+
+impl CompensateCli {
+    /// The arguments of [`compensate`].
+    pub fn into_args(self) -> CompensateArgs {
+        CompensateArgs {
+            nominal: self.nominal,
+            base: self.base,
+            tip: self.tip,
+            model: self.model,
+            joints: self.joints,
+            position_only: self.position_only,
+            units: DataUnits {
+                length: self.length_unit,
+                angle: self.angle_unit,
+            },
+            out: self.out,
+        }
+    }
+}
+
+/// Refuses a calibrated model whose joints are not the nominal model's.
+fn same_joints(
+    nominal: &dh_core::DhTable,
+    calibrated: &CalibratedModel,
+    origins: (&str, &str),
+) -> Result<()> {
+    let a: Vec<&str> = nominal.rows.iter().map(|r| r.name.as_str()).collect();
+    let b: Vec<&str> = calibrated
+        .loaded
+        .table
+        .rows
+        .iter()
+        .map(|r| r.name.as_str())
+        .collect();
+    if a != b {
+        return Err(hinted(
+            format!(
+                "{} and {} have different joints: {} against {}",
+                origins.0,
+                origins.1,
+                a.iter().map(|n| format!("'{}'", crate::guard::escape(n))).collect::<Vec<_>>().join(", "),
+                b.iter().map(|n| format!("'{}'", crate::guard::escape(n))).collect::<Vec<_>>().join(", ")
+            ),
+            "give the model the calibration started from as --nominal (with --base/--tip for a URDF)",
+        ));
+    }
+    Ok(())
+}
+
+/// Runs `compensate`. Exit 1 when a pose cannot be compensated (no convergence, or joint
+/// values beyond their limits), naming each.
+///
+/// # Errors
+/// Bad model or joint files, models with different joints, failed writes.
+pub fn compensate(
+    args: &CompensateArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> Result<Outcome> {
+    let nominal = load_model(
+        &args.nominal,
+        args.base.as_deref(),
+        args.tip.as_deref(),
+        Convention::Standard,
+    )?;
+    let model = load_calibrated(&args.model, None, None)?;
+    let (n_origin, c_origin) = (display_name(&args.nominal), display_name(&args.model));
+    same_joints(&nominal.table, &model, (&n_origin, &c_origin))?;
+    for w in model
+        .loaded
+        .warnings
+        .iter()
+        .filter(|w| !w.contains(": effects: "))
+    {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
+    let input = read_joints(&args.joints, &model, args.units)?;
+    let options = CompensateOptions {
+        orientation: !args.position_only,
+        ..CompensateOptions::default()
+    };
+    let (lu, au) = (args.units.length, args.units.angle);
+    let mut text = format!(
+        "# compensated by urdf-dh compensate: {c_origin} reaching what {n_origin} reaches at the commanded values ({}); joints in {} ({} for prismatic), errors of the tool in the base link frame: position_* in {}, orientation_* in {}\n",
+        if args.position_only { "position only" } else { "position and orientation" },
+        au.symbol(),
+        lu.symbol(),
+        lu.symbol(),
+        au.symbol()
+    );
+    let mut header: Vec<String> = model.joints.columns.iter().map(|n| quoted(n)).collect();
+    header.extend(
+        [
+            "config",
+            "position_before",
+            "orientation_before",
+            "position_error",
+            "orientation_error",
+        ]
+        .map(String::from),
+    );
+    text.push_str(&header.join(","));
+    text.push('\n');
+    let mut failed: Vec<String> = Vec::new();
+    let (mut before_max, mut after_max, mut rot_before_max, mut rot_after_max, mut change_max) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut sum_before = 0.0;
+    let mut sum_after = 0.0;
+    for row in &input.rows {
+        let goal = nominal.table.fk(&model.joints.rows(&row.q))?;
+        let c = solve(&model.calibrated, &model.joints, &goal, &row.q, &options);
+        let config = row
+            .config
+            .clone()
+            .unwrap_or_else(|| format!("line{}", row.line));
+        if c.stalled {
+            failed.push(format!(
+                "{} (line {}): beyond the calibrated robot's reach from the commanded values: the nearest pose leaves {:.3e} {} and {:.3e} {}",
+                crate::guard::escape(&config),
+                row.line,
+                c.position_error / lu.metres(),
+                lu.symbol(),
+                c.orientation_error / au.radians(),
+                au.symbol()
+            ));
+        } else if !c.converged {
+            failed.push(format!(
+                "{} (line {}): no convergence after {} iterations (a singular pose?), {:.3e} {} and {:.3e} {} remain",
+                crate::guard::escape(&config),
+                row.line,
+                c.iterations,
+                c.position_error / lu.metres(),
+                lu.symbol(),
+                c.orientation_error / au.radians(),
+                au.symbol()
+            ));
+        } else if !c.beyond_limits.is_empty() {
+            failed.push(format!(
+                "{} (line {}): beyond the limits of {}",
+                crate::guard::escape(&config),
+                row.line,
+                c.beyond_limits
+                    .iter()
+                    .map(|n| format!("'{}'", crate::guard::escape(n)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        before_max = before_max.max(c.error_before.0);
+        rot_before_max = rot_before_max.max(c.error_before.1);
+        after_max = after_max.max(c.position_error);
+        rot_after_max = rot_after_max.max(c.orientation_error);
+        sum_before += c.error_before.0 * c.error_before.0;
+        sum_after += c.position_error * c.position_error;
+        for ((a, b), p) in c.q.iter().zip(&row.q).zip(&input.prismatic) {
+            if !p {
+                change_max = change_max.max((a - b).abs());
+            }
+        }
+        let mut cells: Vec<String> =
+            c.q.iter()
+                .zip(&input.prismatic)
+                .map(|(v, p)| joint_cell(*v, *p, args.units))
+                .collect();
+        cells.push(quoted(&config));
+        cells.push(cell(c.error_before.0 / lu.metres()));
+        cells.push(cell(c.error_before.1 / au.radians()));
+        cells.push(cell(c.position_error / lu.metres()));
+        cells.push(cell(c.orientation_error / au.radians()));
+        text.push_str(&cells.join(","));
+        text.push('\n');
+    }
+    let path = args.out.as_deref().unwrap_or(crate::output::STDIO);
+    crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
+    let report: &mut dyn Write = if path == crate::output::STDIO {
+        err
+    } else {
+        out
+    };
+    let n = input.rows.len() as f64;
+    writeln!(
+        report,
+        "compensated {} pose(s): {c_origin} against {n_origin}{}",
+        input.rows.len(),
+        if path == crate::output::STDIO {
+            String::new()
+        } else {
+            format!(" -> {}", display_name(path))
+        }
+    )?;
+    writeln!(
+        report,
+        "tool position error at the commanded values: RMS {:.6} max {:.6} {}; after compensation: RMS {:.3e} max {:.3e} {} (tolerance {:.0e} m)",
+        (sum_before / n).sqrt() / lu.metres(),
+        before_max / lu.metres(),
+        lu.symbol(),
+        (sum_after / n).sqrt() / lu.metres(),
+        after_max / lu.metres(),
+        lu.symbol(),
+        options.position_tolerance
+    )?;
+    writeln!(
+        report,
+        "tool orientation error: max {:.6} {} before, {:.3e} {} after{}; largest joint change {:.6} {}",
+        rot_before_max / au.radians(),
+        au.symbol(),
+        rot_after_max / au.radians(),
+        au.symbol(),
+        if args.position_only { " (not matched: --position-only)" } else { "" },
+        change_max / au.radians(),
+        au.symbol()
+    )?;
+    if failed.is_empty() {
+        writeln!(report, "result: every pose compensated")?;
+        Ok(Outcome::Pass)
+    } else {
+        writeln!(report, "result: {} pose(s) not compensated:", failed.len())?;
+        for f in &failed {
+            writeln!(report, "  {f}")?;
+        }
+        Ok(Outcome::Differs)
+    }
+}

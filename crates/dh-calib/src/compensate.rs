@@ -1,0 +1,252 @@
+//! Compensation: the joint values with which the calibrated robot reaches what the nominal
+//! model reaches at the commanded ones (what vendors' absolute-accuracy options do).
+//!
+//! A robot program's joint values `q_c` were computed with the nominal model: its tool is meant
+//! to be at `T* = FK_nominal(q_c)` in the base link frame. The real (calibrated) robot is there
+//! at `q*` with `FK_calibrated(q*) = T*`, found by Gauss-Newton on the pose error
+//! `e = [p* − p(q); L · log(R* R(q)ᵀ)]` (`L` the robot's characteristic length, so that
+//! a radian weighs like a metre at the robot's size) over the measured joint columns
+//! ([`JointMap`]: mimic and coupled rows follow theirs), seeded at `q_c`. Each step is the
+//! minimum-norm least-squares step of the SVD of the Jacobian (central differences, steps of
+//! [`JOINT_STEP`]), halved until the error falls: a redundant arm stays nearest the
+//! commanded values, an arm with fewer than six joints gets the least-squares pose. With
+//! [`CompensateOptions::orientation`] off only the position is matched.
+
+use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
+
+use crate::joints::JointMap;
+use crate::predict::{Calibrated, Frame};
+
+/// Central-difference step of a joint value (radians or metres).
+pub const JOINT_STEP: f64 = 1e-7;
+
+/// Smallest damping of a step, relative to the mean squared singular value of the Jacobian:
+/// Gauss-Newton away from singularities, a bounded step near them.
+const MIN_DAMPING: f64 = 1e-12;
+
+/// Options of [`compensate`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompensateOptions {
+    /// Match the orientation as well as the position (with fewer than six joint columns the
+    /// pose is matched in the least-squares sense).
+    pub orientation: bool,
+    /// Stop when the position error is below this (metres) ...
+    pub position_tolerance: f64,
+    /// ... and the orientation error below this (radians).
+    pub orientation_tolerance: f64,
+    /// Iterations at most.
+    pub max_iterations: usize,
+}
+
+impl Default for CompensateOptions {
+    fn default() -> Self {
+        CompensateOptions {
+            orientation: true,
+            position_tolerance: 1e-9,
+            orientation_tolerance: 1e-9,
+            max_iterations: 100,
+        }
+    }
+}
+
+/// One compensated pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compensated {
+    /// Corrected joint columns (radians, metres), in [`JointMap::columns`] order.
+    pub q: Vec<f64>,
+    /// Distance (metres) between the calibrated tool at `q` and the nominal goal: what
+    /// remains.
+    pub position_error: f64,
+    /// Angle (radians) between their orientations.
+    pub orientation_error: f64,
+    /// The same two at the commanded values: the error compensation removes.
+    pub error_before: (f64, f64),
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Both errors within the tolerances (when orientation is not matched, the position).
+    pub converged: bool,
+    /// Not converged, and no step reduced the error before the iteration limit: the pose is a
+    /// least-squares minimum, the nearest the calibrated robot gets from the commanded values
+    /// (the goal lies beyond its reach, such as past a stretched arm's boundary).
+    pub stalled: bool,
+    /// Rows whose value at `q` is outside the row's joint limits.
+    pub beyond_limits: Vec<String>,
+}
+
+/// The pose of the calibrated tool at columns `q`, in the base link frame.
+fn pose(calibrated: &Calibrated, map: &JointMap, q: &[f64]) -> Isometry3<f64> {
+    calibrated.tool(&map.rows(q), Frame::Base)
+}
+
+/// Position and orientation errors from `at` to `goal`: `p* − p` and the rotation vector of
+/// `R* Rᵀ`.
+fn errors(goal: &Isometry3<f64>, at: &Isometry3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    (
+        goal.translation.vector - at.translation.vector,
+        (goal.rotation * at.rotation.inverse()).scaled_axis(),
+    )
+}
+
+/// The joint columns at which `calibrated` (a serial robot) puts its tool at `goal` (base link
+/// frame), from `seed` (the commanded columns; see the module docs).
+pub fn compensate(
+    calibrated: &Calibrated,
+    map: &JointMap,
+    goal: &Isometry3<f64>,
+    seed: &[f64],
+    options: &CompensateOptions,
+) -> Compensated {
+    let weight = calibrated.model().length_scale().max(1e-3);
+    let dims = if options.orientation { 6 } else { 3 };
+    let residual = |q: &[f64]| -> DVector<f64> {
+        let (p, r) = errors(goal, &pose(calibrated, map, q));
+        let mut e = DVector::zeros(dims);
+        e.fixed_rows_mut::<3>(0).copy_from(&p);
+        if options.orientation {
+            e.fixed_rows_mut::<3>(3).copy_from(&(r * weight));
+        }
+        e
+    };
+    let done = |q: &[f64]| {
+        let (p, r) = errors(goal, &pose(calibrated, map, q));
+        p.norm() <= options.position_tolerance
+            && (!options.orientation || r.norm() <= options.orientation_tolerance)
+    };
+    let mut q = seed.to_vec();
+    let mut e = residual(&q);
+    let mut iterations = 0;
+    let mut stalled = false;
+    let mut mu = MIN_DAMPING;
+    while iterations < options.max_iterations && !done(&q) {
+        iterations += 1;
+        let mut jac = DMatrix::zeros(dims, q.len());
+        let mut qp = q.clone();
+        for c in 0..q.len() {
+            qp[c] = q[c] + JOINT_STEP;
+            let plus = residual(&qp);
+            qp[c] = q[c] - JOINT_STEP;
+            let minus = residual(&qp);
+            qp[c] = q[c];
+            // e = goal − f(q): ∂f/∂q = −∂e/∂q.
+            jac.set_column(c, &((minus - plus) / (2.0 * JOINT_STEP)));
+        }
+        // Levenberg-Marquardt in its minimum-norm form: Δ = Jᵀ (J Jᵀ + μ I)⁻¹ e.
+        let jjt = &jac * jac.transpose();
+        let size = jjt.trace().max(f64::MIN_POSITIVE) / dims as f64;
+        let mut improved = false;
+        for _ in 0..40 {
+            let mut m = jjt.clone();
+            for d in 0..dims {
+                m[(d, d)] += mu * size;
+            }
+            let Some(chol) = m.cholesky() else {
+                mu *= 10.0;
+                continue;
+            };
+            let step = jac.transpose() * chol.solve(&e);
+            let trial: Vec<f64> = q.iter().zip(step.iter()).map(|(a, d)| a + d).collect();
+            let et = residual(&trial);
+            if et.norm() < e.norm() {
+                q = trial;
+                e = et;
+                mu = (mu / 10.0).max(MIN_DAMPING);
+                improved = true;
+                break;
+            }
+            mu *= 10.0;
+        }
+        if !improved {
+            stalled = true;
+            break;
+        }
+    }
+    let (p, r) = errors(goal, &pose(calibrated, map, &q));
+    let (p0, r0) = errors(goal, &pose(calibrated, map, seed));
+    let rows = map.rows(&q);
+    let beyond_limits = calibrated
+        .table()
+        .rows
+        .iter()
+        .zip(&rows)
+        .filter(|(row, v)| {
+            row.limits
+                .as_ref()
+                .is_some_and(|l| **v < l.lower || **v > l.upper)
+        })
+        .map(|(row, _)| row.name.clone())
+        .collect();
+    let converged = p.norm() <= options.position_tolerance
+        && (!options.orientation || r.norm() <= options.orientation_tolerance);
+    Compensated {
+        converged,
+        stalled: stalled && !converged,
+        q,
+        position_error: p.norm(),
+        orientation_error: r.norm(),
+        error_before: (p0.norm(), r0.norm()),
+        iterations,
+        beyond_limits,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effects::EffectContext;
+    use crate::predict::effects_from_parameters;
+    use dh_core::{Convention, DhRow, DhTable};
+    use std::f64::consts::FRAC_PI_2;
+
+    fn ur5() -> DhTable {
+        DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::identity(),
+            tool: Isometry3::identity(),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, FRAC_PI_2, 0.089159, 0.0),
+                DhRow::revolute("j2", -0.425, 0.0, 0.0, 0.0),
+                DhRow::revolute("j3", -0.39225, 0.0, 0.0, 0.0),
+                DhRow::revolute("j4", 0.0, FRAC_PI_2, 0.10915, 0.0),
+                DhRow::revolute("j5", 0.0, -FRAC_PI_2, 0.09465, 0.0),
+                DhRow::revolute("j6", 0.0, 0.0, 0.0823, 0.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn the_calibrated_robot_reaches_the_nominal_goal() {
+        let nominal = ur5();
+        let mut real = nominal.clone();
+        real.rows[1].a += 5e-4;
+        real.rows[2].theta += 1e-3;
+        real.rows[3].alpha += -7e-4;
+        let ctx = EffectContext::serial(&real);
+        let effects = effects_from_parameters(&[("gear_ratio:j2".into(), 2e-3)], &ctx).unwrap();
+        let calibrated = Calibrated::new(&real, &effects, &Isometry3::identity(), &[]).unwrap();
+        let map = JointMap::new(&real, &[]);
+        let options = CompensateOptions::default();
+        for q in [
+            [0.1, -1.2, 1.5, -0.3, 1.2, 0.4],
+            [-2.0, -0.5, -1.0, 2.0, -0.8, 3.0],
+            [0.0, -FRAC_PI_2, 0.3, 0.0, 0.7, 0.0],
+        ] {
+            let goal = nominal.fk(&q).unwrap();
+            let c = compensate(&calibrated, &map, &goal, &q, &options);
+            assert!(c.converged, "{c:?}");
+            assert!(c.error_before.0 > 1e-4, "{c:?}");
+            let reached = calibrated.tool(&map.rows(&c.q), Frame::Base);
+            assert!((reached.translation.vector - goal.translation.vector).norm() < 1e-9);
+            assert!(reached.rotation.angle_to(&goal.rotation) < 1e-9);
+            assert!(c.beyond_limits.is_empty());
+        }
+        // Position only: three equations, six joints, the nearest solution.
+        let q = [0.1, -1.2, 1.5, -0.3, 1.2, 0.4];
+        let goal = nominal.fk(&q).unwrap();
+        let only = CompensateOptions {
+            orientation: false,
+            ..CompensateOptions::default()
+        };
+        let c = compensate(&calibrated, &map, &goal, &q, &only);
+        assert!(c.converged && c.position_error < 1e-9, "{c:?}");
+    }
+}

@@ -1,0 +1,506 @@
+//! Using a calibration: the calibrated robot's positions and poses at given joint values, with
+//! each prediction's standard uncertainty.
+//!
+//! # Frames
+//! With `T_device_base` the estimated device frame, `FK` the calibrated table's forward
+//! kinematics with its effects (base and tool included, see [`crate::model`]) and `t_k` target
+//! `k` in the tip frame:
+//!
+//! ```text
+//! Frame::Device:  p = s(q) · T_device_base · FK(q) · t_k    (s: the device scale effect, 1 without)
+//! Frame::Base:    p = FK(q) · t_k,        tool pose FK(q)   (the robot's base link frame)
+//! ```
+//!
+//! # Uncertainty
+//! `u = sqrt(diag(G C Gᵀ))`, first order: `C` is the covariance of the calibration's free
+//! parameters ([`Covariance`], `σ̂² (JᵀJ)⁺` of [`crate::fit`]) and `G` the prediction's
+//! derivative by those parameters, by central differences with steps that move the tip by
+//! [`DIFFERENCE_STEP`]. Parameters the data could not identify were held at nominal and add
+//! nothing: the uncertainty is that of what was identified, in the frame it was identified in
+//! (a base frame error aliased with the device frame is in neither figure). Rotational
+//! uncertainties are about the axes of the prediction frame (radians), not roll-pitch-yaw.
+
+use std::sync::Arc;
+
+use dh_core::DhTable;
+use nalgebra::{DMatrix, Isometry3, Vector3, Vector6};
+
+use crate::effects::{parse_label_in, EffectContext};
+use crate::fit::CalibError;
+use crate::model::{Effect, Model, ModelOptions};
+
+/// Tip motion (metres) of one central-difference step of a parameter: small against any
+/// calibrated error, large against rounding (relative error of the difference about 1e-10).
+pub const DIFFERENCE_STEP: f64 = 1e-6;
+
+/// Relative asymmetry a covariance may have (it is written to 17 digits and read back).
+const SYMMETRY_TOLERANCE: f64 = 1e-9;
+
+/// The covariance of a calibration's free parameters, by name, in their own units (metres,
+/// radians, an effect's unit); parameter names as in [`crate::model`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Covariance {
+    /// The parameters, in the matrix's order.
+    pub parameters: Vec<String>,
+    /// Symmetric, positive semi-definite.
+    pub matrix: DMatrix<f64>,
+}
+
+impl Covariance {
+    /// Checks and builds a covariance.
+    ///
+    /// # Errors
+    /// [`CalibError::BadOption`] for a matrix that is not square, not of the names' size, not
+    /// finite, not symmetric or has a negative variance, or for a name given twice.
+    pub fn new(parameters: Vec<String>, matrix: DMatrix<f64>) -> Result<Self, CalibError> {
+        let bad = |reason: String| CalibError::BadOption {
+            what: "covariance".into(),
+            reason,
+        };
+        let n = parameters.len();
+        if matrix.nrows() != n || matrix.ncols() != n {
+            return Err(bad(format!(
+                "expected a {n} x {n} matrix for {n} parameters, found {} x {}",
+                matrix.nrows(),
+                matrix.ncols()
+            )));
+        }
+        if let Some(v) = matrix.iter().find(|v| !v.is_finite()) {
+            return Err(bad(format!("expected finite values, found {v}")));
+        }
+        for (i, p) in parameters.iter().enumerate() {
+            if parameters[..i].contains(p) {
+                return Err(bad(format!("parameter '{p}' is given twice")));
+            }
+            if matrix[(i, i)] < 0.0 {
+                return Err(bad(format!(
+                    "expected a non-negative variance of '{p}', found {}",
+                    matrix[(i, i)]
+                )));
+            }
+        }
+        let largest = matrix.amax();
+        for i in 0..n {
+            for j in 0..i {
+                if (matrix[(i, j)] - matrix[(j, i)]).abs() > SYMMETRY_TOLERANCE * largest {
+                    return Err(bad(format!(
+                        "expected a symmetric matrix, found {} and {} at '{}' x '{}'",
+                        matrix[(i, j)],
+                        matrix[(j, i)],
+                        parameters[i],
+                        parameters[j]
+                    )));
+                }
+            }
+        }
+        Ok(Covariance { parameters, matrix })
+    }
+
+    /// The standard uncertainty of each parameter, in the order of [`Covariance::parameters`].
+    pub fn std_errors(&self) -> Vec<f64> {
+        (0..self.parameters.len())
+            .map(|i| self.matrix[(i, i)].max(0.0).sqrt())
+            .collect()
+    }
+}
+
+/// Which frame predictions are expressed in (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Frame {
+    /// The measuring device's frame, where the calibration data were measured.
+    Device,
+    /// The robot's base link frame.
+    Base,
+}
+
+/// An effect with its parameter values (in the order of [`Effect::parameter_names`]).
+pub type EffectValues = (Arc<dyn Effect>, Vec<f64>);
+
+/// A calibrated robot that predicts (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Calibrated {
+    model: Model,
+    x: Vec<f64>,
+    /// Model parameter index per covariance row, and the covariance.
+    covariance: Option<(Vec<usize>, DMatrix<f64>)>,
+}
+
+impl Calibrated {
+    /// The calibrated `table` with its `effects` at their values, the device frame
+    /// `T_device_base` and the targets (name, position in the tip frame), all metres and
+    /// radians.
+    ///
+    /// # Errors
+    /// As [`Model::new`] and [`Model::add_effect`]; [`CalibError::BadOption`] for an effect
+    /// given the wrong number of values.
+    pub fn new(
+        table: &DhTable,
+        effects: &[EffectValues],
+        device: &Isometry3<f64>,
+        targets: &[(String, Vector3<f64>)],
+    ) -> Result<Self, CalibError> {
+        let names: Vec<String> = targets.iter().map(|(n, _)| n.clone()).collect();
+        let mut model = Model::new(table, &names, &ModelOptions::default())?;
+        let mut values = Vec::new();
+        for (effect, v) in effects {
+            let range = model.add_effect(effect.clone())?;
+            if range.len() != v.len() {
+                return Err(CalibError::BadOption {
+                    what: format!("effect '{}'", effect.label()),
+                    reason: format!("expected {} values, found {}", range.len(), v.len()),
+                });
+            }
+            values.push((range, v.clone()));
+        }
+        model.set_device(device);
+        for (k, (_, t)) in targets.iter().enumerate() {
+            model.set_target(k, *t);
+        }
+        let mut x = vec![0.0; model.parameter_count()];
+        for (range, v) in values {
+            for (i, value) in range.zip(v) {
+                x[i] = value;
+            }
+        }
+        Ok(Calibrated {
+            model,
+            x,
+            covariance: None,
+        })
+    }
+
+    /// The calibrated robot of a [`crate::calibrate::Report`]: its table, the effects it
+    /// selected (their labels parsed in `ctx`, which gives the masses of gravity effects), its
+    /// device frame and targets, and its covariance.
+    ///
+    /// # Errors
+    /// As [`Calibrated::new`]; a selected effect whose label does not parse in `ctx`.
+    pub fn from_report(
+        report: &crate::calibrate::Report,
+        ctx: &EffectContext,
+    ) -> Result<Self, CalibError> {
+        let values: Vec<(String, f64)> = report
+            .parameters
+            .iter()
+            .map(|p| (p.name.clone(), p.estimate))
+            .collect();
+        let mut effects = Vec::new();
+        for label in &report.selected_effects {
+            let effect = parse_label_in(label, ctx)?;
+            let v = effect
+                .parameter_names()
+                .iter()
+                .map(|n| values.iter().find(|(m, _)| m == n).map_or(0.0, |(_, v)| *v))
+                .collect();
+            effects.push((effect, v));
+        }
+        let c = Self::new(
+            &report.calibrated,
+            &effects,
+            &report.device,
+            &report.targets,
+        )?;
+        match &report.covariance {
+            Some(cov) => c.with_covariance(cov),
+            None => Ok(c),
+        }
+    }
+
+    /// The same robot with the covariance of its parameters.
+    ///
+    /// # Errors
+    /// [`CalibError::BadOption`] naming a covariance parameter the model does not have.
+    pub fn with_covariance(mut self, covariance: &Covariance) -> Result<Self, CalibError> {
+        let index = covariance
+            .parameters
+            .iter()
+            .map(|p| {
+                self.model.index_of(p).ok_or_else(|| CalibError::BadOption {
+                    what: "covariance".into(),
+                    reason: format!("parameter '{p}' is no parameter of this model"),
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        self.covariance = Some((index, covariance.matrix.clone()));
+        Ok(self)
+    }
+
+    /// Whether predictions come with an uncertainty.
+    pub fn has_covariance(&self) -> bool {
+        self.covariance.is_some()
+    }
+
+    /// The underlying model (its parameters at [`Calibrated::parameters`]).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The parameter vector of the calibrated state (zero but for the effects' values).
+    pub fn parameters(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// The calibrated table (the model's, tilts in their rows).
+    pub fn table(&self) -> &DhTable {
+        self.model.nominal()
+    }
+
+    /// Target names and positions in the tip frame (metres).
+    pub fn targets(&self) -> &[(String, Vector3<f64>)] {
+        self.model.targets()
+    }
+
+    /// Where target `k` is at row values `q` (one per table row), metres.
+    pub fn point(&self, q: &[f64], target: usize, frame: Frame) -> Vector3<f64> {
+        self.point_at(&self.x, q, target, frame)
+    }
+
+    /// The tip (tool) frame at row values `q`; in [`Frame::Device`] its position carries the
+    /// device scale.
+    pub fn tool(&self, q: &[f64], frame: Frame) -> Isometry3<f64> {
+        self.tool_at(&self.x, q, frame)
+    }
+
+    fn point_at(&self, x: &[f64], q: &[f64], target: usize, frame: Frame) -> Vector3<f64> {
+        match frame {
+            Frame::Device => self.model.point(x, q, target),
+            Frame::Base => {
+                self.model
+                    .robot_fk(x, q)
+                    .transform_point(&self.model.target_at(x, target).into())
+                    .coords
+            }
+        }
+    }
+
+    fn tool_at(&self, x: &[f64], q: &[f64], frame: Frame) -> Isometry3<f64> {
+        match frame {
+            Frame::Device => self.model.tip(x, q),
+            Frame::Base => self.model.robot_fk(x, q),
+        }
+    }
+
+    /// Standard uncertainty of [`Calibrated::point`] per axis of `frame` (metres); `None`
+    /// without a covariance.
+    pub fn point_uncertainty(
+        &self,
+        q: &[f64],
+        target: usize,
+        frame: Frame,
+    ) -> Option<Vector3<f64>> {
+        let g = self.derivative(3, |x| {
+            let p = self.point_at(x, q, target, frame);
+            [p.x, p.y, p.z, 0.0, 0.0, 0.0]
+        })?;
+        let u = self.propagate(&g)?;
+        Some(Vector3::new(u[0], u[1], u[2]))
+    }
+
+    /// Standard uncertainty of [`Calibrated::tool`]: position per axis (metres), then rotation
+    /// about each axis of `frame` (radians); `None` without a covariance.
+    pub fn tool_uncertainty(&self, q: &[f64], frame: Frame) -> Option<Vector6<f64>> {
+        let at = self.tool_at(&self.x, q, frame);
+        let g = self.derivative(6, |x| {
+            let t = self.tool_at(x, q, frame);
+            // The small rotation from the calibrated attitude, about the frame's axes.
+            let r = (t.rotation * at.rotation.inverse()).scaled_axis();
+            [
+                t.translation.x,
+                t.translation.y,
+                t.translation.z,
+                r.x,
+                r.y,
+                r.z,
+            ]
+        })?;
+        let u = self.propagate(&g)?;
+        Some(Vector6::from_column_slice(&u))
+    }
+
+    /// `rows × m` derivative of `f` by the covariance's parameters.
+    fn derivative(&self, rows: usize, f: impl Fn(&[f64]) -> [f64; 6]) -> Option<DMatrix<f64>> {
+        let (index, _) = self.covariance.as_ref()?;
+        let scales = self.model.scales();
+        let mut g = DMatrix::zeros(rows, index.len());
+        let mut x = self.x.clone();
+        for (col, &i) in index.iter().enumerate() {
+            let h = DIFFERENCE_STEP / scales.get(i).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
+            x[i] = self.x[i] + h;
+            let plus = f(&x);
+            x[i] = self.x[i] - h;
+            let minus = f(&x);
+            x[i] = self.x[i];
+            for r in 0..rows {
+                g[(r, col)] = (plus[r] - minus[r]) / (2.0 * h);
+            }
+        }
+        Some(g)
+    }
+
+    /// `sqrt(diag(G C Gᵀ))`.
+    fn propagate(&self, g: &DMatrix<f64>) -> Option<Vec<f64>> {
+        let (_, c) = self.covariance.as_ref()?;
+        let gc = g * c;
+        Some(
+            (0..g.nrows())
+                .map(|r| gc.row(r).dot(&g.row(r)).max(0.0).sqrt())
+                .collect(),
+        )
+    }
+}
+
+/// The effects of a written calibration: `values` are its effect parameters by name
+/// (`gear_ratio:j2`, `gear_harmonic:j1.sin`, ...), grouped into the effects they belong to
+/// (labels parsed in `ctx`), in the order first named.
+///
+/// # Errors
+/// [`CalibError::BadOption`] for a name that belongs to no effect `ctx` can parse, or an
+/// effect with some of its parameters missing; as [`parse_label_in`].
+pub fn effects_from_parameters(
+    values: &[(String, f64)],
+    ctx: &EffectContext,
+) -> Result<Vec<EffectValues>, CalibError> {
+    let mut out: Vec<EffectValues> = Vec::new();
+    let mut used = vec![false; values.len()];
+    for (i, (name, _)) in values.iter().enumerate() {
+        if used[i] {
+            continue;
+        }
+        // The label is the name, or the name without its last `.part`s (the parameter).
+        let mut label = name.as_str();
+        let effect = loop {
+            let parsed = parse_label_in(label, ctx);
+            match parsed {
+                Ok(e) if e.parameter_names().contains(name) => break e,
+                Ok(_) | Err(_) => match label.rfind('.') {
+                    Some(dot) => label = &label[..dot],
+                    None => {
+                        // The label's own error says what is wrong with the name.
+                        parse_label_in(name, ctx)?;
+                        return Err(CalibError::BadOption {
+                            what: format!("effect parameter '{name}'"),
+                            reason: "expected the name of an effect's parameter".into(),
+                        });
+                    }
+                },
+            }
+        };
+        let mut v = Vec::new();
+        for p in effect.parameter_names() {
+            let at =
+                values
+                    .iter()
+                    .position(|(n, _)| *n == p)
+                    .ok_or_else(|| CalibError::BadOption {
+                        what: format!("effect '{}'", effect.label()),
+                        reason: format!("expected a value of its parameter '{p}', found none"),
+                    })?;
+            used[at] = true;
+            v.push(values[at].1);
+        }
+        out.push((effect, v));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dh_core::{Convention, DhRow};
+
+    fn table() -> DhTable {
+        DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::identity(),
+            tool: Isometry3::translation(0.0, 0.0, 0.1),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, std::f64::consts::FRAC_PI_2, 0.3, 0.0),
+                DhRow::revolute("j2", 0.4, 0.0, 0.0, 0.0),
+                DhRow::revolute("j3", 0.3, 0.0, 0.0, 0.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn effects_group_by_label_and_bad_names_are_named() {
+        let t = table();
+        let ctx = EffectContext::serial(&t);
+        let values = vec![
+            ("gear_harmonic:j1.sin".to_string(), 1e-4),
+            ("gear_ratio:j2".to_string(), 2e-3),
+            ("gear_harmonic:j1.cos".to_string(), -1e-4),
+        ];
+        let e = effects_from_parameters(&values, &ctx).unwrap();
+        assert_eq!(e.len(), 2);
+        assert_eq!(e[0].0.label(), "gear_harmonic:j1");
+        assert_eq!(e[0].1, vec![1e-4, -1e-4]);
+        assert_eq!(e[1].1, vec![2e-3]);
+        let missing = vec![("gear_harmonic:j1.sin".to_string(), 1e-4)];
+        let err = effects_from_parameters(&missing, &ctx)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("gear_harmonic:j1.cos"), "{err}");
+        let unknown = vec![("gear_ratio:j9".to_string(), 1e-4)];
+        assert!(effects_from_parameters(&unknown, &ctx).is_err());
+    }
+
+    #[test]
+    fn predictions_carry_effects_frames_and_first_order_uncertainty() {
+        let t = table();
+        let ctx = EffectContext::serial(&t);
+        let effects =
+            effects_from_parameters(&[("gear_ratio:j2".to_string(), 0.01)], &ctx).unwrap();
+        let device = Isometry3::translation(1.0, 2.0, 3.0);
+        let target = vec![("t".to_string(), Vector3::new(0.0, 0.05, 0.0))];
+        let c = Calibrated::new(&t, &effects, &device, &target).unwrap();
+        let q = [0.3, -0.7, 1.1];
+        // The gear ratio is theta += 0.01 q.
+        let mut geometric = t.clone();
+        geometric.rows[1].theta += 0.01 * q[1];
+        let fk = geometric.fk(&q).unwrap();
+        let want = fk
+            .transform_point(&Vector3::new(0.0, 0.05, 0.0).into())
+            .coords;
+        assert!((c.point(&q, 0, Frame::Base) - want).norm() < 1e-14);
+        assert!(
+            (c.point(&q, 0, Frame::Device) - (want + Vector3::new(1.0, 2.0, 3.0))).norm() < 1e-14
+        );
+        assert!(
+            (c.tool(&q, Frame::Base).translation.vector - fk.translation.vector).norm() < 1e-14
+        );
+        assert!(c.point_uncertainty(&q, 0, Frame::Base).is_none());
+
+        // A variance on j3.a alone: the point moves by exactly da along j3's x axis.
+        let s = 1e-4;
+        let cov = Covariance::new(vec!["j3.a".into()], DMatrix::from_element(1, 1, s * s)).unwrap();
+        let c = c.with_covariance(&cov).unwrap();
+        let u = c.point_uncertainty(&q, 0, Frame::Base).unwrap();
+        let x3 = (fk * t.tool.inverse()).rotation * Vector3::x();
+        let want = x3.map(|v| v.abs() * s);
+        assert!((u - want).norm() < 1e-12, "{u} vs {want}");
+        // Orientation does not depend on a.
+        let ut = c.tool_uncertainty(&q, Frame::Base).unwrap();
+        assert!(ut.fixed_rows::<3>(3).norm() < 1e-12);
+        // The device frame is a rigid motion of the base frame here: the same norm.
+        let ud = c.point_uncertainty(&q, 0, Frame::Device).unwrap();
+        assert!((ud.norm() - u.norm()).abs() < 1e-12);
+
+        let bad = Covariance::new(vec!["j9.a".into()], DMatrix::from_element(1, 1, 1.0)).unwrap();
+        let err = c.clone().with_covariance(&bad).unwrap_err().to_string();
+        assert!(err.contains("j9.a"), "{err}");
+    }
+
+    #[test]
+    fn bad_covariances_are_refused() {
+        let names = vec!["a".to_string(), "b".to_string()];
+        let ok = DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.5, 1.0]);
+        assert!(Covariance::new(names.clone(), ok).is_ok());
+        let asym = DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.4, 1.0]);
+        assert!(Covariance::new(names.clone(), asym).is_err());
+        let neg = DMatrix::from_row_slice(2, 2, &[-1.0, 0.0, 0.0, 1.0]);
+        assert!(Covariance::new(names.clone(), neg).is_err());
+        assert!(Covariance::new(names, DMatrix::zeros(1, 1)).is_err());
+        let twice = vec!["a".to_string(), "a".to_string()];
+        assert!(Covariance::new(twice, DMatrix::identity(2, 2)).is_err());
+    }
+}
