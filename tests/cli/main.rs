@@ -15,6 +15,7 @@ mod import_columns;
 mod invalid;
 mod measured;
 mod outputs;
+mod predict;
 mod roundtrip;
 mod tree;
 mod writers;

@@ -1408,7 +1408,47 @@ fn model_text(
             device: report.device,
         },
     )?;
+    let proof = predict_proof(path, &text, report, &q, &target, proof)?;
     Ok((text, proof))
+}
+
+/// The second half of the proof for a sheet: `predict` reads it back (effects, device frame,
+/// targets, covariance) and its predictions of every measured point, effects included, are the
+/// fitted model's within [`written::WRITTEN_TOLERANCE`]. A model with gravity effects (which
+/// need the link masses `predict` does not take) keeps the geometric proof alone.
+///
+/// # Errors
+/// A sheet `predict` cannot read: a defect of the writer, reported as such.
+fn predict_proof(
+    path: &str,
+    text: &str,
+    report: &Report,
+    q: &[Vec<f64>],
+    target: &[usize],
+    mut proof: WrittenDoc,
+) -> Result<WrittenDoc> {
+    if path.to_ascii_lowercase().ends_with(".urdf") {
+        return Ok(proof);
+    }
+    let ctx = EffectContext::serial(&report.calibrated);
+    let Ok(fitted) = dh_calib::predict::Calibrated::from_report(report, &ctx) else {
+        return Ok(proof);
+    };
+    let name = display_name(path);
+    let back = crate::calibrated::calibrated_sheet(text, &name).with_context(|| {
+        format!(
+            "{name}: the calibrated sheet does not read back for predict (a defect of the writer)"
+        )
+    })?;
+    let frame = dh_calib::predict::Frame::Device;
+    let mut worst = 0.0f64;
+    for (q, &k) in q.iter().zip(target) {
+        let d = (back.calibrated.point(q, k, frame) - fitted.point(q, k, frame)).norm();
+        worst = worst.max(if d.is_finite() { d } else { f64::INFINITY });
+    }
+    proof.max_deviation = proof.max_deviation.max(worst);
+    proof.passed &= worst <= written::WRITTEN_TOLERANCE;
+    Ok(proof)
 }
 
 /// `table` as the calibrated model of `inputs` without effects (see [`calibrated_text`]), for
