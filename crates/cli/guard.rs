@@ -145,6 +145,11 @@ pub fn noise(s: &str) -> Result<f64, String> {
     ranged(s, "a length in metres", 0.0, 1.0, false)
 }
 
+/// `compensate --max-change`: radians (metres for prismatic joints) in `(0, 1]`.
+pub fn max_change(s: &str) -> Result<f64, String> {
+    ranged(s, "radians (metres for prismatic joints)", 0.0, 1.0, true)
+}
+
 /// `--validation`: a fraction in `[0, 0.9]`.
 pub fn fraction(s: &str) -> Result<f64, String> {
     ranged(s, "a fraction", 0.0, 0.9, false)

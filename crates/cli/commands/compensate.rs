@@ -42,6 +42,10 @@ pub struct CompensateCli {
     /// Match the tool's position only, not its orientation.
     #[arg(long)]
     position_only: bool,
+    /// Largest change of a joint from its commanded value: radians (metres for prismatic
+    /// joints), whatever the file's units [default: 0.05].
+    #[arg(long, value_name = "CHANGE", value_parser = crate::guard::max_change)]
+    max_change: Option<f64>,
     /// Unit of lengths in the joint file and the output.
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
     length_unit: LengthUnit,
@@ -68,6 +72,8 @@ pub struct CompensateArgs {
     pub joints: String,
     /// Position only.
     pub position_only: bool,
+    /// Largest joint change in radians (metres for prismatic joints).
+    pub max_change: f64,
     /// Units of the joint file and the output.
     pub units: DataUnits,
     /// Output path (`None` or `-`: standard output).
@@ -84,6 +90,9 @@ impl CompensateCli {
             model: self.model,
             joints: self.joints,
             position_only: self.position_only,
+            max_change: self
+                .max_change
+                .unwrap_or(dh_calib::compensate::DEFAULT_MAX_CHANGE),
             units: DataUnits {
                 length: self.length_unit,
                 angle: self.angle_unit,
@@ -152,6 +161,7 @@ pub fn compensate(
     let input = read_joints(&args.joints, &model, args.units)?;
     let options = CompensateOptions {
         orientation: !args.position_only,
+        max_change: args.max_change,
         ..CompensateOptions::default()
     };
     let (lu, au) = (args.units.length, args.units.angle);
@@ -188,7 +198,23 @@ pub fn compensate(
             .config
             .clone()
             .unwrap_or_else(|| format!("line{}", row.line));
-        if c.stalled {
+        if !c.converged && !c.at_max_change.is_empty() {
+            failed.push(format!(
+                "{} (line {}): needs more than --max-change {} (rad or m) of {} (a singular pose?): {:.3e} {} and {:.3e} {} remain at that bound",
+                crate::guard::escape(&config),
+                row.line,
+                args.max_change,
+                c.at_max_change
+                    .iter()
+                    .map(|&i| format!("'{}'", crate::guard::escape(&model.joints.columns[i])))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                c.position_error / lu.metres(),
+                lu.symbol(),
+                c.orientation_error / au.radians(),
+                au.symbol()
+            ));
+        } else if c.stalled {
             failed.push(format!(
                 "{} (line {}): beyond the calibrated robot's reach from the commanded values: the nearest pose leaves {:.3e} {} and {:.3e} {}",
                 crate::guard::escape(&config),

@@ -24,6 +24,9 @@ pub const JOINT_STEP: f64 = 1e-7;
 /// Gauss-Newton away from singularities, a bounded step near them.
 const MIN_DAMPING: f64 = 1e-12;
 
+/// Default of [`CompensateOptions::max_change`]: 0.05 rad (2.9°) or 50 mm.
+pub const DEFAULT_MAX_CHANGE: f64 = 0.05;
+
 /// Options of [`compensate`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct CompensateOptions {
@@ -36,6 +39,10 @@ pub struct CompensateOptions {
     pub orientation_tolerance: f64,
     /// Iterations at most.
     pub max_iterations: usize,
+    /// Largest change of any joint column from its commanded value (radians, or metres for a
+    /// prismatic joint): a calibration corrects by fractions of a degree, and a pose that needs
+    /// more is at or near a singularity, where a large reconfiguration is no correction.
+    pub max_change: f64,
 }
 
 impl Default for CompensateOptions {
@@ -45,6 +52,7 @@ impl Default for CompensateOptions {
             position_tolerance: 1e-9,
             orientation_tolerance: 1e-9,
             max_iterations: 100,
+            max_change: DEFAULT_MAX_CHANGE,
         }
     }
 }
@@ -71,6 +79,8 @@ pub struct Compensated {
     pub stalled: bool,
     /// Rows whose value at `q` is outside the row's joint limits.
     pub beyond_limits: Vec<String>,
+    /// Columns whose change reached [`CompensateOptions::max_change`].
+    pub at_max_change: Vec<usize>,
 }
 
 /// The pose of the calibrated tool at columns `q`, in the base link frame.
@@ -144,7 +154,14 @@ pub fn compensate(
                 continue;
             };
             let step = jac.transpose() * chol.solve(&e);
-            let trial: Vec<f64> = q.iter().zip(step.iter()).map(|(a, d)| a + d).collect();
+            // Within the bound on the change from the commanded values.
+            let b = options.max_change;
+            let trial: Vec<f64> = q
+                .iter()
+                .zip(step.iter())
+                .zip(seed)
+                .map(|((a, d), s)| (a + d).clamp(s - b, s + b))
+                .collect();
             let et = residual(&trial);
             if et.norm() < e.norm() {
                 q = trial;
@@ -177,7 +194,15 @@ pub fn compensate(
         .collect();
     let converged = p.norm() <= options.position_tolerance
         && (!options.orientation || r.norm() <= options.orientation_tolerance);
+    let at_max_change = q
+        .iter()
+        .zip(seed)
+        .enumerate()
+        .filter(|(_, (a, s))| (*a - *s).abs() >= options.max_change * (1.0 - 1e-6))
+        .map(|(c, _)| c)
+        .collect();
     Compensated {
+        at_max_change,
         converged,
         stalled: stalled && !converged,
         q,
