@@ -186,7 +186,8 @@ pub fn compensate(
     );
     text.push_str(&header.join(","));
     text.push('\n');
-    let mut failed: Vec<String> = Vec::new();
+    // (config, lines, reason) of the poses not compensated.
+    let mut failed: Vec<(String, Vec<usize>, String)> = Vec::new();
     let (mut before_max, mut after_max, mut rot_before_max, mut rot_after_max, mut change_max) =
         (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut sum_before = 0.0;
@@ -198,11 +199,10 @@ pub fn compensate(
             .config
             .clone()
             .unwrap_or_else(|| format!("line{}", row.line));
+        let mut why: Option<String> = None;
         if !c.converged && !c.at_max_change.is_empty() {
-            failed.push(format!(
-                "{} (line {}): needs more than --max-change {} (rad or m) of {} (a singular pose?): {:.3e} {} and {:.3e} {} remain at that bound",
-                crate::guard::escape(&config),
-                row.line,
+            why = Some(format!(
+                "needs more than --max-change {} (rad or m) of {} (a singular pose?): {:.3e} {} and {:.3e} {} remain at that bound",
                 args.max_change,
                 c.at_max_change
                     .iter()
@@ -215,20 +215,16 @@ pub fn compensate(
                 au.symbol()
             ));
         } else if c.stalled {
-            failed.push(format!(
-                "{} (line {}): beyond the calibrated robot's reach from the commanded values: the nearest pose leaves {:.3e} {} and {:.3e} {}",
-                crate::guard::escape(&config),
-                row.line,
+            why = Some(format!(
+                "beyond the calibrated robot's reach from the commanded values: the nearest pose leaves {:.3e} {} and {:.3e} {}",
                 c.position_error / lu.metres(),
                 lu.symbol(),
                 c.orientation_error / au.radians(),
                 au.symbol()
             ));
         } else if !c.converged {
-            failed.push(format!(
-                "{} (line {}): no convergence after {} iterations (a singular pose?), {:.3e} {} and {:.3e} {} remain",
-                crate::guard::escape(&config),
-                row.line,
+            why = Some(format!(
+                "no convergence after {} iterations (a singular pose?), {:.3e} {} and {:.3e} {} remain",
                 c.iterations,
                 c.position_error / lu.metres(),
                 lu.symbol(),
@@ -236,16 +232,21 @@ pub fn compensate(
                 au.symbol()
             ));
         } else if !c.beyond_limits.is_empty() {
-            failed.push(format!(
-                "{} (line {}): beyond the limits of {}",
-                crate::guard::escape(&config),
-                row.line,
+            why = Some(format!(
+                "beyond the limits of {}",
                 c.beyond_limits
                     .iter()
                     .map(|n| format!("'{}'", crate::guard::escape(n)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ));
+        }
+        if let Some(why) = why {
+            // Repeats of one pose (a measurement file's targets and repeats) are one entry.
+            match failed.last_mut() {
+                Some((c, lines, w)) if *c == config && *w == why => lines.push(row.line),
+                _ => failed.push((config.clone(), vec![row.line], why)),
+            }
         }
         before_max = before_max.max(c.error_before.0);
         rot_before_max = rot_before_max.max(c.error_before.1);
@@ -315,8 +316,24 @@ pub fn compensate(
         writeln!(report, "result: every pose compensated")?;
         Ok(Outcome::Pass)
     } else {
-        writeln!(report, "result: {} pose(s) not compensated:", failed.len())?;
-        for f in &failed {
+        let rows: usize = failed.iter().map(|(_, l, _)| l.len()).sum();
+        writeln!(
+            report,
+            "result: {} pose(s) not compensated{}:",
+            failed.len(),
+            if rows > failed.len() {
+                format!(" ({rows} rows)")
+            } else {
+                String::new()
+            }
+        )?;
+        for (config, lines, why) in &failed {
+            let at = match lines.as_slice() {
+                [one] => format!("line {one}"),
+                [first, .., last] => format!("{} rows, lines {first}-{last}", lines.len()),
+                [] => String::new(),
+            };
+            let f = format!("{} ({at}): {why}", crate::guard::escape(config));
             writeln!(report, "  {f}")?;
         }
         Ok(Outcome::Differs)
