@@ -324,6 +324,24 @@ where
     }
 }
 
+/// Runs one command as [`run`] does, for callers in process (the Python package): the
+/// command's error (with its hint, see [`crate::error::hint_for`]) is returned, not printed, and
+/// a usage error is an error whose message is clap's.
+///
+/// # Errors
+/// Usage errors and every error of the command.
+pub fn run_command<I, T>(args: I, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let cli = Cli::try_parse_from(args).map_err(|e| {
+        let text = e.render().to_string();
+        anyhow::anyhow!("{}", text.strip_prefix("error: ").unwrap_or(&text).trim_end())
+    })?;
+    dispatch(cli, out, err)
+}
+
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {

@@ -255,12 +255,54 @@ fn check(
     py.detach(run).map_err(|e| to_py(py, e))
 }
 
+/// Runs one `urdf-dh` command in process (its arguments after the program name) and returns
+/// its standard output, standard error and whether it exited 1 (a difference found, a pose not
+/// compensated); an error is raised with the command's message and hint.
+#[pyfunction]
+fn run(py: Python<'_>, argv: Vec<String>) -> PyResult<(String, String, bool)> {
+    let go = || -> anyhow::Result<(String, String, bool)> {
+        let (mut out, mut err) = (Vec::new(), Vec::new());
+        let args = std::iter::once("urdf-dh".to_string()).chain(argv);
+        let outcome = urdf_dh_cli::cli::run_command(args, &mut out, &mut err)?;
+        Ok((
+            String::from_utf8_lossy(&out).into_owned(),
+            String::from_utf8_lossy(&err).into_owned(),
+            outcome == urdf_dh_cli::error::Outcome::Differs,
+        ))
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
+/// The joint columns a measurement or joint-value file needs for `model`, in row order (mimic
+/// and coupled rows follow theirs).
+#[pyfunction]
+#[pyo3(signature = (model, base=None, tip=None))]
+fn measured_joints(
+    py: Python<'_>,
+    model: &str,
+    base: Option<String>,
+    tip: Option<String>,
+) -> PyResult<Vec<String>> {
+    let go = || -> anyhow::Result<Vec<String>> {
+        let m = urdf_dh_cli::measured::load_model(
+            model,
+            base.as_deref(),
+            tip.as_deref(),
+            Convention::Standard,
+        )?;
+        Ok(m.measured_joints())
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
 /// The native module.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<NativeTable>()?;
     m.add_function(wrap_pyfunction!(extract, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(measured_joints, m)?)?;
     m.add("UrdfDhError", m.py().get_type::<UrdfDhError>())?;
     m.add("CHECK_LINEAR", CHECK_LINEAR)?;
     m.add("CHECK_ANGULAR", CHECK_ANGULAR)?;

@@ -20,15 +20,21 @@ import numpy as np
 
 from . import _native
 from ._native import UrdfDhError
+from .calibration import Prediction, Report, calibrate, compensate, predict
 
 __all__ = [
     "CheckReport",
     "Mimic",
+    "Prediction",
+    "Report",
     "Row",
     "Table",
     "UrdfDhError",
+    "calibrate",
     "check",
+    "compensate",
     "extract",
+    "predict",
 ]
 
 UrdfSource = Union[str, "os.PathLike[str]"]
