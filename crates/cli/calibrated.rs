@@ -1,7 +1,8 @@
 //! A calibrated model as `predict` and `compensate` read it: a sheet written by `calibrate
 //! --out` (its table, `effects`, and the `calibration` section's device frame, targets and
-//! covariance), or any other model (a URDF chain, a sheet) taken as exact, without device frame,
-//! targets or uncertainty.
+//! covariance), `simulate`'s truth file (the `truth` section's device frame, targets and
+//! effects: the simulated robot itself, without uncertainty), or any other model (a URDF chain,
+//! a sheet) taken as exact, without device frame, targets or uncertainty.
 
 use anyhow::{Context, Result};
 use dh_calib::effects::EffectContext;
@@ -69,6 +70,18 @@ struct CalibrationRecord {
     covariance: Option<CovarianceDoc>,
 }
 
+/// What `predict` reads of a `simulate` truth file's `truth` section: the simulated robot's
+/// device frame, targets and effect values (parameter name, value; SI units).
+#[derive(Clone, Debug, Default, Deserialize)]
+struct TruthRecord {
+    #[serde(default)]
+    device: Option<PoseRecord>,
+    #[serde(default)]
+    targets: Vec<TargetRecord>,
+    #[serde(default)]
+    effects: Vec<(String, f64)>,
+}
+
 #[derive(Clone, Debug, Deserialize)]
 struct PoseRecord {
     xyz: [f64; 3],
@@ -87,7 +100,8 @@ pub struct CalibratedModel {
     pub loaded: LoadedModel,
     /// The robot with its effects, device frame, targets and covariance.
     pub calibrated: Calibrated,
-    /// Whether the file gave a device frame (a `calibration` section).
+    /// Whether the file gave a device frame (a `calibration` section, or a `truth` section of
+    /// `simulate`).
     pub has_device: bool,
     /// The map from measured joint columns to the table's rows.
     pub joints: JointMap,
@@ -134,18 +148,29 @@ pub fn load_calibrated(
 pub fn calibrated_sheet(text: &str, origin: &str) -> Result<CalibratedModel> {
     let loaded = sheet_model(text, origin)?.loaded;
     let doc = parse_doc(text, origin)?;
-    let record = match doc.calibration {
-        Some(c) => {
-            serde_yaml::from_value(c).with_context(|| format!("{origin}: calibration section"))?
-        }
-        None => CalibrationRecord::default(),
-    };
-    let effect_values = doc
+    let mut effect_values: Vec<(String, f64)> = doc
         .effects
         .unwrap_or_default()
         .into_iter()
         .map(|e| (e.name, e.value))
         .collect();
+    let record = match (doc.calibration, doc.truth) {
+        (Some(c), _) => {
+            serde_yaml::from_value(c).with_context(|| format!("{origin}: calibration section"))?
+        }
+        // A simulated robot's truth file: the device frame, targets and effects it simulated.
+        (None, Some(t)) => {
+            let truth: TruthRecord =
+                serde_yaml::from_value(t).with_context(|| format!("{origin}: truth section"))?;
+            effect_values.extend(truth.effects);
+            CalibrationRecord {
+                device: truth.device,
+                targets: truth.targets,
+                covariance: None,
+            }
+        }
+        (None, None) => CalibrationRecord::default(),
+    };
     assemble(loaded, record, effect_values, origin)
 }
 

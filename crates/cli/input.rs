@@ -69,6 +69,25 @@ pub fn read_text(path: &str) -> Result<String> {
     utf8_text(path, read_bytes(path)?)
 }
 
+/// Reads a data table: UTF-8 text, or a MATLAB level-5 `.mat` file as the CSV text of its
+/// numeric variables ([`dh_calib::import::mat`]; what it leaves out is warned on `err`).
+///
+/// # Errors
+/// As [`read_text`]; a `.mat` file that does not read (naming the file).
+pub fn read_table(path: &str, err: &mut dyn std::io::Write) -> Result<String> {
+    let bytes = read_bytes(path)?;
+    if !dh_calib::import::mat::is_mat(&bytes) {
+        return utf8_text(path, bytes);
+    }
+    let origin = display_name(path);
+    let (text, notes) =
+        dh_calib::import::mat::to_csv(&bytes).map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
+    for n in notes {
+        writeln!(err, "urdf-dh: warning: {origin}: {n}")?;
+    }
+    Ok(text)
+}
+
 /// The bytes read from `path` as UTF-8 text.
 ///
 /// # Errors

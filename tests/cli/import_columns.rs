@@ -156,3 +156,96 @@ fn column_maps_that_do_not_fit_are_usage_errors() {
         );
     }
 }
+
+/// The same export saved by MATLAB-compatible `save` (`-v7`, compressed; scipy's `savemat`):
+/// variables `A` (8x2, degrees), `P` (8x3, mm), `sigma` (8x1, mm), and `rate` (1x1) and
+/// `operator` (text), which are not columns.
+const MAT_EXPORT: &str = "fixtures/import/export_mm_deg.mat";
+
+#[test]
+fn a_mat_export_reads_as_its_csv_export() {
+    let (code, from_mat, err) = exec(&[
+        "import",
+        "--layout",
+        "columns",
+        "--joints",
+        "A_1,A_2",
+        "--joint-names",
+        "joint_1,joint_2",
+        "--points",
+        "P_1,P_2,P_3",
+        "--sigma",
+        "sigma",
+        "--length-unit",
+        "mm",
+        "--angle-unit",
+        "deg",
+        MAT_EXPORT,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // What is not a column is named, not silently dropped.
+    assert!(
+        err.contains("'rate' (1x1) has not 8 rows: left out"),
+        "{err}"
+    );
+    assert!(
+        err.contains("'operator' (1x12) is not a numeric array"),
+        "{err}"
+    );
+    let original = std::fs::read_to_string(root().join(ORIGINAL)).unwrap();
+    let (a, b) = (rows(&from_mat), rows(&original));
+    assert_eq!(a.len(), 8);
+    for ((na, _), (nb, _)) in a.iter().zip(&b) {
+        assert_eq!(na.len(), nb.len());
+        for (x, y) in na.iter().zip(nb) {
+            assert!((x - y).abs() <= 1e-12 * y.abs().max(1e-3), "{x} vs {y}");
+        }
+    }
+    // A column that is not there is named with the columns the file has.
+    let (code, _, err) = exec(&[
+        "import",
+        "--layout",
+        "columns",
+        "--joints",
+        "q_1",
+        "--points",
+        "P_1,P_2,P_3",
+        MAT_EXPORT,
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("'q_1'") && err.contains("A_1"), "{err}");
+}
+
+/// The Innopolis course's own `calibration_dataset.mat` (github.com/Sarrasor/RoboticManipulators,
+/// `data/calibration_dataset.mat`) imports as the CSV converted from it in `../shared`. The file
+/// is not in the repository (nothing fetched is committed): the test runs where
+/// `URDF_DH_INNOPOLIS_MAT` names a copy and says so when it skips.
+#[test]
+fn the_innopolis_mat_file_imports_as_its_csv() {
+    let Ok(mat) = std::env::var("URDF_DH_INNOPOLIS_MAT") else {
+        eprintln!("skipped: URDF_DH_INNOPOLIS_MAT does not name a copy of calibration_dataset.mat");
+        return;
+    };
+    let Some(shared) =
+        crate::common::skip_without_shared("the_innopolis_mat_file_imports_as_its_csv")
+    else {
+        return;
+    };
+    let csv = shared.join("measured/innopolis_fanuc_r2000ic_165f_3markers/calibration_dataset.csv");
+    let (code, from_mat, err) = exec(&["import", &mat]);
+    assert_eq!(code, 0, "{err}");
+    let (code, from_csv, err) = exec(&["import", csv.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let (a, b) = (rows(&from_mat), rows(&from_csv));
+    assert_eq!(a.len(), 720);
+    // The same targets and configurations (runs of equal joint values in the .mat, config_id in
+    // the CSV) and the same numbers up to the CSV's rounding (joint values to 10 digits).
+    assert_eq!(a.len(), b.len());
+    for (k, ((na, ta), (nb, tb))) in a.iter().zip(&b).enumerate() {
+        assert_eq!(ta, tb, "row {k}");
+        assert_eq!(na.len(), nb.len(), "row {k}");
+        for (x, y) in na.iter().zip(nb) {
+            assert!((x - y).abs() <= 1e-9, "row {k}: {x} vs {y}");
+        }
+    }
+}

@@ -10,7 +10,7 @@ use dh_calib::data::Split;
 use dh_calib::import::{import as import_layout, mukca, Layout, Source};
 
 use crate::error::{hinted, Outcome};
-use crate::input::{display_name, read_text};
+use crate::input::{display_name, read_table, read_text};
 use crate::output::check_destinations;
 
 /// Everything `import` needs.
@@ -62,11 +62,11 @@ fn placements(dir: &Path) -> Result<Vec<(String, String)>> {
 }
 
 /// The files named by `args`: directories expanded to their files (sorted), each with its file
-/// name and text. Files that are not UTF-8 text inside a directory are skipped (datasets ship
+/// name and text (a MATLAB `.mat` file as the CSV text of its variables, see [`read_table`]). Files that are not UTF-8 text inside a directory are skipped (datasets ship
 /// images and archives beside their data). A MUKCa placement directory (with `hole_0.csv` and
 /// `hole_1.csv`), or a robot directory of them, gives its placement files named
 /// `<placement>/<file>`.
-fn gather(args: &[String]) -> Result<Vec<(String, String)>> {
+fn gather(args: &[String], err: &mut dyn Write) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
     for a in args {
         let p = Path::new(a);
@@ -86,12 +86,12 @@ fn gather(args: &[String]) -> Result<Vec<(String, String)>> {
             entries.sort();
             for e in entries {
                 let path = e.to_string_lossy().into_owned();
-                if let Ok(text) = read_text(&path) {
+                if let Ok(text) = read_table(&path, err) {
                     out.push((display_name(&path), text));
                 }
             }
         } else {
-            out.push((display_name(a), read_text(a)?));
+            out.push((display_name(a), read_table(a, err)?));
         }
     }
     Ok(out)
@@ -109,7 +109,7 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
     }
     if let Some(map) = &args.columns {
         let path = &args.files[0];
-        let text = read_text(path)?;
+        let text = read_table(path, err)?;
         let (data, notes) = dh_calib::import::columns::parse(&text, map)
             .map_err(|e| anyhow::anyhow!("{}: {e}", display_name(path)))?;
         for n in notes {
@@ -121,7 +121,7 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
         );
         return write_import(args, &data, header, out, err);
     }
-    let files = gather(&args.files)?;
+    let files = gather(&args.files, err)?;
     let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
     let layouts = || {
         Layout::ALL

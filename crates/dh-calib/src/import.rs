@@ -72,6 +72,7 @@ pub mod dlr;
 pub mod hilti;
 pub mod innopolis;
 pub mod liaowu;
+pub mod mat;
 pub mod mukca;
 mod table;
 
@@ -189,9 +190,11 @@ impl Layout {
                 .filter(|f| f.required)
                 .all(|f| match f.name.strip_prefix('*') {
                     Some(ext) => names.iter().any(|n| n.ends_with(ext)),
-                    None => names
-                        .iter()
-                        .any(|n| n.rsplit('/').next().is_some_and(|base| base == f.name)),
+                    None => names.iter().any(|n| {
+                        n.rsplit('/')
+                            .next()
+                            .is_some_and(|base| same_file(base, f.name))
+                    }),
                 })
         })
     }
@@ -238,6 +241,17 @@ pub fn import(layout: Layout, sources: &[Source<'_>]) -> Result<Measurements, Da
 }
 
 /// Looks up a layout's files among the sources.
+/// Whether a file given as `given` is the layout's file `spec`: the same name, or a MATLAB
+/// export of a CSV file (`calibration_dataset.mat` for `calibration_dataset.csv`), read as its
+/// CSV text by [`mat::to_csv`].
+fn same_file(given: &str, spec: &str) -> bool {
+    given == spec
+        || given
+            .strip_suffix(".mat")
+            .zip(spec.strip_suffix(".csv"))
+            .is_some_and(|(a, b)| a == b)
+}
+
 pub(crate) struct Files<'s, 'a> {
     layout: Layout,
     sources: &'s [Source<'a>],
@@ -265,7 +279,7 @@ impl<'a> Files<'_, 'a> {
             None => self
                 .sources
                 .iter()
-                .filter(|s| s.name == spec.name)
+                .filter(|s| same_file(&s.name, spec.name))
                 .collect(),
         };
         let source = match (self.sources, matching.as_slice()) {
@@ -302,7 +316,10 @@ impl<'a> Files<'_, 'a> {
 
     /// The text of file `name`, `None` when it was not given.
     pub(crate) fn optional(&self, name: &str) -> Option<&'a str> {
-        self.sources.iter().find(|s| s.name == name).map(|s| s.text)
+        self.sources
+            .iter()
+            .find(|s| same_file(&s.name, name))
+            .map(|s| s.text)
     }
 
     /// The text of file `name`.

@@ -29,11 +29,11 @@ PLANTED = {"shoulder_lift_joint.a": 0.0005, "elbow_joint.theta": 0.001}
 NOISE = 5e-5
 
 
-def simulate(tmp, name, poses, seed, targets=1, noise=NOISE, planted=True):
-    """Runs ``urdf-dh simulate``; returns (data path, truth path)."""
+def simulate(tmp, name, poses, seed, noise=NOISE, planted=True, validation=0.0):
+    """Runs ``urdf-dh simulate`` (one target); returns (data path, truth path)."""
     data, truth = tmp / f"{name}.csv", tmp / f"{name}.truth.yaml"
     argv = ["simulate", "--model", str(UR5), "--poses", str(poses), "--seed", str(seed)]
-    argv += ["--targets", str(targets), "--noise", repr(noise)]
+    argv += ["--noise", repr(noise), "--validation", repr(validation)]
     if planted:
         for k, v in PLANTED.items():
             argv += ["--error", f"{k}={v}"]
@@ -50,13 +50,16 @@ def read(path):
 def sets(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("ur5")
     data, truth = simulate(tmp, "data", 150, 7)
-    validate, _ = simulate(tmp, "validate", 60, 8)
-    return tmp, data, truth, validate
+    return tmp, data, truth
 
 
-def test_calibrate_finds_the_planted_errors(sets):
-    _, data, _, validate = sets
-    r = urdf_dh.calibrate(UR5, data, validate=validate, sigma=NOISE)
+def test_calibrate_finds_the_planted_errors(tmp_path):
+    # The last 40 of 200 poses held out (the `set` column), then handed over as two DataFrames
+    # without that column: the same device frame, another set of poses.
+    both = read(simulate(tmp_path, "both", 200, 7, validation=0.2)[0])
+    fit, held = (both[both.set == s].drop(columns="set") for s in ("calibration", "validation"))
+    assert len(held) == 40
+    r = urdf_dh.calibrate(UR5, fit, validate=held, sigma=NOISE)
     assert isinstance(r, urdf_dh.Report)
     assert r.rms_before > 5e-4 and r.rms_after < 1.5 * NOISE * math.sqrt(3)
     assert r.val_rms_after is not None and r.val_rms_after < 1.5 * NOISE * math.sqrt(3)
@@ -73,7 +76,7 @@ def test_calibrate_finds_the_planted_errors(sets):
 
 
 def test_dataframe_and_array_give_the_file_result(sets):
-    _, data, _, _ = sets
+    _, data, _ = sets
     from_file = urdf_dh.calibrate(UR5, data)
     frame = read(data)
     from_frame = urdf_dh.calibrate(UR5, frame)
@@ -91,37 +94,41 @@ def test_dataframe_and_array_give_the_file_result(sets):
 
 
 def test_predict_matches_the_true_robot_within_its_uncertainty(sets):
-    tmp, data, truth, _ = sets
+    tmp, data, truth = sets
     cal = tmp / "cal.yaml"
     r = urdf_dh.calibrate(UR5, data, out=cal)
     assert r.written is not None and cal.exists()
     q = np.random.default_rng(3).uniform(-3.0, 3.0, size=(40, 6))
-    p = urdf_dh.predict(cal, q, frame="base")
+    # In the device frame (where the data were measured; the default of both files): the truth
+    # file predicts as the simulated robot, with its device frame and targets, and has no
+    # covariance.
+    p = urdf_dh.predict(cal, q)
     assert p.points.shape == (40, 3) and p.uncertainty.shape == (40, 3)
     assert np.all(p.uncertainty > 0) and np.all(p.uncertainty < 1e-3)
-    # The truth has no covariance: predictions only.
-    t = urdf_dh.predict(truth, q, frame="base")
+    assert p.targets == ["t1"] * 40
+    t = urdf_dh.predict(truth, q)
     assert t.uncertainty is None
     z = (p.points - t.points) / p.uncertainty
     rms_z = float(np.sqrt(np.mean(z**2)))
     assert 0.3 < rms_z < 3.0, rms_z
     # One pose as a 1-D array, in mm and degrees.
-    one = urdf_dh.predict(cal, np.degrees(q[0]), frame="base", length_unit="mm", angle_unit="deg")
+    one = urdf_dh.predict(cal, np.degrees(q[0]), length_unit="mm", angle_unit="deg")
     np.testing.assert_allclose(one.points[0], 1000 * p.points[0], atol=1e-9)
     tool = urdf_dh.predict(cal, q[:5], targets="tool", frame="base")
     assert tool.rpy.shape == (5, 3) and tool.uncertainty.shape == (5, 6)
 
 
 def test_compensate_brings_the_true_robot_to_the_nominal_goal(sets):
-    tmp, data, truth, _ = sets
+    tmp, data, truth = sets
     cal = tmp / "cal2.yaml"
     urdf_dh.calibrate(UR5, data, out=cal)
     program = read(simulate(tmp, "program", 30, 99, noise=0.0, planted=False)[0])[JOINTS]
     q, errors, failures = urdf_dh.compensate(UR5, cal, program.to_numpy())
     assert q.shape == (30, 6) and errors.shape == (30, 4)
-    # The program's first pose is the zero pose (stretched arm, aligned wrist): singular, named.
-    assert any(f.startswith("p0 ") for f in failures), failures
-    done = [i for i in range(30) if not any(f.startswith(f"p{i} ") for f in failures)]
+    # Poses without a config column are named by their line (the header is line 1). The
+    # program's first pose is the zero pose (stretched arm, aligned wrist): singular, named.
+    assert any(f.startswith("line2 (line 2): needs more than --max-change") for f in failures), failures
+    done = [i for i in range(30) if not any(f.startswith(f"line{i + 2} ") for f in failures)]
     assert len(done) >= 25
     # Where the true robot's tool goes at the commanded and the corrected values.
     goal = urdf_dh.predict(UR5, program.to_numpy(), targets="tool", frame="base").points
@@ -136,7 +143,7 @@ def test_compensate_brings_the_true_robot_to_the_nominal_goal(sets):
 
 
 def test_bad_inputs_raise_the_cli_messages(sets, tmp_path):
-    _, data, _, _ = sets
+    _, data, _ = sets
     with pytest.raises(urdf_dh.UrdfDhError, match="effect"):
         urdf_dh.calibrate(UR5, data, effects=["no_such_effect:elbow_joint"])
     missing = tmp_path / "missing.csv"

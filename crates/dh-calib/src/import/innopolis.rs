@@ -4,7 +4,10 @@
 //! # Layout
 //! A CSV with header `config_id, q1_rad..q6_rad, mA_x_m, mA_y_m, mA_z_m, mB_…, mC_…`: one row
 //! per measurement, ten consecutive rows repeating each of 24 configurations. Columns are found
-//! by name, so their order does not matter.
+//! by name, so their order does not matter. The course's own `calibration_dataset.mat` (variables
+//! `q`, `mA`, `mB`, `mC`) reads too, through [`super::mat`]: its columns `q_1..q_6`,
+//! `mA_1..mA_3` (x, y, z), ... stand for the CSV's, and without `config_id` a run of consecutive
+//! rows with the same joint values is one configuration (`0`, `1`, ..., as the CSV's `config_id`).
 //!
 //! # Result
 //! - joints `joint_1..joint_6` = `q1..q6`, radians, the controller's values as recorded (the
@@ -42,29 +45,35 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
             found: "only a header",
         });
     }
-    let find = |name: &str| {
-        header
-            .fields
-            .iter()
-            .position(|f| f == name)
+    // A column by its CSV name, or by its name in the .mat export.
+    let find = |name: &str, mat: &str| {
+        let at = |n: &str| header.fields.iter().position(|f| f == n);
+        at(name)
+            .or_else(|| at(mat))
             .ok_or_else(|| DataError::Format {
                 line: header.line,
                 expected: format!("a column '{name}'"),
                 found: format!("columns {}", header.fields.join(", ")),
             })
     };
-    let config_col = find("config_id")?;
+    let config_col = find("config_id", "config_id").ok();
     let joint_cols = (1..=6)
-        .map(|i| find(&format!("q{i}_rad")))
+        .map(|i| find(&format!("q{i}_rad"), &format!("q_{i}")))
         .collect::<Result<Vec<_>, _>>()?;
     let mut marker_cols = Vec::new();
     for marker in ["mA", "mB", "mC"] {
         let mut xyz = [0; 3];
-        for (slot, axis) in xyz.iter_mut().zip(["x", "y", "z"]) {
-            *slot = find(&format!("{marker}_{axis}_m"))?;
+        for ((slot, axis), k) in xyz.iter_mut().zip(["x", "y", "z"]).zip(1..) {
+            *slot = find(&format!("{marker}_{axis}_m"), &format!("{marker}_{k}"))?;
         }
         marker_cols.push(xyz);
     }
+    if config_col.is_none() && !header.fields.iter().any(|f| f == "q_1") {
+        // The CSV layout needs its config_id; only the .mat export goes without.
+        find("config_id", "config_id")?;
+    }
+    let mut previous: Option<Vec<f64>> = None;
+    let mut runs = 0usize;
 
     let mut samples = Vec::with_capacity(3 * rows.len());
     for row in rows {
@@ -81,7 +90,16 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
             .iter()
             .map(|&i| cell(i))
             .collect::<Result<Vec<_>, _>>()?;
-        let config = row.fields[config_col].clone();
+        let config = match config_col {
+            Some(c) => row.fields[c].clone(),
+            None => {
+                if previous.as_ref() != Some(&q) {
+                    runs += 1;
+                    previous = Some(q.clone());
+                }
+                (runs - 1).to_string()
+            }
+        };
         for (target, xyz) in marker_cols.iter().enumerate() {
             let point = Vector3::new(cell(xyz[0])?, cell(xyz[1])?, cell(xyz[2])?);
             samples.push(Sample {
@@ -125,6 +143,23 @@ q1_rad,config_id,q2_rad,q3_rad,q4_rad,q5_rad,q6_rad,mA_x_m,mA_y_m,mA_z_m,mB_x_m,
         assert_eq!(s.point, Vector3::new(2.1, 2.2, 2.3));
         assert_eq!(m.samples[3].point.x, 1.1001);
         assert!(m.samples.iter().all(|s| s.config.as_deref() == Some("0")));
+    }
+
+    #[test]
+    fn the_mat_export_reads_with_configurations_from_runs() {
+        let text = "q_1,q_2,q_3,q_4,q_5,q_6,mA_1,mA_2,mA_3,mB_1,mB_2,mB_3,mC_1,mC_2,mC_3
+0.5,0.1,0.2,-1,0.3,2,1.1,1.2,1.3,2.1,2.2,2.3,3.1,3.2,3.3
+0.5,0.1,0.2,-1,0.3,2,1.1001,1.2,1.3,2.1,2.2,2.3,3.1,3.2,3.3
+0.6,0.1,0.2,-1,0.3,2,1.1,1.2,1.3,2.1,2.2,2.3,3.1,3.2,3.3
+";
+        let m = parse(text).unwrap();
+        let configs: Vec<&str> = m
+            .samples
+            .iter()
+            .map(|s| s.config.as_deref().unwrap())
+            .collect();
+        assert_eq!(configs, ["0", "0", "0", "0", "0", "0", "1", "1", "1"]);
+        assert_eq!(m.samples[8].point, Vector3::new(3.1, 3.2, 3.3));
     }
 
     #[test]
