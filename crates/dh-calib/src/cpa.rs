@@ -1561,12 +1561,14 @@ mod tests {
 
     fn set(qs: &[[f64; 2]]) -> Measurements {
         Measurements {
+            sessions: Vec::new(),
             joint_names: vec!["a".into(), "b".into()],
             targets: vec!["t".into()],
             samples: qs
                 .iter()
                 .enumerate()
                 .map(|(i, q)| crate::data::Sample {
+                    session: 0,
                     q: q.to_vec(),
                     target: 0,
                     point: Vector3::zeros(),

@@ -136,6 +136,7 @@ impl SocketProblem<'_> {
 
     fn observed(&self, x: &[f64], c: &Contact) -> Observed {
         Observed {
+            session: 0,
             q: c.q.clone(),
             observation: Observation::Point {
                 target: c.target,
@@ -1319,7 +1320,7 @@ fn estimates(
             )
         };
         let (nom, est) = match p.block {
-            Block::Device => pose(&Isometry3::identity()),
+            Block::Device | Block::Session(_) => pose(&Isometry3::identity()),
             Block::Base => pose(&nominal.base),
             Block::Tool => pose(&nominal.tool),
             Block::Mount(b) => pose(

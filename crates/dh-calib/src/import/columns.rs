@@ -200,6 +200,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         None => format!("{}", c + 1),
     };
     let mut m = Measurements {
+        sessions: Vec::new(),
         joint_names: joint_names.clone(),
         targets: Vec::new(),
         samples: Vec::new(),
@@ -308,6 +309,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             _ => Split::Calibration,
         };
         m.samples.push(Sample {
+            session: 0,
             q,
             target,
             point: p,
