@@ -257,7 +257,8 @@ pub struct Report {
     pub calibrated: DhTable,
     /// Estimated `T_device_base` (of the first calibration session when there are several).
     pub device: Isometry3<f64>,
-    /// Every session's device frame and RMS (one entry for a set without sessions).
+    /// Every session's device frame and RMS (one entry for a set without sessions); the first
+    /// is the session of `device`.
     pub sessions: Vec<crate::sessions::SessionReport>,
     /// Estimated target positions in the tip frame.
     pub targets: Vec<(String, Vector3<f64>)>,
@@ -1134,6 +1135,11 @@ impl<'a> Session<'a> {
                 .collect();
             crate::predict::Covariance::new(names, c.clone()).ok()
         });
+        notes.extend(crate::sessions::moved_note(
+            self.session_names.len(),
+            final_.rms,
+            final_.val_rms,
+        ));
         let verdict = crate::diagnose::verdict(
             self,
             last,

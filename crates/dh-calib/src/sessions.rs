@@ -191,8 +191,10 @@ pub(crate) fn distance_in(model: &Model, x: &[f64], o: &Observed, frame: &Isomet
     (p.coords * model.scale_at(x, &o.q) - measured(o)).norm()
 }
 
-/// Per session of `data`: its frame at `x` and the RMS of its calibration and validation
-/// distances (`cal_d`, `val_d` in the order of `prep.cal`, `prep.val`).
+/// Per session named in `names` (one unnamed session when empty): its frame at `x` and the
+/// RMS of its calibration and validation distances (`cal_d`, `val_d` in the order of
+/// `prep.cal`, `prep.val`). The first entry is the session of the `device` block (the first
+/// with calibration samples), the others follow in file order.
 pub(crate) fn reports(
     model: &Model,
     x: &[f64],
@@ -205,7 +207,13 @@ pub(crate) fn reports(
     let rms = |d: &[f64]| {
         (!d.is_empty()).then(|| (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt())
     };
-    (0..names.len().max(1))
+    // The `device` block's session first, then the others in file order.
+    let mut order = sessions_of(&prep.cal);
+    order.truncate(1);
+    let first = order.first().copied();
+    order.extend((0..names.len().max(1)).filter(|s| Some(*s) != first));
+    order
+        .into_iter()
         .filter_map(|s| {
             let c: Vec<f64> = prep
                 .cal
@@ -254,3 +262,21 @@ pub(crate) fn unseen_notes(data: &Measurements, prep: &Prepared) -> Vec<String> 
         })
         .collect()
 }
+
+/// A note when validation samples without their own session are far worse than the
+/// calibration (`val_rms` above [`MOVED_RATIO`] times `rms` and above [`MOVED_RMS`]): the
+/// device was probably moved between them, which a `session` column would say.
+pub(crate) fn moved_note(sessions: usize, rms: f64, val_rms: Option<f64>) -> Option<String> {
+    let v = val_rms?;
+    (sessions <= 1 && v > MOVED_RATIO * rms && v > MOVED_RMS).then(|| {
+        format!(
+            "the validation RMS ({v:.6} m) is {:.0} x the calibration RMS: if the validation data was measured in another session (the device moved), name each sample's session in a `session` column so that each gets its own device frame",
+            v / rms.max(f64::MIN_POSITIVE)
+        )
+    })
+}
+
+/// See [`moved_note`]: validation RMS over calibration RMS.
+pub const MOVED_RATIO: f64 = 100.0;
+/// See [`moved_note`]: validation RMS (metres).
+pub const MOVED_RMS: f64 = 0.01;
