@@ -280,3 +280,32 @@ pub(crate) fn moved_note(sessions: usize, rms: f64, val_rms: Option<f64>) -> Opt
 pub const MOVED_RATIO: f64 = 100.0;
 /// See [`moved_note`]: validation RMS (metres).
 pub const MOVED_RMS: f64 = 0.01;
+
+/// The validation observations for the effect search's linearised held-out figures
+/// ([`crate::diagnose`]): those of an unseen session (see [`unseen_frames`]) are moved from
+/// their fitted frame `T_u` into the `device` block's frame `T_d` at `x`
+/// (`p' = T_d · T_u⁻¹ · p`), where the model compares them; the frame is held at its fit at `x`
+/// (not refitted per candidate). The others are unchanged.
+pub(crate) fn val_for_linearisation(model: &Model, x: &[f64], prep: &Prepared) -> Vec<Observed> {
+    let unseen = unseen_frames(model, x, prep);
+    if unseen.is_empty() {
+        return prep.val.clone();
+    }
+    let device = model.device_at(x);
+    prep.val
+        .iter()
+        .map(|o| {
+            let mut o = o.clone();
+            if let Some((_, t)) = unseen.iter().find(|(s, _)| *s == o.session) {
+                let to_device = device * t.inverse();
+                match &mut o.observation {
+                    Observation::Point { point, .. } => {
+                        *point = (to_device * Point3::from(*point)).coords;
+                    }
+                    Observation::Pose(p) => *p = to_device * *p,
+                }
+            }
+            o
+        })
+        .collect()
+}
