@@ -423,6 +423,14 @@ pub struct CpaResult {
 /// the DH extraction.
 pub fn analyse(m: &Measurements, opts: &CpaOptions) -> Result<CpaResult, CpaError> {
     check_input(m, opts)?;
+    if m.session_count() > 1 {
+        // Circles fitted across sessions would mix device frames.
+        return Err(CpaError::InvalidOption {
+            option: "session",
+            expected: "one measurement session (circles are fitted in one device frame); give a nominal model to calibrate several sessions",
+            found: format!("{} sessions ({})", m.session_count(), m.sessions.join(", ")),
+        });
+    }
     let kinds: Vec<JointKind> = m
         .joint_names
         .iter()

@@ -832,6 +832,16 @@ fn run_sockets(
     options: &CalibrationOptions,
     auto: Option<&Auto<'_>>,
 ) -> Result<SocketReport, CalibError> {
+    if data.session_count() > 1 {
+        return Err(CalibError::BadOption {
+            what: "contact calibration".into(),
+            reason: format!(
+                "expected one measurement session (the socket model has one device frame), found {} ({})",
+                data.session_count(),
+                data.sessions.join(", ")
+            ),
+        });
+    }
     let prep = prepare(tree, data)?;
     let cal = contacts_of(data, &prep.cal, Split::Calibration)?;
     let val = contacts_of(data, &prep.val, Split::Validation)?;
