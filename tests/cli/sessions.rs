@@ -205,3 +205,79 @@ fn a_session_too_small_for_a_frame_or_without_a_name_is_refused() {
     assert!(out.starts_with("exit: 2"), "{out}");
     assert!(out.contains("line 4") && out.contains("session"), "{out}");
 }
+
+/// The CSV `text` with only the rows whose last cell `keep` accepts (comments and header kept).
+fn rows_where(text: &str, keep: impl Fn(&str) -> bool) -> String {
+    text.lines()
+        .filter(|l| {
+            l.starts_with('#') || l.ends_with(",session") || keep(l.rsplit(',').next().unwrap())
+        })
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
+
+#[test]
+fn a_validation_file_of_another_day_gets_its_own_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = simulated(dir.path());
+    let text = std::fs::read_to_string(&data).unwrap();
+    // The set column marks s3 for validation; a separate file holds it.
+    let cal = path(dir.path(), "cal.csv");
+    let val = path(dir.path(), "val.csv");
+    std::fs::write(&cal, rows_where(&text, |s| s != "s3")).unwrap();
+    std::fs::write(&val, rows_where(&text, |s| s == "s3")).unwrap();
+    let report: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        UR5,
+        "--data",
+        &cal,
+        "--validate",
+        &val,
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    let sessions = report["sessions"].as_array().unwrap();
+    assert_eq!(sessions.len(), 3);
+    assert_eq!(sessions[2]["name"], "s3");
+    assert_eq!(sessions[2]["fitted_on_validation"], true);
+    let v = report["val_rms_after"].as_f64().unwrap();
+    assert!(v < 1.15 * 3f64.sqrt() * NOISE, "validation RMS {v}");
+
+    // Without session columns, the other day's file is compared in the first day's frame:
+    // metres off, and a note says what to do.
+    let strip = |t: String| {
+        rows_where(&t, |_| true)
+            .lines()
+            .map(|l| match l.starts_with('#') {
+                true => format!("{l}\n"),
+                false => format!("{}\n", &l[..l.rfind(',').unwrap()]),
+            })
+            .collect::<String>()
+    };
+    std::fs::write(&cal, strip(rows_where(&text, |s| s == "s1"))).unwrap();
+    std::fs::write(&val, strip(rows_where(&text, |s| s == "s3"))).unwrap();
+    let report: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        UR5,
+        "--data",
+        &cal,
+        "--validate",
+        &val,
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    assert!(report["val_rms_after"].as_f64().unwrap() > 0.01);
+    assert!(
+        report["notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("`session` column")),
+        "{}",
+        report["notes"]
+    );
+}

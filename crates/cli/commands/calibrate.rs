@@ -547,7 +547,9 @@ fn merge_validation(data: &mut Measurements, extra: Measurements) {
         .enumerate()
         .map(|(i, t)| (t.clone(), i))
         .collect();
+    let sessions = super::calibrate_sessions::merge(data, &extra);
     for mut s in extra.samples {
+        s.session = sessions.get(s.session).copied().unwrap_or(0);
         let name = extra.targets.get(s.target).cloned().unwrap_or_default();
         let next = data.targets.len();
         let k = *index.entry(name.clone()).or_insert_with(|| {

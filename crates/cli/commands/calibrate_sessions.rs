@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use dh_calib::calibrate::Report;
+use dh_calib::data::Measurements;
 use nalgebra::Isometry3;
 use serde::Serialize;
 
@@ -129,4 +130,37 @@ pub fn read_back_deviation(docs: &[SessionDoc], back: &[(String, Isometry3<f64>)
             d.translation.vector.norm().max(d.rotation.angle())
         })
         .fold(0.0, f64::max)
+}
+
+/// Name of the session of a validation file without a `session` column when the calibration
+/// data names its sessions (or the other way round).
+pub const UNNAMED_VALIDATION: &str = "validation";
+
+/// Matches the sessions of `extra` (a validation file) to those of `data` by name, adding the
+/// new ones to `data.sessions`; returns `data`'s index of each of `extra`'s sessions. When
+/// neither names sessions, everything stays in one session. When only one of them does, the
+/// other's samples are one session of their own (`"1"` for the calibration data,
+/// [`UNNAMED_VALIDATION`] for the validation file), whose frame is then estimated apart.
+pub fn merge(data: &mut Measurements, extra: &Measurements) -> Vec<usize> {
+    if data.sessions.is_empty() && extra.sessions.is_empty() {
+        return vec![0];
+    }
+    if data.sessions.is_empty() {
+        data.sessions.push(data.session_name(0));
+    }
+    let names: Vec<String> = if extra.sessions.is_empty() {
+        vec![UNNAMED_VALIDATION.to_string()]
+    } else {
+        extra.sessions.clone()
+    };
+    names
+        .into_iter()
+        .map(|n| match data.sessions.iter().position(|s| *s == n) {
+            Some(i) => i,
+            None => {
+                data.sessions.push(n);
+                data.sessions.len() - 1
+            }
+        })
+        .collect()
 }
