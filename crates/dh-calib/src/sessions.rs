@@ -48,7 +48,8 @@ pub struct SessionReport {
 
 /// Checks the sessions of `data`: every used session has a non-empty name and at least
 /// [`MIN_SESSION_POSES`] distinct poses (samples sharing `config`, or else the same joint
-/// values, are one pose) in each split it appears in.
+/// values, are one pose) of calibration samples, or of validation samples for a session
+/// without calibration samples (whose frame they fix).
 ///
 /// # Errors
 /// [`CalibError::BadOption`] naming the session and its first sample's line.
@@ -84,9 +85,14 @@ pub fn check(data: &Measurements) -> Result<(), CalibError> {
             e.1.push(key);
         }
     }
+    let calibrated: Vec<usize> = seen.keys().filter(|k| !k.1).map(|k| k.0).collect();
     let mut found: Vec<_> = seen.into_iter().collect();
     found.sort_by_key(|(_, (line, _))| *line);
     for ((s, val), (line, poses)) in found {
+        // Validation samples of a calibrated session use its frame: any number will do.
+        if val && calibrated.contains(&s) {
+            continue;
+        }
         if poses.len() < MIN_SESSION_POSES {
             return Err(CalibError::BadOption {
                 what: format!(
