@@ -68,6 +68,17 @@ struct CalibrationRecord {
     targets: Vec<TargetRecord>,
     #[serde(default)]
     covariance: Option<CovarianceDoc>,
+    /// Every measurement session's device frame but the first's (`device`).
+    #[serde(default)]
+    sessions: Vec<SessionRecord>,
+}
+
+/// A session's device frame (metres, roll-pitch-yaw radians).
+#[derive(Clone, Debug, Deserialize)]
+struct SessionRecord {
+    name: String,
+    xyz: [f64; 3],
+    rpy: [f64; 3],
 }
 
 /// What `predict` reads of a `simulate` truth file's `truth` section: the simulated robot's
@@ -105,6 +116,9 @@ pub struct CalibratedModel {
     pub has_device: bool,
     /// The map from measured joint columns to the table's rows.
     pub joints: JointMap,
+    /// The other measurement sessions' device frames `T_device_base` (the `calibration`
+    /// section's `sessions`), by name; `calibrated` holds the first session's.
+    pub sessions: Vec<(String, Isometry3<f64>)>,
 }
 
 /// Loads `path` (see the module docs).
@@ -188,6 +202,11 @@ fn assemble(
         )
     })?;
     let has_device = record.device.is_some();
+    let sessions = record
+        .sessions
+        .iter()
+        .map(|s| (s.name.clone(), dh_core::pose::from_xyz_rpy(s.xyz, s.rpy)))
+        .collect();
     let device = record.device.map_or_else(Isometry3::identity, |p| {
         dh_core::pose::from_xyz_rpy(p.xyz, p.rpy)
     });
@@ -219,5 +238,6 @@ fn assemble(
         calibrated,
         has_device,
         joints,
+        sessions,
     })
 }

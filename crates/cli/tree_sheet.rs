@@ -665,6 +665,7 @@ branches:
             ["t1", "t2", "r1", "r2", "l1"]
         );
         let mut data = dh_calib::data::Measurements {
+            sessions: Vec::new(),
             joint_names: vec![
                 "t1".into(),
                 "t2".into(),
@@ -674,6 +675,7 @@ branches:
             ],
             targets: vec!["l".into()],
             samples: vec![dh_calib::data::Sample {
+                session: 0,
                 q: vec![0.1, 0.2, 0.3, 0.4, 0.5],
                 target: 0,
                 point: Vector3::zeros(),

@@ -135,6 +135,7 @@ fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u6
                     continue;
                 };
                 samples.push(Sample {
+                    session: 0,
                     q,
                     target: 0,
                     point: Vector3::zeros(),
@@ -160,6 +161,7 @@ fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u6
         }
     }
     let data = Measurements {
+        sessions: Vec::new(),
         joint_names: table.rows.iter().map(|r| r.name.clone()).collect(),
         targets: vec!["ball".into()],
         samples,

@@ -17,6 +17,7 @@ mod measured;
 mod outputs;
 mod predict;
 mod roundtrip;
+mod sessions;
 mod tree;
 mod writers;
 mod written;

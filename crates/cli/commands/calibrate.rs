@@ -479,8 +479,11 @@ pub struct CalibrationDoc {
     pub selected_effects: Vec<String>,
     /// The candidate table of `--effects auto` (empty otherwise).
     pub candidates: Vec<CandidateDoc>,
-    /// Estimated robot base in the device frame.
+    /// Estimated robot base in the device frame (of the first session with several).
     pub device: PoseSi,
+    /// With several measurement sessions: each one's device frame and RMS; absent otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sessions: Vec<super::calibrate_sessions::SessionDoc>,
     /// Estimated targets in the tip frame.
     pub targets: Vec<TargetDoc>,
     /// Remarks.
@@ -544,7 +547,9 @@ fn merge_validation(data: &mut Measurements, extra: Measurements) {
         .enumerate()
         .map(|(i, t)| (t.clone(), i))
         .collect();
+    let sessions = super::calibrate_sessions::merge(data, &extra);
     for mut s in extra.samples {
+        s.session = sessions.get(s.session).copied().unwrap_or(0);
         let name = extra.targets.get(s.target).cloned().unwrap_or_default();
         let next = data.targets.len();
         let k = *index.entry(name.clone()).or_insert_with(|| {
@@ -947,6 +952,7 @@ fn document(args: &CalibrateArgs, inputs: &Inputs, report: &Report) -> Calibrati
         selected_effects: report.selected_effects.clone(),
         candidates: report.candidates.iter().map(CandidateDoc::from).collect(),
         device: PoseSi::of(&report.device),
+        sessions: super::calibrate_sessions::docs(report),
         targets: report
             .targets
             .iter()
@@ -1166,11 +1172,12 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         "estimated parameters (nominal -> estimate +- standard error):"
     );
     let width = crate::guard::column_width(doc.parameters.iter().map(|p| p.name.as_str()), 4);
-    for p in doc
-        .parameters
-        .iter()
-        .filter(|p| p.free && !p.name.starts_with("device.") && !p.name.starts_with("target."))
-    {
+    for p in doc.parameters.iter().filter(|p| {
+        p.free
+            && !p.name.starts_with("device.")
+            && !p.name.starts_with("session.")
+            && !p.name.starts_with("target.")
+    }) {
         let _ = writeln!(
             s,
             "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
@@ -1197,6 +1204,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         units.angle.symbol(),
         rpy(doc.device.rpy)
     );
+    super::calibrate_sessions::text(&mut s, &doc.sessions, &xyz, &rpy, &o);
     for t in &doc.targets {
         let _ = writeln!(
             s,
@@ -1320,6 +1328,7 @@ fn model_text(
         val_rms_before: doc.val_rms_before,
         val_rms_after: doc.val_rms_after,
         device: doc.device.clone(),
+        sessions: super::calibrate_sessions::frames(&doc.sessions),
         targets: doc.targets.clone(),
         effects: doc
             .parameters
@@ -1408,7 +1417,7 @@ fn model_text(
             device: report.device,
         },
     )?;
-    let proof = predict_proof(path, &text, report, &q, &target, proof)?;
+    let proof = predict_proof(path, &text, report, &doc.sessions, &q, &target, proof)?;
     Ok((text, proof))
 }
 
@@ -1423,6 +1432,7 @@ fn predict_proof(
     path: &str,
     text: &str,
     report: &Report,
+    sessions: &[super::calibrate_sessions::SessionDoc],
     q: &[Vec<f64>],
     target: &[usize],
     mut proof: WrittenDoc,
@@ -1446,6 +1456,11 @@ fn predict_proof(
         let d = (back.calibrated.point(q, k, frame) - fitted.point(q, k, frame)).norm();
         worst = worst.max(if d.is_finite() { d } else { f64::INFINITY });
     }
+    // The other sessions' device frames read back as written.
+    worst = worst.max(super::calibrate_sessions::read_back_deviation(
+        sessions,
+        &back.sessions,
+    ));
     proof.max_deviation = proof.max_deviation.max(worst);
     proof.passed &= worst <= written::WRITTEN_TOLERANCE;
     Ok(proof)
@@ -1520,6 +1535,9 @@ struct CalibrationSection {
     val_rms_before: Option<f64>,
     val_rms_after: Option<f64>,
     device: PoseSi,
+    /// Every session's device frame but the first's (`device`), with several sessions.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    sessions: Vec<super::calibrate_sessions::SessionFrameDoc>,
     targets: Vec<TargetDoc>,
     effects: Vec<(String, f64)>,
     /// Covariance of the last step's free parameters: what `predict` propagates.

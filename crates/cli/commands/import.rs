@@ -238,6 +238,10 @@ pub struct ImportCli {
     /// `--layout columns`: the split column (calibration/train, validation/test).
     #[arg(long, value_name = "COL")]
     set: Option<String>,
+    /// `--layout columns`: the measurement session column (the device was moved between
+    /// sessions; each gets its own device frame).
+    #[arg(long, value_name = "COL")]
+    session: Option<String>,
     /// `--layout columns`: the separator [default: `,`, `;` or tab, detected].
     #[arg(long, value_enum)]
     delimiter: Option<Delimiter>,
@@ -341,6 +345,7 @@ impl ImportCli {
                     sigma: one("--sigma", &self.sigma)?,
                     config: one("--config", &self.config)?,
                     set: one("--set", &self.set)?,
+                    session: one("--session", &self.session)?,
                     delimiter: self.delimiter.map(|d| match d {
                         Delimiter::Comma => ',',
                         Delimiter::Semicolon => ';',

@@ -3,6 +3,7 @@
 pub mod batch;
 pub mod calibrate;
 pub mod calibrate_findings;
+pub mod calibrate_sessions;
 pub mod calibrate_tree;
 pub mod check;
 pub mod compensate;

@@ -54,6 +54,9 @@ pub struct SimulateArgs {
     pub repeats: usize,
     /// Fraction of poses (the last ones) held out for validation.
     pub validation: f64,
+    /// Measurement sessions: consecutive blocks of poses, each measured from its own device
+    /// frame (see `dh_calib::simulate::SimulationOptions::sessions`).
+    pub sessions: usize,
     /// Seed.
     pub seed: u64,
     /// The CSV to write.
@@ -102,6 +105,9 @@ struct TruthSection {
     samples: usize,
     sigma: f64,
     device: PoseSi,
+    /// With several sessions: every session's true device frame, by name (`s1` is `device`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    sessions: Vec<(String, PoseSi)>,
     targets: Vec<TargetDoc>,
     errors: Vec<(String, f64)>,
     effects: Vec<(String, f64)>,
@@ -149,6 +155,8 @@ fn apply_effects(
         }
     }
     for s in &mut data.samples {
+        // Each session's own device frame (the difference is a vector in that frame).
+        model.set_device(truth.sessions.get(s.session).unwrap_or(&truth.device));
         s.point += model.point(&x, &s.q, s.target) - model.point(&plain, &s.q, s.target);
     }
     Ok(applied)
@@ -284,6 +292,7 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         errors,
         validation_fraction: args.validation,
         repeats: args.repeats,
+        sessions: args.sessions,
         ..SimulationOptions::default()
     };
     let (mut data, truth) = run_simulation(table, &options).map_err(|e| {
@@ -346,6 +355,13 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         samples: data.samples.len(),
         sigma: truth.sigma,
         device: PoseSi::of(&truth.device),
+        sessions: if data.sessions.is_empty() {
+            Vec::new()
+        } else {
+            (0..truth.sessions.len())
+                .map(|s| (data.session_name(s), PoseSi::of(&truth.sessions[s])))
+                .collect()
+        },
         targets: truth
             .targets
             .iter()
@@ -446,6 +462,11 @@ pub struct SimulateCli {
     /// Fraction of the poses (the last ones) marked for validation.
     #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = crate::guard::fraction)]
     validation: f64,
+    /// Measurement sessions: the poses are split into N consecutive blocks, each measured from
+    /// its own device frame (moved by up to 0.5 m and 30 degrees from the first), and the CSV
+    /// gets a `session` column (s1, s2, ...).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = crate::guard::small_count)]
+    sessions: usize,
     /// Seed of the random stream (a seed reproduces a data set exactly).
     #[arg(long, value_name = "S", default_value_t = 1)]
     seed: u64,
@@ -475,6 +496,7 @@ impl SimulateCli {
             targets: self.targets,
             repeats: self.repeats,
             validation: self.validation,
+            sessions: self.sessions,
             seed: self.seed,
             out: self.out,
             truth: self.truth,

@@ -90,6 +90,7 @@ fn setup(table: &DhTable, data: &Measurements) -> (Model, Vec<Observed>, Vec<f64
         .iter()
         .filter(|s| s.split == Split::Calibration)
         .map(|s| Observed {
+            session: 0,
             q: s.q.clone(),
             observation: Observation::Point {
                 target: s.target,

@@ -23,9 +23,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use dh_core::DhTable;
-use nalgebra::{
-    DMatrix, Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3,
-};
+use nalgebra::{DMatrix, Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::data::{Measurements, Split};
 use crate::fit::{self, CalibError, FitOptions, FitOutcome, Termination};
@@ -257,8 +255,11 @@ pub struct Report {
     pub parametrisation: Vec<PairParametrisation>,
     /// The calibrated table, Hayati tilts in their rows' `beta` (see [`Model::table_at`]).
     pub calibrated: DhTable,
-    /// Estimated `T_device_base`.
+    /// Estimated `T_device_base` (of the first calibration session when there are several).
     pub device: Isometry3<f64>,
+    /// Every session's device frame and RMS (one entry for a set without sessions); the first
+    /// is the session of `device`.
+    pub sessions: Vec<crate::sessions::SessionReport>,
     /// Estimated target positions in the tip frame.
     pub targets: Vec<(String, Vector3<f64>)>,
     /// Remarks for the user (unused targets, approximations).
@@ -359,6 +360,7 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
             })
             .collect();
         let obs = Observed {
+            session: s.session,
             q,
             observation: Observation::Point {
                 target: s.target,
@@ -455,7 +457,7 @@ fn targets_given_device(model: &mut Model, x: &[f64], cal: &[Observed]) {
     let mut sums = vec![(Vector3::zeros(), 0usize); k];
     for o in cal {
         if let Observation::Point { target, point } = &o.observation {
-            let tip = model.tip_of(x, &o.q, model.target_chain(*target));
+            let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
             if let Some(s) = sums.get_mut(*target) {
                 s.0 += tip.inverse_transform_point(&(*point).into()).coords;
                 s.1 += 1;
@@ -487,33 +489,36 @@ fn initialise(
             model.set_target(k, *v);
         }
     }
+    let sessions = crate::sessions::sessions_of(cal);
     if let Some(d) = &options.device_guess {
         model.set_device(d);
         if options.target_guesses.is_none() {
-            targets_given_device(model, x, cal);
+            let first: Vec<Observed> = cal
+                .iter()
+                .filter(|o| Some(&o.session) == sessions.first())
+                .cloned()
+                .collect();
+            targets_given_device(model, x, &first);
+        }
+        // The other sessions' frames from the targets the guess gives.
+        for (s, t) in
+            crate::sessions::register_each(model, x, cal, sessions.get(1..).unwrap_or(&[]))?
+        {
+            model.set_session_device(s, &t);
         }
         return Ok(());
     }
-    let measured: Vec<Vector3<f64>> = cal.iter().map(observed_position).collect();
-    // Alternate registration and targets; a few rounds reach the basin of the least squares.
+    // Alternate registration (each session's frame) and targets; a few rounds reach the basin
+    // of the least squares.
     let rounds = if options.target_guesses.is_some() {
         1
     } else {
         4
     };
     for _ in 0..rounds {
-        let modelled: Vec<Vector3<f64>> = cal
-            .iter()
-            .map(|o| match &o.observation {
-                Observation::Point { target, .. } => {
-                    let fk = model.robot_fk_of(x, &o.q, model.target_chain(*target));
-                    (fk * Point3::from(model.target_at(x, *target))).coords
-                }
-                Observation::Pose(_) => model.robot_fk(x, &o.q).translation.vector,
-            })
-            .collect();
-        let d = register(&modelled, &measured)?;
-        model.set_device(&d);
+        for (s, t) in crate::sessions::register_each(model, x, cal, &sessions)? {
+            model.set_session_device(s, &t);
+        }
         if options.target_guesses.is_none() {
             targets_given_device(model, x, cal);
         }
@@ -597,7 +602,7 @@ fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<f64> {
     for o in &prep.val {
         if let Observation::Point { target, point } = &o.observation {
             if measured.get(*target) == Some(&false) {
-                let tip = model.tip_of(x, &o.q, model.target_chain(*target));
+                let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
                 let s = model.scale_at(x, &o.q);
                 let acc = &mut sums[*target];
                 acc.0 += tip.rotation.inverse() * (point - tip.translation.vector) * s;
@@ -610,13 +615,21 @@ fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<f64> {
             located[k] = Some(sum / *weight);
         }
     }
+    let unseen = crate::sessions::unseen_frames(model, x, prep);
     let mut r = [0.0; 6];
     prep.val
         .iter()
         .map(|o| match &o.observation {
+            _ if unseen.iter().any(|(s, _)| *s == o.session) => {
+                let frame = unseen
+                    .iter()
+                    .find(|(s, _)| *s == o.session)
+                    .map(|(_, t)| *t);
+                crate::sessions::distance_in(model, x, o, &frame.unwrap_or_default())
+            }
             Observation::Point { target, point } => match located.get(*target).copied().flatten() {
                 Some(p) => {
-                    let tip = model.tip_of(x, &o.q, model.target_chain(*target));
+                    let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
                     let s = model.scale_at(x, &o.q);
                     (tip.translation.vector + tip.rotation * p * s - point).norm()
                 }
@@ -655,7 +668,7 @@ pub(crate) fn validation_locations(
     for (i, o) in prep.val.iter().enumerate() {
         if let Observation::Point { target, .. } = &o.observation {
             if measured.get(*target) == Some(&false) {
-                let tip = model.tip_of(x, &o.q, model.target_chain(*target));
+                let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
                 groups[*target].0.push(i);
                 groups[*target]
                     .1
@@ -749,6 +762,8 @@ pub(crate) struct Session<'a> {
     measured: Vec<bool>,
     device_nominal: Isometry3<f64>,
     targets_nominal: Vec<Vector3<f64>>,
+    /// The name of every session of the data (see [`crate::sessions`]).
+    session_names: Vec<String>,
 }
 
 /// The chain of each target of `data` in `tree` (see [`CalibrationOptions::target_branches`]).
@@ -794,6 +809,7 @@ impl<'a> Session<'a> {
         options: &'a CalibrationOptions,
         effects: &[Arc<dyn Effect>],
     ) -> Result<Session<'a>, CalibError> {
+        crate::sessions::check(data)?;
         let prep = prepare(tree, data)?;
         if prep.cal.len() < 3 {
             return Err(CalibError::TooFewSamples {
@@ -804,6 +820,7 @@ impl<'a> Session<'a> {
         }
         let chains = target_chains(tree, data, options)?;
         let mut model = Model::new_tree(tree, &chains, &options.model)?;
+        crate::sessions::add_blocks(&mut model, data, &prep.cal);
         for e in effects {
             model.add_effect(e.clone())?;
         }
@@ -850,9 +867,13 @@ impl<'a> Session<'a> {
                 });
             }
         }
+        notes.extend(crate::sessions::unseen_notes(data, &prep));
         let device_nominal = model.device();
         let targets_nominal = model.targets().iter().map(|t| t.1).collect();
         Ok(Session {
+            session_names: (0..data.session_count())
+                .map(|s| data.session_name(s))
+                .collect(),
             model,
             prep,
             scales,
@@ -962,7 +983,7 @@ impl<'a> Session<'a> {
         let mut x = vec![0.0; self.model.parameter_count()];
         let measured = self.measured.clone();
         let nominal_columns = self.model.indices(|b| match b {
-            Block::Device => true,
+            Block::Device | Block::Session(_) => true,
             Block::Target(k) => measured[k],
             _ => false,
         });
@@ -1024,6 +1045,7 @@ impl<'a> Session<'a> {
                     .collect();
                 for &k in &targets {
                     synthetic.push(Observed {
+                        session: 0,
                         q: q.clone(),
                         observation: Observation::Point {
                             target: k,
@@ -1113,6 +1135,11 @@ impl<'a> Session<'a> {
                 .collect();
             crate::predict::Covariance::new(names, c.clone()).ok()
         });
+        notes.extend(crate::sessions::moved_note(
+            self.session_names.len(),
+            final_.rms,
+            final_.val_rms,
+        ));
         let verdict = crate::diagnose::verdict(
             self,
             last,
@@ -1139,6 +1166,7 @@ impl<'a> Session<'a> {
             parametrisation: model.pairs().to_vec(),
             calibrated: tree.trunk().clone(),
             device: model.device_at(&x),
+            sessions: self.session_reports(&x),
             targets: (0..model.targets().len())
                 .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
                 .collect(),
@@ -1151,6 +1179,25 @@ impl<'a> Session<'a> {
             verdict,
             covariance,
         }
+    }
+}
+
+impl Session<'_> {
+    /// Each session's frame and RMS at `x` (see [`crate::sessions::reports`]).
+    fn session_reports(&self, x: &[f64]) -> Vec<crate::sessions::SessionReport> {
+        let cal_d = distances(&self.model, x, &self.prep.cal);
+        let val_d = match self.validation {
+            Validation::Split { .. } => split_distances(&self.model, x, &self.prep),
+            _ => Vec::new(),
+        };
+        crate::sessions::reports(
+            &self.model,
+            x,
+            &self.session_names,
+            &self.prep,
+            &cal_d,
+            &val_d,
+        )
     }
 }
 
@@ -1344,7 +1391,7 @@ fn estimates(
     let mut done_blocks: Vec<Block> = Vec::new();
     for (c, p) in params.iter().enumerate() {
         match p.block {
-            Block::Device | Block::Base | Block::Tool | Block::Mount(_) => {
+            Block::Device | Block::Session(_) | Block::Base | Block::Tool | Block::Mount(_) => {
                 if done_blocks.contains(&p.block) {
                     continue;
                 }
@@ -1352,6 +1399,8 @@ fn estimates(
                 let idx = model.indices(|b| b == p.block);
                 let nom = match p.block {
                     Block::Device => xyz_rpy(&device_nominal),
+                    // The reference after the `nominal` step's rebase.
+                    Block::Session(_) => xyz_rpy(&model.pose_at(&vec![0.0; x.len()], p.block)),
                     Block::Base => xyz_rpy(&nominal.base),
                     Block::Mount(b) => model.tree().branches().get(b).map_or_else(
                         || xyz_rpy(&Isometry3::identity()),

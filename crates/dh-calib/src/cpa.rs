@@ -423,6 +423,14 @@ pub struct CpaResult {
 /// the DH extraction.
 pub fn analyse(m: &Measurements, opts: &CpaOptions) -> Result<CpaResult, CpaError> {
     check_input(m, opts)?;
+    if m.session_count() > 1 {
+        // Circles fitted across sessions would mix device frames.
+        return Err(CpaError::InvalidOption {
+            option: "session",
+            expected: "one measurement session (circles are fitted in one device frame); give a nominal model to calibrate several sessions",
+            found: format!("{} sessions ({})", m.session_count(), m.sessions.join(", ")),
+        });
+    }
     let kinds: Vec<JointKind> = m
         .joint_names
         .iter()
@@ -1561,12 +1569,14 @@ mod tests {
 
     fn set(qs: &[[f64; 2]]) -> Measurements {
         Measurements {
+            sessions: Vec::new(),
             joint_names: vec!["a".into(), "b".into()],
             targets: vec!["t".into()],
             samples: qs
                 .iter()
                 .enumerate()
                 .map(|(i, q)| crate::data::Sample {
+                    session: 0,
                     q: q.to_vec(),
                     target: 0,
                     point: Vector3::zeros(),

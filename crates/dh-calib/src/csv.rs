@@ -27,7 +27,10 @@
 //!   fixed point of this name, and the row's `x`, `y`, `z` cells are empty (the columns may be
 //!   absent when every row is a contact); with it, optional `partner`, `distance` and
 //!   `distance_sigma`: another socket at a known centre-to-centre distance from this one and
-//!   its standard deviation, in the length unit (both needed when `partner` is given).
+//!   its standard deviation, in the length unit (both needed when `partner` is given);
+//! - optional `session`: the measurement session (a non-empty name): the device was moved
+//!   between sessions, each has its own device frame (see [`crate::sessions`]); without the
+//!   column every row is in one session.
 //!
 //! Other columns are ignored. Cells may be double-quoted (`""` inside quotes is one quote).
 //! Column names and cells are trimmed of surrounding spaces.
@@ -499,7 +502,7 @@ pub(crate) fn number(text: &str, line: usize, column: &str) -> Result<f64, DataE
 }
 
 /// Columns of the canonical CSV that are not joints: a model's joint may not take these names.
-pub const RESERVED_COLUMNS: [&str; 14] = [
+pub const RESERVED_COLUMNS: [&str; 15] = [
     "x",
     "y",
     "z",
@@ -514,6 +517,7 @@ pub const RESERVED_COLUMNS: [&str; 14] = [
     "partner",
     "distance",
     "distance_sigma",
+    "session",
 ];
 
 /// What is wrong with a list of joint names that a dataset gives itself, as the columns of the
@@ -552,6 +556,7 @@ struct Columns {
     config: Option<usize>,
     sigma: Sigma,
     set: Option<usize>,
+    session: Option<usize>,
 }
 
 enum Sigma {
@@ -663,6 +668,7 @@ fn header_columns(header: &Record, joint_names: &[String]) -> Result<Columns, Da
         config: find("config"),
         sigma,
         set: find("set"),
+        session: find("session"),
     })
 }
 
@@ -725,6 +731,7 @@ pub fn parse_measurements_noting(
         .collect();
 
     let mut m = Measurements {
+        sessions: Vec::new(),
         joint_names: joint_names.to_vec(),
         targets: Vec::new(),
         samples: Vec::new(),
@@ -933,7 +940,7 @@ pub fn parse_measurements_noting(
             },
         };
 
-        for col in [cols.target, cols.config, cols.socket]
+        for col in [cols.target, cols.config, cols.socket, cols.session]
             .into_iter()
             .flatten()
         {
@@ -962,7 +969,25 @@ pub fn parse_measurements_noting(
                 text: text.into(),
             })?,
         };
+        let session = match cols.session {
+            None => 0,
+            Some(col) if cell(col).is_empty() => {
+                return Err(DataError::Format {
+                    line,
+                    expected: "a session name in column 'session'".into(),
+                    found: "an empty cell".into(),
+                })
+            }
+            Some(col) => match m.sessions.iter().position(|t| t == cell(col)) {
+                Some(i) => i,
+                None => {
+                    m.sessions.push(cell(col).to_string());
+                    m.sessions.len() - 1
+                }
+            },
+        };
         m.samples.push(Sample {
+            session,
             q,
             target,
             point,
@@ -999,7 +1024,8 @@ pub(crate) fn parse_split(text: &str) -> Option<Split> {
 /// Columns: the joints, `x,y,z`, `target`; `config` when any sample has one; `sigma` when every
 /// known standard deviation is isotropic, else `sx,sy,sz`; `set` when any sample is for
 /// validation; `socket` when any sample is a contact, with `partner,distance,distance_sigma`
-/// when any socket has a partner (contact rows leave `x,y,z` empty). Targets are written by name, so a target that no sample uses is not kept, and the
+/// when any socket has a partner (contact rows leave `x,y,z` empty); `session` when the set
+/// names sessions. Targets are written by name, so a target that no sample uses is not kept, and the
 /// targets come back numbered in order of first use.
 pub fn write_measurements(m: &Measurements) -> String {
     let any_config = m.samples.iter().any(|s| s.config.is_some());
@@ -1036,6 +1062,10 @@ pub fn write_measurements(m: &Measurements) -> String {
     }
     if any_partner {
         header.extend(["partner", "distance", "distance_sigma"].map(String::from));
+    }
+    let any_session = !m.sessions.is_empty();
+    if any_session {
+        header.push("session".into());
     }
     out.push_str(&header.join(","));
     out.push('\n');
@@ -1088,6 +1118,9 @@ pub fn write_measurements(m: &Measurements) -> String {
                 ]),
                 None => cells.extend([String::new(), String::new(), String::new()]),
             }
+        }
+        if any_session {
+            cells.push(quote(&m.session_name(s.session)));
         }
         out.push_str(&cells.join(","));
         out.push('\n');
@@ -1292,6 +1325,7 @@ j1, j2 ,x,y,z,target,config,sigma,set
     #[test]
     fn writing_round_trips_exactly() {
         let mk = |q: Vec<f64>, target, point, sigma, config: Option<&str>, split| Sample {
+            session: 0,
             q,
             target,
             point,
@@ -1302,6 +1336,7 @@ j1, j2 ,x,y,z,target,config,sigma,set
             socket: None,
         };
         let m = Measurements {
+            sessions: Vec::new(),
             joint_names: names(&["joint 1", "a,b"]),
             targets: names(&["SMR1", "with \"quote\""]),
             samples: vec![

@@ -34,6 +34,10 @@ pub struct Sample {
     /// `Some` for a contact sample (see [`crate::socket`]): the target sat in this unknown
     /// fixed point, `point` is not a measurement and is ignored.
     pub socket: Option<Socket>,
+    /// Measurement session: index into [`Measurements::sessions`] (0 when the set has none).
+    /// Samples of one session share one device frame `T_device_base`; the device (a laser
+    /// tracker) was moved between sessions.
+    pub session: usize,
 }
 
 /// An unknown fixed point that a target was placed in (a ball in a socket): every sample naming
@@ -66,6 +70,9 @@ pub struct Measurements {
     pub targets: Vec<String>,
     /// The samples, in file order.
     pub samples: Vec<Sample>,
+    /// Measurement session names (the `session` column), in order of first appearance; empty
+    /// when the set has no session column: every sample is then in one session, index 0.
+    pub sessions: Vec<String>,
 }
 
 impl Measurements {
@@ -75,6 +82,7 @@ impl Measurements {
         Measurements {
             joint_names: self.joint_names.clone(),
             targets: self.targets.clone(),
+            sessions: self.sessions.clone(),
             samples: self
                 .samples
                 .iter()
@@ -83,5 +91,19 @@ impl Measurements {
                 .map(|(_, s)| s.clone())
                 .collect(),
         }
+    }
+
+    /// Number of sessions (at least 1).
+    pub fn session_count(&self) -> usize {
+        self.sessions.len().max(1)
+    }
+
+    /// The name of session `s`: its entry of [`Measurements::sessions`], or `"1"`, `"2"`, …
+    /// (1-based) when the set names none.
+    pub fn session_name(&self, s: usize) -> String {
+        self.sessions
+            .get(s)
+            .cloned()
+            .unwrap_or_else(|| (s + 1).to_string())
     }
 }

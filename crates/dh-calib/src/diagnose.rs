@@ -863,7 +863,8 @@ fn score(
     }
     let held = match &session.validation {
         Validation::Split { .. } => {
-            let (jv, rv, sv) = dense(model, &prep.val, x, &columns, &session.scales);
+            let val = crate::sessions::val_for_linearisation(model, x, prep);
+            let (jv, rv, sv) = dense(model, &val, x, &columns, &session.scales);
             let locate = crate::calibrate::validation_locations(model, x, prep);
             Held::Split {
                 jv,

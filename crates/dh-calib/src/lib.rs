@@ -25,6 +25,7 @@ pub mod joints;
 pub mod model;
 pub mod outliers;
 pub mod predict;
+pub mod sessions;
 pub mod simulate;
 pub mod socket;
 mod stats;

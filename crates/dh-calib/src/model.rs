@@ -87,6 +87,10 @@ pub enum Unit {
 pub enum Block {
     /// The device frame (`T_device_base`).
     Device,
+    /// The device frame of measurement session `s` (index into
+    /// [`crate::data::Measurements::sessions`]) when it is not the first calibration session,
+    /// which uses [`Block::Device`] (see [`crate::sessions`]).
+    Session(usize),
     /// The table's base transform.
     Base,
     /// A row of the table (index into its rows).
@@ -313,6 +317,10 @@ pub struct Observed {
     pub q: Vec<f64>,
     /// The measurement.
     pub observation: Observation,
+    /// Measurement session (index into [`crate::data::Measurements::sessions`]): which device
+    /// frame measured it. Sessions without their own block ([`Model::add_session`]) use the
+    /// `device` block.
+    pub session: usize,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -444,6 +452,9 @@ pub struct Model {
     effects: Vec<EffectSlot>,
     scale_param: Option<usize>,
     pairs: Vec<PairParametrisation>,
+    /// Per session with its own device block: the session index and its op indices of each
+    /// chain (its block instead of the device block).
+    session_chains: Vec<(usize, Vec<Vec<usize>>)>,
 }
 
 fn finite(what: &str, v: f64) -> Result<f64, CalibError> {
@@ -590,6 +601,7 @@ impl Model {
             effects: Vec::new(),
             scale_param: None,
             pairs,
+            session_chains: Vec::new(),
         };
         m.push_pose_block("device", Block::Device, &Isometry3::identity());
         m.push_pose_block("base", Block::Base, &tree.trunk().base);
@@ -915,7 +927,7 @@ impl Model {
                 Block::Effect(_) => 1,
                 Block::Joint(_) => 2,
                 Block::Target(_) => 3,
-                Block::Device => 4,
+                Block::Device | Block::Session(_) => 4,
             })
             .collect()
     }
@@ -952,12 +964,20 @@ impl Model {
     pub fn rebase(&mut self, x: &mut [f64]) {
         let device = self.device_at(x);
         self.set_device(&device);
+        let sessions: Vec<usize> = self.session_chains.iter().map(|(s, _)| *s).collect();
+        for s in sessions {
+            let frame = self.session_device_at(x, s);
+            self.set_session_device(s, &frame);
+        }
         for k in 0..self.targets.len() {
             let t = self.target_at(x, k);
             self.targets[k].1 = t;
         }
         for (i, p) in self.parameters.iter().enumerate() {
-            if matches!(p.block, Block::Device | Block::Target(_)) {
+            if matches!(
+                p.block,
+                Block::Device | Block::Session(_) | Block::Target(_)
+            ) {
                 if let Some(v) = x.get_mut(i) {
                     *v = 0.0;
                 }
@@ -1061,6 +1081,80 @@ impl Model {
             .map_or(&[], |c| c.as_slice())
     }
 
+    /// [`Model::chain_ops`] of `chain` as measured in `session`.
+    fn session_ops(&self, chain: usize, session: usize) -> &[usize] {
+        match self.session_chains.iter().find(|(s, _)| *s == session) {
+            Some((_, chains)) => chains
+                .get(chain)
+                .or_else(|| chains.first())
+                .map_or(&[], |c| c.as_slice()),
+            None => self.chain_ops(chain),
+        }
+    }
+
+    /// Gives measurement session `session` its own device frame `T_device_base` (reference
+    /// `frame`, plus six parameters `session.<name>.x|y|z|rx|ry|rz` laid out as `device.*`),
+    /// appended to the parameters. Observations of other sessions keep the `device` block.
+    /// Adding a session twice is a no-op.
+    pub fn add_session(&mut self, session: usize, name: &str, frame: &Isometry3<f64>) {
+        if self.session_chains.iter().any(|(s, _)| *s == session) {
+            return;
+        }
+        let start = self.ops.len();
+        self.push_pose_block(&format!("session.{name}"), Block::Session(session), frame);
+        let block: Vec<usize> = (start..self.ops.len()).collect();
+        let chains = self
+            .chains
+            .iter()
+            .map(|c| {
+                let mut ops = block.clone();
+                ops.extend_from_slice(c.get(DEVICE_OPS..).unwrap_or(&[]));
+                ops
+            })
+            .collect();
+        self.session_chains.push((session, chains));
+    }
+
+    /// The sessions with their own device block, in the order added.
+    pub fn sessions(&self) -> Vec<usize> {
+        self.session_chains.iter().map(|(s, _)| *s).collect()
+    }
+
+    /// `T_device_base` of measurement session `session` at `x` (the `device` block's for a
+    /// session without its own).
+    pub fn session_device_at(&self, x: &[f64], session: usize) -> Isometry3<f64> {
+        if self.session_chains.iter().any(|(s, _)| *s == session) {
+            self.pose_at(x, Block::Session(session))
+        } else {
+            self.device_at(x)
+        }
+    }
+
+    /// Sets the reference device frame of `session` ([`Model::set_device`] for a session
+    /// without its own block).
+    pub fn set_session_device(&mut self, session: usize, device: &Isometry3<f64>) {
+        let op = self
+            .parameters
+            .iter()
+            .position(|p| p.block == Block::Session(session))
+            .and_then(|p| self.param_op[p]);
+        match op {
+            // The block's Fixed op precedes its six parameter ops.
+            Some(o) if o > 0 => self.ops[o - 1].fixed = Frame::from_iso(device),
+            _ => self.set_device(device),
+        }
+    }
+
+    /// Chain `chain`'s tip frame in session `session`'s device frame at `x` and `q` (its
+    /// position scaled by the device scale).
+    pub fn tip_in(&self, x: &[f64], q: &[f64], chain: usize, session: usize) -> Isometry3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &mut v);
+        let mut f = self.chain(&v, None, self.session_ops(chain, session));
+        f.t *= self.scale_factor(x, q);
+        f.to_iso()
+    }
+
     /// Where target `k` is in the device frame at parameters `x` and joint values `q` (one per
     /// row), metres (the device scale applied).
     pub fn point(&self, x: &[f64], q: &[f64], target: usize) -> Vector3<f64> {
@@ -1113,7 +1207,11 @@ impl Model {
             let mut scratch = scratch.borrow_mut();
             let v = &mut scratch.values;
             self.op_values(x, &obs.q, v);
-            let f = self.chain(v, None, self.chain_ops(self.observation_chain(obs)));
+            let f = self.chain(
+                v,
+                None,
+                self.session_ops(self.observation_chain(obs), obs.session),
+            );
             let s = self.scale_factor(x, &obs.q);
             self.write_residuals(x, &f, s, obs, out);
         });
@@ -1201,7 +1299,7 @@ impl Model {
         grad: &mut Vec<f64>,
     ) {
         self.op_values(x, &obs.q, v);
-        let ops = self.chain_ops(self.observation_chain(obs));
+        let ops = self.session_ops(self.observation_chain(obs), obs.session);
         let f = self.chain(v, Some((before, on)), ops);
         let scale = self.scale_factor(x, &obs.q);
         let phi = self.write_residuals(x, &f, scale, obs, residuals);

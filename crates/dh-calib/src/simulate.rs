@@ -85,7 +85,18 @@ pub struct SimulationOptions {
     pub repeats: usize,
     /// Parametrisation of the truth (Hayati threshold decides which rows have `beta`).
     pub model: ModelOptions,
+    /// Measurement sessions (at least 1): the poses are split into this many consecutive
+    /// blocks, session `s1`, `s2`, …; the first is measured from `device`, each later one from
+    /// its own frame `device · M` with `M` a random motion of the robot in its base frame (up to
+    /// [`SESSION_SHIFT`] metres and [`SESSION_TURN`] radians). With more than one the samples
+    /// name their session (see [`crate::sessions`]).
+    pub sessions: usize,
 }
+
+/// Largest translation between two simulated sessions' device frames (metres).
+pub const SESSION_SHIFT: f64 = 0.5;
+/// Largest rotation between two simulated sessions' device frames (radians, 30 degrees).
+pub const SESSION_TURN: f64 = std::f64::consts::PI / 6.0;
 
 impl Default for SimulationOptions {
     fn default() -> Self {
@@ -103,6 +114,7 @@ impl Default for SimulationOptions {
             validation_fraction: 0.0,
             repeats: 1,
             model: ModelOptions::default(),
+            sessions: 1,
         }
     }
 }
@@ -120,6 +132,8 @@ pub struct Truth {
     pub errors: Vec<(String, f64)>,
     /// Noise standard deviation per axis (metres).
     pub sigma: f64,
+    /// True `T_device_base` of every session (one entry, `device`, without sessions).
+    pub sessions: Vec<Isometry3<f64>>,
 }
 
 fn bad(what: &str, reason: String) -> CalibError {
@@ -255,10 +269,18 @@ pub fn simulate(
             }
         }
     }
+    let sessions = o.sessions.max(1);
+    // Drawn only with sessions: a seed gives the same single-session set as before.
+    let frames: Vec<Isometry3<f64>> = std::iter::once(device)
+        .chain((1..sessions).map(|_| device * session_motion(&mut rng)))
+        .collect();
     let n_val = (o.validation_fraction * poses.len() as f64).round() as usize;
     let first_val = poses.len() - n_val.min(poses.len());
     let mut samples = Vec::with_capacity(poses.len() * target_pos.len() * o.repeats.max(1));
+    let pose_count = poses.len().max(1);
     for (i, (q, config)) in poses.iter().enumerate() {
+        let session = i * sessions / pose_count;
+        model.set_device(&frames[session]);
         let split = if i >= first_val {
             Split::Validation
         } else {
@@ -269,6 +291,7 @@ pub fn simulate(
                 let p = model.point(&x, q, k);
                 let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * o.sigma);
                 samples.push(Sample {
+                    session,
                     q: q.clone(),
                     target: k,
                     point: p + noise,
@@ -292,6 +315,11 @@ pub fn simulate(
         .map(|(p, v)| (p.name.clone(), *v))
         .collect();
     let data = Measurements {
+        sessions: if sessions > 1 {
+            (1..=sessions).map(|s| format!("s{s}")).collect()
+        } else {
+            Vec::new()
+        },
         joint_names: nominal.rows.iter().map(|r| r.name.clone()).collect(),
         targets: names.clone(),
         samples,
@@ -302,8 +330,25 @@ pub fn simulate(
         targets: names.into_iter().zip(target_pos).collect(),
         errors,
         sigma: o.sigma,
+        sessions: frames,
     };
     Ok((data, truth))
+}
+
+/// A random rigid motion: a translation of uniform direction and length up to
+/// [`SESSION_SHIFT`], a rotation about a uniform axis by up to [`SESSION_TURN`].
+fn session_motion(rng: &mut ChaCha8Rng) -> Isometry3<f64> {
+    let unit = |rng: &mut ChaCha8Rng| {
+        let v = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
+        v.try_normalize(1e-12).unwrap_or_else(Vector3::x)
+    };
+    let shift = unit(rng) * rng.random_range(0.0..=SESSION_SHIFT);
+    let axis = unit(rng);
+    let turn = rng.random_range(0.0..=SESSION_TURN);
+    Isometry3::from_parts(
+        Translation3::from(shift),
+        UnitQuaternion::from_scaled_axis(axis * turn),
+    )
 }
 
 /// A uniformly random rotation and a position uniformly on the sphere of radius `distance`.

@@ -136,6 +136,7 @@ impl SocketProblem<'_> {
 
     fn observed(&self, x: &[f64], c: &Contact) -> Observed {
         Observed {
+            session: 0,
             q: c.q.clone(),
             observation: Observation::Point {
                 target: c.target,
@@ -831,6 +832,16 @@ fn run_sockets(
     options: &CalibrationOptions,
     auto: Option<&Auto<'_>>,
 ) -> Result<SocketReport, CalibError> {
+    if data.session_count() > 1 {
+        return Err(CalibError::BadOption {
+            what: "contact calibration".into(),
+            reason: format!(
+                "expected one measurement session (the socket model has one device frame), found {} ({})",
+                data.session_count(),
+                data.sessions.join(", ")
+            ),
+        });
+    }
     let prep = prepare(tree, data)?;
     let cal = contacts_of(data, &prep.cal, Split::Calibration)?;
     let val = contacts_of(data, &prep.val, Split::Validation)?;
@@ -1319,7 +1330,7 @@ fn estimates(
             )
         };
         let (nom, est) = match p.block {
-            Block::Device => pose(&Isometry3::identity()),
+            Block::Device | Block::Session(_) => pose(&Isometry3::identity()),
             Block::Base => pose(&nominal.base),
             Block::Tool => pose(&nominal.tool),
             Block::Mount(b) => pose(

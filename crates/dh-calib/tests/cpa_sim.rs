@@ -69,6 +69,7 @@ impl Rig {
             for t in 0..self.targets.len() {
                 let e = Vector3::from_fn(|_, _| noise.sample(&mut rng));
                 samples.push(Sample {
+                    session: 0,
                     q: q.clone(),
                     target: t,
                     point: self.point(q, t) + e,
@@ -81,6 +82,7 @@ impl Rig {
             }
         }
         Measurements {
+            sessions: Vec::new(),
             joint_names: self.table.rows.iter().map(|r| r.name.clone()).collect(),
             targets: (0..self.targets.len()).map(|t| format!("T{t}")).collect(),
             samples,

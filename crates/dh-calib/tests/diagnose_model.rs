@@ -147,6 +147,7 @@ fn tree_and_effect_jacobians_match_central_differences() {
         sampler.next_into(&mut q);
         let target = i % 2;
         obs.push(Observed {
+            session: 0,
             q: q.clone(),
             observation: Observation::Point {
                 target,
@@ -272,6 +273,7 @@ fn simulate_tree(
         for k in 0..2 {
             let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * sigma);
             samples.push(Sample {
+                session: 0,
                 q: q.clone(),
                 target: k,
                 point: m.point(&x, &q, k) + noise,
@@ -288,6 +290,7 @@ fn simulate_tree(
         }
     }
     Measurements {
+        sessions: Vec::new(),
         joint_names: tree.rows().iter().map(|r| r.name.clone()).collect(),
         targets: vec!["right".into(), "left".into()],
         samples,

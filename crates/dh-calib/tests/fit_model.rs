@@ -48,6 +48,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
         // Measurements a little off the model so that residuals are not zero.
         let point = m.point(x, &q, i % 2) + Vector3::new(1e-3, -2e-3, 5e-4);
         out.push(Observed {
+            session: 0,
             q: q.clone(),
             observation: Observation::Point {
                 target: i % 2,
@@ -60,6 +61,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
                 UnitQuaternion::from_euler_angles(0.02, -0.03, 0.05),
             );
         out.push(Observed {
+            session: 0,
             q: q.clone(),
             observation: Observation::Pose(pose),
         });

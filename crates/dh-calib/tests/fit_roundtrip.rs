@@ -461,6 +461,7 @@ fn bad_input_is_an_error() {
         Err(CalibError::BadTarget { target: 4, .. })
     ));
     let few = Measurements {
+        sessions: Vec::new(),
         samples: data.samples[..2].to_vec(),
         ..data.clone()
     };

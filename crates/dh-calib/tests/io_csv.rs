@@ -57,6 +57,7 @@ fn sample(joints: usize, targets: usize) -> impl Strategy<Value = Sample> {
         split(),
     )
         .prop_map(|(q, target, (x, y, z), sigma, config, split)| Sample {
+            session: 0,
             q,
             target,
             point: Vector3::new(x, y, z),
@@ -98,6 +99,7 @@ fn measurements() -> impl Strategy<Value = Measurements> {
                 .map(|(k, &t)| format!("{}{k}", names[t]))
                 .collect();
             Measurements {
+                sessions: Vec::new(),
                 joint_names: (0..joints).map(|j| format!("joint {j}")).collect(),
                 targets,
                 samples,

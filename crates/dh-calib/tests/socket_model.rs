@@ -165,6 +165,7 @@ fn simulated_panda_contacts_recover_planted_errors_within_three_standard_errors(
                     continue;
                 };
                 samples.push(Sample {
+                    session: 0,
                     q,
                     target: 0,
                     point: Vector3::zeros(),
@@ -190,6 +191,7 @@ fn simulated_panda_contacts_recover_planted_errors_within_three_standard_errors(
         }
     }
     let data = Measurements {
+        sessions: Vec::new(),
         joint_names: table.rows.iter().map(|r| r.name.clone()).collect(),
         targets: vec!["ball".into()],
         samples,

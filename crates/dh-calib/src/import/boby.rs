@@ -51,6 +51,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         for target in 0..3 {
             let p = &v[3 * target..3 * target + 3];
             samples.push(Sample {
+                session: 0,
                 q: q.clone(),
                 target,
                 point: Vector3::new(p[0], p[1], p[2]) / 1000.0,
@@ -63,6 +64,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         }
     }
     Ok(Measurements {
+        sessions: Vec::new(),
         joint_names: numbered("joint", 6),
         targets: TARGETS.map(String::from).to_vec(),
         samples,

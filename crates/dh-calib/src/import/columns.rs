@@ -82,6 +82,9 @@ pub struct ColumnMap {
     pub config: Option<ColumnRef>,
     /// The split column (`calibration`/`train` or `validation`/`test`).
     pub set: Option<ColumnRef>,
+    /// The measurement session column (a non-empty name per row; see [`crate::sessions`]):
+    /// each session has its own device frame. Without it every row is in one session.
+    pub session: Option<ColumnRef>,
     /// Separator; `None` detects `,`, `;` or tab from the first data line.
     pub delimiter: Option<char>,
     /// Whether the first non-comment line is a header.
@@ -177,6 +180,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         optional(&map.config)?,
         optional(&map.set)?,
     );
+    let session_col = optional(&map.session)?;
     let joint_names: Vec<String> = if !map.joint_names.is_empty() {
         if map.joint_names.len() != joints.len() {
             return Err(DataError::Content {
@@ -200,6 +204,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         None => format!("{}", c + 1),
     };
     let mut m = Measurements {
+        sessions: Vec::new(),
         joint_names: joint_names.clone(),
         targets: Vec::new(),
         samples: Vec::new(),
@@ -307,7 +312,28 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             }
             _ => Split::Calibration,
         };
+        let session = match session_col {
+            None => 0,
+            Some(c) if cell(c).is_empty() => {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!("a session name in column '{}'", column_name(c)),
+                    found: "an empty cell".into(),
+                })
+            }
+            Some(c) => {
+                check_name(cell(c), line, &column_name(c))?;
+                match m.sessions.iter().position(|s| s == cell(c)) {
+                    Some(k) => k,
+                    None => {
+                        m.sessions.push(cell(c).to_string());
+                        m.sessions.len() - 1
+                    }
+                }
+            }
+        };
         m.samples.push(Sample {
+            session,
             q,
             target,
             point: p,
@@ -357,6 +383,7 @@ mod tests {
             sigma: None,
             config: None,
             set: None,
+            session: None,
             delimiter: None,
             header: true,
             length_scale: 1e-3,
@@ -424,5 +451,21 @@ mod tests {
         radians.angle_scale = 1.0;
         let e = parse("a,b,x,y,z\n90,0,3,4,5\n", &radians).unwrap_err();
         assert!(e.to_string().contains("angle unit"), "{e}");
+    }
+
+    #[test]
+    fn a_session_column_names_each_rows_session() {
+        let mut with = map();
+        with.session = Some(ColumnRef::Name("day".into()));
+        let text = "a,b,x,y,z,day\n0,0,1,2,3,mon\n1,0,1,2,3,tue\n2,0,1,2,3,mon\n";
+        let (m, _) = parse(text, &with).unwrap();
+        assert_eq!(m.sessions, ["mon", "tue"]);
+        let s: Vec<usize> = m.samples.iter().map(|s| s.session).collect();
+        assert_eq!(s, [0, 1, 0]);
+        let e = parse("a,b,x,y,z,day\n0,0,1,2,3,\n", &with).unwrap_err();
+        assert!(
+            e.to_string().contains("line 2") && e.to_string().contains("session"),
+            "{e}"
+        );
     }
 }

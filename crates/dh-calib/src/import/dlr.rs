@@ -93,6 +93,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         }
         for (target, p) in xyz.chunks_exact(3).enumerate() {
             samples.push(Sample {
+                session: 0,
                 q: q.clone(),
                 target,
                 point: Vector3::new(p[0], p[1], p[2]),
@@ -105,6 +106,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         }
     }
     Ok(Measurements {
+        sessions: Vec::new(),
         joint_names: joint_names(),
         targets: TARGETS.map(String::from).to_vec(),
         samples,

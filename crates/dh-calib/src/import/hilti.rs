@@ -136,6 +136,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                     let q = numbers(field(entry, "joint_states", &at)?, joint_names.len(), &at)?;
                     let p = numbers(field(entry, "prism_position", &at)?, 3, &at)?;
                     samples.push(Sample {
+                        session: 0,
                         q,
                         target: 0,
                         point: Vector3::new(p[0], p[1], p[2]),
@@ -160,6 +161,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         }
     }
     Ok(Measurements {
+        sessions: Vec::new(),
         joint_names,
         targets: vec![TARGET.into()],
         samples,

@@ -103,6 +103,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         for (target, xyz) in marker_cols.iter().enumerate() {
             let point = Vector3::new(cell(xyz[0])?, cell(xyz[1])?, cell(xyz[2])?);
             samples.push(Sample {
+                session: 0,
                 q: q.clone(),
                 target,
                 point,
@@ -115,6 +116,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         }
     }
     Ok(Measurements {
+        sessions: Vec::new(),
         joint_names: numbered("joint", 6),
         targets: TARGETS.map(String::from).to_vec(),
         samples,

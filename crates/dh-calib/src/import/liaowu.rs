@@ -106,6 +106,7 @@ pub(crate) fn parse(files: &Files<'_, '_>) -> Result<Measurements, DataError> {
         }
     }
     Ok(Measurements {
+        sessions: Vec::new(),
         joint_names: numbered("joint", 6),
         targets: TARGETS.map(String::from).to_vec(),
         samples,
@@ -119,6 +120,7 @@ fn table(text: &str, name: &str, width: usize) -> Result<Vec<Row>, DataError> {
 fn sample(q: &Row, p: &Row, target: usize, config: String, split: Split) -> Sample {
     let v = &p.values;
     Sample {
+        session: 0,
         q: q.values.iter().map(|d| d.to_radians()).collect(),
         target,
         point: Vector3::new(v[0], v[1], v[2]) / 1000.0,

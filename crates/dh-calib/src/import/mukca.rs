@@ -90,6 +90,7 @@ pub fn parse(sources: &[Source<'_>]) -> Result<Measurements, DataError> {
             let rows = parse_file(source.text, &mut joints).map_err(|e| in_file(source.name, e))?;
             for (q, line) in rows {
                 samples.push(Sample {
+                    session: 0,
                     q,
                     target: 0,
                     point: Default::default(),
@@ -110,6 +111,7 @@ pub fn parse(sources: &[Source<'_>]) -> Result<Measurements, DataError> {
         }
     }
     Ok(Measurements {
+        sessions: Vec::new(),
         joint_names: numbered("joint", joints.unwrap_or(0)),
         targets: vec![TARGET.into()],
         samples,

@@ -189,6 +189,7 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
         let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * arm.sigma);
         noises.push(noise);
         samples.push(Sample {
+            session: 0,
             q: q.clone(),
             target: 0,
             point: m.point(&x, q, 0) + noise,
@@ -207,6 +208,7 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
     Simulated {
         floor,
         data: Measurements {
+            sessions: Vec::new(),
             joint_names: table.rows.iter().map(|r| r.name.clone()).collect(),
             targets: vec!["t1".into()],
             samples,
@@ -254,6 +256,7 @@ pub fn floor(
         let mut jb = vec![0.0; 3 * cols.len()];
         for (i, q) in qs.iter().enumerate() {
             let o = Observed {
+                session: 0,
                 q: q.clone(),
                 observation: Observation::Point {
                     target: 0,
