@@ -330,14 +330,21 @@ where
 ///
 /// # Errors
 /// Usage errors and every error of the command.
-pub fn run_command<I, T>(args: I, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome>
+pub fn run_command<I, T>(
+    args: I,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome>
 where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
     let cli = Cli::try_parse_from(args).map_err(|e| {
         let text = e.render().to_string();
-        anyhow::anyhow!("{}", text.strip_prefix("error: ").unwrap_or(&text).trim_end())
+        anyhow::anyhow!(
+            "{}",
+            text.strip_prefix("error: ").unwrap_or(&text).trim_end()
+        )
     })?;
     dispatch(cli, out, err)
 }

@@ -508,11 +508,13 @@ pub struct UnitsDoc {
 
 /// The unit of a parameter, from its name (see `dh_calib::model`).
 pub fn unit_of(name: &str) -> &'static str {
-    if name.contains(':') || name == "scale" {
+    if name.contains(':') || name == "scale" || name == "drift" {
         // Effect parameters (see `dh_calib::effects`).
         return match name.split(':').next() {
             Some("compliance" | "lateral_compliance") => "rad/(N m)",
-            Some("gear_harmonic" | "parallel_tilt" | "backlash") => "rad",
+            Some("gear_harmonic" | "gear_harmonic2" | "parallel_tilt" | "backlash") => "rad",
+            // Radians, metres for a prismatic joint (the report's effect table says which).
+            Some("backlash_direction") => "rad",
             Some("gear_ratio" | "coupling") => "rad/rad",
             _ => "1",
         };
@@ -1602,11 +1604,18 @@ fn distances(
         }
     }
     let q = row_values(table, data)?;
+    // The effects of the sample order see each sample's place in the sequence, as the fit did.
+    let contexts = dh_calib::effects_order::sequence_contexts(
+        q.iter()
+            .zip(&data.samples)
+            .map(|(q, s)| (q.as_slice(), s.config.as_deref())),
+    );
     Ok(data
         .samples
         .iter()
         .zip(&q)
-        .map(|(s, q)| (model.point(&x, q, s.target) - s.point).norm())
+        .zip(&contexts)
+        .map(|((s, q), c)| (model.point_in(&x, q, c, s.target) - s.point).norm())
         .collect())
 }
 

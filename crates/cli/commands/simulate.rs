@@ -148,8 +148,11 @@ fn apply_effects(
             applied.push((name, *val));
         }
     }
-    for s in &mut data.samples {
-        s.point += model.point(&x, &s.q, s.target) - model.point(&plain, &s.q, s.target);
+    // The effects of the sample order see each sample's place in the file's sequence.
+    let contexts = dh_calib::effects_order::measurement_contexts(data);
+    for (s, c) in data.samples.iter_mut().zip(&contexts) {
+        s.point +=
+            model.point_in(&x, &s.q, c, s.target) - model.point_in(&plain, &s.q, c, s.target);
     }
     Ok(applied)
 }

@@ -331,6 +331,7 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
     let mut val_ids: HashMap<String, usize> = HashMap::new();
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
     let mut config_ids: HashMap<String, usize> = HashMap::new();
+    let mut rows_q: Vec<Vec<f64>> = Vec::with_capacity(data.samples.len());
     for s in &data.samples {
         if s.q.len() != data.joint_names.len() {
             return Err(CalibError::Length {
@@ -351,19 +352,32 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
                 what: format!("sample at line {}", s.line),
             });
         }
-        let q: Vec<f64> = sources
+        rows_q.push(
+            sources
+                .iter()
+                .map(|src| match *src {
+                    Source::Column(c) => s.q[c],
+                    Source::Mimic(c, m, o) => m * s.q[c] + o,
+                })
+                .collect(),
+        );
+    }
+    // The place of every sample in the sequence, calibration and validation alike (the robot
+    // visited both, in file order).
+    let contexts = crate::effects_order::sequence_contexts(
+        rows_q
             .iter()
-            .map(|src| match *src {
-                Source::Column(c) => s.q[c],
-                Source::Mimic(c, m, o) => m * s.q[c] + o,
-            })
-            .collect();
+            .zip(&data.samples)
+            .map(|(q, s)| (q.as_slice(), s.config.as_deref())),
+    );
+    for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
         let obs = Observed {
             q,
             observation: Observation::Point {
                 target: s.target,
                 point: s.point,
             },
+            context,
         };
         match s.split {
             Split::Validation => {
@@ -1023,13 +1037,13 @@ impl<'a> Session<'a> {
                     .map(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
                     .collect();
                 for &k in &targets {
-                    synthetic.push(Observed {
-                        q: q.clone(),
-                        observation: Observation::Point {
+                    synthetic.push(Observed::new(
+                        q.clone(),
+                        Observation::Point {
                             target: k,
                             point: self.model.point(x, &q, k),
                         },
-                    });
+                    ));
                 }
             }
             if let Ok((f, _)) = identify(

@@ -85,6 +85,12 @@ pub struct SimulationOptions {
     pub repeats: usize,
     /// Parametrisation of the truth (Hayati threshold decides which rows have `beta`).
     pub model: ModelOptions,
+    /// Effects of the true robot, by label ([`crate::effects`]; gravity effects need
+    /// inertials and are refused): added to the truth model, their values set by
+    /// [`Errors::Explicit`] through their parameter names (zero otherwise). Effects of the
+    /// sample order see the poses in the order simulated, repeats of one pose sharing its
+    /// place ([`crate::effects_order`]).
+    pub effects: Vec<String>,
 }
 
 impl Default for SimulationOptions {
@@ -103,6 +109,7 @@ impl Default for SimulationOptions {
             validation_fraction: 0.0,
             repeats: 1,
             model: ModelOptions::default(),
+            effects: Vec::new(),
         }
     }
 }
@@ -195,6 +202,9 @@ pub fn simulate(
     for (k, t) in target_pos.iter().enumerate() {
         model.set_target(k, *t);
     }
+    for label in &o.effects {
+        model.add_effect(crate::effects::parse_label(label, nominal)?)?;
+    }
     let mut x = vec![0.0; model.parameter_count()];
     match &o.errors {
         Errors::None => {}
@@ -258,7 +268,11 @@ pub fn simulate(
     let n_val = (o.validation_fraction * poses.len() as f64).round() as usize;
     let first_val = poses.len() - n_val.min(poses.len());
     let mut samples = Vec::with_capacity(poses.len() * target_pos.len() * o.repeats.max(1));
-    for (i, (q, config)) in poses.iter().enumerate() {
+    // Each pose's place in the sequence (its repeats and targets are measured there).
+    let contexts = crate::effects_order::sequence_contexts(
+        poses.iter().map(|(q, c)| (q.as_slice(), Some(c.as_str()))),
+    );
+    for (i, ((q, config), context)) in poses.iter().zip(&contexts).enumerate() {
         let split = if i >= first_val {
             Split::Validation
         } else {
@@ -266,7 +280,7 @@ pub fn simulate(
         };
         for _ in 0..o.repeats.max(1) {
             for k in 0..target_pos.len() {
-                let p = model.point(&x, q, k);
+                let p = model.point_in(&x, q, context, k);
                 let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * o.sigma);
                 samples.push(Sample {
                     q: q.clone(),

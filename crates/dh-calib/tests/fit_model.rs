@@ -53,6 +53,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
                 target: i % 2,
                 point,
             },
+            context: Default::default(),
         });
         let pose = m.tip(x, &q)
             * Isometry3::from_parts(
@@ -62,6 +63,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
         out.push(Observed {
             q: q.clone(),
             observation: Observation::Pose(pose),
+            context: Default::default(),
         });
     }
     out
