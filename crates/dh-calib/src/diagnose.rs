@@ -466,8 +466,11 @@ pub fn diagnose_tree(
         }
     };
     let (scan, cleaned) = crate::calibrate::screen_outliers(tree, data, options)?;
-    let data = cleaned.as_ref().unwrap_or(data);
-    let mut session = Session::new(tree, data, options, &pool)?;
+    let (data, sequence) = match &cleaned {
+        Some((d, c)) => (d, Some(c.as_slice())),
+        None => (data, None),
+    };
+    let mut session = Session::new(tree, data, options, &pool, sequence)?;
     let geo = session.geometric()?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;

@@ -859,7 +859,7 @@ fn run_sockets(
     options: &CalibrationOptions,
     auto: Option<&Auto<'_>>,
 ) -> Result<SocketReport, CalibError> {
-    let prep = prepare(tree, data)?;
+    let prep = prepare(tree, data, None)?;
     let cal = contacts_of(data, &prep.cal, Split::Calibration)?;
     let val = contacts_of(data, &prep.val, Split::Validation)?;
     if cal.contacts.len() < 3 {

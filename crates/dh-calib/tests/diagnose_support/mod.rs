@@ -133,6 +133,16 @@ fn random_pose(rng: &mut ChaCha8Rng, distance: f64) -> Isometry3<f64> {
 /// noise `arm.sigma` per axis, and the effect `label` (if any) planted at a random size between
 /// 15 and 30 times the noise (RMS 3-D displacement of the calibration points).
 pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
+    simulate_sized(arm, label, None, seed)
+}
+
+/// As [`simulate`], the effect's parameters at `values` (radians, ...) instead of a random
+/// size; `ratio` is then the size they give.
+pub fn simulate_values(arm: &Arm, label: &str, values: &[f64], seed: u64) -> Simulated {
+    simulate_sized(arm, Some(label), Some(values), seed)
+}
+
+fn simulate_sized(arm: &Arm, label: Option<&str>, given: Option<&[f64]>, seed: u64) -> Simulated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let ctx = arm.context();
     let table = &arm.table;
@@ -186,6 +196,20 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
         unit(&mut x, s);
         values = dir.iter().map(|d| d * s).collect();
         ratio = want;
+        if let Some(v) = given {
+            for (c, val) in r.clone().zip(v) {
+                x[c] = *val;
+                x1[c] = 0.0;
+            }
+            let disp: f64 = poses[..150]
+                .iter()
+                .zip(&contexts)
+                .map(|(q, c)| (m.point_in(&x, q, c, 0) - m.point_in(&x1, q, c, 0)).norm_squared())
+                .sum::<f64>()
+                / 150.0;
+            values = v.to_vec();
+            ratio = disp.sqrt() / (arm.sigma * 3f64.sqrt());
+        }
     }
     let mut samples = Vec::with_capacity(250);
     let mut noises = Vec::with_capacity(250);
