@@ -823,9 +823,8 @@ pub fn diagnose_sockets(
                 .into_iter()
                 .filter(|e| {
                     let l = e.label();
-                    !e.uses_sequence()
-                        && !l.starts_with("gear_harmonic2:")
-                        && !(l.starts_with("gear_harmonic:") && l.ends_with(":2"))
+                    let both_harmonics = l.starts_with("gear_harmonic:") && l.ends_with(":2");
+                    !(e.uses_sequence() || l.starts_with("gear_harmonic2:") || both_harmonics)
                 })
                 .collect();
             let auto = Auto {
