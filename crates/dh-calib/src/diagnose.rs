@@ -229,7 +229,8 @@ pub enum CandidateStatus {
     NotSelected,
     /// Its columns are zero on these data, it couples two joints one of which moved less
     /// than [`MIN_JOINT_MOTION`] in them, or it is a `backlash_direction` of a joint that
-    /// does not move both ways in them: never selected.
+    /// reverses fewer than [`crate::effects_order::MIN_REVERSALS`] times in them: never
+    /// selected.
     Inert,
     /// Passed the rule's tests but a rival effect of the same joint's quantity did better
     /// (see [`crate::rivals`]; the reason names it).
@@ -1057,7 +1058,8 @@ fn score(
                 .and_then(|rest| rest.split_once(':'))
                 .is_some_and(|(joint, driver)| still(joint) || still(driver))
         });
-        // A direction backlash of a joint that never reverses is a constant offset.
+        // A direction backlash of a joint that hardly reverses is an offset change between
+        // blocks of poses (see `effects_order::MIN_REVERSALS`).
         let one_way = effects.get(e).is_some_and(|(eff, _)| {
             eff.label()
                 .strip_prefix("backlash_direction:")

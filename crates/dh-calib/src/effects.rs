@@ -281,7 +281,8 @@ pub struct Candidates {
 /// gravity loads (typical torque above 1e-6 of the largest; `compliance` also for prismatic
 /// joints); `coupling:J:K` for joints `K` within
 /// two rows of `J` on one chain; per joint `backlash_direction` (the diagnosis holds it inert
-/// where the joint does not move both ways in the data); `scale`; `drift`; `parallel_tilt`
+/// where the joint reverses fewer than [`crate::effects_order::MIN_REVERSALS`] times in the
+/// data); `scale`; `drift`; `parallel_tilt`
 /// for the rows in `tilt_rows`
 /// ([`crate::model::Model::tilt_rows`]). Mimic rows are skipped (their driver's effects cover
 /// them).

@@ -114,16 +114,34 @@ pub fn measurement_contexts(data: &Measurements) -> Vec<SampleContext> {
     )
 }
 
-/// Whether row `row` moves both ways in `contexts` (some sample after a motion in `+`, some
-/// after one in `−`): only then can a direction-dependent backlash show.
-pub fn reverses<'a>(contexts: impl IntoIterator<Item = &'a SampleContext>, row: usize) -> bool {
-    let (mut up, mut down) = (false, false);
+/// A joint whose direction of motion changes fewer times than this over the sequence takes
+/// part in no direction backlash candidate: with a few reversals `s_J` is a step function of
+/// the pose order, a few blocks of consecutive poses (in circle-point data, the joint's own
+/// sweep against the rest), which a change of offset between parts of the session (a warm-up,
+/// a re-seated target) fits as well.
+pub const MIN_REVERSALS: usize = 4;
+
+/// How many times row `row`'s direction of motion changes sign along `contexts` (in sequence
+/// order; directions of 0, before the joint first moves, are skipped).
+pub fn reversals<'a>(contexts: impl IntoIterator<Item = &'a SampleContext>, row: usize) -> usize {
+    let mut last = 0.0;
+    let mut count = 0;
     for c in contexts {
         let d = c.direction_of(row);
-        up |= d > 0.0;
-        down |= d < 0.0;
+        if d != 0.0 {
+            if last != 0.0 && d != last {
+                count += 1;
+            }
+            last = d;
+        }
     }
-    up && down
+    count
+}
+
+/// Whether row `row` reverses at least [`MIN_REVERSALS`] times in `contexts`: only then can a
+/// direction-dependent backlash show apart from an offset change.
+pub fn reverses<'a>(contexts: impl IntoIterator<Item = &'a SampleContext>, row: usize) -> bool {
+    reversals(contexts, row) >= MIN_REVERSALS
 }
 
 fn bad_label(label: &str, reason: String) -> CalibError {
@@ -305,8 +323,18 @@ mod tests {
         assert_eq!(c[3].direction, vec![-1.0, 0.0]);
         assert_eq!(c[4].direction, vec![-1.0, -1.0]);
         assert_eq!((c[2].order, c[4].order), (1.0 / 3.0, 1.0));
-        assert!(reverses(&c, 0));
-        assert!(!reverses(&c, 1));
+        assert_eq!(reversals(&c, 0), 1);
+        assert_eq!(reversals(&c, 1), 0);
+        assert!(!reverses(&c, 0));
+        let back_and_forth: Vec<SampleContext> = [1.0, -1.0, -1.0, 1.0, -1.0, 1.0]
+            .iter()
+            .map(|&d| SampleContext {
+                direction: vec![d],
+                order: 0.0,
+            })
+            .collect();
+        assert_eq!(reversals(&back_and_forth, 0), 4);
+        assert!(reverses(&back_and_forth, 0));
         // Without configs, equal joint values in a row are one pose.
         let c = sequence_contexts(q.iter().map(|v| (v.as_slice(), None)));
         assert_eq!(c[0], c[1]);
