@@ -91,6 +91,9 @@ struct TruthRecord {
     targets: Vec<TargetRecord>,
     #[serde(default)]
     effects: Vec<(String, f64)>,
+    /// With several sessions: every session's device frame, the first's (`device`) included.
+    #[serde(default)]
+    sessions: Vec<(String, PoseRecord)>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -181,6 +184,16 @@ pub fn calibrated_sheet(text: &str, origin: &str) -> Result<CalibratedModel> {
                 device: truth.device,
                 targets: truth.targets,
                 covariance: None,
+                sessions: truth
+                    .sessions
+                    .into_iter()
+                    .skip(1)
+                    .map(|(name, p)| SessionRecord {
+                        name,
+                        xyz: p.xyz,
+                        rpy: p.rpy,
+                    })
+                    .collect(),
             }
         }
         (None, None) => CalibrationRecord::default(),

@@ -537,3 +537,90 @@ fn a_far_point_is_named_by_its_line_and_the_verdict_is_reported() {
     );
     assert!(text.contains("verdict: model complete ("), "{text}");
 }
+
+/// Simulates UR5 with the effect `planted` (LABEL=VALUE, in the file's pose order) and
+/// calibrates it with `--effects auto`: the JSON report and the text report.
+fn auto_on_planted(planted: &str, seed: &str) -> (Value, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let data = path(dir.path(), "order.csv");
+    let out = path(dir.path(), "order.yaml");
+    ok(&[
+        "simulate",
+        "--model",
+        UR5,
+        "--poses",
+        "200",
+        "--noise",
+        "2e-5",
+        "--targets",
+        "2",
+        "--effect",
+        planted,
+        "--seed",
+        seed,
+        "--out",
+        &data,
+    ]);
+    let args = [
+        "calibrate",
+        "--model",
+        UR5,
+        "--data",
+        &data,
+        "--effects",
+        "auto",
+    ];
+    let mut json = args.to_vec();
+    json.extend(["--format", "json", "--out", &out]);
+    let report: Value = serde_json::from_str(&ok(&json)).unwrap();
+    // The written sheet reads back with the effect (the proof of `--out` passed).
+    let sheet = std::fs::read_to_string(&out).unwrap();
+    let label = planted.split('=').next().unwrap();
+    assert!(sheet.contains(label), "{sheet}");
+    (report, ok(&args))
+}
+
+#[test]
+fn auto_names_a_backlash_that_follows_the_last_motion_and_lists_its_rivals() {
+    let (report, text) = auto_on_planted("backlash_direction:elbow_joint=1e-4", "11");
+    assert_eq!(
+        report["selected_effects"],
+        serde_json::json!(["backlash_direction:elbow_joint"]),
+        "{text}"
+    );
+    assert_eq!(report["verdict"]["summary"], "model complete", "{text}");
+    let z = recovered(&report, "backlash_direction:elbow_joint", 1e-4);
+    assert!(z.abs() < 4.0, "backlash {z:.2} standard errors off");
+    // The rivals of the elbow's angle that passed the tests too are listed with the reason.
+    let rivals: Vec<&Value> = report["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["status"] == "rival")
+        .collect();
+    assert!(!rivals.is_empty(), "{text}");
+    for c in rivals {
+        let reason = c["reason"].as_str().unwrap();
+        assert!(
+            reason.starts_with("rival of backlash_direction:elbow_joint: BIC worse by"),
+            "{c}"
+        );
+    }
+    assert!(
+        text.contains("rival (rival of backlash_direction:elbow_joint: BIC worse by"),
+        "{text}"
+    );
+}
+
+#[test]
+fn auto_names_a_drift_of_the_lengths_in_time() {
+    let (report, text) = auto_on_planted("drift=3e-5", "12");
+    assert_eq!(
+        report["selected_effects"],
+        serde_json::json!(["drift"]),
+        "{text}"
+    );
+    assert_eq!(report["verdict"]["summary"], "model complete", "{text}");
+    let z = recovered(&report, "drift", 3e-5);
+    assert!(z.abs() < 4.0, "drift {z:.2} standard errors off");
+}

@@ -296,8 +296,11 @@ pub struct CandidateDoc {
     pub val_rms: Option<f64>,
     /// Sine between its columns and the geometric ones (below 1e-3: aliased).
     pub independence: f64,
-    /// selected, aliased, rejected, not selected, inert.
+    /// selected, aliased, rejected, not selected, inert, rival.
     pub status: &'static str,
+    /// Why a refitted candidate was not added (a rival's names the effect that did better).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
 }
 
 impl From<&dh_calib::diagnose::CandidateReport> for CandidateDoc {
@@ -308,6 +311,7 @@ impl From<&dh_calib::diagnose::CandidateReport> for CandidateDoc {
             val_rms: c.val_rms,
             independence: c.independence,
             status: c.status.name(),
+            reason: c.reason.clone(),
         }
     }
 }
@@ -511,11 +515,13 @@ pub struct UnitsDoc {
 
 /// The unit of a parameter, from its name (see `dh_calib::model`).
 pub fn unit_of(name: &str) -> &'static str {
-    if name.contains(':') || name == "scale" {
+    if name.contains(':') || name == "scale" || name == "drift" {
         // Effect parameters (see `dh_calib::effects`).
         return match name.split(':').next() {
             Some("compliance" | "lateral_compliance") => "rad/(N m)",
-            Some("gear_harmonic" | "parallel_tilt" | "backlash") => "rad",
+            Some("gear_harmonic" | "gear_harmonic2" | "parallel_tilt" | "backlash") => "rad",
+            // Radians, metres for a prismatic joint (the report's effect table says which).
+            Some("backlash_direction") => "rad",
             Some("gear_ratio" | "coupling") => "rad/rad",
             _ => "1",
         };
@@ -1236,7 +1242,10 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
                 c.score / (scale * scale),
                 c.independence,
                 o(c.val_rms),
-                c.status
+                match (c.status, &c.reason) {
+                    ("rival", Some(r)) => format!("rival ({r})"),
+                    (s, _) => s.to_string(),
+                }
             );
         }
         if doc.candidates.len() > 15 {
@@ -1252,7 +1261,7 @@ fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         for p in doc
             .parameters
             .iter()
-            .filter(|p| p.name.contains(':') || p.name == "scale")
+            .filter(|p| p.name.contains(':') || p.name == "scale" || p.name == "drift")
         {
             let stiffness = (p.unit == "rad/(N m)" && p.estimate != 0.0).then(|| {
                 format!(
@@ -1335,7 +1344,7 @@ fn model_text(
             .iter()
             // Effect parameters are named `<kind>:<joints>` or `scale`
             // (`dh_calib::effects`), whatever their unit.
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
         covariance: report
@@ -1350,7 +1359,7 @@ fn model_text(
     let effects: Vec<EffectDoc> = doc
         .parameters
         .iter()
-        .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+        .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
         .map(|p| EffectDoc {
             name: p.name.clone(),
             value: p.estimate,
@@ -1620,11 +1629,18 @@ fn distances(
         }
     }
     let q = row_values(table, data)?;
+    // The effects of the sample order see each sample's place in the sequence, as the fit did.
+    let contexts = dh_calib::effects_order::sequence_contexts(
+        q.iter()
+            .zip(&data.samples)
+            .map(|(q, s)| (q.as_slice(), s.config.as_deref())),
+    );
     Ok(data
         .samples
         .iter()
         .zip(&q)
-        .map(|(s, q)| (model.point(&x, q, s.target) - s.point).norm())
+        .zip(&contexts)
+        .map(|((s, q), c)| (model.point_in(&x, q, c, s.target) - s.point).norm())
         .collect())
 }
 
@@ -1818,7 +1834,11 @@ pub struct CalibrateCli {
     #[arg(long, value_name = "V.csv")]
     validate: Option<String>,
     /// Effects to estimate after the geometric step: none, auto, or labels such as
-    /// gear_ratio:joint_2,gear_ratio:joint_3.
+    /// gear_ratio:joint_2,gear_ratio:joint_3. Labels: gear_ratio:J, gear_harmonic:J (once per
+    /// turn), gear_harmonic2:J (twice), gear_harmonic:J:2 (both), coupling:J:K, scale,
+    /// parallel_tilt:J, backlash_direction:J (after the direction of J's last motion, in the
+    /// file's pose order), drift (lengths growing with the pose order), and with link masses
+    /// compliance:J, lateral_compliance:J, backlash:J.
     #[arg(long, value_name = "none|auto|LIST", default_value = "none")]
     effects: EffectsChoice,
     /// Use only these targets of the data (comma-separated names) [default: all].

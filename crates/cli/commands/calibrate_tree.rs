@@ -536,7 +536,7 @@ fn write_tree(
         effects: doc
             .parameters
             .iter()
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
     };

@@ -154,10 +154,13 @@ fn apply_effects(
             applied.push((name, *val));
         }
     }
-    for s in &mut data.samples {
+    // The effects of the sample order see each sample's place in the file's sequence.
+    let contexts = dh_calib::effects_order::measurement_contexts(data);
+    for (s, c) in data.samples.iter_mut().zip(&contexts) {
         // Each session's own device frame (the difference is a vector in that frame).
         model.set_device(truth.sessions.get(s.session).unwrap_or(&truth.device));
-        s.point += model.point(&x, &s.q, s.target) - model.point(&plain, &s.q, s.target);
+        s.point +=
+            model.point_in(&x, &s.q, c, s.target) - model.point_in(&plain, &s.q, c, s.target);
     }
     Ok(applied)
 }

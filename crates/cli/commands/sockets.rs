@@ -304,7 +304,7 @@ fn text(doc: &ContactDoc) -> String {
         for p in doc
             .parameters
             .iter()
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
         {
             let _ = writeln!(
                 s,
@@ -484,7 +484,7 @@ fn contact_model_bytes(
         effects: doc
             .parameters
             .iter()
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale"))
+            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
     };

@@ -96,6 +96,7 @@ fn setup(table: &DhTable, data: &Measurements) -> (Model, Vec<Observed>, Vec<f64
                 target: s.target,
                 point: s.point,
             },
+            context: Default::default(),
         })
         .collect();
     let fixed: Vec<usize> = report

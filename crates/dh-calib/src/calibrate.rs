@@ -29,7 +29,7 @@ use crate::data::{Measurements, Split};
 use crate::fit::{self, CalibError, FitOptions, FitOutcome, Termination};
 use crate::model::{
     xyz_rpy, Block, Effect, Model, ModelOptions, ModelProblem, Observation, Observed,
-    PairParametrisation, SubsetProblem,
+    PairParametrisation, SampleContext, SubsetProblem,
 };
 use crate::tree::DhTree;
 
@@ -294,7 +294,12 @@ pub(crate) struct Prepared {
     pub(crate) val_groups: Vec<usize>,
 }
 
-pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, CalibError> {
+/// Each sample's joint values per row of `tree` (mimic rows from their driver's column).
+///
+/// # Errors
+/// [`CalibError::MissingJoint`] for a row without a column; [`CalibError::Length`] for a
+/// sample with the wrong number of values; [`CalibError::NonFinite`] for a non-finite value.
+pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Vec<f64>>, CalibError> {
     enum Source {
         Column(usize),
         Mimic(usize, f64, f64),
@@ -320,6 +325,58 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
         };
         sources.push(s);
     }
+    let mut rows_q: Vec<Vec<f64>> = Vec::with_capacity(data.samples.len());
+    for s in &data.samples {
+        if s.q.len() != data.joint_names.len() {
+            return Err(CalibError::Length {
+                what: format!("joint values at line {}", s.line),
+                expected: data.joint_names.len(),
+                found: s.q.len(),
+            });
+        }
+        if s.q.iter().any(|v| !v.is_finite()) {
+            return Err(CalibError::NonFinite {
+                what: format!("sample at line {}", s.line),
+            });
+        }
+        rows_q.push(
+            sources
+                .iter()
+                .map(|src| match *src {
+                    Source::Column(c) => s.q[c],
+                    Source::Mimic(c, m, o) => m * s.q[c] + o,
+                })
+                .collect(),
+        );
+    }
+    Ok(rows_q)
+}
+
+/// The place of each sample of `data` in its sequence, from its row values `rows_q`.
+fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
+    crate::effects_order::sequence_contexts(
+        rows_q
+            .iter()
+            .zip(&data.samples)
+            .map(|(q, s)| (q.as_slice(), s.config.as_deref())),
+    )
+}
+
+/// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
+/// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
+/// whole file: [`screen_outliers`]), `None` to take `data`'s own order.
+pub(crate) fn prepare(
+    tree: &DhTree,
+    data: &Measurements,
+    sequence: Option<&[SampleContext]>,
+) -> Result<Prepared, CalibError> {
+    let rows_q = rows_of(tree, data)?;
+    // The place of every sample in the sequence, calibration and validation alike (the robot
+    // visited both, in file order).
+    let contexts = match sequence {
+        Some(c) if c.len() == data.samples.len() => c.to_vec(),
+        _ => sequence_of(&rows_q, data),
+    };
     let mut out = Prepared {
         cal: vec![],
         val: vec![],
@@ -333,13 +390,6 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
     let mut config_ids: HashMap<String, usize> = HashMap::new();
     for s in &data.samples {
-        if s.q.len() != data.joint_names.len() {
-            return Err(CalibError::Length {
-                what: format!("joint values at line {}", s.line),
-                expected: data.joint_names.len(),
-                found: s.q.len(),
-            });
-        }
         if s.target >= data.targets.len() {
             return Err(CalibError::BadTarget {
                 line: s.line,
@@ -347,18 +397,13 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
                 count: data.targets.len(),
             });
         }
-        if s.q.iter().chain(s.point.iter()).any(|v| !v.is_finite()) {
+        if s.point.iter().any(|v| !v.is_finite()) {
             return Err(CalibError::NonFinite {
                 what: format!("sample at line {}", s.line),
             });
         }
-        let q: Vec<f64> = sources
-            .iter()
-            .map(|src| match *src {
-                Source::Column(c) => s.q[c],
-                Source::Mimic(c, m, o) => m * s.q[c] + o,
-            })
-            .collect();
+    }
+    for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
         let obs = Observed {
             session: s.session,
             q,
@@ -366,6 +411,7 @@ pub(crate) fn prepare(tree: &DhTree, data: &Measurements) -> Result<Prepared, Ca
                 target: s.target,
                 point: s.point,
             },
+            context,
         };
         match s.split {
             Split::Validation => {
@@ -802,15 +848,17 @@ fn target_chains(
 
 impl<'a> Session<'a> {
     /// Prepares the samples, builds the model of `tree` with `effects` (their parameters start
-    /// at zero and are not estimated until a step frees them) and finds the closed-form start.
+    /// at zero and are not estimated until a step frees them) and finds the closed-form start;
+    /// `sequence` places the samples in a longer sequence (see [`prepare`]).
     pub(crate) fn new(
         tree: &DhTree,
         data: &Measurements,
         options: &'a CalibrationOptions,
         effects: &[Arc<dyn Effect>],
+        sequence: Option<&[SampleContext]>,
     ) -> Result<Session<'a>, CalibError> {
         crate::sessions::check(data)?;
-        let prep = prepare(tree, data)?;
+        let prep = prepare(tree, data, sequence)?;
         if prep.cal.len() < 3 {
             return Err(CalibError::TooFewSamples {
                 what: "calibration".into(),
@@ -1044,14 +1092,13 @@ impl<'a> Session<'a> {
                     .map(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
                     .collect();
                 for &k in &targets {
-                    synthetic.push(Observed {
-                        session: 0,
-                        q: q.clone(),
-                        observation: Observation::Point {
+                    synthetic.push(Observed::new(
+                        q.clone(),
+                        Observation::Point {
                             target: k,
                             point: self.model.point(x, &q, k),
                         },
-                    });
+                    ));
                 }
             }
             if let Ok((f, _)) = identify(
@@ -1279,8 +1326,11 @@ pub fn calibrate_tree(
     options: &CalibrationOptions,
 ) -> Result<Report, CalibError> {
     let (scan, cleaned) = screen_outliers(tree, data, options)?;
-    let data = cleaned.as_ref().unwrap_or(data);
-    let mut session = Session::new(tree, data, options, &options.effects)?;
+    let (data, sequence) = match &cleaned {
+        Some((d, c)) => (d, Some(c.as_slice())),
+        None => (data, None),
+    };
+    let mut session = Session::new(tree, data, options, &options.effects, sequence)?;
     let Geometric {
         mut steps,
         last,
@@ -1309,17 +1359,36 @@ pub fn calibrate_tree(
 
 /// The outlier screen of `options.outliers` ([`crate::outliers::screen`]) and, unless the
 /// outliers are kept, the data without them (`None` when nothing is left out).
+/// The outlier screen's findings and, when it drops samples, the samples kept with their
+/// places in the whole file's sequence (a dropped pose was still visited: the direction of
+/// the next one's motion and the time are the file's).
+pub(crate) type Screened = (
+    Option<crate::outliers::OutlierReport>,
+    Option<(Measurements, Vec<SampleContext>)>,
+);
+
 pub(crate) fn screen_outliers(
     tree: &DhTree,
     data: &Measurements,
     options: &CalibrationOptions,
-) -> Result<(Option<crate::outliers::OutlierReport>, Option<Measurements>), CalibError> {
+) -> Result<Screened, CalibError> {
     if !options.outliers.screen {
         return Ok((None, None));
     }
     let scan = crate::outliers::screen(tree, data, options)?;
-    let cleaned = (!scan.kept && !scan.outliers.is_empty()).then(|| scan.without(data));
-    Ok((Some(scan), cleaned))
+    if scan.kept || scan.outliers.is_empty() {
+        return Ok((Some(scan), None));
+    }
+    let dropped: std::collections::BTreeSet<usize> =
+        scan.outliers.iter().map(|o| o.sample).collect();
+    let sequence: Vec<SampleContext> = sequence_of(&rows_of(tree, data)?, data)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| !dropped.contains(i))
+        .map(|(_, c)| c)
+        .collect();
+    let cleaned = scan.without(data);
+    Ok((Some(scan), Some((cleaned, sequence))))
 }
 
 /// Stores the screen's findings in `report`.

@@ -23,7 +23,7 @@
 //!    reported as aliased and never selected.
 //! 4. **Selection rule** (automatic mode): candidates are ranked by score minus the BIC
 //!    penalty `k σ̂² ln m` (`k` parameters, `m` residuals); the best ones are refitted in
-//!    full (nonlinear) in turn, and the first one that passes all of
+//!    full (nonlinear) in turn until one passes all of
 //!    - (a) the F-to-enter test `F = (ΔSSR / k) / (SSR / (m − p))` at `alpha / K`
 //!      (Bonferroni over the `K` eligible candidates of the round),
 //!    - (b) a lower BIC `m ln(SSR/m) + p ln m` on the calibration data,
@@ -32,7 +32,11 @@
 //!      samples, or on the cross-validation predictions when there is no validation split
 //!      (skipped when there is neither),
 //!
-//!    is added; then the loop repeats. It stops when none of the
+//!    Its **rivals** (the other eligible candidates that change the same quantity of
+//!    the same joint, or the device scale: [`crate::rivals`]) are then refitted and judged
+//!    too, and the best of those that pass (lowest BIC, the held-out RMS deciding within
+//!    [`crate::rivals::BIC_TIE`]) is added, the others reported as rivals with the
+//!    difference; then the loop repeats. It stops when none of the
 //!    [`DiagnoseOptions::trials`] best candidates passes, or after
 //!    [`DiagnoseOptions::max_effects`] (a guard, reported in the notes when it stops the
 //!    loop). With explicit labels every non-aliased, identifiable candidate is added in the
@@ -57,6 +61,7 @@ use crate::effects::{self, EffectContext};
 use crate::fit::{CalibError, FitOutcome};
 use crate::gravity::{GravityModel, Inertials};
 use crate::model::{Effect, Model, Observation, Observed};
+use crate::rivals;
 use crate::stats;
 use crate::tree::DhTree;
 
@@ -66,11 +71,13 @@ pub const ALIAS_SINE: f64 = 1e-3;
 
 /// The selection rule, as reported in [`Diagnosis::rule`].
 pub const RULE: &str = "rank candidates by score (first-order SSR reduction beyond the estimated \
-parameters) minus k*sigma^2*ln(m); refit the best in turn and add the first that passes (a) F-to-enter \
+parameters) minus k*sigma^2*ln(m); refit the best in turn until one passes (a) F-to-enter \
 at alpha/K (Bonferroni over the K eligible candidates), (b) lower BIC on calibration data, (c) a \
 one-sided Wilcoxon signed-rank test at alpha, paired over pose groups, of the held-out squared errors \
-(validation split, else cross-validation); stop when none of the tried candidates passes; aliased \
-candidates (sine < 1e-3) are never selected";
+(validation split, else cross-validation); then refit its rivals (eligible candidates changing \
+the same quantity of the same joint, or the device scale) and add the best of those that pass \
+(lowest BIC; within 2 of it, lowest held-out RMS); stop when none of the tried candidates passes; \
+aliased candidates (sine < 1e-3) are never selected";
 
 /// Significance level of the tests by default (the diagnosis's and the final verdict's).
 pub const DEFAULT_ALPHA: f64 = 0.01;
@@ -220,9 +227,14 @@ pub enum CandidateStatus {
     Rejected,
     /// Not added (score too small, not tried, or selection stopped).
     NotSelected,
-    /// Its columns are zero on these data, or it couples two joints one of which moved less
-    /// than [`MIN_JOINT_MOTION`] in them: never selected.
+    /// Its columns are zero on these data, it couples two joints one of which moved less
+    /// than [`MIN_JOINT_MOTION`] in them, or it is a `backlash_direction` of a joint that
+    /// reverses fewer than [`crate::effects_order::MIN_REVERSALS`] times in them: never
+    /// selected.
     Inert,
+    /// Passed the rule's tests but a rival effect of the same joint's quantity did better
+    /// (see [`crate::rivals`]; the reason names it).
+    Rival,
 }
 
 impl CandidateStatus {
@@ -234,6 +246,7 @@ impl CandidateStatus {
             Self::Rejected => "rejected",
             Self::NotSelected => "not selected",
             Self::Inert => "inert",
+            Self::Rival => "rival",
         }
     }
 }
@@ -254,6 +267,9 @@ pub struct CandidateReport {
     pub val_rms: Option<f64>,
     /// What became of it.
     pub status: CandidateStatus,
+    /// Why it was not added, when it was refitted and rejected or lost to a rival (its last
+    /// trial's reason).
+    pub reason: Option<String>,
 }
 
 /// One full refit of a candidate and the tests of the rule.
@@ -451,8 +467,11 @@ pub fn diagnose_tree(
         }
     };
     let (scan, cleaned) = crate::calibrate::screen_outliers(tree, data, options)?;
-    let data = cleaned.as_ref().unwrap_or(data);
-    let mut session = Session::new(tree, data, options, &pool)?;
+    let (data, sequence) = match &cleaned {
+        Some((d, c)) => (d, Some(c.as_slice())),
+        None => (data, None),
+    };
+    let mut session = Session::new(tree, data, options, &pool, sequence)?;
     let geo = session.geometric()?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
@@ -528,7 +547,8 @@ pub fn diagnose_tree(
             let k_count = eligible.len().max(1);
             let mut accepted = None;
             let tries = if forced { 1 } else { diag.trials.max(1) };
-            for &(e, _, k) in eligible.iter().take(tries) {
+            // Refits candidate `e` (of `k` parameters) from the current fit and judges it.
+            let attempt = |e: usize, k: usize| -> Result<Attempt, CalibError> {
                 let label = pool[e].label();
                 let cols: Vec<usize> = session
                     .model
@@ -540,7 +560,7 @@ pub fn diagnose_tree(
                 columns.extend(&cols);
                 let (trial_free, trial_fixed) = session.identify(&last.x, &columns)?;
                 if cols.iter().any(|c| !trial_free.contains(c)) {
-                    round.trials.push(Trial {
+                    let trial = Trial {
                         label,
                         rms: f64::NAN,
                         val_rms: None,
@@ -551,9 +571,8 @@ pub fn diagnose_tree(
                         held_out: None,
                         accepted: false,
                         reason: "not identifiable with the estimated parameters".into(),
-                    });
-                    rejected.push(e);
-                    continue;
+                    };
+                    return Ok((trial, None));
                 }
                 let step =
                     session.step(&format!("+{label}"), &last.x, &trial_free, steps.last())?;
@@ -570,13 +589,55 @@ pub fn diagnose_tree(
                     label,
                     &step.report,
                 );
+                Ok((trial, Some((step, trial_free, trial_fixed))))
+            };
+            for &(e, _, k) in eligible.iter().take(tries) {
+                let (trial, fitted) = attempt(e, k)?;
                 let ok = trial.accepted;
                 round.trials.push(trial);
-                if ok {
-                    accepted = Some((e, step, trial_free, trial_fixed));
-                    break;
+                let Some(fitted) = fitted.filter(|_| ok) else {
+                    rejected.push(e);
+                    continue;
+                };
+                // It passes: its rivals (the other eligible candidates that change the same
+                // quantity of the same joint) are refitted too, and the best of those that
+                // pass is added (see `rivals`).
+                let mut passed = vec![(e, round.trials.len() - 1, fitted)];
+                if !forced {
+                    for &(r, _, kr) in &eligible {
+                        if r == e
+                            || rejected.contains(&r)
+                            || !rivals::are_rivals(pool[e].as_ref(), pool[r].as_ref())
+                        {
+                            continue;
+                        }
+                        let (trial, fitted) = attempt(r, kr)?;
+                        let ok = trial.accepted;
+                        round.trials.push(trial);
+                        match fitted.filter(|_| ok) {
+                            Some(f) => passed.push((r, round.trials.len() - 1, f)),
+                            None => rejected.push(r),
+                        }
+                    }
                 }
-                rejected.push(e);
+                let best = rivals::best(
+                    &passed
+                        .iter()
+                        .map(|p| &round.trials[p.1])
+                        .collect::<Vec<_>>(),
+                );
+                let winner = round.trials[passed[best].1].clone();
+                for (i, (r, t, _)) in passed.iter().enumerate() {
+                    if i != best {
+                        let trial = &mut round.trials[*t];
+                        trial.accepted = false;
+                        trial.reason = rivals::reason(&winner, trial);
+                        rejected.push(*r);
+                    }
+                }
+                let (e, _, (step, trial_free, trial_fixed)) = passed.swap_remove(best);
+                accepted = Some((e, step, trial_free, trial_fixed));
+                break;
             }
             rounds.push(round);
             match accepted {
@@ -605,18 +666,31 @@ pub fn diagnose_tree(
             }
         }
     }
+    // A rejected candidate's row says why: its last trial's reason (a rival's names the
+    // effect that did better).
+    let last_rejection = |trials: &mut dyn Iterator<Item = &Trial>, label: &str| {
+        trials
+            .filter(|t| t.label == label && !t.accepted)
+            .last()
+            .map(|t| {
+                let status = if t.reason.starts_with(rivals::RIVAL_OF) {
+                    CandidateStatus::Rival
+                } else {
+                    CandidateStatus::Rejected
+                };
+                (status, t.reason.clone())
+            })
+    };
     for c in &mut first_table {
         let e = pool.iter().position(|p| p.label() == c.label);
-        c.status = match e {
-            Some(e) if selected.contains(&e) => CandidateStatus::Selected,
-            Some(e) if aliased.contains(&e) => CandidateStatus::Aliased,
-            Some(_) if c.status == CandidateStatus::Inert => CandidateStatus::Inert,
-            Some(_)
-                if rounds
-                    .iter()
-                    .any(|r| r.trials.iter().any(|t| t.label == c.label && !t.accepted)) =>
-            {
-                CandidateStatus::Rejected
+        let rejection = last_rejection(&mut rounds.iter().flat_map(|r| r.trials.iter()), &c.label);
+        c.status = match (e, &rejection) {
+            (Some(e), _) if selected.contains(&e) => CandidateStatus::Selected,
+            (Some(e), _) if aliased.contains(&e) => CandidateStatus::Aliased,
+            (Some(_), _) if c.status == CandidateStatus::Inert => CandidateStatus::Inert,
+            (Some(_), Some((status, reason))) => {
+                c.reason = Some(reason.clone());
+                *status
             }
             _ => CandidateStatus::NotSelected,
         };
@@ -626,10 +700,11 @@ pub fn diagnose_tree(
             if let Some(e) = pool.iter().position(|p| p.label() == c.label) {
                 if selected.contains(&e) {
                     c.status = CandidateStatus::Selected;
-                } else if c.status == CandidateStatus::NotSelected
-                    && r.trials.iter().any(|t| t.label == c.label)
-                {
-                    c.status = CandidateStatus::Rejected;
+                } else if c.status == CandidateStatus::NotSelected {
+                    if let Some((status, reason)) = last_rejection(&mut r.trials.iter(), &c.label) {
+                        c.status = status;
+                        c.reason = Some(reason);
+                    }
                 }
             }
         }
@@ -800,6 +875,16 @@ impl Projector {
         (df, dc, reduction, independence)
     }
 }
+
+/// A judged refit and, when it ran, its step with the free and held parameters.
+type Attempt = (
+    Trial,
+    Option<(
+        crate::calibrate::StepResult,
+        Vec<usize>,
+        Vec<crate::fit::Fixed>,
+    )>,
+);
 
 struct Scored {
     candidates: Vec<(usize, CandidateReport)>,
@@ -974,7 +1059,17 @@ fn score(
                 .and_then(|rest| rest.split_once(':'))
                 .is_some_and(|(joint, driver)| still(joint) || still(driver))
         });
-        let inert = independence.is_nan() || static_coupling;
+        // A direction backlash of a joint that hardly reverses is an offset change between
+        // blocks of poses (see `effects_order::MIN_REVERSALS`).
+        let one_way = effects.get(e).is_some_and(|(eff, _)| {
+            eff.label()
+                .strip_prefix("backlash_direction:")
+                .and_then(|name| rows.iter().position(|r| r.name == name))
+                .is_some_and(|k| {
+                    !crate::effects_order::reverses(prep.cal.iter().map(|o| &o.context), k)
+                })
+        });
+        let inert = independence.is_nan() || static_coupling || one_way;
         let aliased = !inert && independence < ALIAS_SINE;
         let val_rms = if aliased || inert {
             None
@@ -993,6 +1088,7 @@ fn score(
                 score: if aliased || inert { 0.0 } else { reduction },
                 independence: if inert { 0.0 } else { independence },
                 val_rms,
+                reason: None,
                 status: if inert {
                     CandidateStatus::Inert
                 } else if aliased {

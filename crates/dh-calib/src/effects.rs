@@ -8,12 +8,18 @@
 //! | `gear_ratio:J` | `theta_J += eps · q_J` | `gear_ratio:J` (rad/rad) |
 //! | `gear_harmonic:J` | `theta_J += A sin q_J + B cos q_J` | `gear_harmonic:J.sin`, `.cos` (rad) |
 //! | `gear_harmonic:J:2` | the same plus `A2 sin 2q_J + B2 cos 2q_J` | adds `.sin2`, `.cos2` (rad) |
+//! | `gear_harmonic2:J` | `theta_J += A2 sin 2q_J + B2 cos 2q_J` (twice per turn alone) | `gear_harmonic2:J.sin2`, `.cos2` (rad) |
 //! | `compliance:J` | `theta_J += c · tau_J(q)` (`d_J` for a prismatic joint) | `compliance:J` (rad/(N m), m/N) |
 //! | `lateral_compliance:J` | `alpha_J += c · tau⊥_J(q)` | `lateral_compliance:J` (rad/(N m)) |
 //! | `coupling:J:K` | `theta_J += k · q_K` | `coupling:J:K` (rad/rad) |
 //! | `scale` | device positions `× (1 + s)` | `scale` (1) |
 //! | `parallel_tilt:J` | the Hayati-Mirmirani `beta` of the near-parallel pair ending at `J` | `parallel_tilt:J` (rad) |
 //! | `backlash:J` | `theta_J += b · tanh(tau_J / tau_0)` | `backlash:J` (rad) |
+//! | `backlash_direction:J` | `theta_J += b · s_J`, `s_J` the sign of `J`'s last motion (`d_J` for a prismatic joint) | `backlash_direction:J` (rad; m) |
+//! | `drift` | device positions `× (1 + c · t)`, `t` the pose's place in the sequence in `[0, 1]` | `drift` (1) |
+//!
+//! `backlash_direction` and `drift` depend on the order of the samples, not on the joint values
+//! alone: see [`crate::effects_order`] for `s_J` and `t`.
 //!
 //! `tau_J` is the gravity torque on joint `J` and `tau⊥_J` the one about the axis of its
 //! `alpha` ([`crate::gravity`]), both computed **at the nominal geometry**: the torques of the
@@ -83,6 +89,9 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
     let parts: Vec<&str> = label.split(':').collect();
     let kind = parts[0];
     let args = &parts[1..];
+    if let Some(e) = crate::effects_order::parse(label, kind, args, ctx) {
+        return e;
+    }
     let want = |n: usize| {
         if args.len() == n && args.iter().all(|a| !a.is_empty()) {
             Ok(())
@@ -127,10 +136,19 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
             revolute(args[0])?;
             Ok(Arc::new(GearRatio::new(&ctx.tree.joint_table(), args[0])?))
         }
+        "gear_harmonic2" => {
+            want(1)?;
+            let r = revolute(args[0])?;
+            Ok(Arc::new(GearHarmonic {
+                joint: args[0].into(),
+                row: r,
+                harmonics: Harmonics::Second,
+            }))
+        }
         "gear_harmonic" => {
             let harmonics = match args {
-                [_] => 1,
-                [_, "2"] => 2,
+                [_] => Harmonics::First,
+                [_, "2"] => Harmonics::Both,
                 _ => {
                     return Err(bad_label(
                         label,
@@ -220,7 +238,7 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
         _ => Err(bad_label(
             label,
             format!(
-                "expected one of gear_ratio, gear_harmonic, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash; found '{kind}'"
+                "expected one of gear_ratio, gear_harmonic, gear_harmonic2, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash, backlash_direction, drift; found '{kind}'"
             ),
         )),
     }
@@ -258,10 +276,14 @@ pub struct Candidates {
 }
 
 /// Every applicable candidate for automatic diagnosis: per revolute joint `gear_ratio`,
-/// `gear_harmonic` and, with inertials, `compliance` and `lateral_compliance` of joints that
+/// `gear_harmonic`, `gear_harmonic2`, `gear_harmonic:J:2` and, with inertials, `compliance`
+/// and `lateral_compliance` of joints that
 /// gravity loads (typical torque above 1e-6 of the largest; `compliance` also for prismatic
 /// joints); `coupling:J:K` for joints `K` within
-/// two rows of `J` on one chain; `scale`; `parallel_tilt` for the rows in `tilt_rows`
+/// two rows of `J` on one chain; per joint `backlash_direction` (the diagnosis holds it inert
+/// where the joint reverses fewer than [`crate::effects_order::MIN_REVERSALS`] times in the
+/// data); `scale`; `drift`; `parallel_tilt`
+/// for the rows in `tilt_rows`
 /// ([`crate::model::Model::tilt_rows`]). Mimic rows are skipped (their driver's effects cover
 /// them).
 pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
@@ -279,7 +301,10 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
         if r.kind == JointKind::Revolute {
             push(format!("gear_ratio:{}", r.name));
             push(format!("gear_harmonic:{}", r.name));
+            push(format!("gear_harmonic2:{}", r.name));
+            push(format!("gear_harmonic:{}:2", r.name));
         }
+        push(format!("backlash_direction:{}", r.name));
         if let Some(g) = &ctx.gravity {
             let big = (0..rows.len())
                 .flat_map(|k| {
@@ -318,6 +343,7 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
         }
     }
     push("scale".into());
+    push("drift".into());
     for &t in tilt_rows {
         // The label names the later joint of the pair.
         let later = (0..rows.len()).find(|&j| tilt_row(&ctx.tree, j) == Some(t));
@@ -335,29 +361,51 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
     out
 }
 
-/// Once and twice per revolution transmission errors: `theta_J += A sin q + B cos q` (and
-/// `A2 sin 2q + B2 cos 2q`), named `gear_harmonic:J` (`gear_harmonic:J:2`).
+/// Which harmonics of a joint's turn a [`GearHarmonic`] has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Harmonics {
+    /// Once per turn.
+    First,
+    /// Twice per turn alone.
+    Second,
+    /// Once and twice per turn.
+    Both,
+}
+
+impl Harmonics {
+    /// The basis functions of `q` it uses (indices into `sin q, cos q, sin 2q, cos 2q`).
+    fn basis(self) -> std::ops::Range<usize> {
+        match self {
+            Self::First => 0..2,
+            Self::Second => 2..4,
+            Self::Both => 0..4,
+        }
+    }
+}
+
+/// Once and twice per revolution transmission errors: `theta_J += A sin q + B cos q`, named
+/// `gear_harmonic:J`; `A2 sin 2q + B2 cos 2q` alone, named `gear_harmonic2:J`; both, named
+/// `gear_harmonic:J:2` (radians; `q` the joint value).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GearHarmonic {
     joint: String,
     row: usize,
-    harmonics: usize,
+    harmonics: Harmonics,
 }
 
 impl Effect for GearHarmonic {
     fn parameter_names(&self) -> Vec<String> {
         let l = self.label();
-        let mut v = vec![format!("{l}.sin"), format!("{l}.cos")];
-        if self.harmonics > 1 {
-            v.extend([format!("{l}.sin2"), format!("{l}.cos2")]);
-        }
-        v
+        ["sin", "cos", "sin2", "cos2"][self.harmonics.basis()]
+            .iter()
+            .map(|s| format!("{l}.{s}"))
+            .collect()
     }
     fn label(&self) -> String {
-        if self.harmonics > 1 {
-            format!("gear_harmonic:{}:2", self.joint)
-        } else {
-            format!("gear_harmonic:{}", self.joint)
+        match self.harmonics {
+            Harmonics::First => format!("gear_harmonic:{}", self.joint),
+            Harmonics::Second => format!("gear_harmonic2:{}", self.joint),
+            Harmonics::Both => format!("gear_harmonic:{}:2", self.joint),
         }
     }
     fn joint(&self) -> &str {
@@ -374,15 +422,15 @@ impl Effect for GearHarmonic {
     fn gradient(&self, q: &[f64], _params: &[f64], out: &mut [f64]) {
         let v = q.get(self.row).copied().unwrap_or(0.0);
         let basis = [v.sin(), v.cos(), (2.0 * v).sin(), (2.0 * v).cos()];
-        for (o, b) in out.iter_mut().zip(basis.iter().take(2 * self.harmonics)) {
+        for (o, b) in out.iter_mut().zip(&basis[self.harmonics.basis()]) {
             *o = *b;
         }
     }
     fn scales(&self, length: f64) -> Vec<f64> {
-        vec![length; 2 * self.harmonics]
+        vec![length; self.harmonics.basis().len()]
     }
     fn units(&self) -> Vec<String> {
-        vec!["rad".into(); 2 * self.harmonics]
+        vec!["rad".into(); self.harmonics.basis().len()]
     }
 }
 
@@ -600,6 +648,9 @@ mod tests {
             "gear_ratio:j2",
             "gear_harmonic:j1",
             "gear_harmonic:j1:2",
+            "gear_harmonic2:j2",
+            "backlash_direction:j3",
+            "drift",
             "coupling:j2:j3",
             "scale",
             "parallel_tilt:j3",
@@ -613,6 +664,22 @@ mod tests {
         assert!(err("warp:j1").contains("expected one of"));
         assert!(err("coupling:j2:j2").contains("different"));
         assert!(err("parallel_tilt:j1").contains("first of its table"));
+        assert!(err("drift:j1").contains("0 joint names"));
+        assert!(err("backlash_direction").contains("1 joint name"));
+        assert!(err("gear_harmonic2:j1:2").contains("1 joint name"));
+        assert!(matches!(
+            parse_label("backlash_direction:j9", &t),
+            Err(CalibError::MissingJoint { .. })
+        ));
+        // The twice-per-turn effect alone: sin 2q, cos 2q.
+        let e = parse_label("gear_harmonic2:j2", &t).unwrap();
+        assert_eq!(
+            e.parameter_names(),
+            ["gear_harmonic2:j2.sin2", "gear_harmonic2:j2.cos2"]
+        );
+        let q = [0.0, 0.3, 0.0];
+        let want = 1e-5 * (0.6f64).sin() + 2e-5 * (0.6f64).cos();
+        assert!((e.delta(&q, &[1e-5, 2e-5]) - want).abs() < 1e-18);
         assert!(matches!(
             parse_label("gear_ratio:j9", &t),
             Err(CalibError::MissingJoint { .. })
@@ -628,6 +695,14 @@ mod tests {
         assert!(labels.contains(&"coupling:j1:j3".to_string()));
         assert!(labels.contains(&"scale".to_string()));
         assert!(labels.contains(&"parallel_tilt:j3".to_string()));
+        for l in [
+            "gear_harmonic2:j1",
+            "gear_harmonic:j2:2",
+            "backlash_direction:j3",
+            "drift",
+        ] {
+            assert!(labels.contains(&l.to_string()), "{l}");
+        }
         assert!(!labels.iter().any(|l| l.starts_with("compliance")));
         assert_eq!(c.skipped.len(), 1);
         let inertials = Inertials {

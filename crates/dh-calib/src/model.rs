@@ -39,7 +39,14 @@
 //! # Device scale
 //! An [`Effect`] whose field is [`EffectField::Scale`] multiplies every modelled position in
 //! the device frame by `1 + delta` (about the device's origin): a measuring device whose length
-//! unit is off.
+//! unit is off. Several such effects add: the factor is `1 + Σ delta` (a constant `scale` and a
+//! `drift` in time together).
+//!
+//! # Sample order
+//! Every [`Observed`] carries a [`SampleContext`]: the direction of each joint's last motion
+//! and the pose's place in the measurement sequence. Effects of the joint values alone ignore
+//! it; effects of the motion history or of time ([`crate::effects_order`]) read it through
+//! [`Effect::delta_in`].
 //!
 //! # Hayati-Mirmirani parametrisation
 //! Consecutive joint axes within [`ModelOptions::hayati_threshold`] of parallel at the nominal
@@ -191,6 +198,25 @@ pub trait Effect: fmt::Debug + Send + Sync {
     fn delta(&self, q: &[f64], params: &[f64]) -> f64;
     /// `∂delta/∂params` at `q` into `out` (one per parameter).
     fn gradient(&self, q: &[f64], params: &[f64], out: &mut [f64]);
+    /// The change at joint values `q` in the sample's place in the measurement sequence
+    /// `context` ([`SampleContext`]). The model calls this one; by default it is
+    /// [`Effect::delta`] (an effect of the joint values only ignores the context). An effect
+    /// that depends on the sequence (direction of the last motion, time) overrides it and
+    /// makes `delta` its value in the neutral context ([`SampleContext::default`]).
+    fn delta_in(&self, q: &[f64], context: &SampleContext, params: &[f64]) -> f64 {
+        let _ = context;
+        self.delta(q, params)
+    }
+    /// Whether the effect reads the sample's [`SampleContext`] (false by default): such an
+    /// effect needs data in a sequence and is neutral elsewhere.
+    fn uses_sequence(&self) -> bool {
+        false
+    }
+    /// `∂delta_in/∂params` (see [`Effect::delta_in`]); by default [`Effect::gradient`].
+    fn gradient_in(&self, q: &[f64], context: &SampleContext, params: &[f64], out: &mut [f64]) {
+        let _ = context;
+        self.gradient(q, params, out)
+    }
     /// Column scales: the tip motion (metres) that a unit change of each parameter causes,
     /// roughly, in a robot of characteristic length `length`.
     fn scales(&self, length: f64) -> Vec<f64>;
@@ -310,7 +336,30 @@ pub enum Observation {
     Pose(Isometry3<f64>),
 }
 
-/// One sample: joint values in row order and what was measured there.
+/// Where a sample sits in the measurement sequence (the file's sample order): what effects
+/// of the motion history and of time see besides the joint values
+/// ([`Effect::delta_in`]). Built by [`crate::effects_order::sequence_contexts`]; the default
+/// (no direction, order 0) is the neutral context of a pose outside any sequence (a
+/// prediction, a synthetic sample).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SampleContext {
+    /// Per row (tree joint order): the sign of the joint's last motion before this pose,
+    /// `-1`, `0` (not moved yet) or `+1`; empty means 0 for every row.
+    pub direction: Vec<f64>,
+    /// The pose's place in the sequence, normalised to `[0, 1]` (0 the first pose, 1 the
+    /// last; repeats of one pose share it). Dimensionless.
+    pub order: f64,
+}
+
+impl SampleContext {
+    /// The direction of row `row` (0 when not given).
+    pub fn direction_of(&self, row: usize) -> f64 {
+        self.direction.get(row).copied().unwrap_or(0.0)
+    }
+}
+
+/// One sample: joint values in row order, its place in the sequence and what was measured
+/// there.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Observed {
     /// One value per table row (radians or metres).
@@ -321,6 +370,20 @@ pub struct Observed {
     /// frame measured it. Sessions without their own block ([`Model::add_session`]) use the
     /// `device` block.
     pub session: usize,
+    /// Its place in the measurement sequence (neutral by default).
+    pub context: SampleContext,
+}
+
+impl Observed {
+    /// A sample in the neutral context.
+    pub fn new(q: Vec<f64>, observation: Observation) -> Self {
+        Self {
+            q,
+            observation,
+            session: 0,
+            context: SampleContext::default(),
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -450,7 +513,6 @@ pub struct Model {
     target_chain: Vec<usize>,
     target_params: usize,
     effects: Vec<EffectSlot>,
-    scale_param: Option<usize>,
     pairs: Vec<PairParametrisation>,
     /// Per session with its own device block: the session index and its op indices of each
     /// chain (its block instead of the device block).
@@ -599,7 +661,6 @@ impl Model {
             target_chain: targets.iter().map(|(_, c)| *c).collect(),
             target_params: 0,
             effects: Vec::new(),
-            scale_param: None,
             pairs,
             session_chains: Vec::new(),
         };
@@ -763,13 +824,14 @@ impl Model {
     /// [`CalibError::BadOption`] for a tilt effect on a row without a tilt (see
     /// [`Model::tilt_rows`]) or one that already estimates it, and for a second device scale.
     pub fn add_effect(&mut self, effect: Arc<dyn Effect>) -> Result<Range<usize>, CalibError> {
+        let label = effect.label();
+        if self.effects.iter().any(|s| s.effect.label() == label) {
+            return Err(CalibError::BadOption {
+                what: format!("effect '{label}'"),
+                reason: "expected each effect once, found it twice".into(),
+            });
+        }
         let op = if effect.field() == EffectField::Scale {
-            if self.scale_param.is_some() {
-                return Err(CalibError::BadOption {
-                    what: "effects".into(),
-                    reason: "expected at most one device scale, found two".into(),
-                });
-            }
             None
         } else {
             let row =
@@ -809,9 +871,6 @@ impl Model {
             self.push_param(name, Block::Effect(e), Field::Effect(k), Unit::Other);
         }
         let params = start..self.parameters.len();
-        if op.is_none() {
-            self.scale_param = Some(start);
-        }
         self.effects.push(EffectSlot {
             effect,
             params: params.clone(),
@@ -1020,7 +1079,7 @@ impl Model {
         )
     }
 
-    fn op_values(&self, x: &[f64], q: &[f64], out: &mut Vec<f64>) {
+    fn op_values(&self, x: &[f64], q: &[f64], ctx: &SampleContext, out: &mut Vec<f64>) {
         out.clear();
         out.extend(self.ops.iter().map(|o| {
             o.value
@@ -1031,21 +1090,24 @@ impl Model {
             if let Some(op) = slot.op {
                 let params = x.get(slot.params.clone()).unwrap_or(&[]);
                 if params.iter().any(|p| *p != 0.0) {
-                    out[op] += slot.effect.delta(q, params);
+                    out[op] += slot.effect.delta_in(q, ctx, params);
                 }
             }
         }
     }
 
-    /// `1 + s` of the device scale at `x` and `q` (1 without one).
-    fn scale_factor(&self, x: &[f64], q: &[f64]) -> f64 {
-        match self.effects.iter().find(|s| s.op.is_none()) {
-            Some(slot) => {
+    /// `1 + Σ s` of the device scale effects at `x`, `q` and `ctx` (1 without one): the
+    /// scale effects add (a constant `scale` and a `drift` in time together).
+    fn scale_factor(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
+        1.0 + self
+            .effects
+            .iter()
+            .filter(|s| s.op.is_none())
+            .map(|slot| {
                 let params = x.get(slot.params.clone()).unwrap_or(&[]);
-                1.0 + slot.effect.delta(q, params)
-            }
-            None => 1.0,
-        }
+                slot.effect.delta_in(q, ctx, params)
+            })
+            .sum::<f64>()
     }
 
     /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before
@@ -1146,28 +1208,42 @@ impl Model {
     }
 
     /// Chain `chain`'s tip frame in session `session`'s device frame at `x` and `q` (its
-    /// position scaled by the device scale).
+    /// position scaled by the device scale), in the neutral context (see [`Model::point_in`]).
     pub fn tip_in(&self, x: &[f64], q: &[f64], chain: usize, session: usize) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &mut v);
+        let ctx = SampleContext::default();
+        self.op_values(x, q, &ctx, &mut v);
         let mut f = self.chain(&v, None, self.session_ops(chain, session));
-        f.t *= self.scale_factor(x, q);
+        f.t *= self.scale_factor(x, q, &ctx);
         f.to_iso()
     }
 
     /// Where target `k` is in the device frame at parameters `x` and joint values `q` (one per
-    /// row), metres (the device scale applied).
+    /// row), metres (the device scale applied), in the neutral context (no motion history,
+    /// order 0: see [`Model::point_in`]).
     pub fn point(&self, x: &[f64], q: &[f64], target: usize) -> Vector3<f64> {
-        let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &mut v);
-        let f = self.chain(&v, None, self.chain_ops(self.target_chain(target)));
-        (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q)
+        self.point_in(x, q, &SampleContext::default(), target)
     }
 
-    /// `1 + s` of the device scale effect at `x` and `q` (1 without one): what multiplies a
-    /// modelled position in the device frame.
+    /// [`Model::point`] for a sample at `ctx` in the measurement sequence (what the
+    /// effects of motion history and time see).
+    pub fn point_in(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        ctx: &SampleContext,
+        target: usize,
+    ) -> Vector3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, ctx, &mut v);
+        let f = self.chain(&v, None, self.chain_ops(self.target_chain(target)));
+        (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, ctx)
+    }
+
+    /// `1 + s` of the device scale effects at `x` and `q` in the neutral context (1 without
+    /// one): what multiplies a modelled position in the device frame.
     pub fn scale_at(&self, x: &[f64], q: &[f64]) -> f64 {
-        self.scale_factor(x, q)
+        self.scale_factor(x, q, &SampleContext::default())
     }
 
     /// The first chain's tip frame in the device frame at `x` and `q` (its position scaled by
@@ -1179,10 +1255,11 @@ impl Model {
     /// Chain `chain`'s tip frame in the device frame at `x` and `q` (its position scaled by the
     /// device scale).
     pub fn tip_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
+        let ctx = SampleContext::default();
         let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &mut v);
+        self.op_values(x, q, &ctx, &mut v);
         let mut f = self.chain(&v, None, self.chain_ops(chain));
-        f.t *= self.scale_factor(x, q);
+        f.t *= self.scale_factor(x, q, &ctx);
         f.to_iso()
     }
 
@@ -1195,7 +1272,7 @@ impl Model {
     /// Chain `chain`'s tip in the base link frame at `x` and `q` (without the device frame).
     pub fn robot_fk_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &mut v);
+        self.op_values(x, q, &SampleContext::default(), &mut v);
         let ops = self.chain_ops(chain);
         self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]))
             .to_iso()
@@ -1206,13 +1283,13 @@ impl Model {
         SCRATCH.with(|scratch| {
             let mut scratch = scratch.borrow_mut();
             let v = &mut scratch.values;
-            self.op_values(x, &obs.q, v);
+            self.op_values(x, &obs.q, &obs.context, v);
             let f = self.chain(
                 v,
                 None,
                 self.session_ops(self.observation_chain(obs), obs.session),
             );
-            let s = self.scale_factor(x, &obs.q);
+            let s = self.scale_factor(x, &obs.q, &obs.context);
             self.write_residuals(x, &f, s, obs, out);
         });
     }
@@ -1298,10 +1375,10 @@ impl Model {
         on: &mut Vec<bool>,
         grad: &mut Vec<f64>,
     ) {
-        self.op_values(x, &obs.q, v);
+        self.op_values(x, &obs.q, &obs.context, v);
         let ops = self.session_ops(self.observation_chain(obs), obs.session);
         let f = self.chain(v, Some((before, on)), ops);
-        let scale = self.scale_factor(x, &obs.q);
+        let scale = self.scale_factor(x, &obs.q, &obs.context);
         let phi = self.write_residuals(x, &f, scale, obs, residuals);
         let (point, target, pose) = match &obs.observation {
             Observation::Point { target, .. } => {
@@ -1345,7 +1422,7 @@ impl Model {
                     let slot = &self.effects[e];
                     grad.resize(slot.params.len(), 0.0);
                     let params = x.get(slot.params.clone()).unwrap_or(&[]);
-                    slot.effect.gradient(&obs.q, params, grad);
+                    slot.effect.gradient_in(&obs.q, &obs.context, params, grad);
                     let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
                     match slot.op {
                         Some(op) => op_motion(op, g, &mut dp, &mut dw),

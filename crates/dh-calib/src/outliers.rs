@@ -191,7 +191,7 @@ pub fn screen(
             reason: format!("expected a level in (0, 1), found {level}"),
         });
     }
-    let full = prepare(tree, data)?;
+    let full = prepare(tree, data, None)?;
     // Where each sample of `data` went: (validation?, index in its list).
     let mut place = Vec::with_capacity(data.samples.len());
     let (mut nc, mut nv) = (0, 0);
@@ -234,7 +234,7 @@ pub fn screen(
                 data.filtered(|i, s| s.split == Split::Calibration && !flagged.contains(&i)),
             )
         };
-        let mut session = Session::new(tree, &kept, &screen_options, &[])?;
+        let mut session = Session::new(tree, &kept, &screen_options, &[], None)?;
         session.validation = Validation::None;
         let geo = session.geometric()?;
         let x = &geo.last.outcome.x;

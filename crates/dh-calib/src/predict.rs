@@ -11,6 +11,10 @@
 //! Frame::Base:    p = FK(q) · t_k,        tool pose FK(q)   (the robot's base link frame)
 //! ```
 //!
+//! A prediction is a pose outside the measured sequence: the effects of the sample order
+//! ([`crate::effects_order`]) are in their neutral context, a `backlash_direction` midway
+//! between its flanks (`s = 0`) and a `drift` at the session's start (`t = 0`).
+//!
 //! # Uncertainty
 //! `u = sqrt(diag(G C Gᵀ))`, first order: `C` is the covariance of the calibration's free
 //! parameters ([`Covariance`], `σ̂² (JᵀJ)⁺` of [`crate::fit`]) and `G` the prediction's

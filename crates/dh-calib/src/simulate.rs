@@ -91,6 +91,12 @@ pub struct SimulationOptions {
     /// [`SESSION_SHIFT`] metres and [`SESSION_TURN`] radians). With more than one the samples
     /// name their session (see [`crate::sessions`]).
     pub sessions: usize,
+    /// Effects of the true robot, by label ([`crate::effects`]; gravity effects need
+    /// inertials and are refused): added to the truth model, their values set by
+    /// [`Errors::Explicit`] through their parameter names (zero otherwise). Effects of the
+    /// sample order see the poses in the order simulated, repeats of one pose sharing its
+    /// place ([`crate::effects_order`]).
+    pub effects: Vec<String>,
 }
 
 /// Largest translation between two simulated sessions' device frames (metres).
@@ -115,6 +121,7 @@ impl Default for SimulationOptions {
             repeats: 1,
             model: ModelOptions::default(),
             sessions: 1,
+            effects: Vec::new(),
         }
     }
 }
@@ -209,6 +216,9 @@ pub fn simulate(
     for (k, t) in target_pos.iter().enumerate() {
         model.set_target(k, *t);
     }
+    for label in &o.effects {
+        model.add_effect(crate::effects::parse_label(label, nominal)?)?;
+    }
     let mut x = vec![0.0; model.parameter_count()];
     match &o.errors {
         Errors::None => {}
@@ -278,7 +288,11 @@ pub fn simulate(
     let first_val = poses.len() - n_val.min(poses.len());
     let mut samples = Vec::with_capacity(poses.len() * target_pos.len() * o.repeats.max(1));
     let pose_count = poses.len().max(1);
-    for (i, (q, config)) in poses.iter().enumerate() {
+    // Each pose's place in the sequence (its repeats and targets are measured there).
+    let contexts = crate::effects_order::sequence_contexts(
+        poses.iter().map(|(q, c)| (q.as_slice(), Some(c.as_str()))),
+    );
+    for (i, ((q, config), context)) in poses.iter().zip(&contexts).enumerate() {
         let session = i * sessions / pose_count;
         model.set_device(&frames[session]);
         let split = if i >= first_val {
@@ -288,7 +302,7 @@ pub fn simulate(
         };
         for _ in 0..o.repeats.max(1) {
             for k in 0..target_pos.len() {
-                let p = model.point(&x, q, k);
+                let p = model.point_in(&x, q, context, k);
                 let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * o.sigma);
                 samples.push(Sample {
                     session,

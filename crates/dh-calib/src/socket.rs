@@ -135,14 +135,13 @@ impl SocketProblem<'_> {
     }
 
     fn observed(&self, x: &[f64], c: &Contact) -> Observed {
-        Observed {
-            session: 0,
-            q: c.q.clone(),
-            observation: Observation::Point {
+        Observed::new(
+            c.q.clone(),
+            Observation::Point {
                 target: c.target,
                 point: self.socket_at(x, c.socket),
             },
-        }
+        )
     }
 
     fn weight(&self, k: &SocketConstraint) -> f64 {
@@ -664,6 +663,7 @@ impl Run<'_> {
             score: if aliased || inert { 0.0 } else { reduction },
             independence,
             val_rms: None,
+            reason: None,
             status: if inert {
                 CandidateStatus::Inert
             } else if aliased {
@@ -794,16 +794,42 @@ pub fn diagnose_sockets(
         EffectSelection::None => run_sockets(tree, data, &plain, None),
         EffectSelection::Labels(labels) => {
             for l in labels {
-                plain.effects.push(effects::parse_label_in(l, &ctx)?);
+                let e = effects::parse_label_in(l, &ctx)?;
+                if e.uses_sequence() {
+                    return Err(CalibError::BadOption {
+                        what: format!("effect '{l}'"),
+                        reason: "expected an effect of the joint values, found one of the \
+                                 sample order, which contact data does not carry"
+                            .into(),
+                    });
+                }
+                plain.effects.push(e);
             }
             run_sockets(tree, data, &plain, None)
         }
         EffectSelection::Auto => {
             let probe = Model::new_tree(tree, &[], &options.model)?;
             let c = effects::candidates(&ctx, &probe.tilt_rows());
+            let mut skipped = c.skipped;
+            skipped.push(
+                "backlash_direction, drift: not searched on contacts (contact data carries no \
+                 sample order); gear_harmonic2, gear_harmonic:J:2: not searched on contacts (the \
+                 contact selection does not compare rival effects of one joint), name them with \
+                 --effects"
+                    .into(),
+            );
+            let pool = c
+                .effects
+                .into_iter()
+                .filter(|e| {
+                    let l = e.label();
+                    let both_harmonics = l.starts_with("gear_harmonic:") && l.ends_with(":2");
+                    !(e.uses_sequence() || l.starts_with("gear_harmonic2:") || both_harmonics)
+                })
+                .collect();
             let auto = Auto {
-                pool: c.effects,
-                skipped: c.skipped,
+                pool,
+                skipped,
                 diag,
             };
             run_sockets(tree, data, &plain, Some(&auto))
@@ -842,7 +868,7 @@ fn run_sockets(
             ),
         });
     }
-    let prep = prepare(tree, data)?;
+    let prep = prepare(tree, data, None)?;
     let cal = contacts_of(data, &prep.cal, Split::Calibration)?;
     let val = contacts_of(data, &prep.val, Split::Validation)?;
     if cal.contacts.len() < 3 {

@@ -124,7 +124,11 @@ fn tree_and_effect_jacobians_match_central_differences() {
         "coupling:r4:r3",
         "gear_harmonic:l3:2",
         "gear_ratio:t1",
+        "gear_harmonic2:r3",
+        "backlash_direction:t2",
+        "backlash_direction:l2",
         "scale",
+        "drift",
     ] {
         m.add_effect(parse_label_in(l, &ctx).unwrap()).unwrap();
     }
@@ -152,6 +156,13 @@ fn tree_and_effect_jacobians_match_central_differences() {
             observation: Observation::Point {
                 target,
                 point: m.point(&x, &q, target) + Vector3::new(1e-3, 0.0, -2e-3),
+            },
+            // Every sample at its own place in a sequence (the order effects' columns).
+            context: dh_calib::model::SampleContext {
+                direction: (0..q.len())
+                    .map(|k| if (i + k) % 3 == 0 { 1.0 } else { -1.0 })
+                    .collect(),
+                order: i as f64 / 5.0,
             },
         });
     }

@@ -54,6 +54,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
                 target: i % 2,
                 point,
             },
+            context: Default::default(),
         });
         let pose = m.tip(x, &q)
             * Isometry3::from_parts(
@@ -64,6 +65,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
             session: 0,
             q: q.clone(),
             observation: Observation::Pose(pose),
+            context: Default::default(),
         });
     }
     out

@@ -7,8 +7,9 @@ use dh_calib::calibrate::{CalibrationOptions, Report};
 use dh_calib::data::{Measurements, Sample, Split};
 use dh_calib::diagnose::{diagnose, DiagnoseOptions};
 use dh_calib::effects::{parse_label_in, EffectContext};
+use dh_calib::effects_order::sequence_contexts;
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
-use dh_calib::model::{Block, Effect, Model, ModelOptions};
+use dh_calib::model::{Block, Effect, Model, ModelOptions, SampleContext};
 use dh_calib::tree::DhTree;
 use dh_core::{DhTable, JointSampler};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -132,6 +133,16 @@ fn random_pose(rng: &mut ChaCha8Rng, distance: f64) -> Isometry3<f64> {
 /// noise `arm.sigma` per axis, and the effect `label` (if any) planted at a random size between
 /// 15 and 30 times the noise (RMS 3-D displacement of the calibration points).
 pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
+    simulate_sized(arm, label, None, seed)
+}
+
+/// As [`simulate`], the effect's parameters at `values` (radians, ...) instead of a random
+/// size; `ratio` is then the size they give.
+pub fn simulate_values(arm: &Arm, label: &str, values: &[f64], seed: u64) -> Simulated {
+    simulate_sized(arm, Some(label), Some(values), seed)
+}
+
+fn simulate_sized(arm: &Arm, label: Option<&str>, given: Option<&[f64]>, seed: u64) -> Simulated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let ctx = arm.context();
     let table = &arm.table;
@@ -156,6 +167,8 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
             q
         })
         .collect();
+    // Each pose's place in the sequence (one sample per pose, in this order).
+    let contexts = sequence_contexts(poses.iter().map(|q| (q.as_slice(), None)));
     let mut values = vec![];
     let mut ratio = 0.0;
     if let Some(r) = range.clone() {
@@ -173,7 +186,8 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
         unit(&mut x1, 1e-6);
         let disp: f64 = poses[..150]
             .iter()
-            .map(|q| (m.point(&x1, q, 0) - m.point(&x, q, 0)).norm_squared())
+            .zip(&contexts)
+            .map(|(q, c)| (m.point_in(&x1, q, c, 0) - m.point_in(&x, q, c, 0)).norm_squared())
             .sum::<f64>()
             / 150.0;
         let per_unit = disp.sqrt() / 1e-6;
@@ -182,17 +196,31 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
         unit(&mut x, s);
         values = dir.iter().map(|d| d * s).collect();
         ratio = want;
+        if let Some(v) = given {
+            for (c, val) in r.clone().zip(v) {
+                x[c] = *val;
+                x1[c] = 0.0;
+            }
+            let disp: f64 = poses[..150]
+                .iter()
+                .zip(&contexts)
+                .map(|(q, c)| (m.point_in(&x, q, c, 0) - m.point_in(&x1, q, c, 0)).norm_squared())
+                .sum::<f64>()
+                / 150.0;
+            values = v.to_vec();
+            ratio = disp.sqrt() / (arm.sigma * 3f64.sqrt());
+        }
     }
     let mut samples = Vec::with_capacity(250);
     let mut noises = Vec::with_capacity(250);
-    for (i, q) in poses.iter().enumerate() {
+    for (i, (q, c)) in poses.iter().zip(&contexts).enumerate() {
         let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * arm.sigma);
         noises.push(noise);
         samples.push(Sample {
             session: 0,
             q: q.clone(),
             target: 0,
-            point: m.point(&x, q, 0) + noise,
+            point: m.point_in(&x, q, c, 0) + noise,
             sigma: Some(Vector3::repeat(arm.sigma)),
             config: Some(format!("p{i}")),
             split: if i < 150 {
@@ -204,7 +232,7 @@ pub fn simulate(arm: &Arm, label: Option<&str>, seed: u64) -> Simulated {
             socket: None,
         });
     }
-    let floor = floor(&m, &x, &poses, &noises, 150);
+    let floor = floor(&m, &x, &poses, &contexts, &noises, 150);
     Simulated {
         floor,
         data: Measurements {
@@ -243,6 +271,7 @@ pub fn floor(
     m: &Model,
     x: &[f64],
     poses: &[Vec<f64>],
+    contexts: &[SampleContext],
     noise: &[Vector3<f64>],
     n_cal: usize,
 ) -> (f64, f64) {
@@ -250,18 +279,19 @@ pub fn floor(
     use nalgebra::{DMatrix, DVector};
     let cols: Vec<usize> = (0..m.parameter_count()).collect();
     let scales = m.scales();
-    let jac = |qs: &[Vec<f64>]| {
+    let jac = |qs: &[Vec<f64>], cs: &[SampleContext]| {
         let mut j = DMatrix::zeros(3 * qs.len(), cols.len());
         let mut r = [0.0; 3];
         let mut jb = vec![0.0; 3 * cols.len()];
-        for (i, q) in qs.iter().enumerate() {
+        for (i, (q, c)) in qs.iter().zip(cs).enumerate() {
             let o = Observed {
                 session: 0,
                 q: q.clone(),
                 observation: Observation::Point {
                     target: 0,
-                    point: m.point(x, q, 0),
+                    point: m.point_in(x, q, c, 0),
                 },
+                context: c.clone(),
             };
             m.jacobian(x, &o, &cols, &mut r, &mut jb);
             for a in 0..3 {
@@ -272,8 +302,8 @@ pub fn floor(
         }
         j
     };
-    let jc = jac(&poses[..n_cal]);
-    let jv = jac(&poses[n_cal..]);
+    let jc = jac(&poses[..n_cal], &contexts[..n_cal]);
+    let jv = jac(&poses[n_cal..], &contexts[n_cal..]);
     let ec = DVector::from_iterator(
         3 * n_cal,
         noise[..n_cal].iter().flat_map(|v| v.iter().copied()),
