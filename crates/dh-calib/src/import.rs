@@ -279,7 +279,7 @@ impl<'a> Files<'_, 'a> {
             None => self
                 .sources
                 .iter()
-                .filter(|s| same_file(&s.name, spec.name))
+                .filter(|s| same_file(s.name, spec.name))
                 .collect(),
         };
         let source = match (self.sources, matching.as_slice()) {
@@ -318,7 +318,7 @@ impl<'a> Files<'_, 'a> {
     pub(crate) fn optional(&self, name: &str) -> Option<&'a str> {
         self.sources
             .iter()
-            .find(|s| same_file(&s.name, name))
+            .find(|s| same_file(s.name, name))
             .map(|s| s.text)
     }
 
