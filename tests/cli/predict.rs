@@ -117,6 +117,9 @@ fn predictions_carry_an_uncertainty_that_matches_their_error_and_read_back_as_me
         &program,
         "--targets",
         "tool",
+        // The truth file has the simulated device frame: the base frame is asked for.
+        "--frame",
+        "base",
         "--out",
         &out("truth.csv"),
     ]);
@@ -265,6 +268,8 @@ fn compensated_joint_values_bring_the_true_robot_to_the_nominal_goal() {
             joints,
             "--targets",
             "tool",
+            "--frame",
+            "base",
             "--out",
             &out(name),
         ]);
