@@ -6,7 +6,7 @@
 //! diagnosis refits its eligible rivals too and adds the best of those that pass: the lowest
 //! BIC on the calibration data (the likelihood with a penalty per parameter, so a harmonic
 //! with four terms must explain more than one with two), the lower held-out RMS breaking a tie.
-//! The others are reported as rivals with the difference ([`reason`]).
+//! The others are reported as rivals with the difference (`reason`).
 
 use crate::diagnose::Trial;
 use crate::model::Effect;

@@ -282,9 +282,10 @@ pub(crate) fn moved_note(sessions: usize, rms: f64, val_rms: Option<f64>) -> Opt
     })
 }
 
-/// See [`moved_note`]: validation RMS over calibration RMS.
+/// The validation RMS over the calibration RMS above which a note suggests that the validation
+/// data were measured in another session (with [`MOVED_RMS`]).
 pub const MOVED_RATIO: f64 = 100.0;
-/// See [`moved_note`]: validation RMS (metres).
+/// The validation RMS (metres) above which, with [`MOVED_RATIO`], that note is given.
 pub const MOVED_RMS: f64 = 0.01;
 
 /// The validation observations for the effect search's linearised held-out figures
