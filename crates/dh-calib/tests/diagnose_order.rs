@@ -12,7 +12,9 @@ mod diagnose_support;
 
 use dh_calib::calibrate::Report;
 use dh_calib::diagnose::CandidateStatus;
-use diagnose_support::{industrial, run, seeds, simulate, simulate_values, ur_sized, Simulated};
+use diagnose_support::{
+    industrial, run, seeds, simulate, simulate_values, step_summaries, ur_sized, Simulated,
+};
 
 /// Distance from the realisation's floor allowed to the final RMS (as `diagnose_sim`).
 const FLOOR_TOLERANCE: f64 = 0.05;
@@ -21,18 +23,7 @@ const FLOOR_TOLERANCE: f64 = 0.05;
 const TRUE_MODEL_TOLERANCE: f64 = 0.005;
 
 fn summary(r: &Report) -> String {
-    let steps: Vec<String> = r
-        .steps
-        .iter()
-        .map(|s| {
-            format!(
-                "{} {:.4} mm / {:.4} mm",
-                s.label,
-                s.rms * 1e3,
-                s.val_rms.unwrap_or(f64::NAN) * 1e3
-            )
-        })
-        .collect();
+    let steps = step_summaries(r);
     let trials: Vec<String> = r
         .diagnosis
         .iter()

@@ -13,21 +13,12 @@ mod diagnose_support;
 
 use dh_calib::calibrate::Report;
 use dh_calib::diagnose::CandidateStatus;
-use diagnose_support::{industrial, run, seeds, simulate, ur_sized, validation_floor, Arm};
+use diagnose_support::{
+    industrial, run, seeds, simulate, step_summaries, ur_sized, validation_floor, Arm,
+};
 
 fn summary(r: &Report) -> String {
-    let steps: Vec<String> = r
-        .steps
-        .iter()
-        .map(|s| {
-            format!(
-                "{} {:.4} mm / {:.4} mm",
-                s.label,
-                s.rms * 1e3,
-                s.val_rms.unwrap_or(f64::NAN) * 1e3
-            )
-        })
-        .collect();
+    let steps = step_summaries(r);
     let top: Vec<String> = r
         .candidates
         .iter()

@@ -331,3 +331,18 @@ pub fn floor(
     let rms = |v: &DVector<f64>| (v.norm_squared() / (v.len() / 3) as f64).sqrt();
     (rms(&rc), rms(&rv))
 }
+
+/// Each step of `r` as `label cal-RMS mm / val-RMS mm`, for the tests' printed figures.
+pub fn step_summaries(r: &Report) -> Vec<String> {
+    r.steps
+        .iter()
+        .map(|s| {
+            format!(
+                "{} {:.4} mm / {:.4} mm",
+                s.label,
+                s.rms * 1e3,
+                s.val_rms.unwrap_or(f64::NAN) * 1e3
+            )
+        })
+        .collect()
+}
