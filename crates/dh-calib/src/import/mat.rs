@@ -84,11 +84,6 @@ impl Order {
                 a[k] = *v;
             }
         }
-        let le = |n: usize| {
-            let mut x = [0u8; 8];
-            x[..n].copy_from_slice(&a[..n]);
-            x
-        };
         Some(match kind {
             1 => f64::from(a[0] as i8),
             2 => f64::from(a[0]),
@@ -97,9 +92,9 @@ impl Order {
             5 => f64::from(i32::from_le_bytes([a[0], a[1], a[2], a[3]])),
             6 => f64::from(u32::from_le_bytes([a[0], a[1], a[2], a[3]])),
             7 => f64::from(f32::from_le_bytes([a[0], a[1], a[2], a[3]])),
-            9 => f64::from_le_bytes(le(8)),
-            12 => i64::from_le_bytes(le(8)) as f64,
-            13 => u64::from_le_bytes(le(8)) as f64,
+            9 => f64::from_le_bytes(a),
+            12 => i64::from_le_bytes(a) as f64,
+            13 => u64::from_le_bytes(a) as f64,
             _ => return None,
         })
     }

@@ -117,7 +117,6 @@ class Report:
         targets: target name -> position in the tip frame (m).
         verdict, outliers, noise_floor, notes: as in the JSON (dicts, lists, None).
         written: the proof of the file written with ``out=`` (dict), or None.
-        text: the report as the CLI prints it (``format text``) is not kept; see ``to_dict()``.
     """
 
     def __init__(self, doc: Dict[str, Any]) -> None:
