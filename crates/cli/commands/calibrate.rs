@@ -1630,11 +1630,7 @@ fn distances(
     }
     let q = row_values(table, data)?;
     // The effects of the sample order see each sample's place in the sequence, as the fit did.
-    let contexts = dh_calib::effects_order::sequence_contexts(
-        q.iter()
-            .zip(&data.samples)
-            .map(|(q, s)| (q.as_slice(), s.config.as_deref())),
-    );
+    let contexts = dh_calib::effects_order::contexts_of(q.iter().map(Vec::as_slice), data);
     Ok(data
         .samples
         .iter()

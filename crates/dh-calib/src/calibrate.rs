@@ -354,12 +354,7 @@ pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Vec<f64>
 
 /// The place of each sample of `data` in its sequence, from its row values `rows_q`.
 fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
-    crate::effects_order::sequence_contexts(
-        rows_q
-            .iter()
-            .zip(&data.samples)
-            .map(|(q, s)| (q.as_slice(), s.config.as_deref())),
-    )
+    crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
 }
 
 /// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence

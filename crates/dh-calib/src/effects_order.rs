@@ -104,14 +104,24 @@ where
     pose.iter().map(|&k| contexts[k].clone()).collect()
 }
 
+/// [`sequence_contexts`] of the samples of `data`, with each sample's values in row order
+/// (one per table row, as effects index them) from `rows_q`, in sample order.
+pub fn contexts_of<'a>(
+    rows_q: impl IntoIterator<Item = &'a [f64]>,
+    data: &'a Measurements,
+) -> Vec<SampleContext> {
+    sequence_contexts(
+        rows_q
+            .into_iter()
+            .zip(&data.samples)
+            .map(|(q, s)| (q, s.config.as_deref())),
+    )
+}
+
 /// [`sequence_contexts`] of a measurement set whose columns are the rows effects index (a
 /// serial robot without mimic joints, as the simulators write it).
 pub fn measurement_contexts(data: &Measurements) -> Vec<SampleContext> {
-    sequence_contexts(
-        data.samples
-            .iter()
-            .map(|s| (s.q.as_slice(), s.config.as_deref())),
-    )
+    contexts_of(data.samples.iter().map(|s| s.q.as_slice()), data)
 }
 
 /// A joint whose direction of motion changes fewer times than this over the sequence takes
