@@ -359,7 +359,7 @@ fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
 
 /// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
 /// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
-/// whole file: [`screen_outliers`]), `None` to take `data`'s own order.
+/// whole file: [`fitted_session`]), `None` to take `data`'s own order.
 pub(crate) fn prepare(
     tree: &DhTree,
     data: &Measurements,
@@ -805,6 +805,12 @@ pub(crate) struct Session<'a> {
     targets_nominal: Vec<Vector3<f64>>,
     /// The name of every session of the data (see [`crate::sessions`]).
     session_names: Vec<String>,
+    /// Beyond [`CV_TRAINING_MAX`] calibration samples, that many evenly spaced ones (indices
+    /// into `prep.cal`): the closed-form start, each step's identifiability and each fit's
+    /// first iterations use them, and the fit of every sample starts where theirs ends (one
+    /// or two passes over millions of samples instead of one per iteration). Empty for
+    /// smaller sets, which are fitted as they are.
+    coarse: Vec<usize>,
 }
 
 /// The chain of each target of `data` in `tree` (see [`CalibrationOptions::target_branches`]).
@@ -869,7 +875,17 @@ impl<'a> Session<'a> {
         }
         let scales = model.scales();
         let x = vec![0.0; model.parameter_count()];
-        initialise(&mut model, &x, &prep.cal, options)?;
+        let coarse = if prep.cal.len() > CV_TRAINING_MAX {
+            evenly_spaced((0..prep.cal.len()).collect(), CV_TRAINING_MAX)
+        } else {
+            Vec::new()
+        };
+        if coarse.is_empty() {
+            initialise(&mut model, &x, &prep.cal, options)?;
+        } else {
+            let sample: Vec<Observed> = coarse.iter().map(|&i| prep.cal[i].clone()).collect();
+            initialise(&mut model, &x, &sample, options)?;
+        }
         let validation = if !prep.val.is_empty() {
             Validation::Split {
                 samples: prep.val.len(),
@@ -911,6 +927,15 @@ impl<'a> Session<'a> {
             }
         }
         notes.extend(crate::sessions::unseen_notes(data, &prep));
+        if !coarse.is_empty() {
+            notes.push(format!(
+                "{} calibration samples: the closed-form start, the identifiability tests and \
+                 each fit's first iterations use {} evenly spaced ones; every fit then \
+                 converges on all of them (its figures and standard errors are of all samples)",
+                prep.cal.len(),
+                coarse.len()
+            ));
+        }
         let device_nominal = model.device();
         let targets_nominal = model.targets().iter().map(|t| t.1).collect();
         Ok(Session {
@@ -926,6 +951,7 @@ impl<'a> Session<'a> {
             measured,
             device_nominal,
             targets_nominal,
+            coarse,
         })
     }
 
@@ -941,7 +967,17 @@ impl<'a> Session<'a> {
             model: &self.model,
             observations: &self.prep.cal,
         };
-        let outcome = fit::solve(&problem, x0, free, &self.scales, &self.options.fit)?;
+        let start = if self.coarse.is_empty() {
+            x0.to_vec()
+        } else {
+            let sample = SubsetProblem {
+                model: &self.model,
+                observations: &self.prep.cal,
+                subset: &self.coarse,
+            };
+            fit::solve(&sample, x0, free, &self.scales, &self.options.fit)?.x
+        };
+        let outcome = fit::solve(&problem, &start, free, &self.scales, &self.options.fit)?;
         let cal = Stats::of(&distances(&self.model, &outcome.x, &self.prep.cal));
         let held = held_out(
             &self.model,
@@ -987,14 +1023,22 @@ impl<'a> Session<'a> {
         x: &[f64],
         columns: &[usize],
     ) -> Result<(Vec<usize>, Vec<fit::Fixed>), CalibError> {
-        identify(
-            &self.model,
-            &self.prep.cal,
-            x,
-            columns,
-            &self.scales,
-            self.options,
-        )
+        if self.coarse.is_empty() {
+            return identify(
+                &self.model,
+                &self.prep.cal,
+                x,
+                columns,
+                &self.scales,
+                self.options,
+            );
+        }
+        let sample = SubsetProblem {
+            model: &self.model,
+            observations: &self.prep.cal,
+            subset: &self.coarse,
+        };
+        identify_in(&sample, &self.model, x, columns, &self.scales, self.options)
     }
 
     /// Names of `fixed` parameters and their aliases, for a report.
@@ -1320,18 +1364,17 @@ pub fn calibrate_tree(
     data: &Measurements,
     options: &CalibrationOptions,
 ) -> Result<Report, CalibError> {
-    let (scan, cleaned) = screen_outliers(tree, data, options)?;
-    let (data, sequence) = match &cleaned {
-        Some((d, c)) => (d, Some(c.as_slice())),
-        None => (data, None),
-    };
-    let mut session = Session::new(tree, data, options, &options.effects, sequence)?;
-    let Geometric {
-        mut steps,
-        last,
-        mut fixed,
-        ..
-    } = session.geometric()?;
+    let Fitted {
+        session,
+        geo:
+            Geometric {
+                mut steps,
+                last,
+                mut fixed,
+                ..
+            },
+        scan,
+    } = fitted_session(tree, data, options, &options.effects)?;
     let mut last = last.outcome;
     if !options.effects.is_empty() {
         let all: Vec<usize> = (0..session.model.parameter_count()).collect();
@@ -1352,28 +1395,48 @@ pub fn calibrate_tree(
     Ok(report)
 }
 
-/// The outlier screen of `options.outliers` ([`crate::outliers::screen`]) and, unless the
-/// outliers are kept, the data without them (`None` when nothing is left out).
-/// The outlier screen's findings and, when it drops samples, the samples kept with their
-/// places in the whole file's sequence (a dropped pose was still visited: the direction of
-/// the next one's motion and the time are the file's).
-pub(crate) type Screened = (
-    Option<crate::outliers::OutlierReport>,
-    Option<(Measurements, Vec<SampleContext>)>,
-);
+/// A session of the data with `effects` whose geometric step has run, after the outlier screen
+/// of `options.outliers` ([`crate::outliers::screen`]) when it is on.
+pub(crate) struct Fitted<'a> {
+    pub(crate) session: Session<'a>,
+    pub(crate) geo: Geometric,
+    pub(crate) scan: Option<crate::outliers::OutlierReport>,
+}
 
-pub(crate) fn screen_outliers(
+/// Builds the session of `data` with `effects` and runs its geometric step; the screen's first
+/// round is that fit (the same calibration samples, the geometric parameters fitted without
+/// effects), so data without outliers are fitted once. When the screen leaves samples out
+/// (and they are not kept), the session is built anew from the samples kept, placed in the
+/// whole file's sequence: a dropped pose was still visited, so the direction of the next
+/// one's motion and the time are the file's.
+pub(crate) fn fitted_session<'a>(
     tree: &DhTree,
     data: &Measurements,
-    options: &CalibrationOptions,
-) -> Result<Screened, CalibError> {
+    options: &'a CalibrationOptions,
+    effects: &[Arc<dyn Effect>],
+) -> Result<Fitted<'a>, CalibError> {
+    if options.outliers.screen {
+        crate::outliers::check_level(options)?;
+    }
+    let mut session = Session::new(tree, data, options, effects, None)?;
+    let geo = session.geometric()?;
     if !options.outliers.screen {
-        return Ok((None, None));
+        return Ok(Fitted {
+            session,
+            geo,
+            scan: None,
+        });
     }
-    let scan = crate::outliers::screen(tree, data, options)?;
+    let scan = crate::outliers::screen_from(tree, data, options, Some((&session, &geo)))?;
     if scan.kept || scan.outliers.is_empty() {
-        return Ok((Some(scan), None));
+        return Ok(Fitted {
+            session,
+            geo,
+            scan: Some(scan),
+        });
     }
+    // The first session's samples are not needed any more: free them before the second.
+    drop(session);
     let dropped: std::collections::BTreeSet<usize> =
         scan.outliers.iter().map(|o| o.sample).collect();
     let sequence: Vec<SampleContext> = sequence_of(&rows_of(tree, data)?, data)
@@ -1383,7 +1446,13 @@ pub(crate) fn screen_outliers(
         .map(|(_, c)| c)
         .collect();
     let cleaned = scan.without(data);
-    Ok((Some(scan), Some((cleaned, sequence))))
+    let mut session = Session::new(tree, &cleaned, options, effects, Some(&sequence))?;
+    let geo = session.geometric()?;
+    Ok(Fitted {
+        session,
+        geo,
+        scan: Some(scan),
+    })
 }
 
 /// Stores the screen's findings in `report`.
@@ -1407,7 +1476,19 @@ pub(crate) fn identify(
         model,
         observations: cal,
     };
-    let f = fit::factor(&problem, x, columns, scales)?;
+    identify_in(&problem, model, x, columns, scales, options)
+}
+
+/// [`identify`] over the samples of `problem` (all of them, or a subset) of `model`.
+fn identify_in<P: fit::Problem>(
+    problem: &P,
+    model: &Model,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+    options: &CalibrationOptions,
+) -> Result<(Vec<usize>, Vec<fit::Fixed>), CalibError> {
+    let f = fit::factor(problem, x, columns, scales)?;
     let prio_all = model.priorities();
     let prio: Vec<u32> = columns.iter().map(|&c| prio_all[c]).collect();
     // The sensitivity floor is an RMS over points: the factor's singular values are sums in

@@ -466,13 +466,8 @@ pub fn diagnose_tree(
             (v, true)
         }
     };
-    let (scan, cleaned) = crate::calibrate::screen_outliers(tree, data, options)?;
-    let (data, sequence) = match &cleaned {
-        Some((d, c)) => (d, Some(c.as_slice())),
-        None => (data, None),
-    };
-    let mut session = Session::new(tree, data, options, &pool, sequence)?;
-    let geo = session.geometric()?;
+    let crate::calibrate::Fitted { session, geo, scan } =
+        crate::calibrate::fitted_session(tree, data, options, &pool)?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
     let mut held = geo.last.held_out;

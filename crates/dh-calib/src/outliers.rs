@@ -29,7 +29,9 @@ use std::collections::BTreeSet;
 
 use nalgebra::Vector3;
 
-use crate::calibrate::{distances, prepare, CalibrationOptions, Session, Stats, Validation};
+use crate::calibrate::{
+    distances, prepare, CalibrationOptions, Geometric, Session, Stats, Validation,
+};
 use crate::data::{Measurements, Split};
 use crate::fit::CalibError;
 use crate::model::Observed;
@@ -184,6 +186,12 @@ pub fn screen(
     data: &Measurements,
     options: &CalibrationOptions,
 ) -> Result<OutlierReport, CalibError> {
+    check_level(options)?;
+    screen_from(tree, data, options, None)
+}
+
+/// Refuses an outlier level outside (0, 1).
+pub(crate) fn check_level(options: &CalibrationOptions) -> Result<(), CalibError> {
     let level = options.outliers.level;
     if !(level > 0.0 && level < 1.0) {
         return Err(CalibError::BadOption {
@@ -191,7 +199,28 @@ pub fn screen(
             reason: format!("expected a level in (0, 1), found {level}"),
         });
     }
-    let full = prepare(tree, data, None)?;
+    Ok(())
+}
+
+/// [`screen`] whose first round is `first`: a session of all of `data` (prepared in its own
+/// order) whose geometric step has run. Its calibration samples are those the first round
+/// fits, and its geometric parameters are fitted without effects, so the round needs no fit
+/// of its own (on millions of samples, the fit is most of a calibration's time).
+pub(crate) fn screen_from(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    first: Option<(&Session<'_>, &Geometric)>,
+) -> Result<OutlierReport, CalibError> {
+    let level = options.outliers.level;
+    let own_full;
+    let full = match first {
+        Some((s, _)) => &s.prep,
+        None => {
+            own_full = prepare(tree, data, None)?;
+            &own_full
+        }
+    };
     // Where each sample of `data` went: (validation?, index in its list).
     let mut place = Vec::with_capacity(data.samples.len());
     let (mut nc, mut nv) = (0, 0);
@@ -225,25 +254,35 @@ pub fn screen(
     let mut rounds = 0;
     loop {
         rounds += 1;
-        // The data themselves while nothing is left out and all are calibration samples (no
-        // copy of millions of samples), else the calibration samples not flagged.
-        let kept = if flagged.is_empty() && nv == 0 {
-            std::borrow::Cow::Borrowed(data)
-        } else {
-            std::borrow::Cow::Owned(
-                data.filtered(|i, s| s.split == Split::Calibration && !flagged.contains(&i)),
-            )
+        let own;
+        let (session, geo) = match first {
+            Some((s, g)) if flagged.is_empty() => (s, g),
+            _ => {
+                // The data themselves while nothing is left out and all are calibration
+                // samples (no copy of millions of samples), else the calibration samples not
+                // flagged.
+                let kept =
+                    if flagged.is_empty() && nv == 0 {
+                        std::borrow::Cow::Borrowed(data)
+                    } else {
+                        std::borrow::Cow::Owned(data.filtered(|i, s| {
+                            s.split == Split::Calibration && !flagged.contains(&i)
+                        }))
+                    };
+                let mut session = Session::new(tree, &kept, &screen_options, &[], None)?;
+                session.validation = Validation::None;
+                let geo = session.geometric()?;
+                own = (session, geo);
+                (&own.0, &own.1)
+            }
         };
-        let mut session = Session::new(tree, &kept, &screen_options, &[], None)?;
-        session.validation = Validation::None;
-        let geo = session.geometric()?;
         let x = &geo.last.outcome.x;
         let rms = geo.last.report.rms;
         rms_with.get_or_insert(rms);
         let cal_r = residual_vectors(&session, x, &full.cal);
         let val_r = residual_vectors(&session, x, &full.val);
         let p = geo.free.len() as f64;
-        let n_kept = kept.samples.len().max(1) as f64;
+        let n_kept = session.prep.cal.len().max(1) as f64;
         let kept_norms: Vec<f64> = place
             .iter()
             .enumerate()
