@@ -279,8 +279,8 @@ pub(crate) fn screen_from(
         let x = &geo.last.outcome.x;
         let rms = geo.last.report.rms;
         rms_with.get_or_insert(rms);
-        let cal_r = residual_vectors(&session, x, &full.cal);
-        let val_r = residual_vectors(&session, x, &full.val);
+        let cal_r = residual_vectors(session, x, &full.cal);
+        let val_r = residual_vectors(session, x, &full.val);
         let p = geo.free.len() as f64;
         let n_kept = session.prep.cal.len().max(1) as f64;
         let kept_norms: Vec<f64> = place
