@@ -10,7 +10,7 @@ use anyhow::{anyhow, bail, ensure, Context, Result};
 use dh_core::{Bound, DhTable, Precision};
 use nalgebra::Isometry3;
 
-pub use crate::readback_parse::read_back;
+pub use dh_sheet::read_back::read_back;
 use crate::render::{render_sheet_at, Format};
 use crate::sheet::{SheetDoc, VerificationDoc};
 use crate::units::{AngleUnit, LengthUnit, PRINT_NOISE};

@@ -36,19 +36,22 @@
 
 use std::collections::HashSet;
 
-use anyhow::{bail, Result};
 use dh_calib::gravity::{Inertial, Inertials};
 use dh_calib::tree::{Branch, DhTree};
-use dh_core::{DhRow, DhTable};
+use dh_core::{DhRow, DhTable, JointKind};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-use crate::error::hinted;
-use crate::measured::LoadedModel;
+use crate::error::{Result, SheetError};
 use crate::sheet::{
-    check_mimics, coupled_of, parse_doc, pose_of, row_of, JointDoc, PoseDoc, SheetDoc,
+    check_mimics, check_nesting, coupled_of, parse_doc, pose_of, row_of, JointDoc, PoseDoc,
+    SheetDoc,
 };
+use crate::text::{escape, is_spoofing};
 use crate::units::{AngleUnit, LengthUnit};
+
+#[cfg(test)]
+mod tests;
 
 /// One branch of a tree sheet.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -141,19 +144,33 @@ impl InertialsDoc {
         origin: &str,
         text: Option<&str>,
     ) -> Result<(Inertials, Option<Vector3<f64>>)> {
+        let bad = |origin: &str, problem: String, hint: Option<String>| SheetError::BadInertials {
+            origin: origin.into(),
+            problem,
+            hint,
+        };
         let finite3 = |v: &[f64; 3], what: &str| -> Result<Vector3<f64>> {
             if v.iter()
                 .any(|c| !c.is_finite() || c.abs() > MAX_INERTIAL_MAGNITUDE)
             {
-                bail!(
-                    "{origin}: inertials: {what}: expected finite numbers of magnitude at most {MAX_INERTIAL_MAGNITUDE:e}, found {v:?}"
-                );
+                return Err(bad(
+                    origin,
+                    format!(
+                        "{what}: expected finite numbers of magnitude at most \
+                         {MAX_INERTIAL_MAGNITUDE:e}, found {v:?}"
+                    ),
+                    None,
+                ));
             }
             Ok(Vector3::new(v[0], v[1], v[2]))
         };
         let mass = |m: f64, what: &str| -> Result<f64> {
             if !(m.is_finite() && (0.0..=MAX_MASS).contains(&m)) {
-                bail!("{origin}: inertials: {what}: expected a mass in kg from 0 to {MAX_MASS:e}, found {m}");
+                return Err(bad(
+                    origin,
+                    format!("{what}: expected a mass in kg from 0 to {MAX_MASS:e}, found {m}"),
+                    None,
+                ));
             }
             Ok(m)
         };
@@ -161,13 +178,13 @@ impl InertialsDoc {
         for l in &self.links {
             let line = text.and_then(|t| line_of(t, "joint", &l.joint, 0));
             if tree.row_index(&l.joint).is_none() {
-                return Err(hinted(
+                return Err(bad(
+                    &at(origin, line),
                     format!(
-                        "{}: inertials: link of joint '{}': expected a joint of the tree, found none of that name",
-                        at(origin, line),
+                        "link of joint '{}': expected a joint of the tree, found none of that name",
                         l.joint
                     ),
-                    format!("the tree's joints: {}", joint_list(tree.rows())),
+                    Some(format!("the tree's joints: {}", joint_list(tree.rows()))),
                 ));
             }
             let what = format!("link of joint '{}'", l.joint);
@@ -181,16 +198,24 @@ impl InertialsDoc {
         for p in self.payloads.iter().flatten() {
             let chain = match (&p.branch, tree.branches().len()) {
                 (Some(b), _) => tree.branch_index(b).ok_or_else(|| {
-                    hinted(
-                        format!("{origin}: inertials: payload on branch '{b}': expected a branch of the tree, found none of that name"),
-                        format!("the branches: {}", branch_list(tree)),
+                    bad(
+                        origin,
+                        format!(
+                            "payload on branch '{b}': expected a branch of the tree, found none \
+                             of that name"
+                        ),
+                        Some(format!("the branches: {}", branch_list(tree))),
                     )
                 })?,
                 (None, 0 | 1) => 0,
                 (None, _) => {
-                    return Err(hinted(
-                        format!("{origin}: inertials: a payload without 'branch' in a tree of several tips"),
-                        format!("name the branch whose tip carries it: {}", branch_list(tree)),
+                    return Err(bad(
+                        origin,
+                        "a payload without 'branch' in a tree of several tips".into(),
+                        Some(format!(
+                            "name the branch whose tip carries it: {}",
+                            branch_list(tree)
+                        )),
                     ))
                 }
             };
@@ -211,7 +236,7 @@ impl InertialsDoc {
                 payloads,
             },
             ComFrame::BaseAtZero => Inertials::from_zero_pose(tree, &links, payloads)
-                .map_err(|e| anyhow::anyhow!("{origin}: inertials: {e}"))?,
+                .map_err(|e| bad(origin, e.to_string(), None))?,
         };
         let gravity = match &self.gravity {
             Some(g) => Some(finite3(g, "gravity")?),
@@ -225,8 +250,12 @@ impl InertialsDoc {
     /// # Errors
     /// Syntax errors with line and column, unknown or missing keys.
     pub fn parse(text: &str, origin: &str) -> Result<InertialsDoc> {
-        crate::sheet::check_nesting(text, origin)?;
-        serde_yaml::from_str(text).map_err(|e| anyhow::anyhow!("{origin}: {e}"))
+        check_nesting(text, origin)?;
+        serde_yaml::from_str(text).map_err(|e| SheetError::Syntax {
+            origin: origin.into(),
+            location: None,
+            message: e.to_string(),
+        })
     }
 }
 
@@ -341,16 +370,14 @@ impl TreeSheet {
     /// As [`TreeSheet::parse`].
     pub fn from_doc(doc: SheetDoc, text: &str, origin: &str) -> Result<TreeSheet> {
         let Some(branch_docs) = &doc.branches else {
-            return Err(hinted(
-                format!("{origin}: expected a tree sheet with 'branches', found a serial sheet"),
-                "a serial sheet is read as the model itself; a tree sheet adds 'branches: [{name, base, tool, joints}]'",
-            ));
+            return Err(SheetError::NotATree {
+                origin: origin.into(),
+            });
         };
         if branch_docs.is_empty() {
-            return Err(hinted(
-                format!("{origin}: 'branches' is empty; expected at least one branch"),
-                "drop 'branches' for a serial robot",
-            ));
+            return Err(SheetError::NoBranches {
+                origin: origin.into(),
+            });
         }
         let (lu, au) = (doc.length_unit, doc.angle_unit);
         let mut warnings = Vec::new();
@@ -365,11 +392,12 @@ impl TreeSheet {
                 let count = seen.iter().filter(|(n, _)| n == &j.name).count();
                 let line = line_of(text, "name", &j.name, count);
                 if let Some((_, first)) = seen.iter().find(|(n, _)| n == &j.name) {
-                    bail!(
-                        "{}: {table}: joint '{}' appears twice in the tree (first in {first}); expected unique joint names",
-                        at(origin, line),
-                        j.name
-                    );
+                    return Err(SheetError::DuplicateTreeJoint {
+                        origin: at(origin, line),
+                        table: table.into(),
+                        joint: j.name.clone(),
+                        first: first.clone(),
+                    });
                 }
                 seen.push((j.name.clone(), table.to_string()));
                 rows.push(row_of(
@@ -394,32 +422,48 @@ impl TreeSheet {
         for (k, b) in branch_docs.iter().enumerate() {
             let count = branch_docs[..k].iter().filter(|o| o.name == b.name).count();
             let here = at(origin, line_of(text, "name", &b.name, count));
-            if b.name.trim().is_empty() || b.name.chars().any(crate::guard::is_spoofing) {
-                bail!(
-                    "{here}: branch {}: expected a name of printable characters, found '{}'",
-                    k + 1,
-                    crate::guard::escape(&b.name)
-                );
+            let bad = |branch: String, problem: &str, hint: Option<&'static str>| {
+                SheetError::BadBranch {
+                    origin: here.clone(),
+                    branch,
+                    problem: problem.into(),
+                    hint,
+                }
+            };
+            if b.name.trim().is_empty() || b.name.chars().any(is_spoofing) {
+                return Err(bad(
+                    format!("branch {}", k + 1),
+                    &format!(
+                        "expected a name of printable characters, found '{}'",
+                        escape(&b.name)
+                    ),
+                    None,
+                ));
             }
             if b.name.contains('/') {
-                return Err(hinted(
-                    format!("{here}: branch '{}': expected a name without '/', found one", b.name),
-                    "a target 'BRANCH/NAME' rides on branch BRANCH, so a branch name cannot hold '/'",
+                return Err(bad(
+                    format!("branch '{}'", b.name),
+                    "expected a name without '/', found one",
+                    Some(
+                        "a target 'BRANCH/NAME' rides on branch BRANCH, so a branch name cannot \
+                         hold '/'",
+                    ),
                 ));
             }
             if !names.insert(b.name.as_str()) {
-                bail!(
-                    "{here}: branch '{}' appears twice; expected unique branch names",
-                    b.name
-                );
+                return Err(SheetError::DuplicateBranch {
+                    origin: here,
+                    branch: b.name.clone(),
+                });
             }
             if b.joints.is_empty() {
-                return Err(hinted(
-                    format!(
-                        "{here}: branch '{}': 'joints' is empty; expected at least one joint",
-                        b.name
+                return Err(bad(
+                    format!("branch '{}'", b.name),
+                    "'joints' is empty; expected at least one joint",
+                    Some(
+                        "a branch is a chain of its own rows; a fixed tool on the trunk is its \
+                         'tool'",
                     ),
-                    "a branch is a chain of its own rows; a fixed tool on the trunk is its 'tool'",
                 ));
             }
             let table = format!("branch '{}'", b.name);
@@ -434,8 +478,10 @@ impl TreeSheet {
                 },
             });
         }
-        let tree =
-            DhTree::new(trunk, branches).map_err(|e| anyhow::anyhow!("{origin}: tree: {e}"))?;
+        let tree = DhTree::new(trunk, branches).map_err(|e| SheetError::BadTree {
+            origin: origin.into(),
+            problem: e.to_string(),
+        })?;
         check_mimics(tree.rows(), origin, &mut warnings)?;
         // One coupled joint at a time, so that its error names its line.
         let mut coupled = Vec::new();
@@ -462,21 +508,6 @@ impl TreeSheet {
         })
     }
 
-    /// The model as the measured-data code takes it: every row of the tree in joint order
-    /// (trunk, then each branch), for the columns a measurement file needs and the coupling
-    /// of its values ([`LoadedModel::measured_joints`], [`LoadedModel::couple`]).
-    pub fn loaded(&self, origin: &str) -> LoadedModel {
-        LoadedModel {
-            table: self.tree.joint_table(),
-            origin: origin.to_string(),
-            robot: self.robot.clone(),
-            units: (self.length_unit, self.angle_unit),
-            warnings: self.warnings.clone(),
-            links: ("base_link".into(), "tool0".into()),
-            coupled: self.coupled.clone(),
-        }
-    }
-
     /// The branch a target rides on: the branch of the target's own name, else the one named
     /// before its first `/` (see the module docs).
     pub fn branch_of<'a>(tree: &'a DhTree, target: &str) -> Option<&'a str> {
@@ -489,9 +520,16 @@ impl TreeSheet {
             .map(|b| b.name.as_str())
     }
 
-    /// Names of the prismatic rows of the tree.
+    /// Names of the prismatic rows of the tree and the drivers of prismatic mimic rows.
     pub fn prismatic(&self) -> Vec<String> {
-        self.loaded("").prismatic()
+        let prismatic = || self.tree.rows().iter().filter(|r| r.kind == JointKind::Prismatic);
+        let mut p: Vec<String> = prismatic().map(|r| r.name.clone()).collect();
+        for m in prismatic().filter_map(|r| r.mimic.as_ref()) {
+            if !p.contains(&m.joint) {
+                p.push(m.joint.clone());
+            }
+        }
+        p
     }
 
     /// The sheet of `tree` in the given units, with `coupled` and `inertials` as given:
@@ -531,245 +569,3 @@ impl TreeSheet {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A two-branch tree: trunk `t1`, branches `r` and `l` of two joints each.
-    const TREE: &str = "\
-convention: modified
-length_unit: m
-angle_unit: deg
-base: {xyz: [0, 0, 0.5], rpy: [0, 0, 0]}
-tool: {xyz: [0, 0, 0.1], rpy: [0, 0, 0]}
-joints:
-  - {name: t1, type: revolute, a: 0, alpha: 0, d: 0.2, theta: 0}
-  - {name: t2, type: revolute, a: 0.3, alpha: 90, d: 0, theta: 0}
-branches:
-  - name: r
-    base: {xyz: [0, -0.2, 0], rpy: [90, 0, 0]}
-    tool: {xyz: [0, 0, 0.05], rpy: [0, 0, 0]}
-    joints:
-      - {name: r1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
-      - {name: r2, type: revolute, a: 0.25, alpha: -90, d: 0, theta: 0}
-  - name: l
-    base: {xyz: [0, 0.2, 0], rpy: [-90, 0, 0]}
-    joints:
-      - {name: l1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
-      - {name: l2, type: revolute, a: 0.25, alpha: 90, d: 0, theta: 0}
-";
-
-    fn err(text: &str) -> String {
-        format!("{:#}", TreeSheet::parse(text, "tree.yaml").unwrap_err())
-    }
-
-    #[test]
-    fn a_tree_sheet_reads_into_a_tree() {
-        let s = TreeSheet::parse(TREE, "tree.yaml").unwrap();
-        assert_eq!(s.tree.rows().len(), 6);
-        assert_eq!(s.tree.branches().len(), 2);
-        assert_eq!(s.tree.branch_start(1), 4);
-        let r = &s.tree.branches()[0].table;
-        assert!((r.rows[1].a - 0.25).abs() < 1e-15);
-        assert!((r.rows[1].alpha + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
-        assert!((r.base.translation.vector.y + 0.2).abs() < 1e-15);
-        assert_eq!(
-            s.tree.branches()[1].table.tool,
-            nalgebra::Isometry3::identity()
-        );
-        assert_eq!(
-            s.loaded("tree.yaml").measured_joints(),
-            ["t1", "t2", "r1", "r2", "l1", "l2"]
-        );
-        // Targets: by their own name, or the branch before '/'.
-        assert_eq!(TreeSheet::branch_of(&s.tree, "r"), Some("r"));
-        assert_eq!(TreeSheet::branch_of(&s.tree, "l/wrist"), Some("l"));
-        assert_eq!(TreeSheet::branch_of(&s.tree, "x/wrist"), None);
-        assert_eq!(TreeSheet::branch_of(&s.tree, "right"), None);
-        // Written back and read again: the same tree.
-        let doc = TreeSheet::to_doc(&s.tree, &s.coupled, None, LengthUnit::Mm, AngleUnit::Rad);
-        let text = serde_yaml::to_string(&doc).unwrap();
-        let back = TreeSheet::parse(&text, "back.yaml").unwrap();
-        for (a, b) in back.tree.rows().iter().zip(s.tree.rows()) {
-            assert!((a.a - b.a).abs() < 1e-12 && (a.alpha - b.alpha).abs() < 1e-12);
-        }
-        let (dp, dr) = dh_core::pose::pose_error(
-            &back.tree.branches()[0].table.base,
-            &s.tree.branches()[0].table.base,
-        );
-        assert!(dp < 1e-12 && dr < 1e-12);
-    }
-
-    #[test]
-    fn an_unknown_key_in_a_branch_names_it_and_the_line() {
-        let text = TREE.replace(
-            "  - name: l\n",
-            "  - name: l\n    mount: {xyz: [0, 0, 0], rpy: [0, 0, 0]}\n",
-        );
-        let e = err(&text);
-        assert!(e.contains("tree.yaml (line 17, column 5)"), "{e}");
-        assert!(e.contains("unknown field `mount`"), "{e}");
-    }
-
-    #[test]
-    fn a_joint_in_two_branches_is_refused_with_both_places() {
-        let text = TREE.replace("{name: l2,", "{name: r2,");
-        let e = err(&text);
-        assert!(
-            e.contains("tree.yaml (line 20): branch 'l': joint 'r2' appears twice in the tree (first in branch 'r')"),
-            "{e}"
-        );
-        let text = TREE.replace("{name: l1,", "{name: t1,");
-        assert!(err(&text).contains("(first in trunk)"), "{}", err(&text));
-    }
-
-    #[test]
-    fn an_empty_branch_and_empty_branches_are_refused() {
-        let text = TREE.replace(
-            "    joints:\n      - {name: l1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}\n      - {name: l2, type: revolute, a: 0.25, alpha: 90, d: 0, theta: 0}\n",
-            "    joints: []\n",
-        );
-        let e = err(&text);
-        assert!(
-            e.contains("tree.yaml (line 16): branch 'l': 'joints' is empty"),
-            "{e}"
-        );
-        let serial = TREE.split("branches:").next().unwrap().to_string() + "branches: []\n";
-        assert!(
-            err(&serial).contains("'branches' is empty"),
-            "{}",
-            err(&serial)
-        );
-        let twice = TREE.replace("name: l\n", "name: r\n");
-        assert!(
-            err(&twice).contains("branch 'r' appears twice"),
-            "{}",
-            err(&twice)
-        );
-    }
-
-    #[test]
-    fn a_branch_joint_may_be_coupled_to_a_trunk_driver() {
-        // The coupled joint's value is a sum over measured columns, wherever they sit.
-        let text = format!("{TREE}coupled:\n  l2: {{t2: -1, r2: 0.5}}\n");
-        let s = TreeSheet::parse(&text, "tree.yaml").unwrap();
-        assert_eq!(
-            s.coupled,
-            [(
-                "l2".to_string(),
-                vec![("r2".into(), 0.5), ("t2".into(), -1.0)]
-            )]
-        );
-        assert_eq!(
-            s.loaded("tree.yaml").measured_joints(),
-            ["t1", "t2", "r1", "r2", "l1"]
-        );
-        let mut data = dh_calib::data::Measurements {
-            sessions: Vec::new(),
-            joint_names: vec![
-                "t1".into(),
-                "t2".into(),
-                "r1".into(),
-                "r2".into(),
-                "l1".into(),
-            ],
-            targets: vec!["l".into()],
-            samples: vec![dh_calib::data::Sample {
-                session: 0,
-                q: vec![0.1, 0.2, 0.3, 0.4, 0.5],
-                target: 0,
-                point: Vector3::zeros(),
-                sigma: None,
-                config: None,
-                split: dh_calib::data::Split::Calibration,
-                line: 2,
-                socket: None,
-            }],
-        };
-        s.loaded("tree.yaml").couple(&mut data).unwrap();
-        assert_eq!(data.joint_names.last().map(String::as_str), Some("l2"));
-        assert!((data.samples[0].q[5] - (-0.2 + 0.5 * 0.4)).abs() < 1e-15);
-        // A driver that is no joint of the tree is refused.
-        let text = format!("{TREE}coupled:\n  l2: {{torso_9: 1}}\n");
-        assert!(
-            err(&text).contains("driver 'torso_9' is no joint of the sheet"),
-            "{}",
-            err(&text)
-        );
-    }
-
-    #[test]
-    fn inertials_need_joints_and_branches_of_the_tree() {
-        let with = |i: &str| format!("{TREE}inertials:\n{i}");
-        let ok = with("  com_frame: dh\n  links: [{joint: r2, mass: 1.5, com: [0.1, 0, 0]}]\n  payloads: [{branch: l, mass: 2, com: [0, 0, 0.1]}]\n");
-        let s = TreeSheet::parse(&ok, "tree.yaml").unwrap();
-        let (i, g) = s
-            .inertials
-            .as_ref()
-            .unwrap()
-            .to_inertials(&s.tree, "tree.yaml", None)
-            .unwrap();
-        assert_eq!(i.payloads[0].0, 1);
-        assert!(g.is_none());
-        let e = err(&with("  links: [{joint: r9, mass: 1, com: [0, 0, 0]}]\n"));
-        assert!(
-            e.contains("link of joint 'r9': expected a joint of the tree"),
-            "{e}"
-        );
-        let e = err(&with(
-            "  links: []\n  payloads: [{mass: 1, com: [0, 0, 0]}]\n",
-        ));
-        assert!(
-            e.contains("a payload without 'branch' in a tree of several tips"),
-            "{e}"
-        );
-        let e = err(&with("  links: [{joint: r1, mass: -1, com: [0, 0, 0]}]\n"));
-        assert!(e.contains("expected a mass in kg"), "{e}");
-        let e = err(&with("  links: []\n  density: 3\n"));
-        assert!(e.contains("unknown field `density`"), "{e}");
-    }
-
-    #[test]
-    fn serial_commands_refuse_a_tree_sheet() {
-        let e = crate::sheet::Sheet::parse(TREE, "tree.yaml").unwrap_err();
-        assert!(
-            e.to_string().contains(
-                "tree.yaml: 'branches': a tree sheet (a trunk and 2 branch(es): 'r', 'l')"
-            ),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn every_prefix_and_mangling_of_a_tree_is_an_answer_not_a_panic() {
-        // Truncated files and swapped keys: each parses or is an error naming the file.
-        let mut cut = 0;
-        while cut <= TREE.len() {
-            if let Err(e) = TreeSheet::parse(&TREE[..cut], "tree.yaml") {
-                assert!(format!("{e:#}").starts_with("tree.yaml"), "{e:#}");
-            }
-            cut += 7;
-        }
-        for (from, to) in [
-            ("name: r\n", "name: ''\n"),
-            ("name: r\n", "name: 'r/x'\n"),
-            ("name: l\n", "name: r\n"),
-            ("t2", "t1"),
-            ("branches:", "branches: []\nx:"),
-            ("a: 0.25", "a: .nan"),
-            ("rpy: [90, 0, 0]", "rpy: [90, 0]"),
-        ] {
-            let e = err(&TREE.replacen(from, to, 1));
-            assert!(e.starts_with("tree.yaml"), "{from} -> {to}: {e}");
-        }
-    }
-
-    #[test]
-    fn lines_are_found_for_every_spelling() {
-        let t = "a:\n  - {name: j1}\n  - name: \"j1\"\n  - {\"name\": \"j10\"}\n  - {\"name\": \"j1\"}\n";
-        assert_eq!(line_of(t, "name", "j1", 0), Some(2));
-        assert_eq!(line_of(t, "name", "j1", 1), Some(3));
-        assert_eq!(line_of(t, "name", "j1", 2), Some(5));
-        assert_eq!(line_of(t, "name", "j1", 3), None);
-    }
-}
