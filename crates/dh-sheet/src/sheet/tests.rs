@@ -114,3 +114,16 @@ fn a_repeated_key_is_located_where_it_repeats() {
     );
     assert_eq!(duplicate_key_at(flow, "some other message", 0), None);
 }
+
+#[test]
+fn a_bad_transform_says_which_in_one_message() {
+    let e = Sheet::parse(
+        "convention: standard\nlength_unit: m\nangle_unit: rad\nbase: {xyz: [0, 0, .inf], rpy: [0, 0, 0]}\njoints:\n  - {name: a, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}\n",
+        "s.yaml",
+    )
+    .unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "reading the base transform: s.yaml: base: xyz and rpy must be finite numbers"
+    );
+}
