@@ -13,9 +13,9 @@ use dh_core::{Convention, DhTable, JointKind, Tolerance};
 use crate::commands::extract::load_chain;
 use crate::error::hinted;
 use crate::input::{display_name, read_text};
-use dh_sheet::sheet::Sheet;
-use dh_sheet::tree_sheet::TreeSheet;
-use dh_sheet::units::{AngleUnit, LengthUnit};
+use crate::sheet::Sheet;
+use crate::tree_sheet::TreeSheet;
+use crate::units::{AngleUnit, LengthUnit};
 
 /// Columns of the canonical CSV that are not joints (the format's own list).
 pub use dh_calib::csv::RESERVED_COLUMNS;
