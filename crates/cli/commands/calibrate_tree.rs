@@ -294,7 +294,7 @@ pub fn calibrate_tree(
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let tree = &sheet.tree;
-    let model = LoadedModel::of_tree(&sheet, origin);
+    let model = LoadedModel::of_tree(sheet, origin);
     let data_name = display_name(&args.data);
     let data = read_data_for(args, &model, err)?;
     if data.samples.iter().any(|s| s.socket.is_some()) {

@@ -15,10 +15,10 @@ use std::io::Write;
 
 use anyhow::Result;
 use dh_core::Tolerance;
+use dh_sheet::check::kind_name;
 pub use dh_sheet::check::{
     compare, CheckReport, CheckTolerances, DifferenceDoc, CHECK_ANGULAR, CHECK_LINEAR,
 };
-use dh_sheet::check::kind_name;
 
 use crate::commands::extract::load_chain;
 use crate::error::Outcome;

@@ -184,10 +184,12 @@ pub fn compare(chain: &Chain, sheet: &Sheet, tol: Tolerance) -> Result<CheckRepo
     } else {
         sheet.table.clone()
     };
-    let verdict = check_sheet(&reference.table, &plain, freedom, tol, |q| chain.fk(q))
-        .map_err(|error| SheetError::Compare {
-            step: "comparing the sheet with the URDF",
-            error,
+    let verdict =
+        check_sheet(&reference.table, &plain, freedom, tol, |q| chain.fk(q)).map_err(|error| {
+            SheetError::Compare {
+                step: "comparing the sheet with the URDF",
+                error,
+            }
         })?;
     let name = |row: Option<usize>| {
         row.and_then(|r| sheet.table.rows.get(r))

@@ -167,8 +167,12 @@ fn pop_limit(tokens: &mut Vec<&str>) -> Result<Option<f64>> {
 
 fn read_text(text: &str) -> Result<SheetDoc> {
     let mut lines = text.lines();
-    let header = lines.next().ok_or_else(|| unreadable("empty output".into()))?;
-    let columns = lines.next().ok_or_else(|| unreadable("no column header".into()))?;
+    let header = lines
+        .next()
+        .ok_or_else(|| unreadable("empty output".into()))?;
+    let columns = lines
+        .next()
+        .ok_or_else(|| unreadable("no column header".into()))?;
     let (angle, length) = (
         angle_unit(bracket_after(columns, "theta [")?)?,
         length_unit(bracket_after(columns, "d [")?)?,
@@ -292,7 +296,9 @@ fn limit_cell(cell: &str) -> Result<Option<f64>> {
 
 fn read_markdown(text: &str) -> Result<SheetDoc> {
     let mut lines = text.lines();
-    let header = lines.next().ok_or_else(|| unreadable("empty output".into()))?;
+    let header = lines
+        .next()
+        .ok_or_else(|| unreadable("empty output".into()))?;
     let mut units = None;
     let mut joints = Vec::new();
     let (mut base, mut tool) = (None, None);
@@ -387,9 +393,13 @@ fn csv_pose(rest: &str) -> Result<PoseDoc> {
 
 fn read_csv(text: &str) -> Result<SheetDoc> {
     let mut lines = text.lines();
-    let header = lines.next().ok_or_else(|| unreadable("empty output".into()))?;
+    let header = lines
+        .next()
+        .ok_or_else(|| unreadable("empty output".into()))?;
     let convention = convention_of_header(header)?;
-    let units = lines.next().ok_or_else(|| unreadable("no units line".into()))?;
+    let units = lines
+        .next()
+        .ok_or_else(|| unreadable("no units line".into()))?;
     let words: Vec<&str> = units
         .split(|c: char| c.is_whitespace() || c == ',')
         .filter(|w| !w.is_empty())

@@ -35,8 +35,8 @@ mod rows;
 mod tests;
 
 pub use parse::{check_nesting, parse_doc};
-pub use rows::{Coupled, CoupledDoc};
 pub(crate) use rows::{check_mimics, coupled_of, pose_of, row_of};
+pub use rows::{Coupled, CoupledDoc};
 
 /// A pose as URDF writes it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -330,7 +330,6 @@ impl Sheet {
     }
 }
 
-
 impl SheetDoc {
     /// A sheet of just these: convention, units, base, tool and rows (no facts attached).
     pub fn new(
@@ -414,4 +413,3 @@ impl SheetDoc {
         )
     }
 }
-

@@ -383,33 +383,31 @@ impl TreeSheet {
         let mut warnings = Vec::new();
         // Joint names seen so far, with how often, for the line of a repeat.
         let mut seen: Vec<(String, String)> = Vec::new();
-        let mut rows_of = |joints: &[JointDoc],
-                           table: &str,
-                           warnings: &mut Vec<String>|
-         -> Result<Vec<DhRow>> {
-            let mut rows = Vec::with_capacity(joints.len());
-            for j in joints {
-                let count = seen.iter().filter(|(n, _)| n == &j.name).count();
-                let line = line_of(text, "name", &j.name, count);
-                if let Some((_, first)) = seen.iter().find(|(n, _)| n == &j.name) {
-                    return Err(SheetError::DuplicateTreeJoint {
-                        origin: at(origin, line),
-                        table: table.into(),
-                        joint: j.name.clone(),
-                        first: first.clone(),
-                    });
+        let mut rows_of =
+            |joints: &[JointDoc], table: &str, warnings: &mut Vec<String>| -> Result<Vec<DhRow>> {
+                let mut rows = Vec::with_capacity(joints.len());
+                for j in joints {
+                    let count = seen.iter().filter(|(n, _)| n == &j.name).count();
+                    let line = line_of(text, "name", &j.name, count);
+                    if let Some((_, first)) = seen.iter().find(|(n, _)| n == &j.name) {
+                        return Err(SheetError::DuplicateTreeJoint {
+                            origin: at(origin, line),
+                            table: table.into(),
+                            joint: j.name.clone(),
+                            first: first.clone(),
+                        });
+                    }
+                    seen.push((j.name.clone(), table.to_string()));
+                    rows.push(row_of(
+                        j,
+                        lu,
+                        au,
+                        &format!("{}: {table}", at(origin, line)),
+                        warnings,
+                    )?);
                 }
-                seen.push((j.name.clone(), table.to_string()));
-                rows.push(row_of(
-                    j,
-                    lu,
-                    au,
-                    &format!("{}: {table}", at(origin, line)),
-                    warnings,
-                )?);
-            }
-            Ok(rows)
-        };
+                Ok(rows)
+            };
         let trunk_rows = rows_of(&doc.joints, "trunk", &mut warnings)?;
         let trunk = DhTable {
             convention: doc.convention.into(),
@@ -422,14 +420,13 @@ impl TreeSheet {
         for (k, b) in branch_docs.iter().enumerate() {
             let count = branch_docs[..k].iter().filter(|o| o.name == b.name).count();
             let here = at(origin, line_of(text, "name", &b.name, count));
-            let bad = |branch: String, problem: &str, hint: Option<&'static str>| {
-                SheetError::BadBranch {
+            let bad =
+                |branch: String, problem: &str, hint: Option<&'static str>| SheetError::BadBranch {
                     origin: here.clone(),
                     branch,
                     problem: problem.into(),
                     hint,
-                }
-            };
+                };
             if b.name.trim().is_empty() || b.name.chars().any(is_spoofing) {
                 return Err(bad(
                     format!("branch {}", k + 1),
@@ -522,7 +519,12 @@ impl TreeSheet {
 
     /// Names of the prismatic rows of the tree and the drivers of prismatic mimic rows.
     pub fn prismatic(&self) -> Vec<String> {
-        let prismatic = || self.tree.rows().iter().filter(|r| r.kind == JointKind::Prismatic);
+        let prismatic = || {
+            self.tree
+                .rows()
+                .iter()
+                .filter(|r| r.kind == JointKind::Prismatic)
+        };
         let mut p: Vec<String> = prismatic().map(|r| r.name.clone()).collect();
         for m in prismatic().filter_map(|r| r.mimic.as_ref()) {
             if !p.contains(&m.joint) {
@@ -568,4 +570,3 @@ impl TreeSheet {
         doc
     }
 }
-

@@ -9,7 +9,9 @@ use dh_sheet::read_back::read_back;
 use dh_sheet::{compare, parse_doc, render_sheet, Format, Sheet, SheetDoc, SheetError};
 
 fn fixture(path: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures").join(path)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures")
+        .join(path)
 }
 
 fn read(path: &str) -> String {
@@ -58,7 +60,12 @@ fn every_fixture_sheet_is_written_and_read_back_equal() {
         assert_eq!(table.convention, sheet.table.convention);
         for (b, s) in table.rows.iter().zip(&sheet.table.rows) {
             assert_eq!(b.name, s.name);
-            for (x, y) in [(b.a, s.a), (b.d, s.d), (b.alpha, s.alpha), (b.theta, s.theta)] {
+            for (x, y) in [
+                (b.a, s.a),
+                (b.d, s.d),
+                (b.alpha, s.alpha),
+                (b.theta, s.theta),
+            ] {
                 assert!((x - y).abs() < 1e-12, "{id} {}: {x} != {y}", b.name);
             }
         }

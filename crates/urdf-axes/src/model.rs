@@ -221,7 +221,11 @@ impl UrdfModel {
         self.collect_warnings(|_| true, "an error on a chain through it")
     }
 
-    pub(crate) fn collect_warnings(&self, include: impl Fn(&str) -> bool, note: &str) -> Vec<Warning> {
+    pub(crate) fn collect_warnings(
+        &self,
+        include: impl Fn(&str) -> bool,
+        note: &str,
+    ) -> Vec<Warning> {
         let mut out = self.robot.warnings.clone();
         let mut more = self.robot.more_warnings;
         for j in &self.robot.joints {
@@ -305,7 +309,6 @@ impl UrdfModel {
         let origin = dh_core::pose::from_xyz_rpy(j.origin.xyz, j.origin.rpy);
         Some((j.name.as_str(), j.parent.as_str(), origin))
     }
-
 
     pub(crate) fn link_name(&self, link: usize) -> &str {
         self.robot

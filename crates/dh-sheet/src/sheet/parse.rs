@@ -145,7 +145,6 @@ pub fn check_nesting(text: &str, origin: &str) -> Result<()> {
     Ok(())
 }
 
-
 impl SheetDoc {
     /// Converts to SI units and checks the numbers (see [`Sheet::parse`]).
     ///
@@ -205,7 +204,6 @@ impl SheetDoc {
             warnings,
         })
     }
-
 }
 
 /// A serial sheet's bad `base` or `tool`, said as such.

@@ -57,12 +57,7 @@ pub(crate) fn row_of(
     if j.name.trim().is_empty() {
         return Err(bad("expected a name, found a blank one".into()));
     }
-    if let Some((k, c)) = j
-        .name
-        .chars()
-        .enumerate()
-        .find(|(_, c)| is_spoofing(*c))
-    {
+    if let Some((k, c)) = j.name.chars().enumerate().find(|(_, c)| is_spoofing(*c)) {
         // As the URDF reader: such a name corrupts tables, CSV and terminals (and a bidi
         // override reorders what they show).
         return Err(SheetError::BadJoint {
@@ -130,11 +125,7 @@ pub(crate) fn row_of(
             upper: u * limit_unit,
         }),
         (None, None) => None,
-        _ => {
-            return Err(bad(
-                "give both 'lower' and 'upper', or neither".into(),
-            ))
-        }
+        _ => return Err(bad("give both 'lower' and 'upper', or neither".into())),
     };
     if length_unit == LengthUnit::M
         && (j.a.abs() > SUSPICIOUS_METRES || j.d.abs() > SUSPICIOUS_METRES)

@@ -8,9 +8,7 @@ fn units_convert_on_read_and_write() {
     let text = "convention: standard\nlength_unit: mm\nangle_unit: deg\njoints:\n  - {name: j1, type: revolute, a: 180, alpha: -90, d: 400, theta: 0, lower: -155, upper: 155}\n";
     let s = Sheet::parse(text, "t.yaml").unwrap();
     let r = &s.table.rows[0];
-    assert!(
-        (r.a - 0.18).abs() < 1e-15 && (r.alpha + std::f64::consts::FRAC_PI_2).abs() < 1e-15
-    );
+    assert!((r.a - 0.18).abs() < 1e-15 && (r.alpha + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
     assert!(!s.has_base && !s.has_tool);
     let back = SheetDoc::from_table(&s.table, LengthUnit::Mm, AngleUnit::Deg);
     assert!((back.joints[0].a - 180.0).abs() < 1e-12);

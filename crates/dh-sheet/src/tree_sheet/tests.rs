@@ -170,9 +170,8 @@ fn inertials_need_joints_and_branches_of_the_tree() {
 fn serial_commands_refuse_a_tree_sheet() {
     let e = crate::sheet::Sheet::parse(TREE, "tree.yaml").unwrap_err();
     assert!(
-        e.to_string().contains(
-            "tree.yaml: 'branches': a tree sheet (a trunk and 2 branch(es): 'r', 'l')"
-        ),
+        e.to_string()
+            .contains("tree.yaml: 'branches': a tree sheet (a trunk and 2 branch(es): 'r', 'l')"),
         "{e}"
     );
 }
@@ -203,7 +202,8 @@ fn every_prefix_and_mangling_of_a_tree_is_an_answer_not_a_panic() {
 
 #[test]
 fn lines_are_found_for_every_spelling() {
-    let t = "a:\n  - {name: j1}\n  - name: \"j1\"\n  - {\"name\": \"j10\"}\n  - {\"name\": \"j1\"}\n";
+    let t =
+        "a:\n  - {name: j1}\n  - name: \"j1\"\n  - {\"name\": \"j10\"}\n  - {\"name\": \"j1\"}\n";
     assert_eq!(line_of(t, "name", "j1", 0), Some(2));
     assert_eq!(line_of(t, "name", "j1", 1), Some(3));
     assert_eq!(line_of(t, "name", "j1", 2), Some(5));
