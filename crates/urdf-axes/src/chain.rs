@@ -4,6 +4,7 @@ use dh_core::pose::from_xyz_rpy;
 use dh_core::{CoreError, JointAxis, JointKind, Limits, Line, Mimic};
 use nalgebra::{Isometry3, Unit, UnitQuaternion, Vector3};
 
+use crate::check::unit_axis;
 use crate::model::UrdfModel;
 use crate::read::{JointType, Warning};
 use crate::UrdfError;
@@ -54,18 +55,6 @@ pub struct Chain {
     folded_fixed: Vec<String>,
     joints: Vec<String>,
     mimics: Vec<MimicJoint>,
-}
-
-/// The unit direction of a URDF axis, `None` for a zero vector. Divides by the largest
-/// component first so that huge finite components cannot overflow the norm.
-pub(crate) fn unit_axis(xyz: [f64; 3]) -> Option<Unit<Vector3<f64>>> {
-    let v = Vector3::from(xyz);
-    let scale = v.amax();
-    if scale > 0.0 && scale.is_finite() {
-        Some(Unit::new_normalize(v / scale))
-    } else {
-        None
-    }
 }
 
 // A chain is taken from a model: here, so that the model knows nothing of chains.
