@@ -16,7 +16,8 @@
 //! `verification`, `cpa` adds `cpa`, `calibrate --out` adds `calibration` and `simulate`'s truth
 //! file `truth`; a sheet may carry them and they are ignored on input.
 //!
-//! This module holds the document types ([`SheetDoc`] and its parts, as written) and the sheet
+//! This module holds the document types ([`SheetDoc`] and its parts, as written, including the
+//! tree keys `branches` and `inertials` that [`crate::tree_sheet`] reads) and the sheet
 //! read into SI units ([`Sheet`]); reading the text is in `parse` ([`parse_doc`],
 //! [`Sheet::parse`], [`SheetDoc::into_sheet`]), checking rows, poses, mimics, couplings and
 //! effects in `rows`. Writing is [`crate::render`].
@@ -218,10 +219,10 @@ pub struct SheetDoc {
     /// Branches of a kinematic tree: the sheet's own `joints` are then the trunk and its
     /// `tool` the branch point (see [`crate::tree_sheet`]). Only `calibrate` reads trees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub branches: Option<Vec<crate::tree_sheet::BranchDoc>>,
-    /// Link masses of a tree sheet (see [`crate::tree_sheet::InertialsDoc`]).
+    pub branches: Option<Vec<BranchDoc>>,
+    /// Link masses of a tree sheet (see [`InertialsDoc`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub inertials: Option<crate::tree_sheet::InertialsDoc>,
+    pub inertials: Option<InertialsDoc>,
     /// Consecutive axis pairs (extraction output).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pairs: Option<Vec<PairDoc>>,
@@ -243,6 +244,77 @@ pub struct SheetDoc {
     /// What simulated data was generated from (`simulate`'s truth file; ignored on input).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub truth: Option<serde_yaml::Value>,
+}
+
+/// One branch of a tree sheet (see [`crate::tree_sheet`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BranchDoc {
+    /// Name: the targets that ride on the branch are named by it.
+    pub name: String,
+    /// The branch's DH frame 0 in the trunk's branch point frame (the mount); identity when
+    /// absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<PoseDoc>,
+    /// The branch's tip in its last DH frame; identity when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<PoseDoc>,
+    /// Rows, mount to tip (at least one).
+    pub joints: Vec<JointDoc>,
+}
+
+/// The frame link centres of mass are given in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ComFrame {
+    /// The base link frame with every joint at zero.
+    #[default]
+    BaseAtZero,
+    /// The DH frame of the link's row (the frame its joint moves).
+    Dh,
+}
+
+/// One link's mass (`inertials.links`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkDoc {
+    /// The joint that moves the link.
+    pub joint: String,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Centre of mass, metres, in the `com_frame`.
+    pub com: [f64; 3],
+}
+
+/// A payload at a tip (`inertials.payloads`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PayloadDoc {
+    /// The branch whose tip carries it (required in a tree; absent for a serial robot).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branch: Option<String>,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Centre of mass in the tip frame, metres.
+    pub com: [f64; 3],
+}
+
+/// Link masses for the gravity effects (compliance, lateral compliance, backlash): the
+/// `inertials` key of a tree sheet, or a `calibrate --inertials` file given with a tree.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InertialsDoc {
+    /// The frame of `links[].com` (default `base_at_zero`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub com_frame: Option<ComFrame>,
+    /// Gravity in the base link frame, m/s² [default: 0, 0, −9.80665].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<[f64; 3]>,
+    /// Link masses.
+    pub links: Vec<LinkDoc>,
+    /// Payloads at the tips.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payloads: Option<Vec<PayloadDoc>>,
 }
 
 /// `standard` or `modified` in a sheet.

@@ -40,89 +40,19 @@ use dh_calib::gravity::{Inertial, Inertials};
 use dh_calib::tree::{Branch, DhTree};
 use dh_core::{DhRow, DhTable, JointKind};
 use nalgebra::Vector3;
-use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SheetError};
 use crate::sheet::{
-    check_mimics, check_nesting, coupled_of, parse_doc, pose_of, row_of, JointDoc, PoseDoc,
-    SheetDoc,
+    check_mimics, check_nesting, coupled_of, parse_doc, pose_of, row_of, JointDoc, SheetDoc,
 };
 use crate::text::{escape, is_spoofing};
 use crate::units::{AngleUnit, LengthUnit};
 
+// The document types of the tree keys are the sheet's (a `SheetDoc` holds them).
+pub use crate::sheet::{BranchDoc, ComFrame, InertialsDoc, LinkDoc, PayloadDoc};
+
 #[cfg(test)]
 mod tests;
-
-/// One branch of a tree sheet.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BranchDoc {
-    /// Name: the targets that ride on the branch are named by it.
-    pub name: String,
-    /// The branch's DH frame 0 in the trunk's branch point frame (the mount); identity when
-    /// absent.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub base: Option<PoseDoc>,
-    /// The branch's tip in its last DH frame; identity when absent.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tool: Option<PoseDoc>,
-    /// Rows, mount to tip (at least one).
-    pub joints: Vec<JointDoc>,
-}
-
-/// The frame link centres of mass are given in.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ComFrame {
-    /// The base link frame with every joint at zero.
-    #[default]
-    BaseAtZero,
-    /// The DH frame of the link's row (the frame its joint moves).
-    Dh,
-}
-
-/// One link's mass (`inertials.links`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LinkDoc {
-    /// The joint that moves the link.
-    pub joint: String,
-    /// Mass, kg.
-    pub mass: f64,
-    /// Centre of mass, metres, in the `com_frame`.
-    pub com: [f64; 3],
-}
-
-/// A payload at a tip (`inertials.payloads`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PayloadDoc {
-    /// The branch whose tip carries it (required in a tree; absent for a serial robot).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub branch: Option<String>,
-    /// Mass, kg.
-    pub mass: f64,
-    /// Centre of mass in the tip frame, metres.
-    pub com: [f64; 3],
-}
-
-/// Link masses for the gravity effects (compliance, lateral compliance, backlash): the
-/// `inertials` key of a tree sheet, or a `calibrate --inertials` file given with a tree.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct InertialsDoc {
-    /// The frame of `links[].com` (default `base_at_zero`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub com_frame: Option<ComFrame>,
-    /// Gravity in the base link frame, m/s² [default: 0, 0, −9.80665].
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gravity: Option<[f64; 3]>,
-    /// Link masses.
-    pub links: Vec<LinkDoc>,
-    /// Payloads at the tips.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub payloads: Option<Vec<PayloadDoc>>,
-}
 
 /// Largest mass taken as a link or payload mass (kg): an overflow guard, far above any robot.
 const MAX_MASS: f64 = 1e9;
