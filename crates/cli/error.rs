@@ -2,6 +2,7 @@
 
 use std::fmt;
 
+use dh_sheet::SheetError;
 use urdf_axes::UrdfError;
 
 /// An error with a `hint:` line telling the user what to do.
@@ -29,11 +30,18 @@ pub fn hinted(message: impl Into<String>, hint: impl Into<String>) -> anyhow::Er
     })
 }
 
-/// The `hint:` line for an error: a [`Hinted`] one's own, else one for the library errors whose
-/// remedy is a command-line option or a tool (the libraries know no options).
+/// The `hint:` line for an error: a [`Hinted`] one's own, a [`SheetError`]'s own, else one for
+/// the library errors whose remedy is a command-line option or a tool (the libraries know no
+/// options).
 pub fn hint_for(e: &anyhow::Error) -> Option<String> {
     if let Some(h) = e.chain().find_map(|c| c.downcast_ref::<Hinted>()) {
         return Some(h.hint.clone());
+    }
+    if let Some(h) = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<SheetError>().and_then(SheetError::hint))
+    {
+        return Some(h);
     }
     let u = e.chain().find_map(|c| c.downcast_ref::<UrdfError>())?;
     Some(match u {

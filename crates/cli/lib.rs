@@ -1,5 +1,5 @@
-//! The `urdf-dh` command line: files, formats and printing around the `dh-core`, `urdf-axes`
-//! and `dh-calib` libraries. The binary is a thin `main` over [`cli::run`].
+//! The `urdf-dh` command line: files, options and printing around the `dh-core`, `urdf-axes`,
+//! `dh-calib` and `dh-sheet` libraries. The binary is a thin `main` over [`cli::run`].
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
@@ -16,9 +16,9 @@ pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod readback;
-pub mod readback_parse;
-pub mod render;
-pub mod sheet;
 pub mod svg;
-pub mod tree_sheet;
-pub mod units;
+
+// The sheet formats, their units and writers are the `dh-sheet` library's; the CLI keeps their
+// old paths (`urdf_dh::sheet`, `crate::units`, ...) for its commands and for callers of this
+// crate.
+pub use dh_sheet::{render, sheet, tree_sheet, units};

@@ -14,6 +14,7 @@ use crate::commands::extract::load_chain;
 use crate::error::hinted;
 use crate::input::{display_name, read_text};
 use crate::sheet::Sheet;
+use crate::tree_sheet::TreeSheet;
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Columns of the canonical CSV that are not joints (the format's own list).
@@ -39,6 +40,21 @@ pub struct LoadedModel {
 }
 
 impl LoadedModel {
+    /// A tree sheet's model as the measured-data code takes it: every row of the tree in joint
+    /// order (trunk, then each branch), for the columns a measurement file needs and the
+    /// coupling of its values ([`LoadedModel::measured_joints`], [`LoadedModel::couple`]).
+    pub fn of_tree(sheet: &TreeSheet, origin: &str) -> LoadedModel {
+        LoadedModel {
+            table: sheet.tree.joint_table(),
+            origin: origin.to_string(),
+            robot: sheet.robot.clone(),
+            units: (sheet.length_unit, sheet.angle_unit),
+            warnings: sheet.warnings.clone(),
+            links: ("base_link".into(), "tool0".into()),
+            coupled: sheet.coupled.clone(),
+        }
+    }
+
     /// The columns a measurement file needs, in row order: every row but the mimic ones (which
     /// follow their driver) and the coupled ones, plus the drivers of both (a mimic's driver
     /// may be a joint off the chain, such as a telescopic column's own joint).
@@ -566,5 +582,61 @@ mod tests {
             let e = parse_effect(label, &table).err().unwrap();
             assert!(e.to_string().contains(says), "{e}");
         }
+    }
+
+    #[test]
+    fn a_tree_measures_its_rows_and_couples_a_branch_joint_to_a_trunk_driver() {
+        let tree = "\
+convention: modified
+length_unit: m
+angle_unit: deg
+joints:
+  - {name: t1, type: revolute, a: 0, alpha: 0, d: 0.2, theta: 0}
+  - {name: t2, type: revolute, a: 0.3, alpha: 90, d: 0, theta: 0}
+branches:
+  - name: r
+    joints:
+      - {name: r1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
+      - {name: r2, type: revolute, a: 0.25, alpha: -90, d: 0, theta: 0}
+  - name: l
+    joints:
+      - {name: l1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
+      - {name: l2, type: revolute, a: 0.25, alpha: 90, d: 0, theta: 0}
+";
+        let s = TreeSheet::parse(tree, "tree.yaml").unwrap();
+        assert_eq!(
+            LoadedModel::of_tree(&s, "tree.yaml").measured_joints(),
+            ["t1", "t2", "r1", "r2", "l1", "l2"]
+        );
+        // The coupled joint's value is a sum over measured columns, wherever they sit.
+        let text = format!("{tree}coupled:\n  l2: {{t2: -1, r2: 0.5}}\n");
+        let s = TreeSheet::parse(&text, "tree.yaml").unwrap();
+        let model = LoadedModel::of_tree(&s, "tree.yaml");
+        assert_eq!(model.measured_joints(), ["t1", "t2", "r1", "r2", "l1"]);
+        let mut data = dh_calib::data::Measurements {
+            sessions: Vec::new(),
+            joint_names: vec![
+                "t1".into(),
+                "t2".into(),
+                "r1".into(),
+                "r2".into(),
+                "l1".into(),
+            ],
+            targets: vec!["l".into()],
+            samples: vec![dh_calib::data::Sample {
+                session: 0,
+                q: vec![0.1, 0.2, 0.3, 0.4, 0.5],
+                target: 0,
+                point: nalgebra::Vector3::zeros(),
+                sigma: None,
+                config: None,
+                split: dh_calib::data::Split::Calibration,
+                line: 2,
+                socket: None,
+            }],
+        };
+        model.couple(&mut data).unwrap();
+        assert_eq!(data.joint_names.last().map(String::as_str), Some("l2"));
+        assert!((data.samples[0].q[5] - (-0.2 + 0.5 * 0.4)).abs() < 1e-15);
     }
 }

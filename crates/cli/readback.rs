@@ -10,10 +10,10 @@ use anyhow::{anyhow, bail, ensure, Context, Result};
 use dh_core::{Bound, DhTable, Precision};
 use nalgebra::Isometry3;
 
-pub use crate::readback_parse::read_back;
 use crate::render::{render_sheet_at, Format};
 use crate::sheet::{SheetDoc, VerificationDoc};
 use crate::units::{AngleUnit, LengthUnit, PRINT_NOISE};
+pub use dh_sheet::read_back::read_back;
 
 /// The precision at which `format` writes values in these units: the fixed decimals of the text
 /// and Markdown tables ([`crate::render`]), or the picometre / 1e-12 rad rounding (with the snap

@@ -27,6 +27,7 @@ use crate::commands::calibrate::{
 };
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_text};
+use crate::measured::LoadedModel;
 use crate::sheet::parse_doc;
 use crate::tree_sheet::{InertialsDoc, TreeSheet};
 
@@ -293,7 +294,7 @@ pub fn calibrate_tree(
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let tree = &sheet.tree;
-    let model = sheet.loaded(origin);
+    let model = LoadedModel::of_tree(sheet, origin);
     let data_name = display_name(&args.data);
     let data = read_data_for(args, &model, err)?;
     if data.samples.iter().any(|s| s.socket.is_some()) {

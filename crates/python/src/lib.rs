@@ -1,7 +1,8 @@
 //! `urdf_dh._native`: the Python face of the `urdf-dh` library, thin on purpose.
 //!
-//! Every computation is the CLI's own (`run_extract_bytes` + `prove_extracted` for `extract`,
-//! `compare` for `check`); this crate only converts arguments and results. Poses cross as 4x4
+//! Every computation is the CLI's own (`run_extract_bytes` + `prove_extracted` for `extract`) or
+//! its library's (`dh_sheet::check::compare` for `check`, `dh_sheet` for sheets); this crate only
+//! converts arguments and results. Poses cross as 4x4
 //! homogeneous matrices (nested lists, row-major; metres and radians), which the pure-Python
 //! package turns into numpy arrays. Errors carry the CLI's message (`{e:#}`, the whole context
 //! chain) and its `hint:` line.
@@ -11,14 +12,12 @@ use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
-use urdf_dh_cli::commands::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
+use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
+use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use urdf_dh_cli::commands::extract::{
     load_chain_bytes, prove_extracted, run_extract_bytes, ExtractArgs,
 };
 use urdf_dh_cli::input::{display_name, read_robot, read_text};
-use urdf_dh_cli::render::Format;
-use urdf_dh_cli::sheet::Sheet;
-use urdf_dh_cli::units::{AngleUnit, LengthUnit};
 
 create_exception!(
     _native,

@@ -4,8 +4,9 @@ use dh_core::pose::from_xyz_rpy;
 use dh_core::{CoreError, JointAxis, JointKind, Limits, Line, Mimic};
 use nalgebra::{Isometry3, Unit, UnitQuaternion, Vector3};
 
+use crate::check::unit_axis;
 use crate::model::UrdfModel;
-use crate::read::JointType;
+use crate::read::{JointType, Warning};
 use crate::UrdfError;
 
 /// A moving joint of a [`Chain`] that follows another joint (URDF `<mimic>`):
@@ -56,15 +57,66 @@ pub struct Chain {
     mimics: Vec<MimicJoint>,
 }
 
-/// The unit direction of a URDF axis, `None` for a zero vector. Divides by the largest
-/// component first so that huge finite components cannot overflow the norm.
-pub(crate) fn unit_axis(xyz: [f64; 3]) -> Option<Unit<Vector3<f64>>> {
-    let v = Vector3::from(xyz);
-    let scale = v.amax();
-    if scale > 0.0 && scale.is_finite() {
-        Some(Unit::new_normalize(v / scale))
-    } else {
-        None
+// A chain is taken from a model: here, so that the model knows nothing of chains.
+impl UrdfModel {
+    /// Chooses a serial chain from `base` down to `tip` (link names).
+    ///
+    /// `base` defaults to the root link. `tip` defaults to the end of the arm below the base:
+    /// the leaf at the end of the longest run of moving joints, preferring a tool-like fixed
+    /// link (`tool0`, `flange`...) off the last moving link, and the hand link when the
+    /// longest runs are the fingers of one gripper (the rule is in the `tip` module's docs).
+    /// Fixed joints between them are folded into the neighbouring transforms; every revolute,
+    /// continuous and prismatic joint becomes one axis of the chain. Frames: everything the
+    /// chain returns is in the base link's frame, metres and radians.
+    ///
+    /// # Errors
+    /// - [`UrdfError::UnknownLink`] for a base or tip the URDF does not define (with close
+    ///   names, or every link when there are few);
+    /// - [`UrdfError::SeveralLeaves`] when no tip is given and the longest runs of moving
+    ///   joints below the base end at several places (two arms, a humanoid);
+    /// - the fault of a joint on the chain (its type, numbers, limits or mimic:
+    ///   [`UrdfError::Parse`], [`UrdfError::UnsupportedJointType`], [`UrdfError::NonFinite`],
+    ///   [`UrdfError::OutOfRange`], [`UrdfError::ZeroAxis`], [`UrdfError::MissingLimit`],
+    ///   [`UrdfError::LimitsReversed`], [`UrdfError::ControlCharacterInName`],
+    ///   [`UrdfError::UnknownMimicJoint`], [`UrdfError::MimicItself`],
+    ///   [`UrdfError::MimicCycle`], [`UrdfError::MimicOfFixed`]);
+    /// - [`UrdfError::Disconnected`] when the tip is not below the base;
+    /// - [`UrdfError::JointTypeInChain`] for a floating or planar joint between them;
+    /// - [`UrdfError::NoMovingJoint`] when only fixed joints (or none) join them;
+    /// - [`UrdfError::Geometry`] when finite inputs overflow while composing the chain.
+    pub fn chain(&self, base: Option<&str>, tip: Option<&str>) -> Result<Chain, UrdfError> {
+        let base = match base {
+            Some(name) => self.find_link(name, "base")?,
+            None => self.root,
+        };
+        let tip = match tip {
+            Some(name) => self.find_link(name, "tip")?,
+            None => self.default_tip(base)?,
+        };
+        let path = self.path(base, tip)?;
+        // A fault of a joint's own content is an error on the chain (a warning off it).
+        if let Some(fault) = path
+            .iter()
+            .filter_map(|&k| self.robot.joints.get(k))
+            .find_map(|j| j.fault.as_ref())
+        {
+            return Err(fault.clone());
+        }
+        Chain::build(self, base, tip, &path)
+    }
+
+    /// The warnings that concern `chain` (taken from this model): those of
+    /// [`UrdfModel::warnings`], with the faults of joints off the chain (a joint on it has
+    /// none, or the chain would have been refused).
+    pub fn warnings_for(&self, chain: &Chain) -> Vec<Warning> {
+        let on: std::collections::HashSet<&str> =
+            chain.joints().iter().map(String::as_str).collect();
+        let note = format!(
+            "ignored: not on the chain from '{}' to '{}'",
+            chain.base(),
+            chain.tip()
+        );
+        self.collect_warnings(|j| !on.contains(j), &note)
     }
 }
 

@@ -1,8 +1,22 @@
 //! Checks of one joint's numbers and of names.
 
+use nalgebra::{Unit, Vector3};
+
 use crate::read::{Joint, JointType};
 use crate::scan::{Doc, Element};
 use crate::UrdfError;
+
+/// The unit direction of a URDF axis, `None` for a zero vector. Divides by the largest
+/// component first so that huge finite components cannot overflow the norm.
+pub(crate) fn unit_axis(xyz: [f64; 3]) -> Option<Unit<Vector3<f64>>> {
+    let v = Vector3::from(xyz);
+    let scale = v.amax();
+    if scale > 0.0 && scale.is_finite() {
+        Some(Unit::new_normalize(v / scale))
+    } else {
+        None
+    }
+}
 
 /// Largest magnitude of an origin coordinate (metres), a limit (radians or metres) or a mimic
 /// number: far beyond any robot, and far enough from overflow that every unit conversion and
@@ -119,7 +133,7 @@ pub(crate) fn check_joint(
             });
         }
     }
-    if kind.is_moving() && crate::chain::unit_axis(joint.axis).is_none() {
+    if kind.is_moving() && unit_axis(joint.axis).is_none() {
         return Err(UrdfError::ZeroAxis {
             joint: name(),
             axis: joint.axis,

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use crate::check::check_name;
 use crate::read::{self, fault_summary, Robot, Warning};
 use crate::scan::{self, ScanError};
-use crate::{Chain, UrdfError};
+use crate::UrdfError;
 
 /// Largest URDF accepted, in bytes (64 MiB). Real URDFs are at most a few megabytes (meshes
 /// live in their own files); the limit bounds time and memory (about ten times the input at
@@ -34,7 +34,7 @@ pub struct UrdfModel {
     pub(crate) parent_joint: Vec<Option<usize>>,
     /// Per link: joints whose parent it is.
     pub(crate) child_joints: Vec<Vec<usize>>,
-    root: usize,
+    pub(crate) root: usize,
 }
 
 impl UrdfModel {
@@ -221,21 +221,11 @@ impl UrdfModel {
         self.collect_warnings(|_| true, "an error on a chain through it")
     }
 
-    /// The warnings that concern `chain` (taken from this model): those of
-    /// [`UrdfModel::warnings`], with the faults of joints off the chain (a joint on it has
-    /// none, or the chain would have been refused).
-    pub fn warnings_for(&self, chain: &Chain) -> Vec<Warning> {
-        let on: std::collections::HashSet<&str> =
-            chain.joints().iter().map(String::as_str).collect();
-        let note = format!(
-            "ignored: not on the chain from '{}' to '{}'",
-            chain.base(),
-            chain.tip()
-        );
-        self.collect_warnings(|j| !on.contains(j), &note)
-    }
-
-    fn collect_warnings(&self, include: impl Fn(&str) -> bool, note: &str) -> Vec<Warning> {
+    pub(crate) fn collect_warnings(
+        &self,
+        include: impl Fn(&str) -> bool,
+        note: &str,
+    ) -> Vec<Warning> {
         let mut out = self.robot.warnings.clone();
         let mut more = self.robot.more_warnings;
         for j in &self.robot.joints {
@@ -320,52 +310,6 @@ impl UrdfModel {
         Some((j.name.as_str(), j.parent.as_str(), origin))
     }
 
-    /// Chooses a serial chain from `base` down to `tip` (link names).
-    ///
-    /// `base` defaults to the root link. `tip` defaults to the end of the arm below the base:
-    /// the leaf at the end of the longest run of moving joints, preferring a tool-like fixed
-    /// link (`tool0`, `flange`...) off the last moving link, and the hand link when the
-    /// longest runs are the fingers of one gripper (the rule is in the `tip` module's docs).
-    /// Fixed joints between them are folded into the neighbouring transforms; every revolute,
-    /// continuous and prismatic joint becomes one axis of the chain. Frames: everything the
-    /// chain returns is in the base link's frame, metres and radians.
-    ///
-    /// # Errors
-    /// - [`UrdfError::UnknownLink`] for a base or tip the URDF does not define (with close
-    ///   names, or every link when there are few);
-    /// - [`UrdfError::SeveralLeaves`] when no tip is given and the longest runs of moving
-    ///   joints below the base end at several places (two arms, a humanoid);
-    /// - the fault of a joint on the chain (its type, numbers, limits or mimic:
-    ///   [`UrdfError::Parse`], [`UrdfError::UnsupportedJointType`], [`UrdfError::NonFinite`],
-    ///   [`UrdfError::OutOfRange`], [`UrdfError::ZeroAxis`], [`UrdfError::MissingLimit`],
-    ///   [`UrdfError::LimitsReversed`], [`UrdfError::ControlCharacterInName`],
-    ///   [`UrdfError::UnknownMimicJoint`], [`UrdfError::MimicItself`],
-    ///   [`UrdfError::MimicCycle`], [`UrdfError::MimicOfFixed`]);
-    /// - [`UrdfError::Disconnected`] when the tip is not below the base;
-    /// - [`UrdfError::JointTypeInChain`] for a floating or planar joint between them;
-    /// - [`UrdfError::NoMovingJoint`] when only fixed joints (or none) join them;
-    /// - [`UrdfError::Geometry`] when finite inputs overflow while composing the chain.
-    pub fn chain(&self, base: Option<&str>, tip: Option<&str>) -> Result<Chain, UrdfError> {
-        let base = match base {
-            Some(name) => self.find_link(name, "base")?,
-            None => self.root,
-        };
-        let tip = match tip {
-            Some(name) => self.find_link(name, "tip")?,
-            None => self.default_tip(base)?,
-        };
-        let path = self.path(base, tip)?;
-        // A fault of a joint's own content is an error on the chain (a warning off it).
-        if let Some(fault) = path
-            .iter()
-            .filter_map(|&k| self.robot.joints.get(k))
-            .find_map(|j| j.fault.as_ref())
-        {
-            return Err(fault.clone());
-        }
-        Chain::build(self, base, tip, &path)
-    }
-
     pub(crate) fn link_name(&self, link: usize) -> &str {
         self.robot
             .links
@@ -382,7 +326,7 @@ impl UrdfModel {
         self.joint_index.get(joint).copied()
     }
 
-    fn find_link(&self, name: &str, role: &'static str) -> Result<usize, UrdfError> {
+    pub(crate) fn find_link(&self, name: &str, role: &'static str) -> Result<usize, UrdfError> {
         self.link_index.get(name).copied().ok_or_else(|| {
             let mut candidates = candidates(name, &self.links());
             // No close name among many links: offer what the role usually is, the leaves
@@ -422,7 +366,7 @@ impl UrdfModel {
     }
 
     /// Joint indices from `base` down to `tip`.
-    fn path(&self, base: usize, tip: usize) -> Result<Vec<usize>, UrdfError> {
+    pub(crate) fn path(&self, base: usize, tip: usize) -> Result<Vec<usize>, UrdfError> {
         let mut path = Vec::new();
         let mut link = tip;
         while link != base {

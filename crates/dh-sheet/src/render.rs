@@ -1,13 +1,15 @@
-//! Output formats of a DH sheet: a readable table, YAML, JSON, CSV and Markdown.
+//! Writing a DH sheet: a readable table, YAML, JSON, CSV and Markdown (lengths and angles in
+//! the sheet's own units). [`crate::read_back`] reads every one of them back.
 
 use std::fmt::Write as _;
 
-use anyhow::Result;
+use crate::error::Result;
 
 use crate::sheet::{ConventionDoc, JointDoc, JointType, SheetDoc};
 
 /// Output format of `extract` and `convert`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Format {
     /// An aligned table with units, pairs, warnings and the verification line.
     #[default]
@@ -32,7 +34,7 @@ pub fn render_sheet(doc: &SheetDoc, format: Format) -> Result<String> {
 
 /// Renders `doc` in `format`, the text and Markdown tables with `extra` decimals beyond their
 /// usual ones (so that a very large chain's table still proves itself as written; see
-/// [`crate::readback::prove`]).
+/// the written-artefact proof of `urdf-dh extract`).
 ///
 /// # Errors
 /// Serialisation failures (not expected for finite numbers).
@@ -46,8 +48,8 @@ pub fn render_sheet_at(doc: &SheetDoc, format: Format, extra: usize) -> Result<S
     })
 }
 
-/// Decimals of the text and Markdown tables per unit symbol.
-pub(crate) fn decimals(unit: &str) -> usize {
+/// Decimals of the text and Markdown tables per unit symbol (`m`, `mm`, `deg`, `rad`).
+pub fn decimals(unit: &str) -> usize {
     match unit {
         "m" => 6,
         "mm" => 3,
@@ -116,7 +118,7 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let mut s = String::new();
     let _ = writeln!(s, "{}", header_line(doc));
-    let name_w = crate::guard::column_width(doc.joints.iter().map(|j| j.name.as_str()), 5);
+    let name_w = crate::text::column_width(doc.joints.iter().map(|j| j.name.as_str()), 5);
     let headers = [
         format!("theta [{a}]"),
         format!("d [{l}]"),
@@ -146,7 +148,7 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
             lim(j.lower),
             lim(j.upper),
         ];
-        let name = crate::guard::escape(&j.name);
+        let name = crate::text::escape(&j.name);
         let _ = write!(s, "{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
         for c in &cells {
             let _ = write!(s, "  {c:>13}");
@@ -179,10 +181,10 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
             .iter()
             .map(|p| {
                 let [a, b] = &p.joints;
-                format!("{} -> {}", crate::guard::escape(a), crate::guard::escape(b))
+                format!("{} -> {}", crate::text::escape(a), crate::text::escape(b))
             })
             .collect();
-        let w = crate::guard::column_width(names.iter().map(String::as_str), 0);
+        let w = crate::text::column_width(names.iter().map(String::as_str), 0);
         for (p, names) in pairs.iter().zip(&names) {
             let _ = writeln!(
                 s,
@@ -227,7 +229,7 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
     s
 }
 
-/// How the line of the rows' tilts starts (after the CSV's `# `); [`crate::readback`] reads it.
+/// How the line of the rows' tilts starts (after the CSV's `# `); [`crate::read_back`] reads it.
 pub(crate) const TILTS_LINE: &str =
     "beta (Hayati-Mirmirani tilt, Ry(beta) right after the row's Rx(alpha)): ";
 

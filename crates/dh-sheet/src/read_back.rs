@@ -1,12 +1,35 @@
 //! The readers of the formats [`crate::render`] writes: the text and Markdown tables and the
-//! CSV (YAML and JSON go through the sheet reader), for the proof on the artefact
-//! ([`crate::readback::prove`]).
+//! CSV (YAML and JSON go through the sheet reader), for the proof on the artefact (`urdf-dh
+//! extract` proves the table it wrote as read back at the precision it was written). Values stay
+//! in the units the text gives.
 
-use anyhow::{anyhow, bail, ensure, Result};
-
+use crate::error::SheetError;
 use crate::render::Format;
 use crate::sheet::{parse_doc, ConventionDoc, JointDoc, JointType, MimicDoc, PoseDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
+
+type Result<T> = std::result::Result<T, SheetError>;
+
+/// A [`SheetError::ReadBack`] of the message.
+fn unreadable(message: String) -> SheetError {
+    SheetError::ReadBack(message)
+}
+
+/// Returns a [`SheetError::ReadBack`] of the formatted message.
+macro_rules! bail {
+    ($($arg:tt)*) => {
+        return Err(unreadable(format!($($arg)*)))
+    };
+}
+
+/// Returns a [`SheetError::ReadBack`] of the formatted message unless `cond` holds.
+macro_rules! ensure {
+    ($cond:expr, $($arg:tt)*) => {
+        if !$cond {
+            bail!($($arg)*);
+        }
+    };
+}
 
 /// Reads text that [`crate::render::render_sheet`] wrote in `format` back into a sheet document (units,
 /// convention, base, tool, rows and couplings; the facts around them are not read back).
@@ -25,7 +48,7 @@ pub fn read_back(text: &str, format: Format) -> Result<SheetDoc> {
 fn number(token: &str, what: &str) -> Result<f64> {
     token
         .parse::<f64>()
-        .map_err(|_| anyhow!("{what}: expected a number, found '{token}'"))
+        .map_err(|_| unreadable(format!("{what}: expected a number, found '{token}'")))
 }
 
 fn length_unit(symbol: &str) -> Result<LengthUnit> {
@@ -58,11 +81,11 @@ fn convention_of_header(line: &str) -> Result<ConventionDoc> {
 fn bracket_after<'a>(line: &'a str, label: &str) -> Result<&'a str> {
     let at = line
         .find(label)
-        .ok_or_else(|| anyhow!("no '{label}' in '{line}'"))?;
+        .ok_or_else(|| unreadable(format!("no '{label}' in '{line}'")))?;
     let rest = &line[at + label.len()..];
     let end = rest
         .find(']')
-        .ok_or_else(|| anyhow!("no ']' after '{label}'"))?;
+        .ok_or_else(|| unreadable(format!("no ']' after '{label}'")))?;
     Ok(&rest[..end])
 }
 
@@ -70,7 +93,7 @@ fn bracket_after<'a>(line: &'a str, label: &str) -> Result<&'a str> {
 fn three_after(line: &str, label: &str) -> Result<[f64; 3]> {
     let at = line
         .rfind(label)
-        .ok_or_else(|| anyhow!("no '{label}' in '{line}'"))?;
+        .ok_or_else(|| unreadable(format!("no '{label}' in '{line}'")))?;
     let rest = &line[at + label.len()..];
     let rest = &rest[rest.find(']').map_or(0, |k| k + 1)..];
     let v: Vec<f64> = rest
@@ -93,7 +116,7 @@ fn pose_of_line(line: &str) -> Result<Option<PoseDoc>> {
     // The rpy comes last; the xyz is the last one before it (a link name may hold either word).
     let rpy_at = line
         .rfind("rpy [")
-        .ok_or_else(|| anyhow!("no 'rpy [' in '{line}'"))?;
+        .ok_or_else(|| unreadable(format!("no 'rpy [' in '{line}'")))?;
     Ok(Some(PoseDoc {
         xyz: three_after(&line[..rpy_at], "xyz [")?,
         rpy: three_after(&line[rpy_at..], "rpy [")?,
@@ -135,7 +158,7 @@ fn pop_limit(tokens: &mut Vec<&str>) -> Result<Option<f64>> {
         Some(_unit) => {
             let v = tokens
                 .pop()
-                .ok_or_else(|| anyhow!("a limit without a value"))?;
+                .ok_or_else(|| unreadable("a limit without a value".into()))?;
             Ok(Some(number(v, "limit")?))
         }
         None => bail!("a row ends early"),
@@ -144,8 +167,12 @@ fn pop_limit(tokens: &mut Vec<&str>) -> Result<Option<f64>> {
 
 fn read_text(text: &str) -> Result<SheetDoc> {
     let mut lines = text.lines();
-    let header = lines.next().ok_or_else(|| anyhow!("empty output"))?;
-    let columns = lines.next().ok_or_else(|| anyhow!("no column header"))?;
+    let header = lines
+        .next()
+        .ok_or_else(|| unreadable("empty output".into()))?;
+    let columns = lines
+        .next()
+        .ok_or_else(|| unreadable("no column header".into()))?;
     let (angle, length) = (
         angle_unit(bracket_after(columns, "theta [")?)?,
         length_unit(bracket_after(columns, "d [")?)?,
@@ -269,7 +296,9 @@ fn limit_cell(cell: &str) -> Result<Option<f64>> {
 
 fn read_markdown(text: &str) -> Result<SheetDoc> {
     let mut lines = text.lines();
-    let header = lines.next().ok_or_else(|| anyhow!("empty output"))?;
+    let header = lines
+        .next()
+        .ok_or_else(|| unreadable("empty output".into()))?;
     let mut units = None;
     let mut joints = Vec::new();
     let (mut base, mut tool) = (None, None);
@@ -310,7 +339,7 @@ fn read_markdown(text: &str) -> Result<SheetDoc> {
             tool = pose_of_line(line)?;
         }
     }
-    let (length, angle) = units.ok_or_else(|| anyhow!("no table header"))?;
+    let (length, angle) = units.ok_or_else(|| unreadable("no table header".into()))?;
     let header = header.trim_matches('*');
     apply_tilts(text, &mut joints)?;
     Ok(SheetDoc::new(
@@ -364,9 +393,13 @@ fn csv_pose(rest: &str) -> Result<PoseDoc> {
 
 fn read_csv(text: &str) -> Result<SheetDoc> {
     let mut lines = text.lines();
-    let header = lines.next().ok_or_else(|| anyhow!("empty output"))?;
+    let header = lines
+        .next()
+        .ok_or_else(|| unreadable("empty output".into()))?;
     let convention = convention_of_header(header)?;
-    let units = lines.next().ok_or_else(|| anyhow!("no units line"))?;
+    let units = lines
+        .next()
+        .ok_or_else(|| unreadable("no units line".into()))?;
     let words: Vec<&str> = units
         .split(|c: char| c.is_whitespace() || c == ',')
         .filter(|w| !w.is_empty())
@@ -377,7 +410,7 @@ fn read_csv(text: &str) -> Result<SheetDoc> {
             .position(|w| *w == key)
             .and_then(|k| words.get(k + 1))
             .copied()
-            .ok_or_else(|| anyhow!("no '{key}' in '{units}'"))
+            .ok_or_else(|| unreadable(format!("no '{key}' in '{units}'")))
     };
     let (length, angle) = (
         length_unit(after("length_unit")?)?,

@@ -1,0 +1,57 @@
+//! DH sheets: the file formats that carry a Denavit–Hartenberg table (a robot vendor's sheet,
+//! what `urdf-dh extract` writes, a calibrated model), their units and validation, and `check`'s
+//! comparison of a URDF chain with a sheet. What the `urdf-dh` command line reads and writes, a
+//! Rust caller reads and writes here, with the same checks and the same messages.
+//!
+//! Where each concept lives:
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`sheet`] | the serial sheet format: [`SheetDoc`] as written (YAML, JSON), [`Sheet`] in SI units, reading and validation (rows, poses, mimics, couplings, effects) |
+//! | [`tree_sheet`] | tree sheets (a trunk and `branches`) and link masses: [`TreeSheet`], [`InertialsDoc`](tree_sheet::InertialsDoc) |
+//! | [`units`] | [`LengthUnit`], [`AngleUnit`], and the rounding of printed values |
+//! | [`render`] | writing a sheet as a text table, YAML, JSON, CSV or Markdown ([`Format`]) |
+//! | [`read_back`] | reading every written format back (the CSV, text and Markdown tables) |
+//! | [`check`] | [`compare`]: a URDF chain against a sheet, as a [`CheckReport`] |
+//! | [`text`] | escaping names for messages and tables |
+//! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint) |
+//!
+//! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
+//! type read from one ([`Sheet`], [`TreeSheet`], the `dh_core` tables) is in metres and radians.
+//! `base` is DH frame 0 in the base link frame, `tool` the tip link frame in the last DH frame.
+//!
+//! ```
+//! use dh_sheet::{render_sheet, Format, Sheet, SheetDoc};
+//!
+//! let text = "convention: standard\nlength_unit: mm\nangle_unit: deg\njoints:\n  \
+//!             - {name: j1, type: revolute, a: 180, alpha: -90, d: 400, theta: 0}\n";
+//! let sheet = Sheet::parse(text, "robot.yaml")?;
+//! assert!((sheet.table.rows[0].a - 0.18).abs() < 1e-15); // metres
+//! let doc = SheetDoc::from_table(&sheet.table, sheet.length_unit, sheet.angle_unit);
+//! let yaml = render_sheet(&doc, Format::Yaml)?;
+//! assert_eq!(Sheet::parse(&yaml, "written")?.table.rows[0].name, "j1");
+//! # Ok::<(), dh_sheet::SheetError>(())
+//! ```
+//!
+//! The optional feature `clap` derives `clap::ValueEnum` for the unit, convention and format
+//! enums.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+pub mod check;
+pub mod error;
+pub mod read_back;
+pub mod render;
+pub mod sheet;
+pub mod text;
+pub mod tree_sheet;
+pub mod units;
+
+pub use check::{compare, CheckReport};
+pub use error::SheetError;
+pub use render::{render_sheet, Format};
+pub use sheet::{parse_doc, Sheet, SheetDoc};
+pub use tree_sheet::TreeSheet;
+pub use units::{AngleUnit, LengthUnit};
