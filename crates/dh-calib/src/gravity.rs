@@ -30,7 +30,7 @@ use dh_core::{DhTable, JointKind, JointSampler};
 use nalgebra::{Isometry3, Point3, Vector3};
 
 use crate::fit::CalibError;
-use crate::tree::DhTree;
+use crate::tree::{DhTree, TreeFrames};
 
 /// Standard gravity (m/s²), ISO 80000-3.
 pub const STANDARD_GRAVITY: f64 = 9.80665;
@@ -106,6 +106,37 @@ pub struct GravityModel {
     payloads: Vec<(usize, Inertial)>,
     gravity: Vector3<f64>,
     scales: Vec<[f64; 2]>,
+    /// Identifies this model's geometry in the per-thread cache of frames ([`FRAMES`]).
+    id: ModelId,
+}
+
+/// A number given to each [`GravityModel`] when it is built (its clones share it: they hold
+/// the same geometry); it takes no part in equality.
+#[derive(Clone, Copy, Debug)]
+struct ModelId(u64);
+
+impl PartialEq for ModelId {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl ModelId {
+    fn next() -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        Self(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+}
+
+/// A model's id, the joint values and the frames there.
+type CachedFrames = (u64, Vec<f64>, std::rc::Rc<TreeFrames>);
+
+thread_local! {
+    /// The frames of the last joint values a model's torques were asked for on this thread:
+    /// every gravity effect of a calibration asks for the same sample's torques in turn, and
+    /// the frames are most of the work.
+    static FRAMES: std::cell::RefCell<Option<CachedFrames>> =
+        const { std::cell::RefCell::new(None) };
 }
 
 fn bad(reason: String) -> CalibError {
@@ -185,9 +216,30 @@ impl GravityModel {
             payloads: inertials.payloads.clone(),
             gravity,
             scales: vec![],
+            id: ModelId::next(),
         };
         g.scales = g.rms_torques(32);
         Ok(g)
+    }
+
+    /// The nominal tree's frames at `q`, from this thread's cache when `q` was the last asked.
+    fn frames_at(&self, q: &[f64]) -> Option<std::rc::Rc<TreeFrames>> {
+        FRAMES.with(|cache| {
+            let mut cache = cache.borrow_mut();
+            if let Some((id, last, frames)) = cache.as_ref() {
+                if *id == self.id.0
+                    && last
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .eq(q.iter().map(|v| v.to_bits()))
+                {
+                    return Some(frames.clone());
+                }
+            }
+            let frames = std::rc::Rc::new(self.tree.frames(q).ok()?);
+            *cache = Some((self.id.0, q.to_vec(), frames.clone()));
+            Some(frames)
+        })
     }
 
     /// The tree the torques are computed on (the nominal geometry).
@@ -222,7 +274,7 @@ impl GravityModel {
     /// The torque (N m; N for a prismatic joint about [`TorqueAxis::Joint`]) of gravity on row
     /// `row` at joint values `q` (one per row of the tree); 0 for a row or `q` out of range.
     pub fn torque(&self, q: &[f64], row: usize, axis: TorqueAxis) -> f64 {
-        let Ok(frames) = self.tree.frames(q) else {
+        let Some(frames) = self.frames_at(q) else {
             return 0.0;
         };
         let Some(r) = self.tree.rows().get(row) else {

@@ -31,6 +31,7 @@ use crate::error::Result;
 use crate::units::{AngleUnit, LengthUnit};
 
 mod parse;
+mod parts;
 mod rows;
 #[cfg(test)]
 mod tests;

@@ -33,6 +33,10 @@ pub fn parse_doc(text: &str, origin: &str) -> Result<SheetDoc> {
             if let Ok(doc) = serde_json::from_str::<SheetDoc>(text) {
                 return Ok(doc);
             }
+        } else if text.len() >= super::parts::PARTS_MIN_BYTES {
+            if let Some(doc) = super::parts::read_in_parts(text) {
+                return Ok(doc);
+            }
         }
         let doc: SheetDoc = serde_yaml::from_str(text).map_err(|e| {
             let mut message = shortened(&e.to_string());
