@@ -122,6 +122,42 @@ pub struct CalibratedModel {
     /// The other measurement sessions' device frames `T_device_base` (the `calibration`
     /// section's `sessions`), by name; `calibrated` holds the first session's.
     pub sessions: Vec<(String, Isometry3<f64>)>,
+    /// The covariance as the file holds it (every session's device frame in it).
+    covariance: Option<Covariance>,
+}
+
+impl CalibratedModel {
+    /// Predicts from session `name`'s device frame (one of [`CalibratedModel::sessions`]),
+    /// with its uncertainty (see [`Covariance::in_session`]).
+    ///
+    /// # Errors
+    /// A name that is none of the other sessions', naming those there are.
+    pub fn in_session(&mut self, name: &str) -> Result<()> {
+        let Some((_, device)) = self.sessions.iter().find(|(n, _)| n == name) else {
+            let known: Vec<String> = self
+                .sessions
+                .iter()
+                .map(|(n, _)| format!("'{}'", crate::guard::escape(n)))
+                .collect();
+            anyhow::bail!(
+                "--session '{}': {}; the first session's frame is the model's device frame, used without --session",
+                crate::guard::escape(name),
+                if known.is_empty() {
+                    "the model holds one measurement session".to_string()
+                } else {
+                    format!("expected one of {}", known.join(", "))
+                }
+            );
+        };
+        let mut calibrated = self.calibrated.clone().with_device(device);
+        if let Some(c) = &self.covariance {
+            calibrated = calibrated
+                .with_covariance(&c.in_session(Some(name)))
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+        }
+        self.calibrated = calibrated;
+        Ok(())
+    }
 }
 
 /// Loads `path` (see the module docs).
@@ -237,12 +273,17 @@ fn assemble(
     }
     let mut calibrated = Calibrated::new(&loaded.table, &effects, &device, &targets)
         .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
-    if let Some(c) = &record.covariance {
-        let c = c
-            .covariance()
-            .with_context(|| format!("{origin}: calibration"))?;
+    let covariance = match &record.covariance {
+        Some(c) => Some(
+            c.covariance()
+                .with_context(|| format!("{origin}: calibration"))?,
+        ),
+        None => None,
+    };
+    if let Some(c) = &covariance {
+        // The first session's frame is the device frame: the other sessions' are left out.
         calibrated = calibrated
-            .with_covariance(&c)
+            .with_covariance(&c.in_session(None))
             .map_err(|e| anyhow::anyhow!("{origin}: calibration: {e}"))?;
     }
     let joints = JointMap::new(&loaded.table, &loaded.coupled);
@@ -252,5 +293,6 @@ fn assemble(
         has_device,
         joints,
         sessions,
+        covariance,
     })
 }

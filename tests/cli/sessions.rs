@@ -140,6 +140,68 @@ fn each_session_gets_its_frame_and_an_unseen_session_validates_at_the_noise_leve
         text.contains("frame fitted on its validation samples"),
         "{text}"
     );
+
+    // Predictions: the first session's frame by default (the other sessions' frames left out
+    // of the covariance), another's with --session; each predicts its own rows at the noise.
+    let per_session = |extra: &[&str]| -> Vec<(String, f64)> {
+        let mut args = vec!["predict", "--model", &out, "--joints", &data];
+        args.extend(extra);
+        let predicted = ok(&args);
+        let body = |t: &str| -> Vec<Vec<String>> {
+            t.lines()
+                .filter(|l| !l.starts_with('#'))
+                .map(|l| l.split(',').map(str::to_string).collect())
+                .collect()
+        };
+        let (measured, predicted) = (body(&text_of(&data)), body(&predicted));
+        let col =
+            |rows: &[Vec<String>], name: &str| rows[0].iter().position(|c| c == name).unwrap();
+        let session = col(&measured, "session");
+        let mut sums: Vec<(String, f64, usize)> = Vec::new();
+        for (m, p) in measured.iter().zip(&predicted).skip(1) {
+            let d2: f64 = ["x", "y", "z"]
+                .iter()
+                .map(|c| {
+                    let a: f64 = m[col(&measured, c)].parse().unwrap();
+                    let b: f64 = p[col(&predicted, c)].parse().unwrap();
+                    (a - b).powi(2)
+                })
+                .sum();
+            match sums.iter_mut().find(|s| s.0 == m[session]) {
+                Some(s) => {
+                    s.1 += d2;
+                    s.2 += 1;
+                }
+                None => sums.push((m[session].clone(), d2, 1)),
+            }
+        }
+        sums.into_iter()
+            .map(|(n, ss, k)| (n, (ss / k as f64).sqrt()))
+            .collect()
+    };
+    let noise = 3f64.sqrt() * NOISE;
+    let first = per_session(&[]);
+    let second = per_session(&["--session", "s2"]);
+    let rms = |v: &[(String, f64)], s: &str| v.iter().find(|x| x.0 == s).unwrap().1;
+    assert!(rms(&first, "s1") < 1.5 * noise, "{first:?}");
+    assert!(rms(&first, "s2") > 100.0 * noise, "{first:?}");
+    assert!(rms(&second, "s2") < 1.5 * noise, "{second:?}");
+    assert!(rms(&second, "s1") > 100.0 * noise, "{second:?}");
+    let (code, _, err) = crate::common::exec(&[
+        "predict",
+        "--model",
+        &out,
+        "--joints",
+        &data,
+        "--session",
+        "s9",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("expected one of 's2', 's3'"), "{err}");
+}
+
+fn text_of(path: &str) -> String {
+    std::fs::read_to_string(path).unwrap()
 }
 
 #[test]

@@ -53,6 +53,11 @@ pub struct PredictCli {
     /// else base].
     #[arg(long, value_enum)]
     frame: Option<FrameChoice>,
+    /// With a calibration of several measurement sessions: predict in this session's device
+    /// frame (one of the `calibration` section's `sessions`) [default: the first session's,
+    /// the model's device frame].
+    #[arg(long, value_name = "NAME")]
+    session: Option<String>,
     /// Unit of lengths in the joint file and the output.
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
     length_unit: LengthUnit,
@@ -79,6 +84,8 @@ pub struct PredictArgs {
     pub targets: Vec<String>,
     /// Frame; `None`: the default.
     pub frame: Option<FrameChoice>,
+    /// Measurement session of the device frame; `None`: the first.
+    pub session: Option<String>,
     /// Units of the joint file and the output.
     pub units: DataUnits,
     /// Output path (`None` or `-`: standard output).
@@ -95,6 +102,7 @@ impl PredictCli {
             joints: self.joints,
             targets: self.targets,
             frame: self.frame,
+            session: self.session,
             units: DataUnits {
                 length: self.length_unit,
                 angle: self.angle_unit,
@@ -180,8 +188,19 @@ pub(crate) fn quoted(s: &str) -> String {
 /// Bad model or joint files (naming the file, line and column), unknown targets, a device
 /// frame asked of a model without one, failed writes.
 pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    let model = load_calibrated(&args.model, args.base.as_deref(), args.tip.as_deref())?;
+    let mut model = load_calibrated(&args.model, args.base.as_deref(), args.tip.as_deref())?;
     let origin = display_name(&args.model);
+    if let Some(name) = &args.session {
+        model.in_session(name).map_err(|e| {
+            hinted(
+                format!("{origin}: {e}"),
+                "the sessions are listed in the `calibration` section's `sessions`",
+            )
+        })?;
+        if args.frame == Some(FrameChoice::Base) {
+            writeln!(err, "urdf-dh: warning: --session changes the device frame only; --frame base predicts in the base link frame")?;
+        }
+    }
     for w in model
         .loaded
         .warnings
@@ -313,9 +332,10 @@ fn render(
     let with_u = c.has_covariance();
     let mut text = format!(
         "# predicted by urdf-dh predict from {origin} in the {} frame; joints in {} ({} for prismatic), x,y,z in {}{}{}\n",
-        match frame {
-            Frame::Device => "device",
-            Frame::Base => "base link",
+        match (frame, &args.session) {
+            (Frame::Device, Some(s)) => format!("device (session '{}')", crate::guard::escape(s)),
+            (Frame::Device, None) => "device".to_string(),
+            (Frame::Base, _) => "base link".to_string(),
         },
         au.symbol(),
         lu.symbol(),

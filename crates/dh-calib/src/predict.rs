@@ -106,6 +106,37 @@ impl Covariance {
             .map(|i| self.matrix[(i, i)].max(0.0).sqrt())
             .collect()
     }
+
+    /// The covariance of the parameters a prediction in one measurement session uses. A
+    /// calibration of several sessions estimates the first session's device frame
+    /// (`device.*`) and every other's (`session.<name>.*`, see [`crate::sessions`]): `None`
+    /// keeps the first's, `Some(name)` takes session `name`'s as the device frame's (renamed
+    /// `device.*`, the same six small motions). The other sessions' frames are left out, which
+    /// is exact for a Gaussian (their rows and columns dropped: the marginal covariance).
+    pub fn in_session(&self, session: Option<&str>) -> Covariance {
+        let prefix = session.map(|n| format!("session.{n}."));
+        let kept: Vec<(usize, String)> = self
+            .parameters
+            .iter()
+            .enumerate()
+            .filter_map(|(i, name)| {
+                if name.starts_with("session.") {
+                    let rest = name.strip_prefix(prefix.as_deref()?)?;
+                    Some((i, format!("device.{rest}")))
+                } else if name.starts_with("device.") {
+                    session.is_none().then(|| (i, name.clone()))
+                } else {
+                    Some((i, name.clone()))
+                }
+            })
+            .collect();
+        Covariance {
+            parameters: kept.iter().map(|(_, n)| n.clone()).collect(),
+            matrix: DMatrix::from_fn(kept.len(), kept.len(), |a, b| {
+                self.matrix[(kept[a].0, kept[b].0)]
+            }),
+        }
+    }
 }
 
 /// Which frame predictions are expressed in (see the module docs).
@@ -208,6 +239,13 @@ impl Calibrated {
             Some(cov) => c.with_covariance(cov),
             None => Ok(c),
         }
+    }
+
+    /// The same robot measured from another device frame `T_device_base` (another
+    /// measurement session's, see [`Covariance::in_session`]).
+    pub fn with_device(mut self, device: &Isometry3<f64>) -> Self {
+        self.model.set_device(device);
+        self
     }
 
     /// The same robot with the covariance of its parameters.
@@ -410,6 +448,23 @@ pub fn effects_from_parameters(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_session_covariance_is_the_marginal_with_its_frame_as_the_device() {
+        let names = ["device.x", "a.d", "session.s2.x", "session.s3.x"];
+        let m = DMatrix::from_fn(4, 4, |i, j| if i == j { 1.0 + i as f64 } else { 0.1 });
+        let c = Covariance::new(names.iter().map(|n| n.to_string()).collect(), m).unwrap();
+        let first = c.in_session(None);
+        assert_eq!(first.parameters, ["device.x", "a.d"]);
+        assert_eq!(first.matrix[(1, 1)], 2.0);
+        let s3 = c.in_session(Some("s3"));
+        assert_eq!(s3.parameters, ["a.d", "device.x"]);
+        assert_eq!(
+            (s3.matrix[(0, 0)], s3.matrix[(1, 1)], s3.matrix[(0, 1)]),
+            (2.0, 4.0, 0.1)
+        );
+        assert_eq!(c.in_session(Some("s9")).parameters, ["a.d"]);
+    }
     use dh_core::{Convention, DhRow};
 
     fn table() -> DhTable {
