@@ -2,7 +2,10 @@
 
 pub mod batch;
 pub mod calibrate;
+pub mod calibrate_args;
+pub mod calibrate_doc;
 pub mod calibrate_findings;
+pub mod calibrate_inputs;
 pub mod calibrate_sessions;
 pub mod calibrate_tree;
 pub mod check;

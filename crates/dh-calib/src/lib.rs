@@ -19,6 +19,7 @@ pub mod data;
 pub mod diagnose;
 pub mod effects;
 pub mod effects_order;
+pub mod findings;
 pub mod fit;
 pub mod gravity;
 pub mod import;
