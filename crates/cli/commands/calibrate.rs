@@ -6,6 +6,13 @@
 //! between modelled and measured points on the calibration data and on validation data (the
 //! `--validate` file or the file's own validation split, else k-fold cross-validation over
 //! poses). Without `--model` the start is the circle-point analysis of the data.
+//!
+//! # Layout
+//! The arguments, inputs and documents it shares with `crate::commands::sockets` and
+//! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args`,
+//! `crate::commands::calibrate_inputs` and `crate::commands::calibrate_doc`, re-exported here;
+//! the run itself is in `run`, the text report in `text`, the calibrated model (`--out`) in
+//! `calibrated`, the residual chart (`--plot`) in `chart`.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -40,6 +47,8 @@ pub use super::calibrate_args::*;
 pub use super::calibrate_doc::*;
 pub(crate) use super::calibrate_inputs::*;
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod run;
 pub use run::*;
 mod text;

@@ -162,8 +162,6 @@ pub(crate) fn gravity_inputs(
     Ok((inertials, gravity))
 }
 
-/// `--effects auto`: calibrate with the effects the diagnosis of `dh-calib` selects
-
 /// The model to start from, the data and the targets kept.
 pub(crate) struct Inputs {
     pub(crate) table: DhTable,

@@ -2,6 +2,10 @@
 //! time: the sweeps, a circle per joint, the axis lines, and the DH table the axes make (with
 //! its base in the measuring device's frame), plus how the commanded joint motion compares with
 //! the measured one.
+//!
+//! # Layout
+//! The run is here; the JSON document's types are in `docs`, the comparison with a nominal
+//! model in `compare`, the text report in `text` (re-exported here).
 
 use std::fmt::Write as _;
 use std::io::Write;
@@ -62,6 +66,8 @@ pub struct CpaArgs {
     pub format: CpaFormat,
 }
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod docs;
 pub use docs::*;
 mod compare;

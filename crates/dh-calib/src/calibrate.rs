@@ -18,6 +18,13 @@
 //! points on the calibration samples and on validation samples: the validation split when
 //! there is one, else k-fold cross-validation over poses (samples sharing `config`, or else the
 //! same joint values, stay in one fold).
+//!
+//! # Layout
+//! Items live in submodules and are re-exported here: the options (`options`), the report's
+//! types (`report`), preparing the data (`prepare`), the closed-form start (`start`), held-out
+//! errors (`validation`), the session and its steps (`session`), the entry points
+//! (`pipeline`), identifiability and estimates (`identify`), and the residual tests of the
+//! verdict (`verdict`). The diagnosis's data types are in [`crate::findings`].
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -33,6 +40,8 @@ use crate::model::{
 };
 use crate::tree::DhTree;
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod options;
 pub use options::*;
 mod report;

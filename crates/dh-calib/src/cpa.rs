@@ -85,6 +85,11 @@
 //! sweeps of the same joint are listed with `used = false`. Samples of both splits are used.
 //! Joint values are taken as commanded: a controller's own joint coupling other than the
 //! detected proportional one is not modelled.
+//!
+//! # Layout
+//! Items live in submodules and are re-exported here: settings and errors (`options`), the
+//! result's types (`result`), the analysis (`analyse`), poses and sweeps (`sweeps`), fitting a sweep's joint
+//! (`joint_fit`), and the circle and coaxial fits (`circle`).
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 use std::fmt::Write as _;
@@ -101,12 +106,16 @@ use dh_core::{
 
 use crate::data::Measurements;
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod options;
 pub use options::*;
 mod result;
 pub use result::*;
 mod analyse;
 pub use analyse::*;
+mod sweeps;
+use sweeps::*;
 mod joint_fit;
 use joint_fit::*;
 mod circle;

@@ -34,6 +34,11 @@
 //!
 //! Other columns are ignored. Cells may be double-quoted (`""` inside quotes is one quote).
 //! Column names and cells are trimmed of surrounding spaces.
+//!
+//! # Layout
+//! Items live in submodules and are re-exported here: names, limits and errors (`error`), units
+//! and reader settings (`units`), the lexer (`records`), the header's columns (`columns`), the
+//! reader (`reader`) and the writer (`writer`).
 
 use std::fmt;
 use std::str::FromStr;
@@ -43,6 +48,8 @@ use thiserror::Error;
 
 use crate::data::{Measurements, Sample, Socket, SocketDistance, Split};
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod error;
 pub use error::*;
 mod units;

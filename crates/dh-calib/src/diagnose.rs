@@ -48,6 +48,12 @@
 //!    i.e. time: the self-normalised lag-1 statistic `Σ a_i / sqrt(Σ a_i²)`,
 //!    `a_i = r̄_i · r̄_{i+1}` over pose-mean residuals), each at `alpha / (joints + 1)`. What is
 //!    significant is reported with binned residuals rather than fitted.
+//!
+//! # Layout
+//! The options and constants are here; the entry points and the selection loop are in
+//! `selection`, the scoring and judging of candidates in `scoring` (both re-exported here); the
+//! findings' data types are in [`crate::findings`] and the residual tests of steps 1 and 5 in
+//! [`crate::calibrate`], re-exported here under their old paths.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -73,6 +79,8 @@ pub use crate::findings::{
     StructureCheck, Trial, Verdict, DEFAULT_ALPHA,
 };
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod selection;
 pub use selection::*;
 mod scoring;

@@ -33,6 +33,10 @@
 //! `parallel_tilt:J` applies only where the model holds a tilt at zero, i.e. for a pair within
 //! [`crate::model::NEAR_PARALLEL`] of parallel that the geometric step does not already
 //! parametrise with Hayati-Mirmirani ([`crate::model::Model::tilt_rows`]).
+//!
+//! # Layout
+//! Labels, contexts and candidates are here; the effect models (gear harmonics, coupling,
+//! scale, parallel tilt, gravity) are in `models`, re-exported here.
 
 use std::sync::Arc;
 
@@ -361,6 +365,8 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
     out
 }
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod models;
 pub use models::*;
 #[cfg(test)]

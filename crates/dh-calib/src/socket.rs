@@ -49,6 +49,11 @@
 //! sockets' sample counts; then the plain mean over placements. It needs no socket estimate, so
 //! it is computed alike on calibration and validation samples (sockets of held-out placements
 //! are never fitted).
+//!
+//! # Layout
+//! Items live in submodules and are re-exported here: the least-squares problem (`problem`),
+//! the report's types (`report`), contacts and their consistency (`consistency`), a run's fits
+//! (`run`), the entry points (`entry`) and the automatic selection of effects (`select`).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -69,6 +74,8 @@ use crate::model::{xyz_rpy, Block, Effect, Field, Model, Observation, Observed};
 use crate::stats;
 use crate::tree::DhTree;
 
+// The submodules import what they use through `use super::*`: the imports above and each
+// other's items, re-exported here.
 mod problem;
 pub use problem::*;
 mod report;

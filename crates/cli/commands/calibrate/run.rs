@@ -4,6 +4,7 @@
 
 use super::*;
 
+/// `--effects auto`: calibrate with the effects the diagnosis of `dh-calib` selects
 /// (`dh_calib::diagnose`), returning its report (steps `nominal`, `geometric`, then one
 /// `+<label>` per effect added, and the candidate table) and the effects it selected (for the
 /// residual chart).

@@ -1,58 +1,7 @@
-//! The entry points: [`calibrate`] and [`calibrate_tree`] run the session's steps in order,
-//! estimate the noise floor and attach the outlier screen; the diagnosis reuses the fitted
-//! session.
+//! The entry points: [`calibrate`] and [`calibrate_tree`] run the session's steps in order
+//! and attach the outlier screen; the diagnosis reuses the fitted session.
 
 use super::*;
-
-/// The result of [`Session::geometric`].
-pub(crate) struct Geometric {
-    pub(crate) steps: Vec<StepReport>,
-    pub(crate) last: StepResult,
-    pub(crate) free: Vec<usize>,
-    pub(crate) fixed: Vec<fit::Fixed>,
-}
-
-pub(super) fn noise_floor(
-    prep: &Prepared,
-    options: &CalibrationOptions,
-    p: usize,
-) -> Option<NoiseFloor> {
-    let n = prep.cal.len();
-    if n == 0 {
-        return None;
-    }
-    let (e2, source) = if let Some(s) = options.sigma {
-        (3.0 * s * s, NoiseSource::Given)
-    } else if prep.sigmas.iter().all(Option::is_some) {
-        let sum: f64 = prep.sigmas.iter().flatten().map(|s| s.norm_squared()).sum();
-        (sum / n as f64, NoiseSource::Samples)
-    } else {
-        // Pooled pure error of repeated points.
-        let mut groups: HashMap<&(String, usize), Vec<Vector3<f64>>> = HashMap::new();
-        for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
-            if let Some(k) = key {
-                groups.entry(k).or_default().push(observed_position(o));
-            }
-        }
-        let (mut ss, mut dof, mut count) = (0.0, 0usize, 0usize);
-        for pts in groups.values().filter(|v| v.len() > 1) {
-            let mean = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
-            ss += pts.iter().map(|v| (v - mean).norm_squared()).sum::<f64>();
-            dof += pts.len() - 1;
-            count += 1;
-        }
-        if dof == 0 {
-            return None;
-        }
-        (ss / dof as f64, NoiseSource::Repeats { groups: count, dof })
-    };
-    let factor = (1.0 - p as f64 / (3.0 * n as f64)).max(0.0);
-    Some(NoiseFloor {
-        rms: (e2 * factor).sqrt(),
-        sigma: (e2 / 3.0).sqrt(),
-        source,
-    })
-}
 
 /// Runs the calibration of `nominal` against `data` (see the module docs).
 ///

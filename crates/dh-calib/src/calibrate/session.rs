@@ -503,3 +503,11 @@ impl Session<'_> {
         )
     }
 }
+
+/// The result of [`Session::geometric`].
+pub(crate) struct Geometric {
+    pub(crate) steps: Vec<StepReport>,
+    pub(crate) last: StepResult,
+    pub(crate) free: Vec<usize>,
+    pub(crate) fixed: Vec<fit::Fixed>,
+}

@@ -5,6 +5,28 @@
 
 use super::*;
 
+pub(super) fn fit_sweep(
+    m: &Measurements,
+    poses: &[Pose],
+    sweep: &Sweep,
+    index: usize,
+    kind: JointKind,
+    opts: &CpaOptions,
+) -> Result<JointCpa, CpaError> {
+    let groups = groups(m, poses, sweep);
+    if groups.is_empty() {
+        return Err(CpaError::Degenerate {
+            joint: sweep.name.clone(),
+            target: m.targets.join(", "),
+            what: "no target was measured at three or more poses of the sweep".into(),
+        });
+    }
+    match kind {
+        JointKind::Revolute => fit_revolute(m, sweep, index, &groups, opts),
+        JointKind::Prismatic => fit_prismatic(m, sweep, index, &groups),
+    }
+}
+
 pub(super) fn fit_revolute(
     m: &Measurements,
     sweep: &Sweep,

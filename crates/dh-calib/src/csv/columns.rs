@@ -1,26 +1,7 @@
-//! The header's columns: the reserved column names ([`RESERVED_COLUMNS`]), the joint columns
-//! and their name check ([`joint_name_problem`]), and where each column sits.
+//! The header's columns: the joint columns and their name check ([`joint_name_problem`]), and
+//! where each column sits (the reserved names are with the errors that quote them).
 
 use super::*;
-
-/// Columns of the canonical CSV that are not joints: a model's joint may not take these names.
-pub const RESERVED_COLUMNS: [&str; 15] = [
-    "x",
-    "y",
-    "z",
-    "target",
-    "config",
-    "sigma",
-    "sx",
-    "sy",
-    "sz",
-    "set",
-    "socket",
-    "partner",
-    "distance",
-    "distance_sigma",
-    "session",
-];
 
 /// What is wrong with a list of joint names that a dataset gives itself, as the columns of the
 /// canonical CSV would have them: an empty name, a repeated one, a reserved column's name

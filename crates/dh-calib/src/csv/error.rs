@@ -1,6 +1,6 @@
-//! Names and errors of the measurement CSV: the default target name, plausibility limits of
-//! joint values (radians, metres), the check that a name has no spoofing characters, and
-//! [`DataError`] with its messages.
+//! Names and errors of the measurement CSV: the default target name, the reserved column names
+//! ([`RESERVED_COLUMNS`]), plausibility limits of joint values (radians, metres), the check
+//! that a name has no spoofing characters, and [`DataError`] with its messages.
 
 use super::*;
 
@@ -225,3 +225,22 @@ pub(super) fn list(items: &[String]) -> String {
         .collect::<Vec<_>>()
         .join(", ")
 }
+
+/// Columns of the canonical CSV that are not joints: a model's joint may not take these names.
+pub const RESERVED_COLUMNS: [&str; 15] = [
+    "x",
+    "y",
+    "z",
+    "target",
+    "config",
+    "sigma",
+    "sx",
+    "sy",
+    "sz",
+    "set",
+    "socket",
+    "partner",
+    "distance",
+    "distance_sigma",
+    "session",
+];

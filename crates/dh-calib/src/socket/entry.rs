@@ -106,21 +106,6 @@ pub fn diagnose_sockets(
     }
 }
 
-/// The candidates of an automatic selection and its options.
-pub(super) struct Auto<'a> {
-    pub(super) pool: Vec<Arc<dyn Effect>>,
-    pub(super) skipped: Vec<String>,
-    pub(super) diag: &'a DiagnoseOptions,
-}
-
-/// What the automatic selection leaves.
-pub(super) struct Selection {
-    pub(super) selected: Vec<usize>,
-    pub(super) candidates: Vec<CandidateReport>,
-    pub(super) trials: Vec<Trial>,
-    pub(super) notes: Vec<String>,
-}
-
 pub(super) fn run_sockets(
     tree: &DhTree,
     data: &Measurements,
@@ -374,14 +359,4 @@ pub(super) fn run_sockets(
         trials,
         distances,
     })
-}
-
-/// The state the automatic selection advances: the last fit, its free and fixed parameters,
-/// the steps and consistency figures so far.
-pub(super) struct Chosen {
-    pub(super) last: FitOutcome,
-    pub(super) free: Vec<usize>,
-    pub(super) fixed: Vec<fit::Fixed>,
-    pub(super) steps: Vec<SocketStep>,
-    pub(super) consistency: Vec<ConsistencyStep>,
 }

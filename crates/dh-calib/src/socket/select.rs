@@ -1,7 +1,33 @@
-//! The automatic selection of effects for a socket calibration (as [`crate::diagnose`] does
-//! for points, on contacts), and the parameter estimates of the final fit.
+//! The automatic selection of effects for a socket calibration (as [`crate::diagnose`] does for
+//! points, on contacts): its candidates, state and result, and the parameter estimates of the
+//! final fit.
 
 use super::*;
+
+/// The candidates of an automatic selection and its options.
+pub(super) struct Auto<'a> {
+    pub(super) pool: Vec<Arc<dyn Effect>>,
+    pub(super) skipped: Vec<String>,
+    pub(super) diag: &'a DiagnoseOptions,
+}
+
+/// What the automatic selection leaves.
+pub(super) struct Selection {
+    pub(super) selected: Vec<usize>,
+    pub(super) candidates: Vec<CandidateReport>,
+    pub(super) trials: Vec<Trial>,
+    pub(super) notes: Vec<String>,
+}
+
+/// The state the automatic selection advances: the last fit, its free and fixed parameters,
+/// the steps and consistency figures so far.
+pub(super) struct Chosen {
+    pub(super) last: FitOutcome,
+    pub(super) free: Vec<usize>,
+    pub(super) fixed: Vec<fit::Fixed>,
+    pub(super) steps: Vec<SocketStep>,
+    pub(super) consistency: Vec<ConsistencyStep>,
+}
 
 /// The automatic selection of [`diagnose_sockets`] on the candidates of `auto` (the model's
 /// effects, in the same order), from the geometric step in `state`.
