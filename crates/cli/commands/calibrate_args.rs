@@ -193,7 +193,7 @@ pub struct CalibrateCli {
 }
 
 impl CalibrateCli {
-    /// The arguments of [`calibrate`].
+    /// The arguments of [`calibrate`](crate::commands::calibrate::calibrate).
     pub fn into_args(self) -> CalibrateArgs {
         CalibrateArgs {
             model: self.model,

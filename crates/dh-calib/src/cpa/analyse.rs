@@ -3,7 +3,7 @@
 
 use super::*;
 
-/// Runs circle-point analysis on a measurement set (see the [module docs](self)).
+/// Runs circle-point analysis on a measurement set (see the [module docs](crate::cpa)).
 ///
 /// Frames: points, axes and the DH base are in the measuring device's frame; metres and
 /// radians.

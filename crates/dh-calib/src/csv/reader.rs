@@ -4,7 +4,7 @@
 
 use super::*;
 
-/// Reads a measurement set in the canonical CSV layout (see the [module docs](self)).
+/// Reads a measurement set in the canonical CSV layout (see the [module docs](crate::csv)).
 ///
 /// `joint_names` are the model's joints: each needs a column, and every sample's `q` follows
 /// their order. Values are converted to metres and radians with `opts`. Frames: points are in
