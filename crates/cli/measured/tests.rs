@@ -53,13 +53,13 @@ joints:
   - {name: t2, type: revolute, a: 0.3, alpha: 90, d: 0, theta: 0}
 branches:
   - name: r
-joints:
-  - {name: r1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
-  - {name: r2, type: revolute, a: 0.25, alpha: -90, d: 0, theta: 0}
+    joints:
+      - {name: r1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
+      - {name: r2, type: revolute, a: 0.25, alpha: -90, d: 0, theta: 0}
   - name: l
-joints:
-  - {name: l1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
-  - {name: l2, type: revolute, a: 0.25, alpha: 90, d: 0, theta: 0}
+    joints:
+      - {name: l1, type: revolute, a: 0, alpha: 0, d: 0, theta: 0}
+      - {name: l2, type: revolute, a: 0.25, alpha: 90, d: 0, theta: 0}
 ";
     let s = TreeSheet::parse(tree, "tree.yaml").unwrap();
     assert_eq!(

@@ -166,12 +166,12 @@ fn suspicious_units_say_what_to_pass() {
     assert_eq!(
         err("j,x,y,z\n0,0,0.8,0\n0,0,1.2,0\n0,0,1250.5,0\n", &["j"]),
         "line 4, column 'y': 1250.5 m looks like millimetres, but the rows above look like \
-         metres: the file mixes units"
+             metres: the file mixes units"
     );
     assert_eq!(
         err("j,x,y,z\n1.5,0,0,0\n90,0,0,0\n", &["j"]),
         "line 3, column 'j': 90 rad looks like degrees, but the rows above look like \
-         radians: the file mixes units"
+             radians: the file mixes units"
     );
     // A home pose of zeros first says nothing about the unit.
     assert_eq!(
