@@ -22,10 +22,11 @@ use dh_core::DhTable;
 use nalgebra::{Isometry3, Translation3};
 use serde::Serialize;
 
-use crate::commands::calibrate::{
-    calibrated_bytes, gravity_inputs, unit_of, CalibrateArgs, CalibrateFormat, CandidateDoc,
-    EffectsChoice, FixedDoc, Inputs, TargetDoc,
+use crate::commands::calibrate_args::{CalibrateArgs, CalibrateFormat, EffectsChoice};
+use crate::commands::calibrate_doc::{
+    calibrated_bytes, unit_of, CandidateDoc, FixedDoc, TargetDoc,
 };
+use crate::commands::calibrate_inputs::{gravity_inputs, Inputs};
 use crate::error::Outcome;
 use crate::input::display_name;
 use crate::measured::parse_effect;

@@ -1,11 +1,23 @@
 //! Kinematic identification for DH models.
 //!
-//! Measurement sets ([`data`]), their text formats ([`csv`], [`import`]), circle-point analysis
-//! ([`cpa`]), the parametrised measurement model ([`model`]) of serial robots and trees
-//! ([`tree`]), least-squares fitting with identifiability analysis ([`fit`]), the calibration
-//! pipeline ([`calibrate`]), non-geometric effects ([`effects`], [`gravity`]) and the automatic
-//! diagnosis that traces a residual to the effect the model lacks ([`diagnose`]), and a
-//! simulator ([`simulate`]). Depends on `dh-core`, never on the CLI; never prints.
+//! Depends on `dh-core`, never on the CLI; never prints. Every concept is one hop from here:
+//!
+//! - Data: measurement sets ([`data`]), the canonical CSV ([`csv`]: reading, writing, units,
+//!   column names), published datasets ([`import`]), joint-value files ([`joints`]) and
+//!   measurement sessions with their own device frames ([`sessions`]).
+//! - Models: the parametrised measurement model ([`model`]) of serial robots and trees
+//!   ([`tree`]); non-geometric effects ([`effects`]: labels, candidates, models), effects of
+//!   the measurement order ([`effects_order`]) and gravity ([`gravity`]).
+//! - Fitting: nonlinear least squares with identifiability analysis ([`fit`]); circle-point
+//!   analysis for a start without a model ([`cpa`]); the calibration pipeline ([`calibrate`]:
+//!   options, preparation, closed-form start, session steps, validation, identifiability,
+//!   report, verdict); calibration from contacts with unknown fixed points ([`socket`]);
+//!   outlier screening ([`outliers`]).
+//! - Diagnosis: the automatic search for the effect a residual lacks ([`diagnose`]: selection
+//!   loop, scoring and tests), its rival candidates ([`rivals`]) and its findings as data
+//!   ([`findings`]: candidate table, residual tests, verdict).
+//! - Using a calibration: predictions with uncertainty ([`predict`]), compensation of joint
+//!   values ([`compensate`]), and a simulator with known truth ([`simulate`]).
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
@@ -19,6 +31,7 @@ pub mod data;
 pub mod diagnose;
 pub mod effects;
 pub mod effects_order;
+pub mod findings;
 pub mod fit;
 pub mod gravity;
 pub mod import;

@@ -8,7 +8,7 @@
 //! with four terms must explain more than one with two), the lower held-out RMS breaking a tie.
 //! The others are reported as rivals with the difference (`reason`).
 
-use crate::diagnose::Trial;
+use crate::findings::Trial;
 use crate::model::Effect;
 
 /// The start of a rival's reason in its trial and candidate row.

@@ -1,0 +1,367 @@
+//! What `urdf-dh calibrate` reads: the nominal model, the measurements (the `--validate` file
+//! merged as validation samples, the model's coupled joints applied, `--targets` kept), and the
+//! masses the gravity effects need (`--inertials` in kg and metres, or a URDF's `<inertial>`).
+//!
+//! Shared by `calibrate`, its contact path and its tree path.
+
+use std::collections::HashMap;
+use std::io::Write;
+
+use anyhow::{Context, Result};
+use dh_calib::cpa::{analyse, CpaOptions};
+use dh_calib::data::{Measurements, Sample, Split};
+use dh_calib::gravity::{GravityModel, Inertial, Inertials};
+use dh_calib::tree::DhTree;
+use dh_core::{DhTable, Tolerance};
+use nalgebra::Vector3;
+
+use crate::commands::calibrate_args::CalibrateArgs;
+use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
+use crate::error::hinted;
+use crate::input::display_name;
+use crate::measured::{header_joints, load_model, read_measurements, DataFile, LoadedModel};
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
+/// `com_frame: base_at_zero` (base link frame, every joint at zero; the default) or `dh` (the
+/// row's DH frame), optional `payloads: [{mass, com}]` (tip frame) and `gravity: [x, y, z]`.
+pub(crate) fn read_inertials(
+    path: &str,
+    table: &DhTable,
+) -> Result<(Inertials, Option<Vector3<f64>>)> {
+    let origin = display_name(path);
+    let text = crate::input::read_text(path)?;
+    crate::sheet::check_nesting(&text, &origin)?;
+    let doc: serde_yaml::Value =
+        serde_yaml::from_str(&text).with_context(|| format!("{origin}: not YAML"))?;
+    let num = |v: &serde_yaml::Value, what: &str| -> Result<f64> {
+        v.as_f64()
+            .ok_or_else(|| anyhow::anyhow!("{origin}: {what}: expected a number, found {v:?}"))
+    };
+    let vec3 = |v: &serde_yaml::Value, what: &str| -> Result<Vector3<f64>> {
+        match v.as_sequence().map(|s| s.as_slice()) {
+            Some([x, y, z]) => Ok(Vector3::new(num(x, what)?, num(y, what)?, num(z, what)?)),
+            _ => anyhow::bail!("{origin}: {what}: expected [x, y, z], found {v:?}"),
+        }
+    };
+    let mut links = Vec::new();
+    for l in doc["links"]
+        .as_sequence()
+        .map(|s| s.as_slice())
+        .unwrap_or_default()
+    {
+        let joint = l["joint"]
+            .as_str()
+            .ok_or_else(|| anyhow::anyhow!("{origin}: a link without 'joint'"))?;
+        links.push((
+            joint.to_string(),
+            num(&l["mass"], &format!("{joint} mass"))?,
+            vec3(&l["com"], &format!("{joint} com"))?,
+        ));
+    }
+    let mut payloads = Vec::new();
+    for p in doc["payloads"]
+        .as_sequence()
+        .map(|s| s.as_slice())
+        .unwrap_or_default()
+    {
+        payloads.push((
+            0,
+            Inertial {
+                mass: num(&p["mass"], "payload mass")?,
+                com: vec3(&p["com"], "payload com")?,
+            },
+        ));
+    }
+    let tree = DhTree::serial(table);
+    let inertials = if doc["com_frame"].as_str() == Some("dh") {
+        Inertials {
+            links: links
+                .into_iter()
+                .map(|(j, mass, com)| (j, Inertial { mass, com }))
+                .collect(),
+            payloads,
+        }
+    } else {
+        Inertials::from_zero_pose(&tree, &links, payloads)
+            .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?
+    };
+    let gravity = if doc["gravity"].is_null() {
+        None
+    } else {
+        Some(vec3(&doc["gravity"], "gravity")?)
+    };
+    Ok((inertials, gravity))
+}
+
+/// What the gravity effects need: `--inertials`, else a URDF model's `<inertial>` masses
+/// (rows named like its joints), with `--payload` and `--gravity`. `None` when there are no
+/// masses at all.
+pub(crate) fn gravity_inputs(
+    args: &CalibrateArgs,
+    table: &DhTable,
+) -> Result<(Option<Inertials>, Vector3<f64>)> {
+    let mut gravity = GravityModel::default_gravity();
+    let mut inertials = match (&args.inertials, &args.model) {
+        (Some(path), _) => {
+            let (i, g) = read_inertials(path, table)?;
+            if let Some(g) = g {
+                gravity = g;
+            }
+            Some(i)
+        }
+        (None, Some(model)) if model.to_ascii_lowercase().ends_with(".urdf") => {
+            let urdf = std::fs::read_to_string(model)
+                .ok()
+                .and_then(|t| urdf_axes::UrdfModel::parse(&t).ok());
+            let bodies = urdf.as_ref().and_then(|u| {
+                let chain = u.chain(args.base.as_deref(), args.tip.as_deref()).ok()?;
+                urdf_axes::inertia::joint_inertials(u, &chain).ok()
+            });
+            match bodies {
+                Some(b) if b.iter().any(|j| j.mass > 0.0) => {
+                    let links: Vec<(String, f64, Vector3<f64>)> = b
+                        .into_iter()
+                        .filter(|j| j.mass > 0.0)
+                        .map(|j| (j.joint, j.mass, j.com_at_zero))
+                        .collect();
+                    Inertials::from_zero_pose(&DhTree::serial(table), &links, vec![]).ok()
+                }
+                _ => None,
+            }
+        }
+        _ => None,
+    };
+    if let Some(g) = &args.gravity {
+        match g.as_slice() {
+            [x, y, z] if g.iter().all(|v| v.is_finite()) => gravity = Vector3::new(*x, *y, *z),
+            _ => {
+                anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
+            }
+        }
+    }
+    if let Some(p) = &args.payload {
+        match p.as_slice() {
+            [m, x, y, z] if p.iter().all(|v| v.is_finite()) && *m >= 0.0 => {
+                inertials
+                    .get_or_insert_with(Inertials::default)
+                    .payloads
+                    .push((
+                        0,
+                        Inertial {
+                            mass: *m,
+                            com: Vector3::new(*x, *y, *z),
+                        },
+                    ));
+            }
+            _ => anyhow::bail!(
+                "--payload: expected MASS,X,Y,Z (kg, then metres in the tip frame), found {p:?}"
+            ),
+        }
+    }
+    Ok((inertials, gravity))
+}
+
+/// The model to start from, the data and the targets kept.
+pub(crate) struct Inputs {
+    pub(crate) table: DhTable,
+    pub(crate) model_name: String,
+    pub(crate) robot: Option<String>,
+    pub(crate) units: (LengthUnit, AngleUnit),
+    pub(crate) links: (String, String),
+    pub(crate) coupled: Vec<(String, Vec<(String, f64)>)>,
+    pub(crate) data: Measurements,
+    pub(crate) cpa: bool,
+}
+
+/// Appends `extra`'s samples to `data` as validation samples, targets matched by name.
+pub(crate) fn merge_validation(data: &mut Measurements, extra: Measurements) {
+    let mut index: HashMap<String, usize> = data
+        .targets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (t.clone(), i))
+        .collect();
+    let sessions = super::calibrate_sessions::merge(data, &extra);
+    for mut s in extra.samples {
+        s.session = sessions.get(s.session).copied().unwrap_or(0);
+        let name = extra.targets.get(s.target).cloned().unwrap_or_default();
+        let next = data.targets.len();
+        let k = *index.entry(name.clone()).or_insert_with(|| {
+            data.targets.push(name);
+            next
+        });
+        s.target = k;
+        s.split = Split::Validation;
+        data.samples.push(s);
+    }
+}
+
+/// Keeps the samples of `keep` (by name) and renumbers the targets.
+pub(crate) fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Result<()> {
+    for k in keep {
+        if !data.targets.contains(k) {
+            return Err(hinted(
+                format!("{origin}: --targets names '{k}', which the data does not have"),
+                format!("the data's targets: {}", data.targets.join(", ")),
+            ));
+        }
+    }
+    let old = std::mem::take(&mut data.targets);
+    let mut map = vec![None; old.len()];
+    for (i, t) in old.iter().enumerate() {
+        if keep.contains(t) {
+            map[i] = Some(data.targets.len());
+            data.targets.push(t.clone());
+        }
+    }
+    data.samples
+        .retain_mut(|s| match map.get(s.target).copied().flatten() {
+            Some(k) => {
+                s.target = k;
+                true
+            }
+            None => false,
+        });
+    Ok(())
+}
+
+pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
+    let data_name = display_name(&args.data);
+    let file = DataFile::read(&args.data)?;
+    let (model, joints, prismatic) = match &args.model {
+        Some(m) => {
+            let model = load_model(
+                m,
+                args.base.as_deref(),
+                args.tip.as_deref(),
+                args.convention,
+            )?;
+            for w in &model.warnings {
+                writeln!(err, "urdf-dh: warning: {w}")?;
+            }
+            let (j, p) = (model.measured_joints(), model.prismatic());
+            (Some(model), j, p)
+        }
+        None => (None, header_joints(&file)?, Vec::new()),
+    };
+    let mut data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
+    if let Some(v) = &args.validate {
+        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
+        merge_validation(&mut data, extra);
+    }
+    if let Some(m) = &model {
+        m.couple(&mut data)
+            .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
+        for w in crate::measured::beyond_limits(&m.table, &data, &data_name) {
+            writeln!(err, "urdf-dh: warning: {w}")?;
+        }
+    }
+    if !args.targets.is_empty() {
+        keep_targets(&mut data, &args.targets, &data_name)?;
+    }
+    Ok(match model {
+        Some(LoadedModel {
+            table,
+            origin,
+            robot,
+            units,
+            links,
+            coupled,
+            ..
+        }) => Inputs {
+            table,
+            model_name: origin,
+            robot,
+            units,
+            links,
+            coupled,
+            data,
+            cpa: false,
+        },
+        None => {
+            let opts = CpaOptions {
+                convention: args.convention,
+                tolerance: Tolerance::new(CPA_LINEAR, CPA_ANGULAR)
+                    .map_err(|e| anyhow::anyhow!("{e}"))?,
+                ..CpaOptions::default()
+            };
+            let cpa = analyse(&data, &opts).map_err(|e| {
+                hinted(
+                    format!("{data_name}: circle-point analysis failed: {e}"),
+                    "without --model the start is the circle-point analysis of the data, which needs one sweep per joint; give a model with --model",
+                )
+            })?;
+            Inputs {
+                table: cpa.extraction.table,
+                model_name: format!("circle-point analysis of {data_name}"),
+                robot: None,
+                units: (LengthUnit::M, AngleUnit::Rad),
+                links: ("base_link".into(), "tool0".into()),
+                coupled: Vec::new(),
+                data,
+                cpa: true,
+            }
+        }
+    })
+}
+
+/// Refuses, before any fitting, point data that cannot determine its own unknowns: every step
+/// estimates each target's position (3 parameters) and the device frame (6), and each sample
+/// gives 3 coordinates, so fewer than `targets + 3` calibration samples fit nothing (200 rows
+/// of 200 targets took minutes to say so).
+pub(crate) fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
+    let cal: Vec<&Sample> = data
+        .samples
+        .iter()
+        .filter(|s| s.split == Split::Calibration)
+        .collect();
+    let mut targets: Vec<usize> = cal.iter().map(|s| s.target).collect();
+    targets.sort_unstable();
+    targets.dedup();
+    let needed = targets.len() + 3;
+    if cal.len() < needed {
+        return Err(hinted(
+            format!(
+                "{data_name}: expected at least {needed} calibration samples for {} target(s) (each target's position and the device frame are estimated: 3 per target + 6, 3 coordinates per sample), found {}",
+                targets.len(),
+                cal.len()
+            ),
+            "measure each target at several poses (the target column names the reflector, not the pose)",
+        ));
+    }
+    Ok(())
+}
+
+/// The measurement files of `args` read for `model` as `calibrate` reads them for a serial
+/// model: the `--validate` file merged as validation samples, the coupled joints applied and
+/// `--targets` kept (`crate::commands::calibrate_tree` reads a tree's data through it).
+///
+/// # Errors
+/// As the data of [`calibrate`].
+pub(crate) fn read_data_for(
+    args: &CalibrateArgs,
+    model: &LoadedModel,
+    err: &mut dyn Write,
+) -> Result<Measurements> {
+    let data_name = display_name(&args.data);
+    let (joints, prismatic) = (model.measured_joints(), model.prismatic());
+    let mut data = read_measurements(
+        &DataFile::read(&args.data)?,
+        &joints,
+        &prismatic,
+        args.units,
+        err,
+    )?;
+    if let Some(v) = &args.validate {
+        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
+        merge_validation(&mut data, extra);
+    }
+    model
+        .couple(&mut data)
+        .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
+    if !args.targets.is_empty() {
+        keep_targets(&mut data, &args.targets, &data_name)?;
+    }
+    Ok(data)
+}

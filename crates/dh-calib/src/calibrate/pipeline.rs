@@ -1,0 +1,131 @@
+//! The entry points: [`calibrate`] and [`calibrate_tree`] run the session's steps in order
+//! and attach the outlier screen; the diagnosis reuses the fitted session.
+
+use super::*;
+
+/// Runs the calibration of `nominal` against `data` (see the module docs).
+///
+/// Joint values are matched to rows by name; a mimic row without its own column follows its
+/// driver. The report's contract (names, units, layout) is described on [`Report`] and
+/// [`crate::model`].
+///
+/// # Errors
+/// [`CalibError::MissingJoint`] when a row has no column, [`CalibError::BadTarget`] /
+/// [`CalibError::Length`] / [`CalibError::NonFinite`] for bad samples,
+/// [`CalibError::TooFewSamples`] with fewer than 3 calibration samples,
+/// [`CalibError::Degenerate`] when the measured points are collinear, and any error of
+/// [`Model::new`] or [`fit::solve`].
+pub fn calibrate(
+    nominal: &DhTable,
+    data: &Measurements,
+    options: &CalibrationOptions,
+) -> Result<Report, CalibError> {
+    calibrate_tree(&DhTree::serial(nominal), data, options)
+}
+
+/// [`calibrate`] for a tree: the targets ride on the branches named by
+/// [`CalibrationOptions::target_branches`] (or their own names), the joint values are matched
+/// to the tree's rows by name, and the report's `tree` holds the calibrated tree.
+///
+/// # Errors
+/// As [`calibrate`], and [`CalibError::BadOption`] for a target on no branch.
+pub fn calibrate_tree(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+) -> Result<Report, CalibError> {
+    let Fitted {
+        session,
+        geo:
+            Geometric {
+                mut steps,
+                last,
+                mut fixed,
+                ..
+            },
+        scan,
+    } = fitted_session(tree, data, options, &options.effects)?;
+    let mut last = last.outcome;
+    if !options.effects.is_empty() {
+        let all: Vec<usize> = (0..session.model.parameter_count()).collect();
+        let (free, fixed2) = session.identify(&last.x, &all)?;
+        fixed = fixed2;
+        let mut step = session.step("effects", &last.x, &free, steps.last())?;
+        step.report.fixed = session.named_geometric(&fixed);
+        last = step.outcome;
+        steps.push(step.report);
+    }
+    let mut report = session.report(&last, steps, fixed, &[]);
+    report.selected_effects = options
+        .effects
+        .iter()
+        .map(|e| crate::effects::label_of(e.as_ref()))
+        .collect();
+    attach_outliers(&mut report, scan);
+    Ok(report)
+}
+
+/// A session of the data with `effects` whose geometric step has run, after the outlier screen
+/// of `options.outliers` ([`crate::outliers::screen`]) when it is on.
+pub(crate) struct Fitted<'a> {
+    pub(crate) session: Session<'a>,
+    pub(crate) geo: Geometric,
+    pub(crate) scan: Option<crate::outliers::OutlierReport>,
+}
+
+/// Builds the session of `data` with `effects` and runs its geometric step; the screen's first
+/// round is that fit (the same calibration samples, the geometric parameters fitted without
+/// effects), so data without outliers are fitted once. When the screen leaves samples out
+/// (and they are not kept), the session is built anew from the samples kept, placed in the
+/// whole file's sequence: a dropped pose was still visited, so the direction of the next
+/// one's motion and the time are the file's.
+pub(crate) fn fitted_session<'a>(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &'a CalibrationOptions,
+    effects: &[Arc<dyn Effect>],
+) -> Result<Fitted<'a>, CalibError> {
+    if options.outliers.screen {
+        crate::outliers::check_level(options)?;
+    }
+    let mut session = Session::new(tree, data, options, effects, None)?;
+    let geo = session.geometric()?;
+    if !options.outliers.screen {
+        return Ok(Fitted {
+            session,
+            geo,
+            scan: None,
+        });
+    }
+    let scan = crate::outliers::screen_from(tree, data, options, Some((&session, &geo)))?;
+    if scan.kept || scan.outliers.is_empty() {
+        return Ok(Fitted {
+            session,
+            geo,
+            scan: Some(scan),
+        });
+    }
+    // The first session's samples are not needed any more: free them before the second.
+    drop(session);
+    let dropped: std::collections::BTreeSet<usize> =
+        scan.outliers.iter().map(|o| o.sample).collect();
+    let sequence: Vec<SampleContext> = sequence_of(&rows_of(tree, data)?, data)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| !dropped.contains(i))
+        .map(|(_, c)| c)
+        .collect();
+    let cleaned = scan.without(data);
+    let mut session = Session::new(tree, &cleaned, options, effects, Some(&sequence))?;
+    let geo = session.geometric()?;
+    Ok(Fitted {
+        session,
+        geo,
+        scan: Some(scan),
+    })
+}
+
+/// Stores the screen's findings in `report`.
+pub(crate) fn attach_outliers(report: &mut Report, scan: Option<crate::outliers::OutlierReport>) {
+    report.outliers = scan;
+}

@@ -1,0 +1,160 @@
+//! Preparing measurements for a fit: the joint rows of each sample in the tree's order, the
+//! sample contexts (sequence, config) and the calibration/validation split ([`Prepared`]).
+
+use super::*;
+
+/// Calibration samples, validation samples and the pose group of each calibration sample.
+pub(crate) struct Prepared {
+    pub(crate) cal: Vec<Observed>,
+    pub(crate) val: Vec<Observed>,
+    pub(crate) groups: Vec<usize>,
+    pub(crate) group_count: usize,
+    pub(crate) repeat_keys: Vec<Option<(String, usize)>>,
+    pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
+    /// Pose group of each validation sample (numbered apart from the calibration groups).
+    pub(crate) val_groups: Vec<usize>,
+}
+
+/// Each sample's joint values per row of `tree` (mimic rows from their driver's column).
+///
+/// # Errors
+/// [`CalibError::MissingJoint`] for a row without a column; [`CalibError::Length`] for a
+/// sample with the wrong number of values; [`CalibError::NonFinite`] for a non-finite value.
+pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Vec<f64>>, CalibError> {
+    enum Source {
+        Column(usize),
+        Mimic(usize, f64, f64),
+    }
+    let column = |name: &str| data.joint_names.iter().position(|n| n == name);
+    let mut sources = Vec::with_capacity(tree.rows().len());
+    for r in tree.rows() {
+        let s = match (column(&r.name), &r.mimic) {
+            (Some(c), _) => Source::Column(c),
+            (None, Some(m)) => match column(&m.joint) {
+                Some(c) => Source::Mimic(c, m.multiplier, m.offset),
+                None => {
+                    return Err(CalibError::MissingJoint {
+                        joint: r.name.clone(),
+                    })
+                }
+            },
+            (None, None) => {
+                return Err(CalibError::MissingJoint {
+                    joint: r.name.clone(),
+                })
+            }
+        };
+        sources.push(s);
+    }
+    let mut rows_q: Vec<Vec<f64>> = Vec::with_capacity(data.samples.len());
+    for s in &data.samples {
+        if s.q.len() != data.joint_names.len() {
+            return Err(CalibError::Length {
+                what: format!("joint values at line {}", s.line),
+                expected: data.joint_names.len(),
+                found: s.q.len(),
+            });
+        }
+        if s.q.iter().any(|v| !v.is_finite()) {
+            return Err(CalibError::NonFinite {
+                what: format!("sample at line {}", s.line),
+            });
+        }
+        rows_q.push(
+            sources
+                .iter()
+                .map(|src| match *src {
+                    Source::Column(c) => s.q[c],
+                    Source::Mimic(c, m, o) => m * s.q[c] + o,
+                })
+                .collect(),
+        );
+    }
+    Ok(rows_q)
+}
+
+/// The place of each sample of `data` in its sequence, from its row values `rows_q`.
+pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
+    crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
+}
+
+/// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
+/// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
+/// whole file: [`fitted_session`]), `None` to take `data`'s own order.
+pub(crate) fn prepare(
+    tree: &DhTree,
+    data: &Measurements,
+    sequence: Option<&[SampleContext]>,
+) -> Result<Prepared, CalibError> {
+    let rows_q = rows_of(tree, data)?;
+    // The place of every sample in the sequence, calibration and validation alike (the robot
+    // visited both, in file order).
+    let contexts = match sequence {
+        Some(c) if c.len() == data.samples.len() => c.to_vec(),
+        _ => sequence_of(&rows_q, data),
+    };
+    let mut out = Prepared {
+        cal: vec![],
+        val: vec![],
+        groups: vec![],
+        group_count: 0,
+        repeat_keys: vec![],
+        sigmas: vec![],
+        val_groups: vec![],
+    };
+    let mut val_ids: HashMap<String, usize> = HashMap::new();
+    let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
+    let mut config_ids: HashMap<String, usize> = HashMap::new();
+    for s in &data.samples {
+        if s.target >= data.targets.len() {
+            return Err(CalibError::BadTarget {
+                line: s.line,
+                target: s.target,
+                count: data.targets.len(),
+            });
+        }
+        if s.point.iter().any(|v| !v.is_finite()) {
+            return Err(CalibError::NonFinite {
+                what: format!("sample at line {}", s.line),
+            });
+        }
+    }
+    for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
+        let obs = Observed {
+            session: s.session,
+            q,
+            observation: Observation::Point {
+                target: s.target,
+                point: s.point,
+            },
+            context,
+        };
+        match s.split {
+            Split::Validation => {
+                let key = match &s.config {
+                    Some(c) => c.clone(),
+                    None => format!("{:?}", obs.q),
+                };
+                let next = val_ids.len();
+                out.val_groups.push(*val_ids.entry(key).or_insert(next));
+                out.val.push(obs);
+            }
+            Split::Calibration => {
+                let next = group_ids.len() + config_ids.len();
+                let g = match &s.config {
+                    Some(c) => *config_ids.entry(c.clone()).or_insert(next),
+                    None => *group_ids
+                        .entry(obs.q.iter().map(|v| v.to_bits()).collect())
+                        .or_insert(next),
+                };
+                out.groups.push(g);
+                out.repeat_keys
+                    .push(s.config.as_ref().map(|c| (c.clone(), s.target)));
+                out.sigmas.push(s.sigma);
+                out.cal.push(obs);
+            }
+        }
+    }
+    out.group_count = group_ids.len() + config_ids.len();
+    Ok(out)
+}

@@ -1,0 +1,155 @@
+//! The closed-form start (module docs, step 1): rigid registration of the nominal model's points
+//! to the measured ones (Kabsch 1976; Horn, JOSA A 4(4), 1987) alternated with the closed-form
+//! target positions given the device frame.
+
+use super::*;
+
+/// Rigid registration: the `T` minimising `Σ ‖T·a_i − b_i‖²` (Kabsch 1976, with the reflection
+/// guard of Umeyama 1991).
+///
+/// # Errors
+/// [`CalibError::TooFewSamples`] for fewer than 3 pairs, [`CalibError::Degenerate`] when the
+/// points are collinear.
+pub fn register(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Result<Isometry3<f64>, CalibError> {
+    if a.len() != b.len() || a.len() < 3 {
+        return Err(CalibError::TooFewSamples {
+            what: "rigid registration".into(),
+            needed: 3,
+            found: a.len().min(b.len()),
+        });
+    }
+    let n = a.len() as f64;
+    let ca = a.iter().sum::<Vector3<f64>>() / n;
+    let cb = b.iter().sum::<Vector3<f64>>() / n;
+    let mut h = Matrix3::zeros();
+    for (p, q) in a.iter().zip(b) {
+        h += (p - ca) * (q - cb).transpose();
+    }
+    let svd = h.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return Err(CalibError::Degenerate {
+            what: "rigid registration".into(),
+        });
+    };
+    let s = svd.singular_values;
+    let smax = s.max();
+    let mut sorted = [s[0], s[1], s[2]];
+    sorted.sort_by(|x, y| y.total_cmp(x));
+    if smax.is_nan() || smax <= 0.0 || sorted[1] <= 1e-12 * smax {
+        return Err(CalibError::Degenerate {
+            what: "rigid registration".into(),
+        });
+    }
+    let v = vt.transpose();
+    let det = (v * u.transpose()).determinant();
+    let d = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, det.signum()));
+    let r = v * d * u.transpose();
+    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r));
+    let t = cb - rot * ca;
+    Ok(Isometry3::from_parts(Translation3::from(t), rot))
+}
+
+pub(super) fn observed_position(o: &Observed) -> Vector3<f64> {
+    match &o.observation {
+        Observation::Point { point, .. } => *point,
+        Observation::Pose(p) => p.translation.vector,
+    }
+}
+
+/// Closed-form target positions given the device frame: the mean of each target's measured
+/// points mapped into the tip frame (the exact least-squares solution, rotations being
+/// orthogonal).
+pub(super) fn targets_given_device(model: &mut Model, x: &[f64], cal: &[Observed]) {
+    let k = model.targets().len();
+    let mut sums = vec![(Vector3::zeros(), 0usize); k];
+    for o in cal {
+        if let Observation::Point { target, point } = &o.observation {
+            let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
+            if let Some(s) = sums.get_mut(*target) {
+                s.0 += tip.inverse_transform_point(&(*point).into()).coords;
+                s.1 += 1;
+            }
+        }
+    }
+    for (t, (sum, n)) in sums.into_iter().enumerate() {
+        if n > 0 {
+            model.set_target(t, sum / n as f64);
+        }
+    }
+}
+
+pub(super) fn initialise(
+    model: &mut Model,
+    x: &[f64],
+    cal: &[Observed],
+    options: &CalibrationOptions,
+) -> Result<(), CalibError> {
+    if let Some(t) = &options.target_guesses {
+        if t.len() != model.targets().len() {
+            return Err(CalibError::Length {
+                what: "target guesses".into(),
+                expected: model.targets().len(),
+                found: t.len(),
+            });
+        }
+        for (k, v) in t.iter().enumerate() {
+            model.set_target(k, *v);
+        }
+    }
+    let sessions = crate::sessions::sessions_of(cal);
+    if let Some(d) = &options.device_guess {
+        model.set_device(d);
+        if options.target_guesses.is_none() {
+            let first: Vec<Observed> = cal
+                .iter()
+                .filter(|o| Some(&o.session) == sessions.first())
+                .cloned()
+                .collect();
+            targets_given_device(model, x, &first);
+        }
+        // The other sessions' frames from the targets the guess gives.
+        for (s, t) in
+            crate::sessions::register_each(model, x, cal, sessions.get(1..).unwrap_or(&[]))?
+        {
+            model.set_session_device(s, &t);
+        }
+        return Ok(());
+    }
+    // Alternate registration (each session's frame) and targets; a few rounds reach the basin
+    // of the least squares.
+    let rounds = if options.target_guesses.is_some() {
+        1
+    } else {
+        4
+    };
+    for _ in 0..rounds {
+        for (s, t) in crate::sessions::register_each(model, x, cal, &sessions)? {
+            model.set_session_device(s, &t);
+        }
+        if options.target_guesses.is_none() {
+            targets_given_device(model, x, cal);
+        }
+    }
+    Ok(())
+}
+
+/// The `d` of every Hayati pair of `model`, held at nominal and named with the `beta` that
+/// replaces it.
+pub(super) fn replaced_by_beta(model: &Model) -> Vec<FixedParameter> {
+    model
+        .pairs()
+        .iter()
+        .filter(|p| p.hayati)
+        .filter_map(|p| {
+            let d = p.dropped_d.as_ref()?;
+            Some(FixedParameter {
+                name: format!("{d}.d"),
+                aliases: p
+                    .beta_row
+                    .as_ref()
+                    .map(|b| vec![format!("{b}.beta")])
+                    .unwrap_or_default(),
+            })
+        })
+        .collect()
+}

@@ -1,0 +1,251 @@
+//! Held-out errors: the Euclidean distances between modelled and measured points (metres) on
+//! the validation split, or k-fold cross-validation over poses (samples sharing `config`, or
+//! else the same joint values, stay in one fold; at most [`CV_TRAINING_MAX`] training samples), and the noise floor they are
+//! compared with.
+
+use super::*;
+
+/// Calibration samples beyond which a cross-validation fold is fitted on a subsample of its
+/// training samples (see [`Validation::CrossValidation`]): 100 000 points fix a few dozen
+/// kinematic parameters far below any tracker's noise, and the folds then cost one fit of the
+/// whole data between them instead of `folds` fits.
+pub const CV_TRAINING_MAX: usize = 100_000;
+
+/// Distance (metres) between model and measurement of every observation in `obs`.
+pub(crate) fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
+    let idx: Vec<usize> = (0..obs.len()).collect();
+    distances_at(model, x, obs, &idx)
+}
+
+/// [`distances`] of the observations `obs[i]` for `i` in `at`, in parallel segments for long
+/// lists.
+pub(super) fn distances_at(model: &Model, x: &[f64], obs: &[Observed], at: &[usize]) -> Vec<f64> {
+    let one = |i: &usize| {
+        let mut r = [0.0; 6];
+        model.residuals(x, &obs[*i], &mut r);
+        Vector3::new(r[0], r[1], r[2]).norm()
+    };
+    let parts: Vec<&[usize]> = at.chunks(fit::SEGMENT_BLOCKS).collect();
+    if parts.len() <= 1 {
+        return at.iter().map(one).collect();
+    }
+    match fit::parallel_map(parts.len(), |k| {
+        Ok(parts[k].iter().map(one).collect::<Vec<f64>>())
+    }) {
+        Ok(d) => d.concat(),
+        // Only a worker's panic gets here: compute on this thread instead.
+        Err(_) => at.iter().map(one).collect(),
+    }
+}
+
+/// Distances of the validation samples at `x`. A target that no calibration sample measured
+/// (a test point: another reflector, mounted only for validation) has no estimated position on
+/// the tip, so its validation samples first locate it: the point `p` in the tip frame that
+/// minimises `Σ |t_i + s_i R_i p − m_i|²` over them (closed form, 3 parameters, as a tool
+/// is taught), and they are then compared with the model at that point. The figure then
+/// measures how well the model predicts the target's motion between poses, the quantity a
+/// test set of a new tool can measure.
+pub(super) fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<f64> {
+    let mut measured = vec![false; model.targets().len()];
+    for o in &prep.cal {
+        if let Observation::Point { target, .. } = &o.observation {
+            if let Some(m) = measured.get_mut(*target) {
+                *m = true;
+            }
+        }
+    }
+    // Located positions of the targets only validation samples measured.
+    let mut located: Vec<Option<Vector3<f64>>> = vec![None; measured.len()];
+    let mut sums: Vec<(Vector3<f64>, f64)> = vec![(Vector3::zeros(), 0.0); measured.len()];
+    for o in &prep.val {
+        if let Observation::Point { target, point } = &o.observation {
+            if measured.get(*target) == Some(&false) {
+                let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
+                let s = model.scale_at(x, &o.q);
+                let acc = &mut sums[*target];
+                acc.0 += tip.rotation.inverse() * (point - tip.translation.vector) * s;
+                acc.1 += s * s;
+            }
+        }
+    }
+    for (k, (sum, weight)) in sums.iter().enumerate() {
+        if !measured[k] && *weight > 0.0 {
+            located[k] = Some(sum / *weight);
+        }
+    }
+    let unseen = crate::sessions::unseen_frames(model, x, prep);
+    let mut r = [0.0; 6];
+    prep.val
+        .iter()
+        .map(|o| match &o.observation {
+            _ if unseen.iter().any(|(s, _)| *s == o.session) => {
+                let frame = unseen
+                    .iter()
+                    .find(|(s, _)| *s == o.session)
+                    .map(|(_, t)| *t);
+                crate::sessions::distance_in(model, x, o, &frame.unwrap_or_default())
+            }
+            Observation::Point { target, point } => match located.get(*target).copied().flatten() {
+                Some(p) => {
+                    let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
+                    let s = model.scale_at(x, &o.q);
+                    (tip.translation.vector + tip.rotation * p * s - point).norm()
+                }
+                None => {
+                    model.residuals(x, o, &mut r);
+                    Vector3::new(r[0], r[1], r[2]).norm()
+                }
+            },
+            Observation::Pose(_) => {
+                model.residuals(x, o, &mut r);
+                Vector3::new(r[0], r[1], r[2]).norm()
+            }
+        })
+        .collect()
+}
+
+/// For each target that only validation samples measured (see [`split_distances`]): the
+/// indices of its validation samples and the tip's rotation at each, at `x`. The linearised
+/// held-out figures of the effect search project the 3-parameter location out of those
+/// samples' residuals with them (the device scale, within 1e-4 of 1, left out).
+pub(crate) fn validation_locations(
+    model: &Model,
+    x: &[f64],
+    prep: &Prepared,
+) -> Vec<(Vec<usize>, Vec<Matrix3<f64>>)> {
+    let count = model.targets().len();
+    let mut measured = vec![false; count];
+    for o in &prep.cal {
+        if let Observation::Point { target, .. } = &o.observation {
+            if let Some(m) = measured.get_mut(*target) {
+                *m = true;
+            }
+        }
+    }
+    let mut groups: Vec<(Vec<usize>, Vec<Matrix3<f64>>)> = vec![(vec![], vec![]); count];
+    for (i, o) in prep.val.iter().enumerate() {
+        if let Observation::Point { target, .. } = &o.observation {
+            if measured.get(*target) == Some(&false) {
+                let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
+                groups[*target].0.push(i);
+                groups[*target]
+                    .1
+                    .push(*tip.rotation.to_rotation_matrix().matrix());
+            }
+        }
+    }
+    groups.retain(|g| !g.0.is_empty());
+    groups
+}
+
+/// Every `len / keep`-th index of `all` (evenly spaced, deterministic), at most `keep` of them.
+pub(super) fn evenly_spaced(all: Vec<usize>, keep: usize) -> Vec<usize> {
+    if all.len() <= keep || keep == 0 {
+        return all;
+    }
+    let n = all.len();
+    (0..keep).map(|k| all[k * n / keep]).collect()
+}
+
+pub(crate) struct StepResult {
+    pub(crate) outcome: FitOutcome,
+    pub(crate) report: StepReport,
+    /// Held-out distance of every validation sample (split) or calibration sample
+    /// (cross-validation), in sample order; empty without validation.
+    pub(crate) held_out: Vec<f64>,
+}
+
+/// Held-out distances of `free` fitted from `x0`: the validation split's, or k-fold
+/// cross-validation's over pose groups (each calibration sample predicted by the fit without
+/// its fold), in sample order.
+pub(crate) fn held_out(
+    model: &Model,
+    prep: &Prepared,
+    validation: &Validation,
+    x: &[f64],
+    free: &[usize],
+    scales: &[f64],
+    fit_options: &FitOptions,
+) -> Result<Vec<f64>, CalibError> {
+    match validation {
+        Validation::Split { .. } => Ok(split_distances(model, x, prep)),
+        Validation::CrossValidation {
+            folds,
+            training_subsample,
+            ..
+        } => {
+            // The folds are independent fits: run on every core, gathered in fold order.
+            let per_fold = fit::parallel_map(*folds, |f| {
+                let (mut train, mut at) = (Vec::new(), Vec::new());
+                for (i, g) in prep.groups.iter().enumerate() {
+                    if g % folds == f {
+                        at.push(i);
+                    } else {
+                        train.push(i);
+                    }
+                }
+                if let Some(keep) = training_subsample {
+                    train = evenly_spaced(train, *keep);
+                }
+                let p = SubsetProblem {
+                    model,
+                    observations: &prep.cal,
+                    subset: &train,
+                };
+                let fold = fit::solve(&p, x, free, scales, fit_options)?;
+                let d = distances_at(model, &fold.x, &prep.cal, &at);
+                Ok((at, d))
+            })?;
+            let mut d = vec![0.0; prep.cal.len()];
+            for (at, fold) in per_fold {
+                for (i, v) in at.into_iter().zip(fold) {
+                    d[i] = v;
+                }
+            }
+            Ok(d)
+        }
+        Validation::None => Ok(vec![]),
+    }
+}
+
+pub(super) fn noise_floor(
+    prep: &Prepared,
+    options: &CalibrationOptions,
+    p: usize,
+) -> Option<NoiseFloor> {
+    let n = prep.cal.len();
+    if n == 0 {
+        return None;
+    }
+    let (e2, source) = if let Some(s) = options.sigma {
+        (3.0 * s * s, NoiseSource::Given)
+    } else if prep.sigmas.iter().all(Option::is_some) {
+        let sum: f64 = prep.sigmas.iter().flatten().map(|s| s.norm_squared()).sum();
+        (sum / n as f64, NoiseSource::Samples)
+    } else {
+        // Pooled pure error of repeated points.
+        let mut groups: HashMap<&(String, usize), Vec<Vector3<f64>>> = HashMap::new();
+        for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
+            if let Some(k) = key {
+                groups.entry(k).or_default().push(observed_position(o));
+            }
+        }
+        let (mut ss, mut dof, mut count) = (0.0, 0usize, 0usize);
+        for pts in groups.values().filter(|v| v.len() > 1) {
+            let mean = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
+            ss += pts.iter().map(|v| (v - mean).norm_squared()).sum::<f64>();
+            dof += pts.len() - 1;
+            count += 1;
+        }
+        if dof == 0 {
+            return None;
+        }
+        (ss / dof as f64, NoiseSource::Repeats { groups: count, dof })
+    };
+    let factor = (1.0 - p as f64 / (3.0 * n as f64)).max(0.0);
+    Some(NoiseFloor {
+        rms: (e2 * factor).sqrt(),
+        sigma: (e2 / 3.0).sqrt(),
+        source,
+    })
+}

@@ -1,0 +1,314 @@
+//! The verdict on a fitted session: its residual tested against the noise (chi-square with a
+//! known per-axis sigma, or lack of fit against the pure error of repeated poses), and the
+//! residual's remaining structure against each joint and the pose order (binned residuals, F
+//! tests). The diagnosis ([`crate::diagnose`], steps 1 and 5) and the calibration's final
+//! verdict both use these tests. Residuals and noise in metres.
+
+use std::collections::HashMap;
+
+use dh_core::JointKind;
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::{NoiseFloor, Prepared, Session};
+use crate::findings::{NoiseTest, ResidualTest, StructureCheck, Verdict};
+use crate::fit::FitOutcome;
+use crate::model::Observation;
+use crate::stats;
+
+/// The verdict on the fit `fit` of `session` (final calibration RMS `rms`, noise floor
+/// `floor`, effects `selected` estimated in it).
+pub(crate) fn verdict(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    alpha: f64,
+    floor: Option<&NoiseFloor>,
+    rms: f64,
+    selected: &[String],
+) -> Verdict {
+    let test = residual_test(session, fit, alpha);
+    let structure = structure_checks(session, fit, alpha);
+    let ratio = floor.filter(|f| f.rms > 0.0).map(|f| rms / f.rms);
+    let complete = (test.kind != NoiseTest::None).then_some(!test.significant);
+    let summary = match (complete, ratio) {
+        (Some(true), _) => "model complete".to_string(),
+        (Some(false), Some(r)) => format!("residual remains: {r:.2} x the floor"),
+        (Some(false), None) => "residual remains".to_string(),
+        (None, _) => "no test possible".to_string(),
+    };
+    let mut notes = Vec::new();
+    let significant: Vec<&str> = structure
+        .iter()
+        .filter(|s| s.significant)
+        .map(|s| s.variable.as_str())
+        .collect();
+    let shape = if significant.is_empty() {
+        "no structure against the joints or the pose order that the tests resolve".to_string()
+    } else {
+        format!(
+            "structure against {} (see the bins)",
+            significant.join(", ")
+        )
+    };
+    match complete {
+        None => notes.push(
+            "no test of the final model is possible: no known sigma and no repeated poses \
+             (give --sigma or repeat poses under one config)"
+                .into(),
+        ),
+        Some(false) => {
+            if !selected.is_empty() {
+                notes.push(format!(
+                    "the residual is still above the noise with the selected effects ({}): they \
+                     may stand in for something unmodelled rather than be its cause",
+                    selected.join(", ")
+                ));
+            }
+            notes.push(format!("the final residual has {shape}"));
+        }
+        Some(true) => {}
+    }
+    Verdict {
+        test,
+        alpha,
+        complete,
+        ratio,
+        summary,
+        structure,
+        notes,
+    }
+}
+
+/// Pure error of repeated points: `(sum of squares, degrees of freedom)`.
+fn pure_error(prep: &Prepared) -> Option<(f64, usize)> {
+    let mut groups: HashMap<&(String, usize), Vec<Vector3<f64>>> = HashMap::new();
+    for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
+        if let (Some(k), Observation::Point { point, .. }) = (key, &o.observation) {
+            groups.entry(k).or_default().push(*point);
+        }
+    }
+    let (mut ss, mut dof) = (0.0, 0usize);
+    for pts in groups.values().filter(|v| v.len() > 1) {
+        let mean = pts.iter().sum::<Vector3<f64>>() / pts.len() as f64;
+        ss += pts.iter().map(|v| (v - mean).norm_squared()).sum::<f64>();
+        dof += 3 * (pts.len() - 1);
+    }
+    (dof > 0).then_some((ss, dof))
+}
+
+/// Known per-axis noise of every calibration sample, when there is one.
+fn known_sigmas(session: &Session<'_>) -> Option<Vec<Vector3<f64>>> {
+    if let Some(s) = session.options.sigma {
+        return Some(vec![Vector3::repeat(s); session.prep.cal.len()]);
+    }
+    let v: Option<Vec<Vector3<f64>>> = session.prep.sigmas.iter().copied().collect();
+    v.filter(|v| v.iter().all(|s| s.iter().all(|x| *x > 0.0)))
+}
+
+pub(crate) fn residual_test(session: &Session<'_>, fit: &FitOutcome, alpha: f64) -> ResidualTest {
+    let m = fit.residual_count as f64;
+    let p = fit.free.len() as f64;
+    let dof = (m - p).max(1.0);
+    let model = &session.model;
+    if let Some(sig) = known_sigmas(session) {
+        let mut chi2 = 0.0;
+        let mut r = [0.0; 6];
+        for (o, s) in session.prep.cal.iter().zip(&sig) {
+            model.residuals(&fit.x, o, &mut r);
+            for a in 0..3 {
+                chi2 += (r[a] / s[a]).powi(2);
+            }
+        }
+        let pv = stats::chi2_sf(chi2, dof);
+        let noise = (sig.iter().map(|s| s.norm_squared()).sum::<f64>() / sig.len() as f64).sqrt();
+        return ResidualTest {
+            kind: NoiseTest::KnownSigma,
+            statistic: Some(chi2),
+            dof: (dof, 0.0),
+            p_value: Some(pv),
+            noise_rms: Some(noise),
+            significant: pv < alpha,
+            summary: format!(
+                "chi-square {chi2:.1} on {dof:.0} degrees of freedom against the known noise, p = {pv:.2e}"
+            ),
+        };
+    }
+    if let Some((ss_pe, df_pe)) = pure_error(&session.prep) {
+        let df_lof = dof - df_pe as f64;
+        let ss_lof = (fit.ssr - ss_pe).max(0.0);
+        let noise = (3.0 * ss_pe / df_pe as f64).sqrt();
+        if df_lof >= 1.0 {
+            let f = (ss_lof / df_lof) / (ss_pe / df_pe as f64).max(1e-300);
+            let pv = stats::f_sf(f, df_lof, df_pe as f64);
+            return ResidualTest {
+                kind: NoiseTest::PureError,
+                statistic: Some(f),
+                dof: (df_lof, df_pe as f64),
+                p_value: Some(pv),
+                noise_rms: Some(noise),
+                significant: pv < alpha,
+                summary: format!(
+                    "lack of fit F = {f:.1} on ({df_lof:.0}, {df_pe}) degrees of freedom against the pure error of repeats, p = {pv:.2e}"
+                ),
+            };
+        }
+    }
+    ResidualTest {
+        kind: NoiseTest::None,
+        statistic: None,
+        dof: (0.0, 0.0),
+        p_value: None,
+        noise_rms: None,
+        significant: true,
+        summary: "no independent noise estimate (no known sigma, no repeated poses): held-out \
+                  error decides"
+            .into(),
+    }
+}
+
+pub(crate) fn structure_checks(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    alpha: f64,
+) -> Vec<StructureCheck> {
+    let model = &session.model;
+    let prep = &session.prep;
+    let rows = model.tree().rows();
+    let mut res = Vec::with_capacity(prep.cal.len());
+    let mut r = [0.0; 6];
+    for o in &prep.cal {
+        model.residuals(&fit.x, o, &mut r);
+        res.push(Vector3::new(r[0], r[1], r[2]));
+    }
+    // One unit per pose and target: repeats are averaged, so that the test asks whether the
+    // joint explains the lack of fit, not whether there is one (that is the residual test).
+    let mut unit_of: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut units: Vec<(Vector3<f64>, usize, usize)> = Vec::new();
+    for (i, o) in prep.cal.iter().enumerate() {
+        let t = match o.observation {
+            Observation::Point { target, .. } => target,
+            Observation::Pose(_) => usize::MAX,
+        };
+        let next = units.len();
+        let u = *unit_of.entry((prep.groups[i], t)).or_insert(next);
+        if u == next {
+            units.push((Vector3::zeros(), 0, i));
+        }
+        units[u].0 += res[i];
+        units[u].1 += 1;
+    }
+    let means: Vec<Vector3<f64>> = units.iter().map(|(s, n, _)| s / *n as f64).collect();
+    let ssr0: f64 = means.iter().map(|v| v.norm_squared()).sum();
+    let joints: Vec<usize> = (0..rows.len())
+        .filter(|&j| rows[j].mimic.is_none())
+        .collect();
+    let k_tests = (joints.len() + 1) as f64;
+    let level = alpha / k_tests;
+    let mut out = Vec::new();
+    for &j in &joints {
+        let prismatic = rows[j].kind == JointKind::Prismatic;
+        let q: Vec<f64> = units
+            .iter()
+            .map(|(_, _, i)| prep.cal[*i].q.get(j).copied().unwrap_or(0.0))
+            .collect();
+        let basis = |v: f64| -> Vec<f64> {
+            if prismatic {
+                vec![1.0, v, v * v]
+            } else {
+                vec![1.0, v.sin(), v.cos(), (2.0 * v).sin(), (2.0 * v).cos()]
+            }
+        };
+        let nb = basis(0.0).len();
+        let x = DMatrix::from_fn(q.len(), nb, |i, c| basis(q[i])[c]);
+        let svd = x.clone().svd(true, false);
+        let Some(u) = &svd.u else { continue };
+        let smax = svd.singular_values.max();
+        let rank: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&i| svd.singular_values[i] > 1e-9 * smax)
+            .collect();
+        let mut explained = 0.0;
+        for a in 0..3 {
+            let y = DVector::from_iterator(means.len(), means.iter().map(|v| v[a]));
+            for &i in &rank {
+                explained += u.column(i).dot(&y).powi(2);
+            }
+        }
+        let d1 = (3 * rank.len()) as f64;
+        let d2 = (3.0 * means.len() as f64 - fit.free.len() as f64 - d1).max(1.0);
+        let f = (explained / d1) / ((ssr0 - explained).max(1e-300) / d2);
+        let p = stats::f_sf(f, d1, d2);
+        let res_q: Vec<f64> = prep
+            .cal
+            .iter()
+            .map(|o| o.q.get(j).copied().unwrap_or(0.0))
+            .collect();
+        out.push(StructureCheck {
+            variable: rows[j].name.clone(),
+            statistic: f,
+            p_value: p,
+            significant: p < level,
+            bins: bins(&res_q, &res, 8),
+        });
+    }
+    // Pose order: pose-mean residuals in order of first appearance.
+    let mut order: Vec<usize> = Vec::new();
+    let mut sums: HashMap<usize, (Vector3<f64>, usize)> = HashMap::new();
+    for (i, g) in prep.groups.iter().enumerate() {
+        let e = sums.entry(*g).or_insert_with(|| {
+            order.push(*g);
+            (Vector3::zeros(), 0)
+        });
+        e.0 += res[i];
+        e.1 += 1;
+    }
+    let means: Vec<Vector3<f64>> = order
+        .iter()
+        .map(|g| {
+            let (s, n) = sums[g];
+            s / n.max(1) as f64
+        })
+        .collect();
+    if means.len() >= 4 {
+        let a: Vec<f64> = means.windows(2).map(|w| w[0].dot(&w[1])).collect();
+        let num: f64 = a.iter().sum();
+        let den = a.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let z = if den > 0.0 { num / den } else { 0.0 };
+        let p = 2.0 * stats::normal_sf(z.abs());
+        let idx: Vec<f64> = (0..means.len()).map(|i| i as f64).collect();
+        out.push(StructureCheck {
+            variable: "pose order".into(),
+            statistic: z,
+            p_value: p,
+            significant: p < level,
+            bins: bins(&idx, &means, 8),
+        });
+    }
+    out
+}
+
+/// `(centre, RMS, |mean|)` of `res` in `n` equal bins of `v`.
+fn bins(v: &[f64], res: &[Vector3<f64>], n: usize) -> Vec<(f64, f64, f64)> {
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !(lo.is_finite() && hi.is_finite()) {
+        return vec![];
+    }
+    let w = ((hi - lo) / n as f64).max(1e-12);
+    let mut acc = vec![(Vector3::zeros(), 0.0, 0usize); n];
+    for (x, r) in v.iter().zip(res) {
+        let b = (((x - lo) / w) as usize).min(n - 1);
+        acc[b].0 += r;
+        acc[b].1 += r.norm_squared();
+        acc[b].2 += 1;
+    }
+    acc.into_iter()
+        .enumerate()
+        .filter(|(_, a)| a.2 > 0)
+        .map(|(b, (s, ss, c))| {
+            (
+                lo + (b as f64 + 0.5) * w,
+                (ss / c as f64).sqrt(),
+                (s / c as f64).norm(),
+            )
+        })
+        .collect()
+}

@@ -1,0 +1,349 @@
+//! Reading a measurement CSV into [`Measurements`] ([`parse_measurements`],
+//! [`parse_measurements_noting`]): units converted to metres and radians, per-axis sigmas
+//! floored at [`SIGMA_FLOOR`], samples, sockets and the split.
+
+use super::*;
+
+/// Reads a measurement set in the canonical CSV layout (see the [module docs](crate::csv)).
+///
+/// `joint_names` are the model's joints: each needs a column, and every sample's `q` follows
+/// their order. Values are converted to metres and radians with `opts`. Frames: points are in
+/// the measuring device's frame. `Sample::line` is the row's 1-based line in `text`.
+///
+/// # Errors
+/// A [`DataError`] naming the line and column for: no header or no data rows, a missing joint
+/// or point column, duplicate or conflicting columns, a row with the wrong number of fields, a
+/// cell that is not a finite number, a standard deviation < 0 (0 is floored at [`SIGMA_FLOOR`]), an unknown `set` value, and
+/// values that look like another unit (a revolute joint beyond 8π rad, a coordinate beyond
+/// 100 m).
+pub fn parse_measurements(
+    text: &str,
+    joint_names: &[String],
+    opts: &CsvOptions,
+) -> Result<Measurements, DataError> {
+    parse_measurements_noting(text, joint_names, opts).map(|(m, _)| m)
+}
+
+/// Standard deviation (metres) given to a point whose `sigma` cell is 0: trackers export
+/// coordinates rounded to 1 µm, and some write a 0 for "exact". A zero would weight the point
+/// infinitely; 1 µm is the rounding step, a conservative bound on the rounding error (whose
+/// standard deviation is the step over √12).
+pub const SIGMA_FLOOR: f64 = 1e-6;
+
+/// [`parse_measurements`], with the warnings a reader should see: standard deviations of 0
+/// floored at [`SIGMA_FLOOR`] (how many, and the first line).
+///
+/// # Errors
+/// As [`parse_measurements`].
+pub fn parse_measurements_noting(
+    text: &str,
+    joint_names: &[String],
+    opts: &CsvOptions,
+) -> Result<(Measurements, Vec<String>), DataError> {
+    let mut zero_sigmas: Vec<usize> = Vec::new();
+    // Row by row: the rows' cells are never all held at once.
+    let mut rows = Records::new(text, ',', true).peekable();
+    let header = rows.next().ok_or(DataError::Empty {
+        found: "an empty file",
+    })??;
+    let header = &header;
+    if rows.peek().is_none() {
+        return Err(DataError::Empty {
+            found: "only a header",
+        });
+    }
+    for (k, field) in header.fields.iter().enumerate() {
+        check_name(field, header.line, &format!("{}", k + 1))?;
+    }
+    let cols = header_columns(header, joint_names)?;
+    let length = |v: f64| opts.length_unit.to_metres(v);
+    let revolute: Vec<bool> = joint_names
+        .iter()
+        .map(|j| !opts.prismatic.contains(j))
+        .collect();
+
+    let mut m = Measurements {
+        sessions: Vec::new(),
+        joint_names: joint_names.to_vec(),
+        targets: Vec::new(),
+        samples: Vec::new(),
+    };
+    let expected = header.fields.len();
+    // Largest magnitude accepted so far per column: a value far beyond it that is also beyond
+    // the unit's plausible range means the file mixes units (an earlier row in the other one).
+    let mut largest = vec![0.0f64; expected];
+    let mixed = |largest: &[f64], col: usize, value: f64, ratio: f64| {
+        largest
+            .get(col)
+            .is_some_and(|&m| m > 0.0 && value.abs() > ratio * m)
+    };
+    for row in rows {
+        let row = row?;
+        let line = row.line;
+        if row.fields.len() != expected {
+            return Err(DataError::FieldCount {
+                line,
+                expected,
+                found: row.fields.len(),
+            });
+        }
+        let cell = |i: usize| row.fields[i].as_str();
+        let name = |i: usize| header.fields[i].as_str();
+
+        let mut q = Vec::with_capacity(joint_names.len());
+        for (&col, &revolute) in cols.joints.iter().zip(&revolute) {
+            let value = number(cell(col), line, name(col))?;
+            if revolute
+                && opts.angle_unit == AngleUnit::Radian
+                && value.abs() > MAX_PLAUSIBLE_RADIANS
+            {
+                return Err(DataError::SuspiciousUnit {
+                    line,
+                    column: name(col).into(),
+                    value,
+                    unit: "rad",
+                    // Degrees are 57 times radians.
+                    hint: if mixed(&largest, col, value, 20.0) {
+                        "looks like degrees, but the rows above look like radians: the file \
+                         mixes units"
+                    } else {
+                        "looks like degrees; pass --angle-unit deg"
+                    },
+                });
+            }
+            if let Some(m) = largest.get_mut(col) {
+                *m = m.max(value.abs());
+            }
+            let si = if revolute {
+                opts.angle_unit.to_radians(value)
+            } else {
+                length(value)
+            };
+            // Whatever the unit: a joint value past four turns or 100 m is no pose (and a
+            // huge one would lose every digit in the trigonometry).
+            let cap = if revolute {
+                MAX_PLAUSIBLE_RADIANS
+            } else {
+                MAX_PLAUSIBLE_METRES
+            };
+            if si.abs() > cap {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a joint value within {cap:.1} {} in column '{}'",
+                        if revolute { "rad" } else { "m" },
+                        name(col)
+                    ),
+                    found: format!("'{}'", cell(col)),
+                });
+            }
+            q.push(si);
+        }
+
+        let socket = match cols.socket.map(cell).filter(|c| !c.is_empty()) {
+            None => None,
+            Some(socket) => {
+                let partner = match cols.partner {
+                    Some([p, d, ds]) if !cell(p).is_empty() => {
+                        let distance = length(number(cell(d), line, name(d))?);
+                        let sigma = length(number(cell(ds), line, name(ds))?);
+                        if !(distance > 0.0 && sigma > 0.0) {
+                            return Err(DataError::Format {
+                                line,
+                                expected: "a distance and its standard deviation > 0".into(),
+                                found: format!("{} and {}", cell(d), cell(ds)),
+                            });
+                        }
+                        Some(SocketDistance {
+                            socket: cell(p).to_string(),
+                            distance,
+                            sigma,
+                        })
+                    }
+                    _ => None,
+                };
+                Some(Socket {
+                    name: socket.to_string(),
+                    partner,
+                })
+            }
+        };
+        let mut point = Vector3::zeros();
+        let xyz_cols = match (cols.xyz, &socket) {
+            (Some(c), None) => c.to_vec(),
+            (Some(c), Some(_)) => {
+                if let Some(&col) = c.iter().find(|&&col| !cell(col).is_empty()) {
+                    return Err(DataError::Format {
+                        line,
+                        expected: format!(
+                            "an empty '{}' in a contact row (socket given)",
+                            name(col)
+                        ),
+                        found: format!("'{}'", cell(col)),
+                    });
+                }
+                Vec::new()
+            }
+            (None, None) => {
+                return Err(DataError::Format {
+                    line,
+                    expected: "a socket name (the file has no x, y, z columns)".into(),
+                    found: "an empty 'socket' cell".into(),
+                })
+            }
+            (None, Some(_)) => Vec::new(),
+        };
+        for (k, &col) in xyz_cols.iter().enumerate() {
+            let value = number(cell(col), line, name(col))?;
+            if opts.length_unit == LengthUnit::Metre && value.abs() > MAX_PLAUSIBLE_METRES {
+                return Err(DataError::SuspiciousUnit {
+                    line,
+                    column: name(col).into(),
+                    value,
+                    unit: "m",
+                    hint: if mixed(&largest, col, value, 100.0) {
+                        "looks like millimetres, but the rows above look like metres: the file \
+                         mixes units"
+                    } else {
+                        "looks like millimetres; pass --length-unit mm"
+                    },
+                });
+            }
+            if let Some(m) = largest.get_mut(col) {
+                *m = m.max(value.abs());
+            }
+            point[k] = length(value);
+            if point[k].abs() > MAX_PLAUSIBLE_METRES {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a coordinate within {MAX_PLAUSIBLE_METRES} m in column '{}'",
+                        name(col)
+                    ),
+                    found: format!("'{}'", cell(col)),
+                });
+            }
+        }
+
+        let mut sigma_cell = |col: usize| -> Result<Option<f64>, DataError> {
+            let text = cell(col);
+            if text.is_empty() {
+                return Ok(None);
+            }
+            let value = number(text, line, name(col))?;
+            if value == 0.0 {
+                if zero_sigmas.last() != Some(&line) {
+                    zero_sigmas.push(line);
+                }
+                return Ok(Some(SIGMA_FLOOR));
+            }
+            if value < 0.0 {
+                return Err(DataError::BadSigma {
+                    line,
+                    column: name(col).into(),
+                    text: text.into(),
+                });
+            }
+            if length(value) > MAX_PLAUSIBLE_METRES {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a standard deviation within {MAX_PLAUSIBLE_METRES} m in column '{}'",
+                        name(col)
+                    ),
+                    found: format!("'{text}'"),
+                });
+            }
+            Ok(Some(length(value)))
+        };
+        let sigma = match cols.sigma {
+            Sigma::None => None,
+            Sigma::Isotropic(col) => sigma_cell(col)?.map(|s| Vector3::new(s, s, s)),
+            Sigma::PerAxis(c) => match (sigma_cell(c[0])?, sigma_cell(c[1])?, sigma_cell(c[2])?) {
+                (Some(a), Some(b), Some(c)) => Some(Vector3::new(a, b, c)),
+                (None, None, None) => None,
+                _ => {
+                    return Err(DataError::Format {
+                        line,
+                        expected: "all of sx, sy, sz or none".into(),
+                        found: "some of them empty".into(),
+                    })
+                }
+            },
+        };
+
+        for col in [cols.target, cols.config, cols.socket, cols.session]
+            .into_iter()
+            .flatten()
+        {
+            check_name(cell(col), line, name(col))?;
+        }
+        if let Some([p, _, _]) = cols.partner {
+            check_name(cell(p), line, name(p))?;
+        }
+        let target_name = cols.target.map_or(DEFAULT_TARGET, cell);
+        let target = match m.targets.iter().position(|t| t == target_name) {
+            Some(i) => i,
+            None => {
+                m.targets.push(target_name.to_string());
+                m.targets.len() - 1
+            }
+        };
+        let config = cols
+            .config
+            .map(cell)
+            .filter(|c| !c.is_empty())
+            .map(str::to_string);
+        let split = match cols.set.map(cell) {
+            None | Some("") => Split::Calibration,
+            Some(text) => parse_split(text).ok_or_else(|| DataError::UnknownSet {
+                line,
+                text: text.into(),
+            })?,
+        };
+        let session = match cols.session {
+            None => 0,
+            Some(col) if cell(col).is_empty() => {
+                return Err(DataError::Format {
+                    line,
+                    expected: "a session name in column 'session'".into(),
+                    found: "an empty cell".into(),
+                })
+            }
+            Some(col) => match m.sessions.iter().position(|t| t == cell(col)) {
+                Some(i) => i,
+                None => {
+                    m.sessions.push(cell(col).to_string());
+                    m.sessions.len() - 1
+                }
+            },
+        };
+        m.samples.push(Sample {
+            session,
+            q,
+            target,
+            point,
+            sigma,
+            config,
+            split,
+            line,
+            socket,
+        });
+    }
+    let mut notes = Vec::new();
+    if let Some(first) = zero_sigmas.first() {
+        notes.push(format!(
+            "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
+            zero_sigmas.len()
+        ));
+    }
+    Ok((m, notes))
+}
+
+pub(crate) fn parse_split(text: &str) -> Option<Split> {
+    match text.to_ascii_lowercase().as_str() {
+        "train" | "calibration" => Some(Split::Calibration),
+        "test" | "validation" => Some(Split::Validation),
+        _ => None,
+    }
+}

@@ -1,0 +1,233 @@
+//! Unit tests of the measurement CSV reader and writer.
+
+use super::*;
+
+fn names(n: &[&str]) -> Vec<String> {
+    n.iter().map(|s| s.to_string()).collect()
+}
+
+/// Fuzzing find: a model joint named `socket` was read from the socket column and the file
+/// written back had that column twice.
+#[test]
+fn a_joint_named_like_a_reserved_column_is_refused() {
+    for joint in RESERVED_COLUMNS {
+        let text = format!("{joint},x,y,z\n0.0,1,2,3\n");
+        let err =
+            parse_measurements(&text, &names(&[joint]), &CsvOptions::default()).expect_err(joint);
+        assert!(
+            matches!(&err, DataError::ReservedJointName { line: 1, joint: j } if j == joint),
+            "{err}"
+        );
+        assert!(err.to_string().contains("rename the joint"), "{err}");
+    }
+}
+
+#[test]
+fn reads_all_optional_columns() {
+    let text = "\
+# a comment
+j1, j2 ,x,y,z,target,config,sigma,set
+
+0.1,0.2,1,2,3,A,c1,1e-5,train
+0.1,0.2,1.5,2,3,B,c1,,test
+  # indented comment
+0.3,0.4,1,2,3.5,A,,2e-5,
+";
+    let m = parse_measurements(text, &names(&["j1", "j2"]), &CsvOptions::default()).unwrap();
+    assert_eq!(m.targets, names(&["A", "B"]));
+    assert_eq!(m.samples.len(), 3);
+    let s = &m.samples;
+    assert_eq!(s[0].q, vec![0.1, 0.2]);
+    assert_eq!(s[0].point, Vector3::new(1.0, 2.0, 3.0));
+    assert_eq!(s[0].sigma, Some(Vector3::new(1e-5, 1e-5, 1e-5)));
+    assert_eq!(s[0].config.as_deref(), Some("c1"));
+    assert_eq!(s[0].line, 4);
+    assert_eq!(
+        (s[1].target, s[1].split, s[1].sigma),
+        (1, Split::Validation, None)
+    );
+    assert_eq!(
+        (s[2].config.clone(), s[2].split, s[2].line),
+        (None, Split::Calibration, 7)
+    );
+}
+
+#[test]
+fn joint_columns_follow_the_models_order_not_the_files() {
+    let text = "z,y,x,b,a\n3,2,1,20,10\n";
+    let m = parse_measurements(text, &names(&["a", "b"]), &CsvOptions::default()).unwrap();
+    assert_eq!(m.samples[0].q, vec![10.0, 20.0]);
+    assert_eq!(m.samples[0].point, Vector3::new(1.0, 2.0, 3.0));
+    assert_eq!(m.targets, vec![DEFAULT_TARGET.to_string()]);
+}
+
+#[test]
+fn converts_units_and_keeps_prismatic_joints_as_lengths() {
+    let text = "rot,slide,x,y,z,sx,sy,sz\n90,250,1000,-2000,500,0.01,0.02,0.03\n";
+    let opts = CsvOptions {
+        length_unit: LengthUnit::Millimetre,
+        angle_unit: AngleUnit::Degree,
+        prismatic: names(&["slide"]),
+    };
+    let m = parse_measurements(text, &names(&["rot", "slide"]), &opts).unwrap();
+    let s = &m.samples[0];
+    assert!((s.q[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    assert!((s.q[1] - 0.25).abs() < 1e-15);
+    assert!((s.point - Vector3::new(1.0, -2.0, 0.5)).norm() < 1e-15);
+    assert!((s.sigma.unwrap() - Vector3::new(1e-5, 2e-5, 3e-5)).norm() < 1e-18);
+}
+
+#[test]
+fn quoted_cells_keep_commas() {
+    let text = "j,x,y,z,target\n0,1,2,3,\"left, upper\"\n";
+    let m = parse_measurements(text, &names(&["j"]), &CsvOptions::default()).unwrap();
+    assert_eq!(m.targets, names(&["left, upper"]));
+}
+
+fn err(text: &str, joints: &[&str]) -> String {
+    parse_measurements(text, &names(joints), &CsvOptions::default())
+        .unwrap_err()
+        .to_string()
+}
+
+#[test]
+fn error_messages_name_line_column_and_text() {
+    assert_eq!(
+        err("", &["j"]),
+        "expected a header line and at least one data row, found an empty file"
+    );
+    assert_eq!(
+        err("# only comments\n\nj,x,y,z\n", &["j"]),
+        "expected a header line and at least one data row, found only a header"
+    );
+    assert_eq!(
+        err("j1,x,y,z\n0,0,0,0\n", &["j1", "j2", "j3"]),
+        "line 1: missing joint column(s) 'j2', 'j3'; the header has 'j1', 'x', 'y', 'z'"
+    );
+    assert_eq!(
+        err("j,x,z\n0,0,0\n", &["j"]),
+        "line 1: missing point column 'y'; the header has 'j', 'x', 'z'"
+    );
+    assert_eq!(
+        err("j,x,y,z,x\n0,0,0,0,0\n", &["j"]),
+        "line 1: duplicate column 'x'"
+    );
+    assert_eq!(
+        err("j,x,y,z\n0,0,0,0\n0,0,0\n", &["j"]),
+        "line 3: expected 4 fields, found 3"
+    );
+    assert_eq!(
+        err("j,x,y,z\n0,0,abc,0\n", &["j"]),
+        "line 2, column 'y': expected a number, found 'abc'"
+    );
+    assert_eq!(
+        err("j,x,y,z\nNaN,0,0,0\n", &["j"]),
+        "line 2, column 'j': expected a finite number, found 'NaN'"
+    );
+    assert_eq!(
+        err("j,x,y,z\n0,inf,0,0\n", &["j"]),
+        "line 2, column 'x': expected a finite number, found 'inf'"
+    );
+    assert_eq!(
+        err("j,x,y,z,set\n0,0,0,0,holdout\n", &["j"]),
+        "line 2, column 'set': expected train, calibration, test or validation, found 'holdout'"
+    );
+    assert_eq!(
+        err("j,x,y,z,sigma,sy\n0,0,0,0,1,1\n", &["j"]),
+        "line 1: columns 'sigma' and 'sy' conflict; give one of them"
+    );
+    assert_eq!(
+        err("j,x,y,z,sigma\n0,0,0,0,-1\n", &["j"]),
+        "line 2, column 'sigma': expected a standard deviation > 0, found '-1'"
+    );
+    assert_eq!(
+        err("j,x,y,z,target\n0,0,0,0,\"open\n", &["j"]),
+        "line 2: unterminated quoted field"
+    );
+}
+
+#[test]
+fn suspicious_units_say_what_to_pass() {
+    assert_eq!(
+        err("j,x,y,z\n90,0,0,0\n", &["j"]),
+        "line 2, column 'j': 90 rad looks like degrees; pass --angle-unit deg"
+    );
+    assert_eq!(
+        err("j,x,y,z\n0,0,1250.5,0\n", &["j"]),
+        "line 2, column 'y': 1250.5 m looks like millimetres; pass --length-unit mm"
+    );
+    // Prismatic columns are lengths: 90 (m!) is not an angle, and is not checked as one.
+    let opts = CsvOptions {
+        prismatic: names(&["j"]),
+        ..CsvOptions::default()
+    };
+    assert!(parse_measurements("j,x,y,z\n90,0,0,0\n", &names(&["j"]), &opts).is_ok());
+    // Rows in one unit, then rows in the other: the file mixes units.
+    assert_eq!(
+        err("j,x,y,z\n0,0,0.8,0\n0,0,1.2,0\n0,0,1250.5,0\n", &["j"]),
+        "line 4, column 'y': 1250.5 m looks like millimetres, but the rows above look like \
+             metres: the file mixes units"
+    );
+    assert_eq!(
+        err("j,x,y,z\n1.5,0,0,0\n90,0,0,0\n", &["j"]),
+        "line 3, column 'j': 90 rad looks like degrees, but the rows above look like \
+             radians: the file mixes units"
+    );
+    // A home pose of zeros first says nothing about the unit.
+    assert_eq!(
+        err("j,x,y,z\n0,0,0,0\n90,0,0,0\n", &["j"]),
+        "line 3, column 'j': 90 rad looks like degrees; pass --angle-unit deg"
+    );
+}
+
+#[test]
+fn writing_round_trips_exactly() {
+    let mk = |q: Vec<f64>, target, point, sigma, config: Option<&str>, split| Sample {
+        session: 0,
+        q,
+        target,
+        point,
+        sigma,
+        config: config.map(String::from),
+        split,
+        line: 0,
+        socket: None,
+    };
+    let m = Measurements {
+        sessions: Vec::new(),
+        joint_names: names(&["joint 1", "a,b"]),
+        targets: names(&["SMR1", "with \"quote\""]),
+        samples: vec![
+            mk(
+                vec![0.1 + 0.2, -1e-300],
+                0,
+                Vector3::new(1.0 / 3.0, -2.5e-7, 12.345_678_901_234_568),
+                Some(Vector3::new(1e-5, 2e-5, 3e-5)),
+                Some("pose 1"),
+                Split::Calibration,
+            ),
+            mk(
+                vec![std::f64::consts::PI, 0.0],
+                1,
+                Vector3::new(-0.0, 5e-324, 99.999_999_999_999_99),
+                None,
+                None,
+                Split::Validation,
+            ),
+        ],
+    };
+    let text = write_measurements(&m);
+    let back = parse_measurements(&text, &m.joint_names, &CsvOptions::default()).unwrap();
+    let strip = |m: &Measurements| {
+        let mut m = m.clone();
+        m.samples.iter_mut().for_each(|s| s.line = 0);
+        m
+    };
+    assert_eq!(strip(&back), m);
+    for (a, b) in back.samples.iter().zip(&m.samples) {
+        for (x, y) in a.point.iter().zip(b.point.iter()) {
+            assert_eq!(x.to_bits(), y.to_bits());
+        }
+    }
+    assert_eq!(back.samples[1].line, 4);
+}

@@ -1,0 +1,367 @@
+//! The diagnosis's entry points ([`diagnose`], [`diagnose_tree`]) and its selection loop
+//! (module docs, steps 1, 4 and 5): test the geometric fit's residual, rank the candidates,
+//! refit and judge the best and their rivals, add the winner, repeat; then the final
+//! residual's structure and the notes.
+
+use super::*;
+
+/// [`diagnose_tree`] for a serial robot.
+///
+/// # Errors
+/// As [`diagnose_tree`].
+pub fn diagnose(
+    nominal: &DhTable,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+) -> Result<Report, CalibError> {
+    diagnose_tree(&DhTree::serial(nominal), data, options, diag)
+}
+
+/// Checks the diagnosis options and builds what every candidate effect needs: the tree and,
+/// with inertials, its gravity model (shared by the point and the contact diagnoses).
+///
+/// # Errors
+/// [`CalibError::BadOption`] for an `alpha` outside (0, 1); those of [`GravityModel::new`].
+pub(crate) fn effect_context(
+    tree: &DhTree,
+    diag: &DiagnoseOptions,
+) -> Result<EffectContext, CalibError> {
+    if !(diag.alpha > 0.0 && diag.alpha < 1.0) {
+        return Err(CalibError::BadOption {
+            what: "alpha".into(),
+            reason: format!("expected a level in (0, 1), found {}", diag.alpha),
+        });
+    }
+    let gravity = match &diag.inertials {
+        Some(i) => Some(Arc::new(GravityModel::new(tree, i, diag.gravity)?)),
+        None => None,
+    };
+    Ok(EffectContext {
+        tree: tree.clone(),
+        gravity,
+    })
+}
+
+/// Calibrates `tree` against `data` as [`crate::calibrate::calibrate_tree`] does, then
+/// diagnoses and adds the effects the geometric model lacks (see the module docs). The report
+/// has the steps `nominal`, `geometric` and one `+<label>` per effect added, the candidate
+/// table of the first round, the selected effects and the [`Diagnosis`], whose notes (and the
+/// residual test's summary) are also appended to the report's notes.
+/// `options.effects` is ignored: [`DiagnoseOptions::effects`] says which effects.
+///
+/// # Errors
+/// Those of [`crate::calibrate::calibrate_tree`]; [`CalibError::BadOption`] /
+/// [`CalibError::MissingJoint`] for a bad label, bad inertials or a bad `alpha`.
+pub fn diagnose_tree(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+) -> Result<Report, CalibError> {
+    let ctx = effect_context(tree, diag)?;
+    let mut notes = Vec::new();
+    // Which candidates the model can carry.
+    let probe = Model::new_tree(tree, &[], &options.model)?;
+    let (pool, forced) = match &diag.effects {
+        EffectSelection::None => (vec![], false),
+        EffectSelection::Auto => {
+            let c = effects::candidates(&ctx, &probe.tilt_rows());
+            notes.extend(c.skipped);
+            (c.effects, false)
+        }
+        EffectSelection::Labels(labels) => {
+            let mut v = Vec::new();
+            for l in labels {
+                let e = effects::parse_label_in(l, &ctx)?;
+                probe.clone().add_effect(e.clone())?;
+                v.push(e);
+            }
+            (v, true)
+        }
+    };
+    let crate::calibrate::Fitted { session, geo, scan } =
+        crate::calibrate::fitted_session(tree, data, options, &pool)?;
+    let mut steps = geo.steps;
+    let mut last = geo.last.outcome;
+    let mut held = geo.last.held_out;
+    let mut free = geo.free;
+    let mut fixed = geo.fixed;
+    let all_effects: Vec<usize> = (0..pool.len()).collect();
+
+    let residual_test = residual_test(&session, &last, diag.alpha);
+    let mut rounds: Vec<Round> = Vec::new();
+    let mut selected: Vec<usize> = Vec::new();
+    let mut first_table: Vec<CandidateReport> = Vec::new();
+    let mut rejected: Vec<usize> = Vec::new();
+    let mut aliased: Vec<usize> = Vec::new();
+    if !pool.is_empty() {
+        if !forced && !residual_test.significant {
+            notes.push(format!(
+                "nothing significant is left after the geometric step ({}); no effect is selected",
+                residual_test.summary
+            ));
+        }
+        loop {
+            let remaining: Vec<usize> = all_effects
+                .iter()
+                .copied()
+                .filter(|e| !selected.contains(e))
+                .collect();
+            if remaining.is_empty() {
+                break;
+            }
+            let scored = score(&session, &last.x, &free, &remaining)?;
+            let mut table: Vec<(usize, CandidateReport)> = scored.candidates;
+            table.sort_by(|a, b| b.1.score.total_cmp(&a.1.score));
+            for (e, c) in &table {
+                if c.status == CandidateStatus::Aliased && !aliased.contains(e) {
+                    aliased.push(*e);
+                }
+            }
+            let mut round = Round {
+                rms: steps.last().map_or(0.0, |s| s.rms),
+                val_rms: scored.baseline_val,
+                candidates: table.iter().map(|(_, c)| c.clone()).collect(),
+                trials: vec![],
+            };
+            let stop_here =
+                !forced && (!residual_test.significant || selected.len() >= diag.max_effects);
+            if rounds.is_empty() {
+                first_table = round.candidates.clone();
+            }
+            if stop_here {
+                if residual_test.significant {
+                    notes.push(format!(
+                        "stopped after the most effects allowed ({}); candidates may remain",
+                        diag.max_effects
+                    ));
+                }
+                rounds.push(round);
+                break;
+            }
+            let m = scored.residuals as f64;
+            let p = free.len() as f64;
+            let sigma2 = last.ssr / (m - p).max(1.0);
+            let mut eligible: Vec<(usize, f64, usize)> = table
+                .iter()
+                .filter(|(e, c)| c.status == CandidateStatus::NotSelected && !rejected.contains(e))
+                .map(|(e, c)| {
+                    let gain = c.score - c.parameters as f64 * sigma2 * m.ln();
+                    (*e, gain, c.parameters)
+                })
+                .filter(|(_, gain, _)| forced || *gain > 0.0)
+                .collect();
+            eligible.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let k_count = eligible.len().max(1);
+            let mut accepted = None;
+            let tries = if forced { 1 } else { diag.trials.max(1) };
+            // Refits candidate `e` (of `k` parameters) from the current fit and judges it.
+            let attempt = |e: usize, k: usize| -> Result<Attempt, CalibError> {
+                let label = pool[e].label();
+                let cols: Vec<usize> = session
+                    .model
+                    .effects()
+                    .get(e)
+                    .map(|(_, r)| r.clone().collect())
+                    .unwrap_or_default();
+                let mut columns = free.clone();
+                columns.extend(&cols);
+                let (trial_free, trial_fixed) = session.identify(&last.x, &columns)?;
+                if cols.iter().any(|c| !trial_free.contains(c)) {
+                    let trial = Trial {
+                        label,
+                        rms: f64::NAN,
+                        val_rms: None,
+                        f: 0.0,
+                        f_p: 1.0,
+                        f_threshold: diag.alpha / k_count as f64,
+                        bic: (f64::NAN, f64::NAN),
+                        held_out: None,
+                        accepted: false,
+                        reason: "not identifiable with the estimated parameters".into(),
+                    };
+                    return Ok((trial, None));
+                }
+                let step =
+                    session.step(&format!("+{label}"), &last.x, &trial_free, steps.last())?;
+                let trial = judge(
+                    &session,
+                    &last,
+                    &held,
+                    &step.outcome,
+                    &step.held_out,
+                    k,
+                    k_count,
+                    diag.alpha,
+                    forced,
+                    label,
+                    &step.report,
+                );
+                Ok((trial, Some((step, trial_free, trial_fixed))))
+            };
+            for &(e, _, k) in eligible.iter().take(tries) {
+                let (trial, fitted) = attempt(e, k)?;
+                let ok = trial.accepted;
+                round.trials.push(trial);
+                let Some(fitted) = fitted.filter(|_| ok) else {
+                    rejected.push(e);
+                    continue;
+                };
+                // It passes: its rivals (the other eligible candidates that change the same
+                // quantity of the same joint) are refitted too, and the best of those that
+                // pass is added (see `rivals`).
+                let mut passed = vec![(e, round.trials.len() - 1, fitted)];
+                if !forced {
+                    for &(r, _, kr) in &eligible {
+                        if r == e
+                            || rejected.contains(&r)
+                            || !rivals::are_rivals(pool[e].as_ref(), pool[r].as_ref())
+                        {
+                            continue;
+                        }
+                        let (trial, fitted) = attempt(r, kr)?;
+                        let ok = trial.accepted;
+                        round.trials.push(trial);
+                        match fitted.filter(|_| ok) {
+                            Some(f) => passed.push((r, round.trials.len() - 1, f)),
+                            None => rejected.push(r),
+                        }
+                    }
+                }
+                let best = rivals::best(
+                    &passed
+                        .iter()
+                        .map(|p| &round.trials[p.1])
+                        .collect::<Vec<_>>(),
+                );
+                let winner = round.trials[passed[best].1].clone();
+                for (i, (r, t, _)) in passed.iter().enumerate() {
+                    if i != best {
+                        let trial = &mut round.trials[*t];
+                        trial.accepted = false;
+                        trial.reason = rivals::reason(&winner, trial);
+                        rejected.push(*r);
+                    }
+                }
+                let (e, _, (step, trial_free, trial_fixed)) = passed.swap_remove(best);
+                accepted = Some((e, step, trial_free, trial_fixed));
+                break;
+            }
+            rounds.push(round);
+            match accepted {
+                Some((e, mut step, f2, fixed2)) => {
+                    selected.push(e);
+                    // The trial identified only the free columns and the effect's: what an
+                    // earlier step held stays held and must stay listed.
+                    let now_held: Vec<usize> = fixed2.iter().map(|g| g.index).collect();
+                    let mut fixed2: Vec<crate::fit::Fixed> = fixed
+                        .iter()
+                        .filter(|f| !f2.contains(&f.index) && !now_held.contains(&f.index))
+                        .cloned()
+                        .chain(fixed2)
+                        .collect();
+                    fixed2.sort_by_key(|f| f.index);
+                    step.report.fixed = session.named_geometric(&fixed2);
+                    steps.push(step.report);
+                    last = step.outcome;
+                    held = step.held_out;
+                    free = f2;
+                    fixed = fixed2;
+                    // A rejection in one round may pass once another effect is in.
+                    rejected.clear();
+                }
+                None => break,
+            }
+        }
+    }
+    // A rejected candidate's row says why: its last trial's reason (a rival's names the
+    // effect that did better).
+    let last_rejection = |trials: &mut dyn Iterator<Item = &Trial>, label: &str| {
+        trials
+            .filter(|t| t.label == label && !t.accepted)
+            .last()
+            .map(|t| {
+                let status = if t.reason.starts_with(rivals::RIVAL_OF) {
+                    CandidateStatus::Rival
+                } else {
+                    CandidateStatus::Rejected
+                };
+                (status, t.reason.clone())
+            })
+    };
+    for c in &mut first_table {
+        let e = pool.iter().position(|p| p.label() == c.label);
+        let rejection = last_rejection(&mut rounds.iter().flat_map(|r| r.trials.iter()), &c.label);
+        c.status = match (e, &rejection) {
+            (Some(e), _) if selected.contains(&e) => CandidateStatus::Selected,
+            (Some(e), _) if aliased.contains(&e) => CandidateStatus::Aliased,
+            (Some(_), _) if c.status == CandidateStatus::Inert => CandidateStatus::Inert,
+            (Some(_), Some((status, reason))) => {
+                c.reason = Some(reason.clone());
+                *status
+            }
+            _ => CandidateStatus::NotSelected,
+        };
+    }
+    for r in &mut rounds {
+        for c in &mut r.candidates {
+            if let Some(e) = pool.iter().position(|p| p.label() == c.label) {
+                if selected.contains(&e) {
+                    c.status = CandidateStatus::Selected;
+                } else if c.status == CandidateStatus::NotSelected {
+                    if let Some((status, reason)) = last_rejection(&mut r.trials.iter(), &c.label) {
+                        c.status = status;
+                        c.reason = Some(reason);
+                    }
+                }
+            }
+        }
+    }
+    let structure = structure_checks(&session, &last, diag.alpha);
+    for s in structure.iter().filter(|s| s.significant) {
+        notes.push(format!(
+            "structure remains that no candidate explains: the residual depends on {} \
+             (statistic {:.3}, p = {:.2e}); see its bins",
+            s.variable, s.statistic, s.p_value
+        ));
+    }
+    let effect_parameters = effect_estimates(&session.model, &last, &selected);
+    let hidden: Vec<usize> = all_effects
+        .iter()
+        .copied()
+        .filter(|e| !selected.contains(e))
+        .collect();
+    let mut report = session.report(&last, steps, fixed, &hidden);
+    report.selected_effects = selected.iter().map(|&e| pool[e].label()).collect();
+    if diag.alpha != DEFAULT_ALPHA {
+        report.verdict = verdict(
+            &session,
+            &last,
+            diag.alpha,
+            report.noise_floor.as_ref(),
+            report.rms_after,
+            &report.selected_effects,
+        );
+    }
+    crate::calibrate::attach_outliers(&mut report, scan);
+    report.candidates = first_table;
+    // The report's notes carry the diagnosis's findings too, for readers of the report alone.
+    if !pool.is_empty() {
+        report.notes.push(format!(
+            "residual after the geometric step: {}",
+            residual_test.summary
+        ));
+    }
+    report.notes.extend(notes.iter().cloned());
+    report.diagnosis = Some(Diagnosis {
+        rule: RULE.into(),
+        alpha: diag.alpha,
+        residual_test,
+        rounds,
+        effect_parameters,
+        structure,
+        notes,
+    });
+    Ok(report)
+}
