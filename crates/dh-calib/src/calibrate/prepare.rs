@@ -9,7 +9,7 @@ pub(crate) struct Prepared {
     pub(crate) val: Vec<Observed>,
     pub(crate) groups: Vec<usize>,
     pub(crate) group_count: usize,
-    pub(crate) repeat_keys: Vec<Option<(String, usize)>>,
+    pub(crate) repeat_keys: Vec<Option<(usize, usize)>>,
     pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
     /// Pose group of each validation sample (numbered apart from the calibration groups).
     pub(crate) val_groups: Vec<usize>,
@@ -104,7 +104,7 @@ pub(crate) fn prepare(
     };
     let mut val_ids: HashMap<String, usize> = HashMap::new();
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
-    let mut config_ids: HashMap<String, usize> = HashMap::new();
+    let mut config_ids: HashMap<&str, usize> = HashMap::new();
     for s in &data.samples {
         if s.target >= data.targets.len() {
             return Err(CalibError::BadTarget {
@@ -142,14 +142,14 @@ pub(crate) fn prepare(
             Split::Calibration => {
                 let next = group_ids.len() + config_ids.len();
                 let g = match &s.config {
-                    Some(c) => *config_ids.entry(c.clone()).or_insert(next),
+                    Some(c) => *config_ids.entry(c.as_str()).or_insert(next),
                     None => *group_ids
                         .entry(obs.q.iter().map(|v| v.to_bits()).collect())
                         .or_insert(next),
                 };
                 out.groups.push(g);
                 out.repeat_keys
-                    .push(s.config.as_ref().map(|c| (c.clone(), s.target)));
+                    .push(s.config.as_ref().map(|_| (g, s.target)));
                 out.sigmas.push(s.sigma);
                 out.cal.push(obs);
             }

@@ -79,6 +79,13 @@ impl<'a> Session<'a> {
                 found: prep.cal.len(),
             });
         }
+        let mut prep = prep;
+        if !effects.iter().any(|e| e.uses_sequence()) {
+            // No effect reads the direction of motion: 8 bytes per joint and sample freed.
+            for o in prep.cal.iter_mut().chain(prep.val.iter_mut()) {
+                o.context.direction = Vec::new();
+            }
+        }
         let chains = target_chains(tree, data, options)?;
         let mut model = Model::new_tree(tree, &chains, &options.model)?;
         crate::sessions::add_blocks(&mut model, data, &prep.cal);

@@ -80,7 +80,7 @@ pub(crate) fn verdict(
 
 /// Pure error of repeated points: `(sum of squares, degrees of freedom)`.
 fn pure_error(prep: &Prepared) -> Option<(f64, usize)> {
-    let mut groups: HashMap<&(String, usize), Vec<Vector3<f64>>> = HashMap::new();
+    let mut groups: HashMap<&(usize, usize), Vec<Vector3<f64>>> = HashMap::new();
     for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
         if let (Some(k), Observation::Point { point, .. }) = (key, &o.observation) {
             groups.entry(k).or_default().push(*point);
@@ -218,8 +218,13 @@ pub(crate) fn structure_checks(
             }
         };
         let nb = basis(0.0).len();
-        let x = DMatrix::from_fn(q.len(), nb, |i, c| basis(q[i])[c]);
-        let svd = x.clone().svd(true, false);
+        let mut x = DMatrix::zeros(q.len(), nb);
+        for (i, v) in q.iter().enumerate() {
+            for (c, b) in basis(*v).into_iter().enumerate() {
+                x[(i, c)] = b;
+            }
+        }
+        let svd = x.svd(true, false);
         let Some(u) = &svd.u else { continue };
         let smax = svd.singular_values.max();
         let rank: Vec<usize> = (0..svd.singular_values.len())

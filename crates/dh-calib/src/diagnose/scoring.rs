@@ -65,7 +65,7 @@ impl Projector {
             let qr = sub.qr();
             (qr.q(), qr.r())
         };
-        let qtr = q.transpose() * &rr;
+        let qtr = q.tr_mul(&rr);
         let r_perp = &rr - &q * &qtr;
         let all = rows.iter().enumerate().all(|(i, &r)| i == r) && rows.len() == res.len();
         Projector {
@@ -88,7 +88,7 @@ impl Projector {
             selected = c.select_rows(self.rows.iter());
             &selected
         };
-        let qtc = self.q.transpose() * cs;
+        let qtc = self.q.tr_mul(cs);
         let c_perp = cs - &self.q * &qtc;
         let r_perp = &self.r_perp;
         let k = c.ncols();
