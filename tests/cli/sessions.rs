@@ -67,6 +67,22 @@ fn calibrate_json(data: &str, out: Option<&str>) -> Value {
     serde_json::from_str(&ok(&args)).unwrap()
 }
 
+/// The JSON report of `calibrate` on `data` with the validation file `val`.
+fn calibrate_validated(data: &str, val: &str) -> Value {
+    serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        UR5,
+        "--data",
+        data,
+        "--validate",
+        val,
+        "--format",
+        "json",
+    ]))
+    .unwrap()
+}
+
 #[test]
 fn each_session_gets_its_frame_and_an_unseen_session_validates_at_the_noise_level() {
     let dir = tempfile::tempdir().unwrap();
@@ -288,18 +304,7 @@ fn a_validation_file_of_another_day_gets_its_own_frame() {
     let val = path(dir.path(), "val.csv");
     std::fs::write(&cal, rows_where(&text, |s| s != "s3")).unwrap();
     std::fs::write(&val, rows_where(&text, |s| s == "s3")).unwrap();
-    let report: Value = serde_json::from_str(&ok(&[
-        "calibrate",
-        "--model",
-        UR5,
-        "--data",
-        &cal,
-        "--validate",
-        &val,
-        "--format",
-        "json",
-    ]))
-    .unwrap();
+    let report = calibrate_validated(&cal, &val);
     let sessions = report["sessions"].as_array().unwrap();
     assert_eq!(sessions.len(), 3);
     assert_eq!(sessions[2]["name"], "s3");
@@ -320,18 +325,7 @@ fn a_validation_file_of_another_day_gets_its_own_frame() {
     };
     std::fs::write(&cal, strip(rows_where(&text, |s| s == "s1"))).unwrap();
     std::fs::write(&val, strip(rows_where(&text, |s| s == "s3"))).unwrap();
-    let report: Value = serde_json::from_str(&ok(&[
-        "calibrate",
-        "--model",
-        UR5,
-        "--data",
-        &cal,
-        "--validate",
-        &val,
-        "--format",
-        "json",
-    ]))
-    .unwrap();
+    let report = calibrate_validated(&cal, &val);
     assert!(report["val_rms_after"].as_f64().unwrap() > 0.01);
     assert!(
         report["notes"]
