@@ -133,19 +133,24 @@ impl CalibratedModel {
     /// # Errors
     /// A name that is none of the other sessions', naming those there are.
     pub fn in_session(&mut self, name: &str) -> Result<()> {
+        self.calibrated = self.for_session(name)?;
+        Ok(())
+    }
+
+    /// The calibrated robot seen from session `name`'s device frame (see
+    /// [`CalibratedModel::in_session`]).
+    ///
+    /// # Errors
+    /// As [`CalibratedModel::in_session`].
+    pub fn for_session(&self, name: &str) -> Result<Calibrated> {
         let Some((_, device)) = self.sessions.iter().find(|(n, _)| n == name) else {
-            let known: Vec<String> = self
-                .sessions
-                .iter()
-                .map(|(n, _)| format!("'{}'", crate::guard::escape(n)))
-                .collect();
             anyhow::bail!(
                 "--session '{}': {}; the first session's frame is the model's device frame, used without --session",
                 crate::guard::escape(name),
-                if known.is_empty() {
+                if self.sessions.is_empty() {
                     "the model holds one measurement session".to_string()
                 } else {
-                    format!("expected one of {}", known.join(", "))
+                    format!("expected one of {}", self.session_list())
                 }
             );
         };
@@ -155,8 +160,16 @@ impl CalibratedModel {
                 .with_covariance(&c.in_session(Some(name)))
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
         }
-        self.calibrated = calibrated;
-        Ok(())
+        Ok(calibrated)
+    }
+
+    /// The other sessions' names, quoted, for messages.
+    pub fn session_list(&self) -> String {
+        self.sessions
+            .iter()
+            .map(|(n, _)| format!("'{}'", crate::guard::escape(n)))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 

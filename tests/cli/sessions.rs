@@ -157,8 +157,9 @@ fn each_session_gets_its_frame_and_an_unseen_session_validates_at_the_noise_leve
         "{text}"
     );
 
-    // Predictions: the first session's frame by default (the other sessions' frames left out
-    // of the covariance), another's with --session; each predicts its own rows at the noise.
+    // Predictions: each row from its own session's frame by default (the file's session
+    // column), every row from one session's with --session (the other sessions' frames left
+    // out of the covariance).
     let per_session = |extra: &[&str]| -> Vec<(String, f64)> {
         let mut args = vec!["predict", "--model", &out, "--joints", &data];
         args.extend(extra);
@@ -196,13 +197,26 @@ fn each_session_gets_its_frame_and_an_unseen_session_validates_at_the_noise_leve
             .collect()
     };
     let noise = 3f64.sqrt() * NOISE;
-    let first = per_session(&[]);
+    let own = per_session(&[]);
     let second = per_session(&["--session", "s2"]);
     let rms = |v: &[(String, f64)], s: &str| v.iter().find(|x| x.0 == s).unwrap().1;
-    assert!(rms(&first, "s1") < 1.5 * noise, "{first:?}");
-    assert!(rms(&first, "s2") > 100.0 * noise, "{first:?}");
+    for s in ["s1", "s2", "s3"] {
+        assert!(rms(&own, s) < 1.5 * noise, "{own:?}");
+    }
     assert!(rms(&second, "s2") < 1.5 * noise, "{second:?}");
     assert!(rms(&second, "s1") > 100.0 * noise, "{second:?}");
+    // Two of the file's sessions unknown to the model: which one is the first is unknown.
+    let renamed = path(dir.path(), "renamed.csv");
+    std::fs::write(
+        &renamed,
+        text_of(&data)
+            .replace(",s1\n", ",a\n")
+            .replace(",s2\n", ",b\n"),
+    )
+    .unwrap();
+    let (code, _, err) = crate::common::exec(&["predict", "--model", &out, "--joints", &renamed]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("sessions 'a', 'b' are not in"), "{err}");
     let (code, _, err) = crate::common::exec(&[
         "predict",
         "--model",

@@ -10,7 +10,7 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dh_calib::predict::Frame;
+use dh_calib::predict::{Calibrated, Frame};
 use dh_core::JointKind;
 
 use crate::calibrated::{load_calibrated, CalibratedModel};
@@ -279,7 +279,12 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         }
         plan = vec![indices; input.rows.len()];
     }
-    let text = render(&model, &input, frame, tool, &plan, args, &origin);
+    let (frames, row_frame) = session_frames(&model, &input, frame, args, &origin)?;
+    let seen = Seen {
+        frames: &frames,
+        row_frame: &row_frame,
+    };
+    let text = render(&model, &input, frame, tool, &plan, args, &origin, &seen);
     let path = args.out.as_deref().unwrap_or(crate::output::STDIO);
     crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
     let uncertainty = if model.calibrated.has_covariance() {
@@ -316,6 +321,91 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     Ok(Outcome::Pass)
 }
 
+/// The calibrated robot as each row sees it: `frames[row_frame[i]]` for row `i`.
+struct Seen<'a> {
+    frames: &'a [Calibrated],
+    row_frame: &'a [usize],
+}
+
+impl Seen<'_> {
+    /// Whether rows are predicted from their own sessions' frames.
+    fn per_session(&self) -> bool {
+        self.frames.len() > 1
+    }
+}
+
+/// The robot each row is predicted with. Without `--session`, in the device frame, a joint
+/// file with a `session` column (a measurement file of several sessions) has each row
+/// predicted from its own session's device frame: the model's `sessions`, and the model's
+/// device frame for the first session, whose name the model does not hold (so at most one of
+/// the file's sessions may be missing from the model).
+fn session_frames(
+    model: &CalibratedModel,
+    input: &JointInput,
+    frame: Frame,
+    args: &PredictArgs,
+    origin: &str,
+) -> Result<(Vec<Calibrated>, Vec<usize>)> {
+    let first = vec![model.calibrated.clone()];
+    let mut names: Vec<&str> = Vec::new();
+    for r in &input.rows {
+        if let Some(s) = r.session.as_deref() {
+            if !names.contains(&s) {
+                names.push(s);
+            }
+        }
+    }
+    if args.session.is_some()
+        || frame == Frame::Base
+        || names.is_empty()
+        || model.sessions.is_empty()
+    {
+        return Ok((first, vec![0; input.rows.len()]));
+    }
+    let unknown: Vec<&str> = names
+        .iter()
+        .copied()
+        .filter(|n| !model.sessions.iter().any(|(m, _)| m == n))
+        .collect();
+    if unknown.len() > 1 {
+        return Err(hinted(
+            format!(
+                "{}: sessions {} are not in {origin}, which holds the first session's device frame and those of {}: at most one of the file's sessions can be the first",
+                display_name(&args.joints),
+                unknown
+                    .iter()
+                    .map(|n| format!("'{}'", crate::guard::escape(n)))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                model.session_list()
+            ),
+            "predict every row from one session's frame with --session NAME (or without it, the first's)",
+        ));
+    }
+    let mut frames = first;
+    let mut index: Vec<(&str, usize)> = Vec::new();
+    for n in names {
+        if unknown.contains(&n) {
+            index.push((n, 0));
+        } else {
+            frames.push(model.for_session(n)?);
+            index.push((n, frames.len() - 1));
+        }
+    }
+    let row_frame = input
+        .rows
+        .iter()
+        .map(|r| {
+            r.session
+                .as_deref()
+                .and_then(|s| index.iter().find(|(n, _)| *n == s))
+                .map_or(0, |(_, k)| *k)
+        })
+        .collect();
+    Ok((frames, row_frame))
+}
+
+#[allow(clippy::too_many_arguments)]
 fn render(
     model: &CalibratedModel,
     input: &JointInput,
@@ -324,16 +414,20 @@ fn render(
     plan: &[Vec<(usize, String)>],
     args: &PredictArgs,
     origin: &str,
+    seen: &Seen<'_>,
 ) -> String {
     let units = args.units;
     let lu = units.length;
     let au = units.angle;
-    let c = &model.calibrated;
-    let with_u = c.has_covariance();
+    let with_u = model.calibrated.has_covariance();
+    let sessions = input.rows.iter().any(|r| r.session.is_some());
     let mut text = format!(
         "# predicted by urdf-dh predict from {origin} in the {} frame; joints in {} ({} for prismatic), x,y,z in {}{}{}\n",
         match (frame, &args.session) {
             (Frame::Device, Some(s)) => format!("device (session '{}')", crate::guard::escape(s)),
+            (Frame::Device, None) if seen.per_session() => {
+                "device (each row's session's)".to_string()
+            }
             (Frame::Device, None) => "device".to_string(),
             (Frame::Base, _) => "base link".to_string(),
         },
@@ -364,6 +458,9 @@ fn render(
         header.extend(["roll", "pitch", "yaw"].map(String::from));
     }
     header.extend(["target", "config"].map(String::from));
+    if sessions {
+        header.push("session".into());
+    }
     if with_u {
         header.extend(["u_x", "u_y", "u_z"].map(String::from));
         if tool {
@@ -375,6 +472,7 @@ fn render(
     let length = |v: f64| cell(v / lu.metres());
     let angle = |v: f64| cell(v / au.radians());
     for (i, row) in input.rows.iter().enumerate() {
+        let c = &seen.frames[seen.row_frame.get(i).copied().unwrap_or(0)];
         let q = model.joints.rows(&row.q);
         let joints: Vec<String> = row
             .q
@@ -382,11 +480,15 @@ fn render(
             .zip(&input.prismatic)
             .map(|(v, p)| joint_cell(*v, *p, units))
             .collect();
-        let config = quoted(
+        // The cells after the target: the config, and the session when the file has them.
+        let mut ids = vec![quoted(
             &row.config
                 .clone()
                 .unwrap_or_else(|| format!("line{}", row.line)),
-        );
+        )];
+        if sessions {
+            ids.push(row.session.as_deref().map(quoted).unwrap_or_default());
+        }
         let mut lines: Vec<Vec<String>> = Vec::new();
         if tool {
             let pose = c.tool(&q, frame);
@@ -394,7 +496,8 @@ fn render(
             let mut cells = joints.clone();
             cells.extend(xyz.iter().map(|v| length(*v)));
             cells.extend(rpy.iter().map(|v| angle(*v)));
-            cells.extend([TOOL.to_string(), config.clone()]);
+            cells.push(TOOL.to_string());
+            cells.extend(ids.iter().cloned());
             if let Some(u) = c.tool_uncertainty(&q, frame) {
                 cells.extend((0..3).map(|i| length(u[i])));
                 cells.extend((3..6).map(|i| angle(u[i])));
@@ -405,7 +508,8 @@ fn render(
                 let p = c.point(&q, *k, frame);
                 let mut cells = joints.clone();
                 cells.extend(p.iter().map(|v| length(*v)));
-                cells.extend([quoted(name), config.clone()]);
+                cells.push(quoted(name));
+                cells.extend(ids.iter().cloned());
                 if let Some(u) = c.point_uncertainty(&q, *k, frame) {
                     cells.extend(u.iter().map(|v| length(*v)));
                 }

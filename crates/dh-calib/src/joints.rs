@@ -89,6 +89,9 @@ pub struct JointRow {
     /// The `target` cell, when the file has that column (a measurement file) and the cell is
     /// not empty.
     pub target: Option<String>,
+    /// The `session` cell, when the file has that column (a measurement file of several
+    /// measurement sessions) and the cell is not empty.
+    pub session: Option<String>,
     /// Values in metres and radians, one per requested column, in the requested order.
     pub q: Vec<f64>,
 }
@@ -140,6 +143,7 @@ pub fn parse_joint_values(
     let cols: Vec<usize> = joints.iter().filter_map(|j| find(j)).collect();
     let config = find("config");
     let target = find("target");
+    let session = find("session");
     let mut out = Vec::new();
     for record in records {
         let record = record?;
@@ -199,10 +203,12 @@ pub fn parse_joint_values(
         };
         let config = name(config, "config")?;
         let target = name(target, "target")?;
+        let session = name(session, "session")?;
         out.push(JointRow {
             line,
             config,
             target,
+            session,
             q,
         });
     }
