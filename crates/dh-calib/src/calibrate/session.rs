@@ -17,7 +17,8 @@ pub(crate) struct Session<'a> {
     pub(super) targets_nominal: Vec<Vector3<f64>>,
     /// The name of every session of the data (see [`crate::sessions`]).
     pub(super) session_names: Vec<String>,
-    /// Beyond [`CV_TRAINING_MAX`] calibration samples, that many evenly spaced ones (indices
+    /// Beyond [`CV_TRAINING_MAX`] calibration samples, about that many evenly spaced ones
+    /// within each session and target (see [`coarse_subset`]; indices
     /// into `prep.cal`): the closed-form start, each step's identifiability and each fit's
     /// first iterations use them, and the fit of every sample starts where theirs ends (one
     /// or two passes over millions of samples instead of one per iteration). Empty for
@@ -95,7 +96,7 @@ impl<'a> Session<'a> {
         let scales = model.scales();
         let x = vec![0.0; model.parameter_count()];
         let coarse = if prep.cal.len() > CV_TRAINING_MAX {
-            evenly_spaced((0..prep.cal.len()).collect(), CV_TRAINING_MAX)
+            coarse_subset(&prep.cal, CV_TRAINING_MAX)
         } else {
             Vec::new()
         };
@@ -149,7 +150,8 @@ impl<'a> Session<'a> {
         if !coarse.is_empty() {
             notes.push(format!(
                 "{} calibration samples: the closed-form start, the identifiability tests and \
-                 each fit's first iterations use {} evenly spaced ones; every fit then \
+                 each fit's first iterations use {} of them, evenly spaced within each session and \
+                 target; every fit then \
                  converges on all of them (its figures and standard errors are of all samples)",
                 prep.cal.len(),
                 coarse.len()

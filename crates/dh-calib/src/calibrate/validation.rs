@@ -147,6 +147,45 @@ pub(super) fn evenly_spaced(all: Vec<usize>, keep: usize) -> Vec<usize> {
     (0..keep).map(|k| all[k * n / keep]).collect()
 }
 
+/// Samples of each (session, target) kept in a coarse subset whatever its share: enough for
+/// the stratum's own parameters (a target's 3, a session frame's 6) far above the noise.
+pub(super) const COARSE_STRATUM_MIN: usize = 1000;
+
+/// At most about `keep` calibration samples of `cal`, evenly spaced within each (session,
+/// target) stratum in proportion to its size, with at least [`COARSE_STRATUM_MIN`] of each
+/// (all of a smaller one): a target or session with few samples is never left out, which
+/// would leave its parameters unidentified in the coarse fit. Sorted; for a set of one
+/// session and one target, [`evenly_spaced`] itself.
+pub(super) fn coarse_subset(cal: &[Observed], keep: usize) -> Vec<usize> {
+    let mut place: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut strata: Vec<Vec<usize>> = Vec::new();
+    for (i, o) in cal.iter().enumerate() {
+        let target = match o.observation {
+            Observation::Point { target, .. } => target,
+            Observation::Pose(_) => usize::MAX,
+        };
+        let next = strata.len();
+        let k = *place.entry((o.session, target)).or_insert(next);
+        if k == next {
+            strata.push(Vec::new());
+        }
+        strata[k].push(i);
+    }
+    if strata.len() == 1 {
+        return evenly_spaced(strata.pop().unwrap_or_default(), keep);
+    }
+    let n = cal.len().max(1);
+    let mut out: Vec<usize> = strata
+        .into_iter()
+        .flat_map(|v| {
+            let share = (keep * v.len()).div_ceil(n).max(COARSE_STRATUM_MIN);
+            evenly_spaced(v, share)
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
 pub(crate) struct StepResult {
     pub(crate) outcome: FitOutcome,
     pub(crate) report: StepReport,
