@@ -151,3 +151,28 @@ def test_bad_inputs_raise_the_cli_messages(sets, tmp_path):
         urdf_dh.calibrate(UR5, missing)
     with pytest.raises(urdf_dh.UrdfDhError, match="frame"):
         urdf_dh.predict(UR5, np.zeros((1, 6)), frame="sideways")
+
+
+def test_predict_takes_each_rows_session_frame(tmp_path):
+    # Two sessions (the tracker moved between them): calibrated together, each session's rows
+    # are predicted from their own device frame; session="s2" predicts all from the second.
+    data = tmp_path / "days.csv"
+    _native.run(
+        ["simulate", "--model", str(UR5), "--poses", "80", "--seed", "5", "--sessions", "2"]
+        + ["--noise", repr(NOISE), "--out", str(data)]
+    )
+    out = tmp_path / "days-calibrated.yaml"
+    urdf_dh.calibrate(UR5, data, out=out)
+    measured = read(data)
+    points = measured[["x", "y", "z"]].to_numpy()
+    own = urdf_dh.predict(out, measured)
+    assert own.sessions == list(measured.session)
+    err = np.linalg.norm(own.points - points, axis=1)
+    assert math.sqrt(np.mean(err**2)) < 1.5 * math.sqrt(3) * NOISE
+    second = urdf_dh.predict(out, measured, session="s2")
+    err = np.linalg.norm(second.points - points, axis=1)
+    s1 = (measured.session == "s1").to_numpy()
+    assert math.sqrt(np.mean(err[~s1] ** 2)) < 1.5 * math.sqrt(3) * NOISE
+    assert np.min(err[s1]) > 100 * NOISE
+    with pytest.raises(urdf_dh.UrdfDhError, match="expected one of 's2'"):
+        urdf_dh.predict(out, measured, session="s9")

@@ -245,6 +245,8 @@ class Prediction:
     Attributes:
         targets: the target of each prediction row (``"tool"`` for tool poses).
         configs: the pose name of each row (``config``, else ``line<N>``).
+        sessions: the measurement session each row was predicted in (the joint values'
+            ``session`` column), or None when they had none.
         points: positions, shape (rows, 3), in the length unit.
         rpy: tool attitudes (roll, pitch, yaw; rows x 3) in the angle unit, or None.
         uncertainty: standard uncertainties, shape (rows, 3) (positions) or (rows, 6) (tool: then
@@ -256,6 +258,9 @@ class Prediction:
         tool = bool(rows) and "roll" in rows[0]
         self.targets: List[str] = [r["target"] for r in rows]
         self.configs: List[str] = [r["config"] for r in rows]
+        self.sessions: Optional[List[str]] = (
+            [r["session"] for r in rows] if rows and "session" in rows[0] else None
+        )
         self.points: np.ndarray = np.array([[float(r[k]) for k in "xyz"] for r in rows]).reshape(-1, 3)
         self.rpy: Optional[np.ndarray] = (
             np.array([[float(r[k]) for k in ("roll", "pitch", "yaw")] for r in rows]).reshape(-1, 3)
@@ -280,6 +285,7 @@ def predict(
     *,
     targets: Union[None, str, Sequence[str]] = None,
     frame: Optional[str] = None,
+    session: Optional[str] = None,
     base: Optional[str] = None,
     tip: Optional[str] = None,
     length_unit: str = "m",
@@ -293,6 +299,9 @@ def predict(
         joints: joint values: a CSV path, a DataFrame, or an array with one column per measured
             joint of the model (``(poses, joints)``; one pose may be a 1-D array).
         frame: ``"device"`` or ``"base"`` (default: device when the model has one).
+        session: with a calibration of several measurement sessions, predict every pose from
+            this session's device frame (default: each row's ``session`` column of a CSV or
+            DataFrame, else the first session's).
 
     Raises:
         UrdfDhError: bad model or joint values (the CLI's message).
@@ -308,6 +317,8 @@ def predict(
             argv += ["--targets", targets if isinstance(targets, str) else ",".join(targets)]
         if frame is not None:
             argv += ["--frame", frame]
+        if session is not None:
+            argv += ["--session", session]
         argv += ["--length-unit", length_unit, "--angle-unit", angle_unit]
         stdout, stderr, _ = _native.run(argv)
     _warn(stderr)
