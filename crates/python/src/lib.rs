@@ -9,11 +9,11 @@
 
 use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
+use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
+use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
-use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
-use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use urdf_dh_cli::commands::extract::{
     load_chain_bytes, prove_extracted, run_extract_bytes, ExtractArgs,
 };
