@@ -67,10 +67,33 @@ impl EffectContext {
     }
 }
 
-fn bad_label(label: &str, reason: impl Into<String>) -> CalibError {
+/// An effect label that does not read, and why.
+pub(crate) fn bad_label(label: &str, reason: impl Into<String>) -> CalibError {
     CalibError::BadOption {
         what: format!("effect '{label}'"),
         reason: reason.into(),
+    }
+}
+
+/// Refuses a label of kind `kind` unless it has exactly `n` non-empty joint names `args`.
+pub(crate) fn expect_joint_names(
+    label: &str,
+    kind: &str,
+    args: &[&str],
+    n: usize,
+) -> Result<(), CalibError> {
+    if args.len() == n && args.iter().all(|a| !a.is_empty()) {
+        Ok(())
+    } else {
+        Err(bad_label(
+            label,
+            format!(
+                "expected '{kind}' with {n} joint name{}, found {} argument{}",
+                if n == 1 { "" } else { "s" },
+                args.len(),
+                if args.len() == 1 { "" } else { "s" }
+            ),
+        ))
     }
 }
 
@@ -96,21 +119,7 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
     if let Some(e) = crate::effects_order::parse(label, kind, args, ctx) {
         return e;
     }
-    let want = |n: usize| {
-        if args.len() == n && args.iter().all(|a| !a.is_empty()) {
-            Ok(())
-        } else {
-            Err(bad_label(
-                label,
-                format!(
-                    "expected '{kind}' with {n} joint name{}, found {} argument{}",
-                    if n == 1 { "" } else { "s" },
-                    args.len(),
-                    if args.len() == 1 { "" } else { "s" }
-                ),
-            ))
-        }
-    };
+    let want = |n: usize| expect_joint_names(label, kind, args, n);
     let row = |name: &str| {
         ctx.tree
             .row_index(name)

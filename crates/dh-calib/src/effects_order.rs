@@ -41,7 +41,7 @@ use std::sync::Arc;
 use dh_core::JointKind;
 
 use crate::data::Measurements;
-use crate::effects::EffectContext;
+use crate::effects::{bad_label, expect_joint_names, EffectContext};
 use crate::fit::CalibError;
 use crate::model::{Effect, EffectField, SampleContext};
 
@@ -154,13 +154,6 @@ pub fn reverses<'a>(contexts: impl IntoIterator<Item = &'a SampleContext>, row: 
     reversals(contexts, row) >= MIN_REVERSALS
 }
 
-fn bad_label(label: &str, reason: String) -> CalibError {
-    CalibError::BadOption {
-        what: format!("effect '{label}'"),
-        reason,
-    }
-}
-
 /// Parses a label of this module's [`KINDS`] (`kind` its part before the first `:`, `args`
 /// the rest); `None` for any other kind.
 pub(crate) fn parse(
@@ -169,21 +162,7 @@ pub(crate) fn parse(
     args: &[&str],
     ctx: &EffectContext,
 ) -> Option<Result<Arc<dyn Effect>, CalibError>> {
-    let count = |n: usize| {
-        if args.len() == n && args.iter().all(|a| !a.is_empty()) {
-            Ok(())
-        } else {
-            Err(bad_label(
-                label,
-                format!(
-                    "expected '{kind}' with {n} joint name{}, found {} argument{}",
-                    if n == 1 { "" } else { "s" },
-                    args.len(),
-                    if args.len() == 1 { "" } else { "s" }
-                ),
-            ))
-        }
-    };
+    let count = |n: usize| expect_joint_names(label, kind, args, n);
     Some(match kind {
         "backlash_direction" => count(1).and_then(|()| {
             let row = ctx
