@@ -1,10 +1,12 @@
-//! Reading input files (or standard input) with errors that name the file.
+//! Reading input files (or standard input) with errors that name the file, and loading a URDF
+//! file's chain ([`load_chain`]) with its warnings ([`urdf_warnings`]).
 
 use std::io::Read;
 use std::path::Path;
 use std::process::Command;
 
 use anyhow::{Context, Result};
+use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::hinted;
 
@@ -149,4 +151,50 @@ pub fn display_name(path: &str) -> String {
         .file_name()
         .map(|f| f.to_string_lossy().into_owned())
         .unwrap_or_else(|| path.to_string())
+}
+
+/// Loads the URDF and its chain.
+///
+/// # Errors
+/// Unreadable file, invalid URDF, unknown or ambiguous base/tip.
+pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(UrdfModel, Chain)> {
+    let bytes = read_robot(path)?;
+    load_chain_bytes(&bytes, &display_name(path), base, tip)
+}
+
+/// Loads the chain of a URDF given as bytes; `name` names it in error messages (a file name, or
+/// `<string>` for XML text a library caller passed).
+///
+/// # Errors
+/// Invalid URDF, unknown or ambiguous base/tip.
+pub fn load_chain_bytes(
+    bytes: &[u8],
+    name: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> Result<(UrdfModel, Chain)> {
+    let model = UrdfModel::from_bytes(bytes).with_context(|| format!("{name}: invalid URDF"))?;
+    let chain = model.chain(base, tip).map_err(|e| chain_error(name, e))?;
+    Ok((model, chain))
+}
+
+/// The error of choosing a chain of the file shown as `name`: a fault of a joint on the chain is
+/// a fault of the file ("invalid URDF"), not of the choice ("cannot choose the chain").
+pub fn chain_error(name: &str, e: urdf_axes::UrdfError) -> anyhow::Error {
+    let what = if e.is_choice() {
+        "cannot choose the chain"
+    } else {
+        "invalid URDF"
+    };
+    anyhow::Error::new(e).context(format!("{name}: {what}"))
+}
+
+/// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name
+/// (`name`), for `urdf-dh: warning:` lines.
+pub fn urdf_warnings(name: &str, model: &UrdfModel, chain: &Chain) -> Vec<String> {
+    model
+        .warnings_for(chain)
+        .iter()
+        .map(|w| format!("{name}: {w}"))
+        .collect()
 }

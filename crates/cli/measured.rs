@@ -10,8 +10,8 @@ use dh_calib::data::Measurements;
 use dh_calib::model::Effect;
 use dh_core::{Convention, DhTable, JointKind, Tolerance};
 
-use crate::commands::extract::load_chain;
 use crate::error::hinted;
+use crate::input::load_chain;
 use crate::input::{display_name, read_text};
 use crate::sheet::Sheet;
 use crate::tree_sheet::TreeSheet;
@@ -313,7 +313,7 @@ pub fn load_model(
         origin,
         robot: Some(urdf_model.robot_name().to_string()),
         units: (LengthUnit::M, AngleUnit::Rad),
-        warnings: crate::commands::extract::urdf_warnings(path, &urdf_model, &chain)
+        warnings: crate::input::urdf_warnings(path, &urdf_model, &chain)
             .into_iter()
             .chain(extraction.warnings.iter().map(|w| w.to_string()))
             .collect(),

@@ -15,8 +15,9 @@ use dh_core::{Convention, Tolerance};
 use serde::Serialize;
 use urdf_axes::UrdfModel;
 
-use crate::commands::extract::{chain_error, extract_chain, prove_extracted, ExtractOptions};
+use crate::commands::extract::{extract_chain, prove_extracted, ExtractOptions};
 use crate::error::Outcome;
+use crate::input::chain_error;
 use crate::input::{display_name, read_robot, read_text};
 use crate::render::Format;
 use crate::sheet::SheetDoc;

@@ -6,6 +6,8 @@ use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_robot};
+// Loading a chain is `crate::input`'s; re-exported for the callers of `extract`'s API.
+pub use crate::input::{chain_error, load_chain, load_chain_bytes, urdf_warnings};
 use crate::readback::{failure_line, prove, Isometry3Pair, Source};
 use crate::render::Format;
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
@@ -90,52 +92,6 @@ pub fn prove_extracted(
 /// samples, each still moving every joint), and never fewer than 10.
 pub fn default_samples(joints: usize) -> usize {
     (10_000_000 / joints.max(1)).clamp(10, 1000)
-}
-
-/// Loads the URDF and its chain.
-///
-/// # Errors
-/// Unreadable file, invalid URDF, unknown or ambiguous base/tip.
-pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(UrdfModel, Chain)> {
-    let bytes = read_robot(path)?;
-    load_chain_bytes(&bytes, &display_name(path), base, tip)
-}
-
-/// Loads the chain of a URDF given as bytes; `name` names it in error messages (a file name, or
-/// `<string>` for XML text a library caller passed).
-///
-/// # Errors
-/// Invalid URDF, unknown or ambiguous base/tip.
-pub fn load_chain_bytes(
-    bytes: &[u8],
-    name: &str,
-    base: Option<&str>,
-    tip: Option<&str>,
-) -> Result<(UrdfModel, Chain)> {
-    let model = UrdfModel::from_bytes(bytes).with_context(|| format!("{name}: invalid URDF"))?;
-    let chain = model.chain(base, tip).map_err(|e| chain_error(name, e))?;
-    Ok((model, chain))
-}
-
-/// The error of choosing a chain of the file shown as `name`: a fault of a joint on the chain is
-/// a fault of the file ("invalid URDF"), not of the choice ("cannot choose the chain").
-pub fn chain_error(name: &str, e: urdf_axes::UrdfError) -> anyhow::Error {
-    let what = if e.is_choice() {
-        "cannot choose the chain"
-    } else {
-        "invalid URDF"
-    };
-    anyhow::Error::new(e).context(format!("{name}: {what}"))
-}
-
-/// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name
-/// (`name`), for `urdf-dh: warning:` lines.
-pub fn urdf_warnings(name: &str, model: &UrdfModel, chain: &Chain) -> Vec<String> {
-    model
-        .warnings_for(chain)
-        .iter()
-        .map(|w| format!("{name}: {w}"))
-        .collect()
 }
 
 /// Extracts; the caller proves what it writes ([`prove_extracted`]) and prints.

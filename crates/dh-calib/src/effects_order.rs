@@ -41,7 +41,7 @@ use std::sync::Arc;
 use dh_core::JointKind;
 
 use crate::data::Measurements;
-use crate::effects::{bad_label, expect_joint_names, EffectContext};
+use crate::effect_label::{bad_label, expect_joint_names, EffectContext};
 use crate::fit::CalibError;
 use crate::model::{Effect, EffectField, SampleContext};
 

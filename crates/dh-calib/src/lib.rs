@@ -29,6 +29,7 @@ pub mod cpa;
 pub mod csv;
 pub mod data;
 pub mod diagnose;
+mod effect_label;
 pub mod effects;
 pub mod effects_order;
 pub mod findings;

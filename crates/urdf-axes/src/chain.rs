@@ -6,7 +6,7 @@ use nalgebra::{Isometry3, Unit, UnitQuaternion, Vector3};
 
 use crate::check::unit_axis;
 use crate::model::UrdfModel;
-use crate::read::{JointType, Warning};
+use crate::robot::{JointType, Warning};
 use crate::UrdfError;
 
 /// A moving joint of a [`Chain`] that follows another joint (URDF `<mimic>`):

@@ -2,7 +2,7 @@
 
 use nalgebra::{Unit, Vector3};
 
-use crate::read::{Joint, JointType};
+use crate::robot::{Joint, JointType};
 use crate::scan::{Doc, Element};
 use crate::UrdfError;
 

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use crate::read::{Joint, JointType};
+use crate::robot::{Joint, JointType};
 use crate::UrdfError;
 
 /// Longest mimic cycle whose joints are all named in its error.

@@ -3,7 +3,8 @@
 use std::collections::HashMap;
 
 use crate::check::check_name;
-use crate::read::{self, fault_summary, Robot, Warning};
+use crate::read::{self, fault_summary};
+use crate::robot::{Robot, Warning};
 use crate::scan::{self, ScanError};
 use crate::UrdfError;
 
@@ -233,7 +234,7 @@ impl UrdfModel {
             if !include(&j.name) {
                 continue;
             }
-            if out.len() < read::MAX_WARNINGS {
+            if out.len() < crate::robot::MAX_WARNINGS {
                 out.push(Warning {
                     // Escaped: an off-chain joint's name may hold the very control or
                     // bidirectional character its fault is about.
