@@ -475,7 +475,20 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             )?;
             compensate::compensate(&args, out, err)
         }
-        Command::Cpa(a) => cpa::cpa(&a.into_args()?, out, err),
+        Command::Cpa(a) => {
+            let args = a.into_args()?;
+            if let Some(plot) = &args.plot {
+                let inputs: Vec<(&str, &str)> = [
+                    ("DATA", Some(args.data.as_str())),
+                    ("--model", args.model.as_deref()),
+                ]
+                .into_iter()
+                .filter_map(|(o, p)| Some((o, p?)))
+                .collect();
+                check_destinations(&inputs, &[("--plot", plot)])?;
+            }
+            cpa::cpa(&args, out, err)
+        }
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
         Command::Completions { shell } => {
             use clap::CommandFactory;

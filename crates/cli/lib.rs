@@ -14,6 +14,7 @@ pub mod input;
 pub mod measured;
 pub mod output;
 pub mod plot;
+pub mod plot_motion;
 pub mod progress;
 pub mod readback;
 pub mod svg;

@@ -57,7 +57,7 @@ const CALIBRATION_COLOUR: &str = "#1f77b4";
 const VALIDATION_COLOUR: &str = "#ff7f0e";
 
 /// Escapes text for XML content and attributes.
-fn xml(s: &str) -> String {
+pub(crate) fn xml(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -65,7 +65,7 @@ fn xml(s: &str) -> String {
 }
 
 /// A coordinate with two decimals.
-fn c(v: f64) -> String {
+pub(crate) fn c(v: f64) -> String {
     let s = format!("{v:.2}");
     if s == "-0.00" {
         "0.00".into()
@@ -75,7 +75,7 @@ fn c(v: f64) -> String {
 }
 
 /// A step of 1, 2 or 5 times a power of ten giving about `ticks` intervals up to `max`.
-fn nice_step(max: f64, ticks: f64) -> f64 {
+pub(crate) fn nice_step(max: f64, ticks: f64) -> f64 {
     if !(max.is_finite() && max > 0.0) {
         return 1.0;
     }
@@ -95,7 +95,7 @@ fn nice_step(max: f64, ticks: f64) -> f64 {
 }
 
 /// A tick label: as few decimals as the step needs.
-fn tick_label(v: f64, step: f64) -> String {
+pub(crate) fn tick_label(v: f64, step: f64) -> String {
     let decimals = if step >= 1.0 {
         0
     } else {
@@ -267,7 +267,7 @@ pub fn residuals_svg(chart: &ResidualChart) -> String {
 }
 
 /// Four significant digits.
-fn significant(v: f64) -> String {
+pub(crate) fn significant(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }

@@ -133,3 +133,64 @@ fn data_without_sweeps_is_refused() {
     );
     assert!(err.contains("hint: "), "{err}");
 }
+
+/// `cpa --plot`: one panel per joint with its points and trend; a planted gear-ratio error is
+/// the slope drawn on its joint's panel. `--plot -` pipes the chart alone (the report goes to
+/// standard error); a chart over the data is refused before anything is written.
+#[test]
+fn the_plot_draws_each_joints_motion_and_its_trend() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let (data, truth, svg) = (path("g.csv"), path("g.truth.yaml"), path("g.svg"));
+    ok(&[
+        "simulate",
+        "--model",
+        "fixtures/robots/ur5/vendor.yaml",
+        "--cpa",
+        "--poses",
+        "9",
+        "--noise",
+        "1e-5",
+        "--targets",
+        "3",
+        "--effect",
+        "gear_ratio:elbow_joint=0.001",
+        "--seed",
+        "9",
+        "--out",
+        &data,
+    ]);
+    let report = ok(&["cpa", &data, "--model", &truth, "--plot", &svg]);
+    assert!(report.contains("elbow_joint"), "{report}");
+    let chart = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(chart.matches("<g>").count(), 6, "{chart}");
+    // 9 poses per sweep: 54 points, one trend curve per joint.
+    assert_eq!(chart.matches("<circle").count(), 54);
+    assert_eq!(chart.matches("<polyline").count(), 6);
+    assert!(!chart.contains("NaN") && !chart.contains("inf"));
+    // The planted ratio is the elbow's slope, to the noise: 10 um at radii of about 0.4 m is
+    // about 15 urad per pose, so the slope of 9 poses over 90 degrees has a standard error of
+    // about 1e-5. Three of them.
+    let elbow = chart
+        .split("<g>")
+        .find(|g| g.contains(">elbow_joint ("))
+        .expect("an elbow panel");
+    let slope: f64 = elbow
+        .split("trend: slope ")
+        .nth(1)
+        .and_then(|t| t.split(|c: char| c == ',' || c == ' ').next())
+        .and_then(|v| v.parse().ok())
+        .expect("the elbow's trend is a slope");
+    assert!((slope - 0.001).abs() < 3e-5, "slope {slope}");
+
+    let (code, stdout, stderr) = crate::common::exec(&["cpa", &data, "--plot", "-"]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.starts_with("<?xml") && stdout.trim_end().ends_with("</svg>"));
+    assert!(stderr.contains("elbow_joint"), "{stderr}");
+
+    let before = std::fs::read(&data).unwrap();
+    let (code, _, stderr) = crate::common::exec(&["cpa", &data, "--plot", &data]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--plot"), "{stderr}");
+    assert_eq!(std::fs::read(&data).unwrap(), before);
+}

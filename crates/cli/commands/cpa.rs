@@ -9,6 +9,7 @@
 
 use std::fmt::Write as _;
 use std::io::Write;
+use std::path::Path;
 
 use anyhow::Result;
 use dh_calib::cpa::{analyse, CpaOptions, CpaResult, JointCpa};
@@ -20,6 +21,7 @@ use serde::Serialize;
 use crate::error::{hinted, Outcome};
 use crate::input::display_name;
 use crate::measured::{header_joints, load_model, read_measurements, DataFile, DataUnits};
+use crate::plot_motion::motion_svg;
 use crate::render::{render_sheet, Format};
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -64,6 +66,9 @@ pub struct CpaArgs {
     pub units: DataUnits,
     /// Output format.
     pub format: CpaFormat,
+    /// Where to write the chart of each joint's measured against commanded motion (SVG), `-`
+    /// for standard output (the report then goes to standard error).
+    pub plot: Option<String>,
 }
 
 // The submodules import what they use through `use super::*`: the imports above and each
@@ -201,10 +206,8 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
             }
         },
     };
-    match args.format {
-        CpaFormat::Text => {
-            out.write_all(text(&doc, &sheet).as_bytes())?;
-        }
+    let report = match args.format {
+        CpaFormat::Text => text(&doc, &sheet),
         CpaFormat::Yaml | CpaFormat::Json => {
             sheet.cpa = Some(serde_yaml::to_value(&doc)?);
             let format = if args.format == CpaFormat::Yaml {
@@ -212,9 +215,24 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
             } else {
                 Format::Json
             };
-            out.write_all(render_sheet(&sheet, format)?.as_bytes())?;
+            render_sheet(&sheet, format)?
         }
+    };
+    // The chart is written (or piped) before the report is printed: a chart that cannot be
+    // written leaves no report claiming success. `--plot -`: the chart alone on standard output.
+    if let Some(path) = &args.plot {
+        let svg = motion_svg(
+            &format!("circle-point analysis of {data_name}: measured against commanded motion"),
+            &result.joints,
+        );
+        crate::output::write_all_or_stdout(&[(Path::new(path), svg.as_bytes())], out)?;
     }
+    let report_sink: &mut dyn Write = if crate::output::any_stdout([args.plot.as_deref()]) {
+        err
+    } else {
+        out
+    };
+    report_sink.write_all(report.as_bytes())?;
     Ok(Outcome::Pass)
 }
 
@@ -250,6 +268,11 @@ pub struct CpaCli {
     /// Output format.
     #[arg(long, value_enum, default_value_t = CpaFormat::Text)]
     format: CpaFormat,
+    /// Write a chart of each joint's measured minus commanded motion against the commanded
+    /// value, with the fitted trend (SVG; - for standard output, the report then on standard
+    /// error).
+    #[arg(long, value_name = "SVG")]
+    plot: Option<String>,
 }
 
 impl CpaCli {
@@ -271,6 +294,7 @@ impl CpaCli {
                 angle: self.angle_unit,
             },
             format: self.format,
+            plot: self.plot,
         })
     }
 }
