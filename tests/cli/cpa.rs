@@ -178,7 +178,7 @@ fn the_plot_draws_each_joints_motion_and_its_trend() {
     let slope: f64 = elbow
         .split("trend: slope ")
         .nth(1)
-        .and_then(|t| t.split(|c: char| c == ',' || c == ' ').next())
+        .and_then(|t| t.split([',', ' ']).next())
         .and_then(|v| v.parse().ok())
         .expect("the elbow's trend is a slope");
     assert!((slope - 0.001).abs() < 3e-5, "slope {slope}");
