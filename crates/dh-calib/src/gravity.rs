@@ -106,6 +106,10 @@ pub struct GravityModel {
     payloads: Vec<(usize, Inertial)>,
     gravity: Vector3<f64>,
     scales: Vec<[f64; 2]>,
+    /// Per row, what it carries: the rows `k` it is an ancestor of that have a mass, and the
+    /// payloads on a chain through it (indices into `payloads`). Built once: the torque asks
+    /// for them at every sample.
+    carried: Vec<(Vec<usize>, Vec<usize>)>,
     /// Identifies this model's geometry in the per-thread cache of frames ([`FRAMES`]).
     id: ModelId,
 }
@@ -128,13 +132,21 @@ impl ModelId {
     }
 }
 
-/// A model's id, the joint values and the frames there.
-type CachedFrames = (u64, Vec<f64>, std::rc::Rc<TreeFrames>);
+/// The frames of one model at one set of joint values, and the torques asked for there so far
+/// (per row, about [`TorqueAxis::Joint`] and [`TorqueAxis::Lateral`]; NaN until computed).
+#[derive(Debug)]
+struct AtJoints {
+    frames: TreeFrames,
+    torques: std::cell::RefCell<Vec<[f64; 2]>>,
+}
+
+/// A model's id, the joint values and what is known there.
+type CachedFrames = (u64, Vec<f64>, std::rc::Rc<AtJoints>);
 
 thread_local! {
-    /// The frames of the last joint values a model's torques were asked for on this thread:
-    /// every gravity effect of a calibration asks for the same sample's torques in turn, and
-    /// the frames are most of the work.
+    /// The frames and torques of the last joint values a model's torques were asked for on
+    /// this thread: every gravity effect of a calibration asks for the same sample's torques in
+    /// turn (for its change and again for its gradient), and the frames are most of the work.
     static FRAMES: std::cell::RefCell<Option<CachedFrames>> =
         const { std::cell::RefCell::new(None) };
 }
@@ -216,14 +228,27 @@ impl GravityModel {
             payloads: inertials.payloads.clone(),
             gravity,
             scales: vec![],
+            carried: vec![],
             id: ModelId::next(),
         };
+        g.carried = (0..g.links.len())
+            .map(|row| {
+                let links = (0..g.links.len())
+                    .filter(|&k| g.links[k].is_some() && g.tree.is_ancestor(row, k))
+                    .collect();
+                let payloads = (0..g.payloads.len())
+                    .filter(|&p| g.chain_has(g.payloads[p].0, row))
+                    .collect();
+                (links, payloads)
+            })
+            .collect();
         g.scales = g.rms_torques(32);
         Ok(g)
     }
 
-    /// The nominal tree's frames at `q`, from this thread's cache when `q` was the last asked.
-    fn frames_at(&self, q: &[f64]) -> Option<std::rc::Rc<TreeFrames>> {
+    /// The nominal tree's frames at `q` (and the torques known there), from this thread's
+    /// cache when `q` was the last asked.
+    fn frames_at(&self, q: &[f64]) -> Option<std::rc::Rc<AtJoints>> {
         FRAMES.with(|cache| {
             let mut cache = cache.borrow_mut();
             if let Some((id, last, frames)) = cache.as_ref() {
@@ -236,7 +261,10 @@ impl GravityModel {
                     return Some(frames.clone());
                 }
             }
-            let frames = std::rc::Rc::new(self.tree.frames(q).ok()?);
+            let frames = std::rc::Rc::new(AtJoints {
+                frames: self.tree.frames(q).ok()?,
+                torques: std::cell::RefCell::new(vec![[f64::NAN; 2]; self.links.len()]),
+            });
             *cache = Some((self.id.0, q.to_vec(), frames.clone()));
             Some(frames)
         })
@@ -274,12 +302,18 @@ impl GravityModel {
     /// The torque (N m; N for a prismatic joint about [`TorqueAxis::Joint`]) of gravity on row
     /// `row` at joint values `q` (one per row of the tree); 0 for a row or `q` out of range.
     pub fn torque(&self, q: &[f64], row: usize, axis: TorqueAxis) -> f64 {
-        let Some(frames) = self.frames_at(q) else {
+        let Some(at) = self.frames_at(q) else {
             return 0.0;
         };
         let Some(r) = self.tree.rows().get(row) else {
             return 0.0;
         };
+        let slot = usize::from(axis == TorqueAxis::Lateral);
+        let known = at.torques.borrow().get(row).map_or(f64::NAN, |t| t[slot]);
+        if !known.is_nan() {
+            return known;
+        }
+        let frames = &at.frames;
         let (origin, dir) = match axis {
             TorqueAxis::Joint => frames.axis(row, r),
             TorqueAxis::Lateral => {
@@ -297,25 +331,27 @@ impl GravityModel {
             force += f;
             moment += (p - origin).cross(&f);
         };
-        for (k, link) in self.links.iter().enumerate() {
-            if let Some(i) = link {
-                if self.tree.is_ancestor(row, k) {
-                    add((frames.after[k] * Point3::from(i.com)).coords, i.mass);
-                }
+        let (links, payloads) = &self.carried[row];
+        for &k in links {
+            if let Some(i) = &self.links[k] {
+                add((frames.after[k] * Point3::from(i.com)).coords, i.mass);
             }
         }
-        for (c, i) in &self.payloads {
-            if self.chain_has(*c, row) {
-                if let Some(tip) = frames.tips.get(*c) {
-                    add((tip * Point3::from(i.com)).coords, i.mass);
-                }
+        for &p in payloads {
+            let (c, i) = &self.payloads[p];
+            if let Some(tip) = frames.tips.get(*c) {
+                add((tip * Point3::from(i.com)).coords, i.mass);
             }
         }
-        if axis == TorqueAxis::Joint && r.kind == JointKind::Prismatic {
+        let torque = if axis == TorqueAxis::Joint && r.kind == JointKind::Prismatic {
             dir.dot(&force)
         } else {
             dir.dot(&moment)
+        };
+        if let Some(t) = at.torques.borrow_mut().get_mut(row) {
+            t[slot] = torque;
         }
+        torque
     }
 
     /// Every row's torque about its joint axis at `q`.
