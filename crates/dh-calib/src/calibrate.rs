@@ -52,6 +52,7 @@ mod start;
 pub use start::*;
 mod validation;
 pub use validation::*;
+mod one_step;
 mod session;
 pub(crate) use session::*;
 mod pipeline;

@@ -25,10 +25,38 @@ pub(crate) fn are_rivals(a: &dyn Effect, b: &dyn Effect) -> bool {
     a.joint() == b.joint() && a.field() == b.field()
 }
 
+/// Relative difference within which two figures of trials are the same number: exact aliases
+/// (two effects that span the same columns with the ones already in, such as couplings of a
+/// passive joint with either of its drivers once its gear ratio is in) fit identically, and
+/// their figures differ by rounding alone.
+const SAME: f64 = 1e-6;
+
 /// The index of the best of `trials` (all passed): lowest BIC after the refit, the lower
-/// held-out RMS among those within [`BIC_TIE`] of it (when every one has one). `0` for an
-/// empty list.
+/// held-out RMS among those within [`BIC_TIE`] of it (when every one has one); among trials
+/// with the same figures (exact aliases, [`SAME`]) the first label in byte order, so that
+/// rounding never decides. `0` for an empty list.
 pub(crate) fn best(trials: &[&Trial]) -> usize {
+    let first = best_by_figures(trials);
+    let Some(w) = trials.get(first) else {
+        return first;
+    };
+    let same = |a: f64, b: f64| (a - b).abs() <= SAME * a.abs().max(b.abs()).max(1e-300);
+    (0..trials.len())
+        .filter(|&i| {
+            let t = trials[i];
+            same(t.bic.1, w.bic.1)
+                && match (t.val_rms, w.val_rms) {
+                    (Some(a), Some(b)) => same(a, b),
+                    (None, None) => true,
+                    _ => false,
+                }
+        })
+        .min_by(|&i, &j| trials[i].label.cmp(&trials[j].label))
+        .unwrap_or(first)
+}
+
+/// [`best`] before the tie between exact aliases is broken.
+fn best_by_figures(trials: &[&Trial]) -> usize {
     let lowest = trials
         .iter()
         .map(|t| t.bic.1)
@@ -111,5 +139,15 @@ mod tests {
         let d = trial("x", -139.0, None);
         assert_eq!(best(&[&b, &d]), 0);
         assert_eq!(best(&[]), 0);
+        // Exact aliases (the same figures to rounding): the first label, whichever order or
+        // rounding.
+        let e = trial(
+            "coupling:j4:j3",
+            -140.0 * (1.0 + 1e-12),
+            Some(3e-5 * (1.0 - 1e-11)),
+        );
+        let f = trial("coupling:j4:j2", -140.0, Some(3e-5));
+        assert_eq!(best(&[&e, &f]), 1);
+        assert_eq!(best(&[&f, &e]), 0);
     }
 }

@@ -184,6 +184,50 @@ impl<'a> Session<'a> {
         free: &[usize],
         previous: Option<&StepReport>,
     ) -> Result<StepResult, CalibError> {
+        self.step_with(label, x0, free, previous, Folds::Refit)
+    }
+
+    /// Held-out distances at the fit `x` of `free` (see [`held_out`]), the folds of a
+    /// cross-validation refitted or stepped once ([`Folds`]).
+    pub(crate) fn held_out_with(
+        &self,
+        x: &[f64],
+        free: &[usize],
+        folds: Folds,
+    ) -> Result<Vec<f64>, CalibError> {
+        match (&self.validation, folds) {
+            (Validation::CrossValidation { folds: k, .. }, Folds::OneStep) => {
+                super::one_step::one_step_cross_validation(
+                    &self.model,
+                    &self.prep,
+                    *k,
+                    x,
+                    free,
+                    &self.scales,
+                    self.options.fit.rank_tolerance,
+                )
+            }
+            _ => held_out(
+                &self.model,
+                &self.prep,
+                &self.validation,
+                x,
+                free,
+                &self.scales,
+                &self.options.fit,
+            ),
+        }
+    }
+
+    /// [`Session::step`] with the held-out distances computed as `folds` says.
+    pub(crate) fn step_with(
+        &self,
+        label: &str,
+        x0: &[f64],
+        free: &[usize],
+        previous: Option<&StepReport>,
+        folds: Folds,
+    ) -> Result<StepResult, CalibError> {
         let problem = ModelProblem {
             model: &self.model,
             observations: &self.prep.cal,
@@ -200,15 +244,7 @@ impl<'a> Session<'a> {
         };
         let outcome = fit::solve(&problem, &start, free, &self.scales, &self.options.fit)?;
         let cal = Stats::of(&distances(&self.model, &outcome.x, &self.prep.cal));
-        let held = held_out(
-            &self.model,
-            &self.prep,
-            &self.validation,
-            &outcome.x,
-            free,
-            &self.scales,
-            &self.options.fit,
-        )?;
+        let held = self.held_out_with(&outcome.x, free, folds)?;
         let val = Stats::of(&held);
         let cal = cal.unwrap_or(Stats {
             rms: 0.0,

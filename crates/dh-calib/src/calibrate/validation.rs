@@ -186,6 +186,28 @@ pub(super) fn coarse_subset(cal: &[Observed], keep: usize) -> Vec<usize> {
     out
 }
 
+/// How cross-validation's folds are fitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Folds {
+    /// Each fold refitted by Levenberg-Marquardt from the full fit: the reported figures.
+    Refit,
+    /// Each fold one Gauss-Newton step from the full fit (`one_step`): the diagnosis's
+    /// candidate trials, compared with each other and with the fit they extend.
+    OneStep,
+}
+
+impl StepResult {
+    /// Puts the held-out distances `held` (as [`StepResult::held_out`]) into the step and its
+    /// report's validation figures.
+    pub(crate) fn set_held_out(&mut self, held: Vec<f64>) {
+        let val = Stats::of(&held);
+        self.report.val_rms = val.map(|v| v.rms);
+        self.report.val_mean = val.map(|v| v.mean);
+        self.report.val_max = val.map(|v| v.max);
+        self.held_out = held;
+    }
+}
+
 pub(crate) struct StepResult {
     pub(crate) outcome: FitOutcome,
     pub(crate) report: StepReport,

@@ -84,7 +84,14 @@ pub fn diagnose_tree(
         crate::calibrate::fitted_session(tree, data, options, &pool)?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
-    let mut held = geo.last.held_out;
+    // The trials' held-out figures step each fold once from the fit (`Folds::OneStep`), and
+    // are compared with the same figure of the fit they extend; the steps the report lists
+    // are refitted per fold.
+    let mut held = if pool.is_empty() {
+        geo.last.held_out
+    } else {
+        session.held_out_with(&last.x, &geo.free, Folds::OneStep)?
+    };
     let mut free = geo.free;
     let mut fixed = geo.fixed;
     let all_effects: Vec<usize> = (0..pool.len()).collect();
@@ -183,8 +190,13 @@ pub fn diagnose_tree(
                     };
                     return Ok((trial, None));
                 }
-                let step =
-                    session.step(&format!("+{label}"), &last.x, &trial_free, steps.last())?;
+                let step = session.step_with(
+                    &format!("+{label}"),
+                    &last.x,
+                    &trial_free,
+                    steps.last(),
+                    Folds::OneStep,
+                )?;
                 let trial = judge(
                     &session,
                     &last,
@@ -263,9 +275,11 @@ pub fn diagnose_tree(
                         .collect();
                     fixed2.sort_by_key(|f| f.index);
                     step.report.fixed = session.named_geometric(&fixed2);
+                    let one_step = std::mem::take(&mut step.held_out);
+                    step.set_held_out(session.held_out_with(&step.outcome.x, &f2, Folds::Refit)?);
                     steps.push(step.report);
                     last = step.outcome;
-                    held = step.held_out;
+                    held = one_step;
                     free = f2;
                     fixed = fixed2;
                     // A rejection in one round may pass once another effect is in.
