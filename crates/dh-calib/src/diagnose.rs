@@ -83,7 +83,9 @@ pub use crate::findings::{
 // other's items, re-exported here.
 mod selection;
 pub use selection::*;
+mod fold_normals;
 mod scoring;
+use fold_normals::FoldNormals;
 pub(crate) use scoring::*;
 
 /// A candidate whose projected columns keep less than this fraction of their length is aliased

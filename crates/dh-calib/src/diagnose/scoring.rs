@@ -183,7 +183,6 @@ pub(super) fn score(
     let all_rows: Vec<usize> = (0..r.len()).collect();
     let full = Projector::new(&jf, &r, all_rows);
     // Held-out predictions, linearised.
-    let cal_idx: Vec<usize> = (0..prep.cal.len()).collect();
     enum Held {
         Split {
             jv: DMatrix<f64>,
@@ -191,9 +190,15 @@ pub(super) fn score(
             starts: Vec<usize>,
             locate: Vec<(Vec<usize>, Vec<nalgebra::Matrix3<f64>>)>,
         },
-        Folds(Vec<(Projector, Vec<usize>)>),
+        Folds(FoldNormals),
         None,
     }
+    // Rows of each sample, by its first row.
+    let mut size_by_start = vec![0usize; r.len()];
+    for (i, &s) in starts.iter().enumerate() {
+        size_by_start[s] = starts.get(i + 1).copied().unwrap_or(r.len()) - s;
+    }
+    let size_at = |s: usize| size_by_start[s];
     let held = match &session.validation {
         Validation::Split { .. } => {
             let val = crate::sessions::val_for_linearisation(model, x, prep);
@@ -207,24 +212,11 @@ pub(super) fn score(
             }
         }
         Validation::CrossValidation { folds, .. } => {
-            let mut v = Vec::with_capacity(*folds);
-            for f in 0..*folds {
-                let (mut train_rows, mut test) = (Vec::new(), Vec::new());
-                for (i, g) in prep.groups.iter().enumerate() {
-                    let size = if i + 1 < starts.len() {
-                        starts[i + 1] - starts[i]
-                    } else {
-                        r.len() - starts[i]
-                    };
-                    if g % folds == f {
-                        test.push(i);
-                    } else {
-                        train_rows.extend(starts[i]..starts[i] + size);
-                    }
-                }
-                v.push((Projector::new(&jf, &r, train_rows), test));
+            let mut of_fold = vec![Vec::new(); *folds];
+            for (i, g) in prep.groups.iter().enumerate() {
+                of_fold[g % folds].push(starts[i]);
             }
-            Held::Folds(v)
+            Held::Folds(FoldNormals::new(&jf, &r, &of_fold, size_at))
         }
         Validation::None => Held::None,
     };
@@ -259,22 +251,7 @@ pub(super) fn score(
                 let idx: Vec<usize> = (0..starts.len()).collect();
                 rms(&distances_of(&pred, starts, &idx))
             }
-            Held::Folds(folds) => {
-                let mut d = Vec::with_capacity(cal_idx.len());
-                for (proj, test) in folds {
-                    let (df, dc, _, _) = proj.solve(c);
-                    // Only the test rows are needed.
-                    for &i in test {
-                        let s = starts[i];
-                        let mut v = r.rows(s, 3).into_owned() + jf.rows(s, 3) * &df;
-                        if c.ncols() > 0 {
-                            v += c.rows(s, 3) * &dc;
-                        }
-                        d.push(v.norm());
-                    }
-                }
-                rms(&d)
-            }
+            Held::Folds(normals) => rms(&normals.distances(c, size_at)),
             Held::None => None,
         }
     };
