@@ -251,8 +251,8 @@ pub fn calibrate_tree(
         write_tree(
             path,
             sheet,
-            &calibrated,
-            &doc,
+            calibrated,
+            doc,
             &targets,
             inertials_doc.map(|(d, _, _)| d),
             out,

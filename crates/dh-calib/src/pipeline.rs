@@ -231,11 +231,11 @@ pub struct ContactCalibration {
 #[derive(Clone, Debug)]
 pub enum Calibration {
     /// Measured points of a serial robot.
-    Points(PointsCalibration),
+    Points(Box<PointsCalibration>),
     /// Measured points of a tree.
-    Tree(TreeCalibration),
+    Tree(Box<TreeCalibration>),
     /// Contacts.
-    Contacts(ContactCalibration),
+    Contacts(Box<ContactCalibration>),
 }
 
 impl Calibration {

@@ -212,7 +212,7 @@ pub struct CalibrationDoc {
     /// Estimated robot base in the device frame (of the first session with several).
     pub device: PoseSi,
     /// With several measurement sessions: each one's device frame and RMS; absent otherwise.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sessions: Vec<SessionDoc>,
     /// Estimated targets in the tip frame.
     pub targets: Vec<TargetDoc>,

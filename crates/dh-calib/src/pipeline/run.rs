@@ -36,13 +36,12 @@ pub fn calibrate(
 ) -> Result<Calibration, PipelineError> {
     let contacts = data.samples.iter().any(|s| s.socket.is_some());
     match start {
-        Start::Tree(tree) if contacts => {
-            let _ = tree;
-            Err(PipelineError::ContactsOnTree)
+        Start::Tree(_) if contacts => Err(PipelineError::ContactsOnTree),
+        Start::Tree(tree) => {
+            calibrate_tree(tree, data, options, progress).map(|c| Calibration::Tree(Box::new(c)))
         }
-        Start::Tree(tree) => calibrate_tree(tree, data, options, progress).map(Calibration::Tree),
         Start::Serial(table) | Start::Cpa(table) if contacts => {
-            calibrate_contacts(table, data, options).map(Calibration::Contacts)
+            calibrate_contacts(table, data, options).map(|c| Calibration::Contacts(Box::new(c)))
         }
         Start::Serial(table) | Start::Cpa(table) => calibrate_points(
             table,
@@ -51,7 +50,7 @@ pub fn calibrate(
             options,
             progress,
         )
-        .map(Calibration::Points),
+        .map(|c| Calibration::Points(Box::new(c))),
     }
 }
 
