@@ -26,6 +26,7 @@
 
 pub mod calibrate;
 pub mod compensate;
+pub mod covariance;
 pub mod cpa;
 pub mod csv;
 pub mod data;
@@ -41,6 +42,8 @@ pub mod model;
 pub mod outliers;
 pub mod pipeline;
 pub mod predict;
+mod prepare;
+pub mod registration;
 pub mod rivals;
 pub mod sessions;
 pub mod simulate;
