@@ -17,7 +17,8 @@
 //! The entry point and its options are here and in `run`; the report's types in `doc`
 //! (steps, parameters, sessions), `findings_doc` (outliers, verdict, diagnosis), `tree_doc`
 //! and `contact_doc`; building the report from [`crate::calibrate::Report`] in `build`; the
-//! preparation of the measurements (a validation set merged in, targets kept) in `inputs`.
+//! preparation of the measurements (a validation set merged in, targets kept) in `inputs`; a
+//! calibrated model read back from a written sheet's sections in `calibrated`.
 
 use std::sync::Arc;
 
@@ -34,6 +35,7 @@ use crate::socket::SocketReport;
 use crate::tree::DhTree;
 
 mod build;
+mod calibrated;
 mod contact_doc;
 mod doc;
 mod findings_doc;
@@ -42,6 +44,7 @@ mod run;
 mod tree_doc;
 
 pub use build::*;
+pub use calibrated::*;
 pub use contact_doc::*;
 pub use doc::*;
 pub use findings_doc::*;
