@@ -21,7 +21,7 @@
 //!
 //! # Layout
 //! Items live in submodules and are re-exported here: the options (`options`), the report's
-//! types (`report`), the closed-form start (`start`; preparing the data is [`crate::prepare`]'s,
+//! types (`report`), the closed-form start (`start`; preparing the data is the private `crate::prepare`'s,
 //! the rigid registration [`crate::registration`]'s), held-out
 //! errors (`validation`), the session and its steps (`session`), the entry points
 //! (`pipeline`), identifiability and estimates (`identify`), and the residual tests of the

@@ -72,7 +72,7 @@ pub struct StepReport {
 /// How validation figures were obtained.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Validation {
-    /// On the samples marked [`Split::Validation`].
+    /// On the samples marked [`crate::data::Split::Validation`].
     Split {
         /// Their number.
         samples: usize,
