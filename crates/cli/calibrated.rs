@@ -2,111 +2,22 @@
 //! --out` (its table, `effects`, and the `calibration` section's device frame, targets and
 //! covariance), `simulate`'s truth file (the `truth` section's device frame, targets and
 //! effects: the simulated robot itself, without uncertainty), or any other model (a URDF chain,
-//! a sheet) taken as exact, without device frame, targets or uncertainty.
+//! a sheet) taken as exact, without device frame, targets or uncertainty. The sections and the
+//! robot they make are `dh_calib::pipeline`'s (`CalibrationRecord`, `CalibratedRobot`); this
+//! module finds and reads the file and words the errors.
 
 use anyhow::{Context, Result};
-use dh_calib::effects::EffectContext;
 use dh_calib::joints::JointMap;
-use dh_calib::predict::{effects_from_parameters, Calibrated, Covariance};
+pub use dh_calib::pipeline::CovarianceDoc;
+use dh_calib::pipeline::{CalibratedError, CalibratedRobot, CalibrationRecord, TruthRecord};
+use dh_calib::predict::{Calibrated, Covariance};
 use dh_core::Convention;
-use nalgebra::{DMatrix, Isometry3, Vector3};
-use serde::{Deserialize, Serialize};
+use nalgebra::Isometry3;
 
 use crate::error::hinted;
 use crate::input::display_name;
 use crate::measured::{load_model, sheet_model, LoadedModel};
 use crate::sheet::parse_doc;
-
-/// The covariance of a calibration's free parameters as a calibrated sheet holds it (in the
-/// `calibration` section; SI units, parameter names as in `dh_calib::model`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CovarianceDoc {
-    /// The parameters, in the matrix's order.
-    pub parameters: Vec<String>,
-    /// Rows of the symmetric matrix.
-    pub matrix: Vec<Vec<f64>>,
-}
-
-impl CovarianceDoc {
-    /// The document of `c`.
-    pub fn of(c: &Covariance) -> Self {
-        CovarianceDoc {
-            parameters: c.parameters.clone(),
-            matrix: c
-                .matrix
-                .row_iter()
-                .map(|r| r.iter().copied().collect())
-                .collect(),
-        }
-    }
-
-    /// The covariance it holds.
-    ///
-    /// # Errors
-    /// Ragged rows, and as [`Covariance::new`].
-    pub fn covariance(&self) -> Result<Covariance> {
-        let n = self.parameters.len();
-        if let Some(r) = self.matrix.iter().find(|r| r.len() != n) {
-            anyhow::bail!(
-                "covariance: expected {n} values per row for {n} parameters, found a row of {}",
-                r.len()
-            );
-        }
-        let m =
-            DMatrix::from_row_iterator(self.matrix.len(), n, self.matrix.iter().flatten().copied());
-        Covariance::new(self.parameters.clone(), m).map_err(|e| anyhow::anyhow!("{e}"))
-    }
-}
-
-/// What `predict` reads of a sheet's `calibration` section (other keys are the report's).
-#[derive(Clone, Debug, Default, Deserialize)]
-struct CalibrationRecord {
-    #[serde(default)]
-    device: Option<PoseRecord>,
-    #[serde(default)]
-    targets: Vec<TargetRecord>,
-    #[serde(default)]
-    covariance: Option<CovarianceDoc>,
-    /// Every measurement session's device frame but the first's (`device`).
-    #[serde(default)]
-    sessions: Vec<SessionRecord>,
-}
-
-/// A session's device frame (metres, roll-pitch-yaw radians).
-#[derive(Clone, Debug, Deserialize)]
-struct SessionRecord {
-    name: String,
-    xyz: [f64; 3],
-    rpy: [f64; 3],
-}
-
-/// What `predict` reads of a `simulate` truth file's `truth` section: the simulated robot's
-/// device frame, targets and effect values (parameter name, value; SI units).
-#[derive(Clone, Debug, Default, Deserialize)]
-struct TruthRecord {
-    #[serde(default)]
-    device: Option<PoseRecord>,
-    #[serde(default)]
-    targets: Vec<TargetRecord>,
-    #[serde(default)]
-    effects: Vec<(String, f64)>,
-    /// With several sessions: every session's device frame, the first's (`device`) included.
-    #[serde(default)]
-    sessions: Vec<(String, PoseRecord)>,
-}
-
-#[derive(Clone, Debug, Deserialize)]
-struct PoseRecord {
-    xyz: [f64; 3],
-    rpy: [f64; 3],
-}
-
-#[derive(Clone, Debug, Deserialize)]
-struct TargetRecord {
-    name: String,
-    xyz: [f64; 3],
-}
 
 /// A calibrated model, ready to predict.
 pub struct CalibratedModel {
@@ -228,22 +139,9 @@ pub fn calibrated_sheet(text: &str, origin: &str) -> Result<CalibratedModel> {
         (None, Some(t)) => {
             let truth: TruthRecord =
                 serde_yaml::from_value(t).with_context(|| format!("{origin}: truth section"))?;
-            effect_values.extend(truth.effects);
-            CalibrationRecord {
-                device: truth.device,
-                targets: truth.targets,
-                covariance: None,
-                sessions: truth
-                    .sessions
-                    .into_iter()
-                    .skip(1)
-                    .map(|(name, p)| SessionRecord {
-                        name,
-                        xyz: p.xyz,
-                        rpy: p.rpy,
-                    })
-                    .collect(),
-            }
+            let (record, effects) = truth.into_calibration();
+            effect_values.extend(effects);
+            record
         }
         (None, None) => CalibrationRecord::default(),
     };
@@ -256,56 +154,23 @@ fn assemble(
     effect_values: Vec<(String, f64)>,
     origin: &str,
 ) -> Result<CalibratedModel> {
-    let ctx = EffectContext::serial(&loaded.table);
-    let effects = effects_from_parameters(&effect_values, &ctx).map_err(|e| {
-        hinted(
-            format!("{origin}: effects: {e}"),
+    let robot = CalibratedRobot::new(&loaded.table, &effect_values, &record).map_err(|e| match e {
+        CalibratedError::Effects(_) => hinted(
+            format!("{origin}: {e}"),
             "gravity effects (compliance, backlash) need the link masses and cannot be predicted yet; every other effect is read as calibrate writes it",
-        )
-    })?;
-    let has_device = record.device.is_some();
-    let sessions = record
-        .sessions
-        .iter()
-        .map(|s| (s.name.clone(), dh_core::pose::from_xyz_rpy(s.xyz, s.rpy)))
-        .collect();
-    let device = record.device.map_or_else(Isometry3::identity, |p| {
-        dh_core::pose::from_xyz_rpy(p.xyz, p.rpy)
-    });
-    let targets: Vec<(String, Vector3<f64>)> = record
-        .targets
-        .iter()
-        .map(|t| (t.name.clone(), Vector3::from(t.xyz)))
-        .collect();
-    for (name, p) in &targets {
-        if !p.iter().all(|v| v.is_finite()) || p.norm() > 100.0 {
-            anyhow::bail!(
-                "{origin}: calibration: target '{name}' at {p:?} m is not a position on a tool"
-            );
-        }
-    }
-    let mut calibrated = Calibrated::new(&loaded.table, &effects, &device, &targets)
-        .map_err(|e| anyhow::anyhow!("{origin}: {e}"))?;
-    let covariance = match &record.covariance {
-        Some(c) => Some(
-            c.covariance()
-                .with_context(|| format!("{origin}: calibration"))?,
         ),
-        None => None,
-    };
-    if let Some(c) = &covariance {
-        // The first session's frame is the device frame: the other sessions' are left out.
-        calibrated = calibrated
-            .with_covariance(&c.in_session(None))
-            .map_err(|e| anyhow::anyhow!("{origin}: calibration: {e}"))?;
-    }
+        CalibratedError::RaggedCovariance { .. } | CalibratedError::Covariance(_) => {
+            anyhow::anyhow!("{e}").context(format!("{origin}: calibration"))
+        }
+        e => anyhow::anyhow!("{origin}: {e}"),
+    })?;
     let joints = JointMap::new(&loaded.table, &loaded.coupled);
     Ok(CalibratedModel {
         loaded,
-        calibrated,
-        has_device,
+        calibrated: robot.calibrated,
+        has_device: robot.has_device,
         joints,
-        sessions,
-        covariance,
+        sessions: robot.sessions,
+        covariance: robot.covariance,
     })
 }

@@ -64,3 +64,58 @@ impl Drop for Progress {
         self.bar.finish_and_clear();
     }
 }
+
+/// The pipeline's progress (`dh_calib::pipeline::Progress`) on a terminal: when the fit
+/// starts, a notice on standard error for a long run (`notice`, `None` for none) and the
+/// spinner of [`Progress`] (`label`); cleared when the fit is over, or when this is dropped.
+pub struct PipelineProgress<'a> {
+    err: &'a mut dyn std::io::Write,
+    quiet: bool,
+    notice: &'a dyn Fn(&dh_calib::pipeline::Plan) -> Option<String>,
+    label: &'a dyn Fn(&dh_calib::pipeline::Plan) -> String,
+    line: Option<Progress>,
+    failed: Option<std::io::Error>,
+}
+
+impl<'a> PipelineProgress<'a> {
+    /// Progress written to `err` (the notice) and drawn on the terminal (the spinner, unless
+    /// `quiet`).
+    pub fn new(
+        err: &'a mut dyn std::io::Write,
+        quiet: bool,
+        notice: &'a dyn Fn(&dh_calib::pipeline::Plan) -> Option<String>,
+        label: &'a dyn Fn(&dh_calib::pipeline::Plan) -> String,
+    ) -> Self {
+        Self {
+            err,
+            quiet,
+            notice,
+            label,
+            line: None,
+            failed: None,
+        }
+    }
+
+    /// The first failure to write the notice, if any.
+    ///
+    /// # Errors
+    /// That failure.
+    pub fn check(&mut self) -> std::io::Result<()> {
+        self.failed.take().map_or(Ok(()), Err)
+    }
+}
+
+impl dh_calib::pipeline::Progress for PipelineProgress<'_> {
+    fn started(&mut self, plan: &dh_calib::pipeline::Plan) {
+        if let Some(n) = (self.notice)(plan) {
+            if let Err(e) = writeln!(self.err, "{n}") {
+                self.failed.get_or_insert(e);
+            }
+        }
+        self.line = Progress::start(&(self.label)(plan), self.quiet);
+    }
+
+    fn finished(&mut self) {
+        self.line = None;
+    }
+}

@@ -21,15 +21,11 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use dh_calib::calibrate::Validation;
-use dh_calib::calibrate::{calibrate as run_calibration, CalibrationOptions, NoiseSource, Report};
+use dh_calib::calibrate::Report;
 use dh_calib::data::{Measurements, Split};
-use dh_calib::diagnose::{diagnose, DiagnoseOptions};
-use dh_calib::effects::{label_of, parse_label_in, EffectContext};
-use dh_calib::gravity::GravityModel;
+use dh_calib::effects::{label_of, EffectContext};
 use dh_calib::model::{Effect, Model, ModelOptions};
-use dh_calib::outliers::OutlierOptions;
-use dh_calib::tree::DhTree;
+use dh_calib::pipeline::{self, Calibration, Names, PipelineError, PipelineOptions, Plan, Start};
 use dh_core::pose::from_xyz_rpy;
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Vector3};
@@ -40,6 +36,7 @@ use crate::error::Outcome;
 use crate::input::display_name;
 use crate::measured::{parse_effect, DataUnits, LoadedModel};
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
+use crate::progress::PipelineProgress;
 use crate::sheet::EffectDoc;
 use crate::units::{AngleUnit, LengthUnit};
 

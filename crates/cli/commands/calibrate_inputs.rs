@@ -4,13 +4,13 @@
 //!
 //! Shared by `calibrate`, its contact path and its tree path.
 
-use std::collections::HashMap;
 use std::io::Write;
 
 use anyhow::{Context, Result};
 use dh_calib::cpa::{analyse, CpaOptions};
-use dh_calib::data::{Measurements, Sample, Split};
+use dh_calib::data::Measurements;
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
+use dh_calib::pipeline::{merge_validation, PipelineError};
 use dh_calib::tree::DhTree;
 use dh_core::{DhTable, Tolerance};
 use nalgebra::Vector3;
@@ -174,56 +174,16 @@ pub(crate) struct Inputs {
     pub(crate) cpa: bool,
 }
 
-/// Appends `extra`'s samples to `data` as validation samples, targets matched by name.
-pub(crate) fn merge_validation(data: &mut Measurements, extra: Measurements) {
-    let mut index: HashMap<String, usize> = data
-        .targets
-        .iter()
-        .enumerate()
-        .map(|(i, t)| (t.clone(), i))
-        .collect();
-    let sessions = super::calibrate_sessions::merge(data, &extra);
-    for mut s in extra.samples {
-        s.session = sessions.get(s.session).copied().unwrap_or(0);
-        let name = extra.targets.get(s.target).cloned().unwrap_or_default();
-        let next = data.targets.len();
-        let k = *index.entry(name.clone()).or_insert_with(|| {
-            data.targets.push(name);
-            next
-        });
-        s.target = k;
-        s.split = Split::Validation;
-        data.samples.push(s);
-    }
-}
-
-/// Keeps the samples of `keep` (by name) and renumbers the targets.
+/// Keeps the samples of `keep` (by name) and renumbers the targets
+/// (`dh_calib::pipeline::keep_targets`), naming the data file `origin` in the error.
 pub(crate) fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Result<()> {
-    for k in keep {
-        if !data.targets.contains(k) {
-            return Err(hinted(
-                format!("{origin}: --targets names '{k}', which the data does not have"),
-                format!("the data's targets: {}", data.targets.join(", ")),
-            ));
-        }
-    }
-    let old = std::mem::take(&mut data.targets);
-    let mut map = vec![None; old.len()];
-    for (i, t) in old.iter().enumerate() {
-        if keep.contains(t) {
-            map[i] = Some(data.targets.len());
-            data.targets.push(t.clone());
-        }
-    }
-    data.samples
-        .retain_mut(|s| match map.get(s.target).copied().flatten() {
-            Some(k) => {
-                s.target = k;
-                true
-            }
-            None => false,
-        });
-    Ok(())
+    dh_calib::pipeline::keep_targets(data, keep).map_err(|e| match e {
+        PipelineError::UnknownTarget { target, targets } => hinted(
+            format!("{origin}: --targets names '{target}', which the data does not have"),
+            format!("the data's targets: {}", targets.join(", ")),
+        ),
+        e => anyhow::anyhow!("{origin}: {e}"),
+    })
 }
 
 pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
@@ -306,31 +266,22 @@ pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<I
     })
 }
 
-/// Refuses, before any fitting, point data that cannot determine its own unknowns: every step
-/// estimates each target's position (3 parameters) and the device frame (6), and each sample
-/// gives 3 coordinates, so fewer than `targets + 3` calibration samples fit nothing (200 rows
-/// of 200 targets took minutes to say so).
+/// Refuses, before any fitting, point data that cannot determine its own unknowns
+/// (`dh_calib::pipeline::enough_samples`), naming the data file `data_name`.
 pub(crate) fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
-    let cal: Vec<&Sample> = data
-        .samples
-        .iter()
-        .filter(|s| s.split == Split::Calibration)
-        .collect();
-    let mut targets: Vec<usize> = cal.iter().map(|s| s.target).collect();
-    targets.sort_unstable();
-    targets.dedup();
-    let needed = targets.len() + 3;
-    if cal.len() < needed {
-        return Err(hinted(
-            format!(
-                "{data_name}: expected at least {needed} calibration samples for {} target(s) (each target's position and the device frame are estimated: 3 per target + 6, 3 coordinates per sample), found {}",
-                targets.len(),
-                cal.len()
-            ),
+    dh_calib::pipeline::enough_samples(data).map_err(|e| too_few(e, data_name))
+}
+
+/// The command line's message for [`PipelineError::TooFewSamples`] (other errors as they are,
+/// after the file name).
+pub(crate) fn too_few(e: PipelineError, data_name: &str) -> anyhow::Error {
+    match e {
+        PipelineError::TooFewSamples { .. } => hinted(
+            format!("{data_name}: {e}"),
             "measure each target at several poses (the target column names the reflector, not the pose)",
-        ));
+        ),
+        e => anyhow::anyhow!("{data_name}: {e}"),
     }
-    Ok(())
 }
 
 /// The measurement files of `args` read for `model` as `calibrate` reads them for a serial

@@ -2,38 +2,31 @@
 //! fitted at once, each measured target on the branch it names.
 //!
 //! The steps, validation, effects and report are those of a serial model
-//! ([`crate::commands::calibrate`], `dh_calib::calibrate::calibrate_tree`,
-//! `dh_calib::diagnose::diagnose_tree`); the report adds a `tree` section saying which
+//! ([`crate::commands::calibrate`], `dh_calib::pipeline::calibrate` with a tree start); the
+//! report adds a `tree` section saying which
 //! parameters, targets and mount belong to the trunk and to each branch. `--out` writes the
 //! calibrated tree sheet (YAML, or JSON for `.json`).
 
 use std::io::Write;
 use std::path::Path;
-use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use dh_calib::calibrate::{calibrate_tree as fit_tree, CalibrationOptions, Report};
-use dh_calib::data::{Measurements, Split};
-use dh_calib::diagnose::{diagnose_tree, DiagnoseOptions};
-use dh_calib::effects::{parse_label_in, EffectContext};
 use dh_calib::gravity::GravityModel;
-use dh_calib::model::Effect;
+use dh_calib::pipeline::{self, target_branches, Calibration, PipelineError, Plan, Start};
+pub use dh_calib::pipeline::{TableDoc, TreeCalibrationDoc};
 use dh_calib::tree::DhTree;
 use serde::Serialize;
 
 use crate::commands::calibrate::{
-    read_data_for, report_for, CalibrateArgs, CalibrateFormat, CalibrationDoc, EffectsChoice,
-    PoseSi,
+    check_sigma, pipeline_options, read_data_for, text_for, too_few, CalibrateArgs,
+    CalibrateFormat, CalibrationDoc, PoseSi,
 };
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_text};
 use crate::measured::LoadedModel;
+use crate::progress::PipelineProgress;
 use crate::sheet::parse_doc;
 use crate::tree_sheet::{InertialsDoc, TreeSheet};
-
-/// Work (calibration samples × (folds + 1) × steps) beyond which a run says it may take a
-/// while, as for a serial model.
-const LONG_RUN: usize = 200_000;
 
 /// The tree sheet `--model` names, with its file name: `None` for a URDF, a serial sheet,
 /// standard input (a tree sheet is read from a file) or a file that does not parse (the
@@ -73,113 +66,6 @@ pub fn tree_model(args: &CalibrateArgs) -> Result<Option<(TreeSheet, String)>> {
     Ok(Some((TreeSheet::from_doc(doc, &text, &origin)?, origin)))
 }
 
-/// Which table a parameter of a tree belongs to: `None` for the trunk, `Some(b)` for branch
-/// `b`; the device frame belongs to none (`Err(())`).
-fn table_of(name: &str, tree: &DhTree, targets: &[(String, usize)]) -> Result<Option<usize>, ()> {
-    if name.starts_with("device.") {
-        return Err(());
-    }
-    if name.starts_with("base.") {
-        return Ok(None);
-    }
-    if let Some(rest) = name.strip_prefix("target.") {
-        // `target.<name>.<x|y|z>`: target names may hold dots, the coordinate may not.
-        let target = rest.rsplit_once('.').map_or(rest, |(t, _)| t);
-        return targets
-            .iter()
-            .find(|(t, _)| t == target)
-            .map(|(_, b)| Some(*b))
-            .ok_or(());
-    }
-    // Effects: `<kind>:<joint>[:<joint>]`, on the first joint's table; `scale` on none.
-    let joint = match name.split_once(':') {
-        Some((_, joints)) => joints.split(':').next().unwrap_or_default(),
-        None => name.rsplit_once('.').map_or(name, |(j, _)| j),
-    };
-    if let Some(b) = joint
-        .strip_suffix(".base")
-        .and_then(|b| tree.branch_index(b))
-    {
-        return Ok(Some(b));
-    }
-    match tree.row_index(joint) {
-        Some(r) => Ok(tree.place(r).0),
-        None => Err(()),
-    }
-}
-
-/// One table of the tree in the report.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct TableDoc {
-    /// `trunk`, or the branch's name.
-    pub name: String,
-    /// Its joints, in order.
-    pub joints: Vec<String>,
-    /// The targets riding on it (a branch), none for the trunk.
-    pub targets: Vec<String>,
-    /// Estimated parameters of its rows, base or mount, targets and effects.
-    pub free: Vec<String>,
-    /// Parameters of it held at nominal.
-    pub fixed: Vec<String>,
-    /// The calibrated mount in the branch point frame (branches; metres, radians).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub mount: Option<PoseSi>,
-}
-
-/// The JSON report of a tree: the serial report's keys and `tree`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct TreeCalibrationDoc {
-    /// Everything a serial calibration reports.
-    #[serde(flatten)]
-    pub report: CalibrationDoc,
-    /// The trunk and each branch.
-    pub tree: Vec<TableDoc>,
-}
-
-/// The tree section of the report.
-fn tables(
-    tree: &DhTree,
-    calibrated: &DhTree,
-    doc: &CalibrationDoc,
-    targets: &[(String, usize)],
-) -> Vec<TableDoc> {
-    let mut out = Vec::with_capacity(tree.branches().len() + 1);
-    let names = |rows: &[dh_core::DhRow]| rows.iter().map(|r| r.name.clone()).collect();
-    let params = |b: Option<usize>, free: bool| -> Vec<String> {
-        doc.parameters
-            .iter()
-            .filter(|p| p.free == free && table_of(&p.name, tree, targets) == Ok(b))
-            .map(|p| p.name.clone())
-            .collect()
-    };
-    out.push(TableDoc {
-        name: "trunk".into(),
-        joints: names(&tree.trunk().rows),
-        targets: Vec::new(),
-        free: params(None, true),
-        fixed: params(None, false),
-        mount: None,
-    });
-    for (b, br) in tree.branches().iter().enumerate() {
-        out.push(TableDoc {
-            name: br.name.clone(),
-            joints: names(&br.table.rows),
-            targets: targets
-                .iter()
-                .filter(|(_, c)| *c == b)
-                .map(|(t, _)| t.clone())
-                .collect(),
-            free: params(Some(b), true),
-            fixed: params(Some(b), false),
-            mount: calibrated
-                .branches()
-                .get(b)
-                .map(|c| PoseSi::of(&c.table.base)),
-        });
-    }
-    out
-}
-
 /// The text of the tree section.
 fn tree_text(tables: &[TableDoc]) -> String {
     let mut s = format!(
@@ -214,36 +100,6 @@ fn tree_text(tables: &[TableDoc]) -> String {
         }
     }
     s
-}
-
-/// The `(target, branch index)` of every target of `data` (see [`crate::tree_sheet`]).
-fn target_branches(
-    tree: &DhTree,
-    data: &Measurements,
-    data_name: &str,
-) -> Result<Vec<(String, usize)>> {
-    let branches = tree
-        .branches()
-        .iter()
-        .map(|b| b.name.as_str())
-        .collect::<Vec<_>>()
-        .join(", ");
-    data.targets
-        .iter()
-        .map(|t| {
-            TreeSheet::branch_of(tree, t)
-                .and_then(|b| tree.branch_index(b))
-                .map(|b| (t.clone(), b))
-                .ok_or_else(|| {
-                    hinted(
-                        format!(
-                            "{data_name}: target '{t}': expected a branch name of the tree ({branches}) or BRANCH/NAME, found no such branch"
-                        ),
-                        "a target rides on the branch of its own name, or on the branch before the first '/' of it (right/wrist); rename the target or the branch",
-                    )
-                })
-        })
-        .collect()
 }
 
 /// Runs `calibrate` on a tree sheet.
@@ -304,7 +160,13 @@ pub fn calibrate_tree(
         ));
     }
     crate::commands::calibrate::enough_samples(&data, &data_name)?;
-    let targets = target_branches(tree, &data, &data_name)?;
+    let targets = target_branches(tree, &data).map_err(|e| match e {
+        PipelineError::NoBranch { .. } => hinted(
+            format!("{data_name}: {e}"),
+            "a target rides on the branch of its own name, or on the branch before the first '/' of it (right/wrist); rename the target or the branch",
+        ),
+        e => anyhow::anyhow!("{data_name}: {e}"),
+    })?;
     // Link masses: --inertials, else the sheet's own.
     let inertials_doc = match &args.inertials {
         Some(path) => {
@@ -341,101 +203,56 @@ pub fn calibrate_tree(
             }
         }
     }
-    let ctx = EffectContext {
-        tree: tree.clone(),
-        gravity: match &inertials {
-            Some(i) => Some(Arc::new(
-                GravityModel::new(tree, i, gravity)
-                    .map_err(|e| anyhow::anyhow!("inertials: {e}"))?,
-            )),
-            None => None,
-        },
+    check_sigma(args)?;
+    let options = pipeline_options(args, origin, inertials, gravity);
+    let notice = |p: &Plan| {
+        p.is_long().then(|| {
+            format!(
+                "urdf-dh: calibrating {origin} ({} samples, {} targets on {} branches, {}-fold cross-validation unless there is a validation split); this may take a while",
+                p.samples, p.targets, p.branches, p.folds
+            )
+        })
     };
-    let effects: Vec<Arc<dyn Effect>> = match &args.effects {
-        EffectsChoice::List(labels) => labels
-            .iter()
-            .map(|l| {
-                parse_label_in(l, &ctx).map_err(|e| {
-                    hinted(
-                        format!("{e}"),
-                        format!(
-                            "effects are named <kind>:<joint> (coupling:<joint>:<driver>; scale alone; compliance needs inertials); the tree's joints: {}",
-                            tree.rows()
-                                .iter()
-                                .map(|r| r.name.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ),
-                    )
-                })
-            })
-            .collect::<Result<_>>()?,
-        EffectsChoice::None | EffectsChoice::Auto => Vec::new(),
+    let label = |p: &Plan| {
+        format!(
+            "calibrating {origin} against {data_name} ({} samples)",
+            p.samples
+        )
     };
-    if let Some(s) = args.sigma {
-        if !(s.is_finite() && s > 0.0) {
-            anyhow::bail!("--sigma: expected a positive length, found {s}");
-        }
-    }
-    let options = CalibrationOptions {
-        folds: args.folds,
-        sigma: args.sigma.map(|s| s * args.units.length.metres()),
-        effects: effects.clone(),
-        target_branches: targets
-            .iter()
-            .map(|(t, b)| (t.clone(), tree.branches()[*b].name.clone()))
-            .collect(),
-        outliers: dh_calib::outliers::OutlierOptions {
-            keep: args.keep_outliers,
-            ..dh_calib::outliers::OutlierOptions::default()
-        },
-        ..CalibrationOptions::default()
-    };
-    let cal = data
-        .samples
-        .iter()
-        .filter(|s| s.split == Split::Calibration)
-        .count();
-    let steps = 2 + usize::from(args.effects != EffectsChoice::None);
-    if cal * (args.folds + 1) * steps > LONG_RUN {
-        writeln!(
-            err,
-            "urdf-dh: calibrating {origin} ({cal} samples, {} targets on {} branches, {}-fold cross-validation unless there is a validation split); this may take a while",
-            data.targets.len(),
-            tree.branches().len(),
-            args.folds
-        )?;
-    }
-    let failed = |e: dh_calib::CalibError| anyhow::anyhow!("{data_name}: calibration failed: {e}");
-    let progress = crate::progress::Progress::start(
-        &format!("calibrating {origin} against {data_name} ({cal} samples)"),
-        args.quiet,
-    );
-    let report: Report = match &args.effects {
-        EffectsChoice::Auto => {
-            let diag = DiagnoseOptions {
-                inertials,
-                gravity,
-                max_effects: args.max_effects,
-                ..DiagnoseOptions::default()
-            };
-            diagnose_tree(tree, &data, &options, &diag).map_err(failed)?
-        }
-        EffectsChoice::None | EffectsChoice::List(_) => {
-            fit_tree(tree, &data, &options).map_err(failed)?
-        }
-    };
+    let mut progress = PipelineProgress::new(err, args.quiet, &notice, &label);
+    let run = pipeline::calibrate(&Start::Tree(tree.clone()), &data, &options, &mut progress);
+    progress.check()?;
     drop(progress);
-    let calibrated = report.tree.clone().unwrap_or_else(|| tree.clone());
-    let (doc, text) = report_for(args, &model, &data, &report);
-    let tables = tables(tree, &calibrated, &doc, &targets);
+    let calibration = match run {
+        Ok(Calibration::Tree(c)) => c,
+        Ok(_) => anyhow::bail!("{data_name}: calibration took another path than a tree's"),
+        Err(e @ PipelineError::Effect { .. }) => {
+            return Err(hinted(
+                format!("{e}"),
+                format!(
+                    "effects are named <kind>:<joint> (coupling:<joint>:<driver>; scale alone; compliance needs inertials); the tree's joints: {}",
+                    tree.rows()
+                        .iter()
+                        .map(|r| r.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ))
+        }
+        Err(e @ PipelineError::Inertials(_)) => return Err(anyhow::anyhow!("{e}")),
+        Err(e) => return Err(too_few(e, &data_name)),
+    };
+    let calibrated = &calibration.calibrated;
+    let doc = &calibration.doc.report;
+    let text = text_for(&model, &data, doc);
+    let tables = &calibration.doc.tree;
     // The file first: a run that cannot write it prints no report.
     if let Some(path) = &args.out {
         write_tree(
             path,
             sheet,
-            &calibrated,
-            &doc,
+            calibrated,
+            doc,
             &targets,
             inertials_doc.map(|(d, _, _)| d),
             out,
@@ -449,11 +266,7 @@ pub fn calibrate_tree(
     };
     match args.format {
         CalibrateFormat::Json => {
-            let doc = TreeCalibrationDoc {
-                report: doc.clone(),
-                tree: tables.clone(),
-            };
-            out.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+            out.write_all((serde_json::to_string_pretty(&calibration.doc)? + "\n").as_bytes())?;
         }
         CalibrateFormat::Text => {
             // The tree section goes before the closing `result:` line.
@@ -462,7 +275,7 @@ pub fn calibrate_tree(
                 None => (text.as_str(), ""),
             };
             out.write_all(body.as_bytes())?;
-            out.write_all(tree_text(&tables).as_bytes())?;
+            out.write_all(tree_text(tables).as_bytes())?;
             out.write_all(result.as_bytes())?;
         }
     }
@@ -549,29 +362,4 @@ fn write_tree(
     };
     crate::output::write_all_or_stdout(&[(Path::new(path), bytes.as_bytes())], stdout)
         .with_context(|| format!("writing the calibrated tree to {}", display_name(path)))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn parameters_belong_to_their_table() {
-        let sheet = TreeSheet::parse(
-            "convention: modified\nlength_unit: m\nangle_unit: rad\njoints:\n  - {name: t1, type: revolute, a: 0, alpha: 0, d: 0.2, theta: 0}\nbranches:\n  - name: r\n    joints: [{name: r1, type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}]\n  - name: l\n    joints: [{name: l1, type: revolute, a: 0.3, alpha: 0, d: 0, theta: 0}]\n",
-            "t.yaml",
-        )
-        .unwrap();
-        let t = &sheet.tree;
-        let targets = [("r".to_string(), 0), ("l/m.1".to_string(), 1)];
-        assert_eq!(table_of("device.x", t, &targets), Err(()));
-        assert_eq!(table_of("base.rz", t, &targets), Ok(None));
-        assert_eq!(table_of("t1.theta", t, &targets), Ok(None));
-        assert_eq!(table_of("r1.a", t, &targets), Ok(Some(0)));
-        assert_eq!(table_of("l.base.x", t, &targets), Ok(Some(1)));
-        assert_eq!(table_of("target.l/m.1.z", t, &targets), Ok(Some(1)));
-        assert_eq!(table_of("compliance:l1", t, &targets), Ok(Some(1)));
-        assert_eq!(table_of("coupling:r1:t1", t, &targets), Ok(Some(0)));
-        assert_eq!(table_of("scale", t, &targets), Err(()));
-    }
 }

@@ -9,173 +9,22 @@
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
-use std::sync::Arc;
 
 use anyhow::Result;
-use dh_calib::calibrate::CalibrationOptions;
-use dh_calib::diagnose::{DiagnoseOptions, EffectSelection};
-use dh_calib::effects::{parse_label_in, EffectContext};
-use dh_calib::gravity::GravityModel;
-use dh_calib::socket::{diagnose_sockets, Consistency, SocketReport};
-use dh_calib::tree::DhTree;
+use dh_calib::pipeline::{self, Calibration, ContactDoc, Silent, SocketDoc, Start};
+use dh_calib::socket::SocketReport;
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Translation3};
 use serde::Serialize;
 
-use crate::commands::calibrate_args::{CalibrateArgs, CalibrateFormat, EffectsChoice};
-use crate::commands::calibrate_doc::{
-    calibrated_bytes, unit_of, CandidateDoc, FixedDoc, TargetDoc,
-};
+use crate::commands::calibrate::{check_sigma, pipeline_options, serial_error};
+use crate::commands::calibrate_args::{CalibrateArgs, CalibrateFormat};
+use crate::commands::calibrate_doc::{calibrated_bytes, unit_of, TargetDoc};
 use crate::commands::calibrate_inputs::{gravity_inputs, Inputs};
 use crate::error::Outcome;
 use crate::input::display_name;
-use crate::measured::parse_effect;
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::units::LengthUnit;
-
-/// Consistency figures in metres (JSON).
-#[derive(Serialize)]
-struct ConsistencyDoc {
-    mean_abs: f64,
-    rms: f64,
-    max: f64,
-    distance_error: Option<f64>,
-    placements: usize,
-    points: usize,
-}
-
-impl From<&Consistency> for ConsistencyDoc {
-    fn from(c: &Consistency) -> Self {
-        Self {
-            mean_abs: c.mean_abs,
-            rms: c.rms,
-            max: c.max,
-            distance_error: c.distance_error,
-            placements: c.placements,
-            points: c.points,
-        }
-    }
-}
-
-#[derive(Serialize)]
-struct StepDoc {
-    label: String,
-    free: Option<usize>,
-    rms: Option<f64>,
-    train: ConsistencyDoc,
-    test: Option<ConsistencyDoc>,
-}
-
-#[derive(Serialize)]
-struct ParameterDoc {
-    name: String,
-    nominal: f64,
-    estimate: f64,
-    std_error: Option<f64>,
-    free: bool,
-}
-
-#[derive(Serialize)]
-struct SocketDoc {
-    name: String,
-    position: [f64; 3],
-    samples: usize,
-}
-
-/// One full refit of a candidate (JSON `trials`).
-#[derive(Serialize)]
-struct TrialDoc {
-    label: String,
-    rms: f64,
-    val_rms: Option<f64>,
-    f: f64,
-    f_p: f64,
-    f_threshold: f64,
-    held_out_p: Option<f64>,
-    accepted: bool,
-    reason: String,
-}
-
-/// The JSON report: metres and radians.
-#[derive(Serialize)]
-struct ContactDoc {
-    model: String,
-    data: String,
-    kind: &'static str,
-    steps: Vec<StepDoc>,
-    sigma_point: f64,
-    condition_number: f64,
-    sockets: Vec<SocketDoc>,
-    parameters: Vec<ParameterDoc>,
-    fixed: Vec<FixedDoc>,
-    selected_effects: Vec<String>,
-    candidates: Vec<CandidateDoc>,
-    trials: Vec<TrialDoc>,
-    notes: Vec<String>,
-}
-
-fn document(model: &str, data: &str, r: &SocketReport) -> ContactDoc {
-    ContactDoc {
-        model: model.into(),
-        data: data.into(),
-        kind: "contacts",
-        steps: r
-            .consistency
-            .iter()
-            .map(|c| {
-                let s = r.steps.iter().find(|s| s.label == c.label);
-                StepDoc {
-                    label: c.label.clone(),
-                    free: s.map(|s| s.free),
-                    rms: s.map(|s| s.rms),
-                    train: (&c.train).into(),
-                    test: c.test.as_ref().map(Into::into),
-                }
-            })
-            .collect(),
-        sigma_point: r.sigma_point,
-        condition_number: r.condition_number,
-        sockets: r
-            .sockets
-            .iter()
-            .map(|s| SocketDoc {
-                name: s.name.clone(),
-                position: [s.position.x, s.position.y, s.position.z],
-                samples: s.samples,
-            })
-            .collect(),
-        parameters: r
-            .parameters
-            .iter()
-            .map(|p| ParameterDoc {
-                name: p.name.clone(),
-                nominal: p.nominal,
-                estimate: p.estimate,
-                std_error: p.std_error,
-                free: p.free,
-            })
-            .collect(),
-        fixed: r.fixed.iter().map(FixedDoc::from).collect(),
-        selected_effects: r.selected_effects.clone(),
-        candidates: r.candidates.iter().map(CandidateDoc::from).collect(),
-        trials: r
-            .trials
-            .iter()
-            .map(|t| TrialDoc {
-                label: t.label.clone(),
-                rms: t.rms,
-                val_rms: t.val_rms,
-                f: t.f,
-                f_p: t.f_p,
-                f_threshold: t.f_threshold,
-                held_out_p: t.held_out.map(|h| h.1),
-                accepted: t.accepted,
-                reason: t.reason.clone(),
-            })
-            .collect(),
-        notes: r.notes.clone(),
-    }
-}
 
 fn mm(v: f64) -> String {
     format!("{:.3}", v * 1e3)
@@ -336,49 +185,21 @@ pub(crate) fn calibrate_contacts(
     err: &mut dyn Write,
 ) -> Result<Outcome> {
     let table = &inputs.table;
-    if let Some(s) = args.sigma {
-        if !(s.is_finite() && s > 0.0) {
-            anyhow::bail!("--sigma: expected a positive length, found {s}");
-        }
-    }
+    check_sigma(args)?;
     let (inertials, gravity) = gravity_inputs(args, table)?;
-    let effects = match &args.effects {
-        EffectsChoice::None => EffectSelection::None,
-        EffectsChoice::Auto => EffectSelection::Auto,
-        EffectsChoice::List(labels) => {
-            let ctx = EffectContext {
-                tree: DhTree::serial(table),
-                gravity: match &inertials {
-                    Some(i) => Some(Arc::new(
-                        GravityModel::serial(table, i, gravity)
-                            .map_err(|e| anyhow::anyhow!("inertials: {e}"))?,
-                    )),
-                    None => None,
-                },
-            };
-            for l in labels {
-                // The CLI's message names the kinds and joints.
-                if parse_label_in(l, &ctx).is_err() {
-                    parse_effect(l, table)?;
-                }
-            }
-            EffectSelection::Labels(labels.clone())
-        }
-    };
-    let options = CalibrationOptions {
-        sigma: args.sigma.map(|s| s * args.units.length.metres()),
-        ..CalibrationOptions::default()
-    };
-    let diag = DiagnoseOptions {
-        effects,
-        inertials,
-        gravity,
-        ..DiagnoseOptions::default()
-    };
     let name = display_name(&args.data);
-    let r = diagnose_sockets(&DhTree::serial(table), &inputs.data, &options, &diag)
-        .map_err(|e| anyhow::anyhow!("{name}: calibration failed: {e}"))?;
-    let doc = document(&inputs.model_name, &name, &r);
+    let options = pipeline_options(args, &inputs.model_name, inertials, gravity);
+    let run = pipeline::calibrate(
+        &Start::Serial(table.clone()),
+        &inputs.data,
+        &options,
+        &mut Silent,
+    );
+    let (r, doc) = match run {
+        Ok(Calibration::Contacts(c)) => (c.report, c.doc),
+        Ok(_) => anyhow::bail!("{name}: calibration took another path than contacts'"),
+        Err(e) => return Err(serial_error(e, table, &name)),
+    };
     // Every output file is built before any is written, and all are written or none.
     let mut files = Vec::new();
     if let Some(path) = &args.out {

@@ -10,7 +10,6 @@
 use anyhow::{Context, Result};
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Point3, Vector3};
-use serde::Serialize;
 use urdf_axes::UrdfModel;
 
 use crate::sheet::Sheet;
@@ -29,24 +28,9 @@ pub const LENGTH_MARGIN: f64 = 1.0;
 /// Forward kinematics of a read-back artefact.
 type Fk = Box<dyn Fn(&[f64]) -> Result<Isometry3<f64>>>;
 
-/// What the read-back found (metres).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct WrittenDoc {
-    /// The file written (or, when the proof failed, not written).
-    pub path: String,
-    /// Predicted points compared.
-    pub points: usize,
-    /// Largest distance between the artefact's prediction and the fitted model's (metres).
-    pub max_deviation: f64,
-    /// The bound it must stay within ([`WRITTEN_TOLERANCE`]).
-    pub bound: f64,
-    /// Largest written length (metres): `|a|`, `|d|`, base and tool offsets.
-    pub max_length: f64,
-    /// The bound on lengths: the nominal model's size plus [`LENGTH_MARGIN`].
-    pub length_bound: f64,
-    /// Both within their bounds; the file is written only then.
-    pub passed: bool,
-}
+/// What the read-back found (metres): the library's document (`dh_calib::pipeline`), which a
+/// report carries as its `written` field.
+pub use dh_calib::pipeline::WrittenDoc;
 
 /// The measured poses and targets the proof predicts at.
 pub struct Predictions<'a> {

@@ -21,7 +21,8 @@
 //!
 //! # Layout
 //! Items live in submodules and are re-exported here: the options (`options`), the report's
-//! types (`report`), preparing the data (`prepare`), the closed-form start (`start`), held-out
+//! types (`report`), the closed-form start (`start`; preparing the data is the private `crate::prepare`'s,
+//! the rigid registration [`crate::registration`]'s), held-out
 //! errors (`validation`), the session and its steps (`session`), the entry points
 //! (`pipeline`), identifiability and estimates (`identify`), and the residual tests of the
 //! verdict (`verdict`). The diagnosis's data types are in [`crate::findings`].
@@ -30,9 +31,9 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use dh_core::DhTable;
-use nalgebra::{DMatrix, Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, Isometry3, Matrix3, Vector3};
 
-use crate::data::{Measurements, Split};
+use crate::data::Measurements;
 use crate::fit::{self, CalibError, FitOptions, FitOutcome, Termination};
 use crate::model::{
     xyz_rpy, Block, Effect, Model, ModelOptions, ModelProblem, Observation, Observed,
@@ -45,11 +46,11 @@ use crate::tree::DhTree;
 mod options;
 pub use options::*;
 mod report;
+pub(crate) use crate::prepare::*;
+pub use crate::registration::register;
 pub use report::*;
-mod prepare;
-pub(crate) use prepare::*;
 mod start;
-pub use start::*;
+use start::*;
 mod validation;
 pub use validation::*;
 mod one_step;
@@ -59,7 +60,10 @@ mod pipeline;
 pub use pipeline::*;
 mod identify;
 pub(crate) use identify::*;
+mod screen;
 mod verdict;
+pub use screen::screen;
+pub(crate) use screen::{check_level, screen_from};
 pub(crate) use verdict::*;
 #[cfg(test)]
 mod tests;

@@ -12,7 +12,8 @@
 //!   analysis for a start without a model ([`cpa`]); the calibration pipeline ([`calibrate`]:
 //!   options, preparation, closed-form start, session steps, validation, identifiability,
 //!   report, verdict); calibration from contacts with unknown fixed points ([`socket`]);
-//!   outlier screening ([`outliers`]).
+//!   outlier screening ([`outliers`]); the whole pipeline as one call, its report a plain
+//!   document ([`pipeline`]: serial, tree and contact paths, the JSON report's types).
 //! - Diagnosis: the automatic search for the effect a residual lacks ([`diagnose`]: selection
 //!   loop, scoring and tests), its rival candidates ([`rivals`]) and its findings as data
 //!   ([`findings`]: candidate table, residual tests, verdict).
@@ -25,6 +26,7 @@
 
 pub mod calibrate;
 pub mod compensate;
+pub mod covariance;
 pub mod cpa;
 pub mod csv;
 pub mod data;
@@ -39,7 +41,10 @@ pub mod import;
 pub mod joints;
 pub mod model;
 pub mod outliers;
+pub mod pipeline;
 pub mod predict;
+mod prepare;
+pub mod registration;
 pub mod rivals;
 pub mod sessions;
 pub mod simulate;

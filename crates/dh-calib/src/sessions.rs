@@ -18,10 +18,11 @@ use std::collections::HashMap;
 
 use nalgebra::{Isometry3, Point3, Vector3};
 
-use crate::calibrate::{register, Prepared};
 use crate::data::{Measurements, Split};
 use crate::fit::CalibError;
 use crate::model::{Model, Observation, Observed};
+use crate::prepare::Prepared;
+use crate::registration::register;
 
 /// Poses a session needs at least: a rigid frame needs three non-collinear points.
 pub const MIN_SESSION_POSES: usize = 3;

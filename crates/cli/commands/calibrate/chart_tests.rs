@@ -1,6 +1,7 @@
 //! Unit tests of the residual chart.
 
 use super::*;
+use dh_calib::calibrate::{calibrate as run_calibration, CalibrationOptions};
 use dh_calib::simulate::{simulate, Errors, SimulationOptions};
 use dh_core::{Convention, DhRow};
 

@@ -85,7 +85,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         inputs.table.rows.len(),
         doc.data
     );
-    let validation = match doc.validation.method {
+    let validation = match doc.validation.method.as_str() {
         "split" => format!(
             "validation on {} held-out samples{}",
             doc.validation_samples,
@@ -123,7 +123,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
                 "noise: {} {} per axis ({}); noise floor {} {} RMS",
                 l(n.sigma),
                 lu.symbol(),
-                match n.source {
+                match n.source.as_str() {
                     "given" => "given with --sigma",
                     "samples" => "the samples' sigma",
                     _ => "pure error of repeated poses",
@@ -217,11 +217,11 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             s,
             "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
             crate::guard::escape(&p.name),
-            unit_label(p.unit, units),
-            value(p.nominal, p.unit, units),
-            value(p.estimate, p.unit, units),
+            unit_label(&p.unit, units),
+            value(p.nominal, &p.unit, units),
+            value(p.estimate, &p.unit, units),
             p.std_error
-                .map_or_else(|| "-".into(), |e| std_error(e, p.unit, units))
+                .map_or_else(|| "-".into(), |e| std_error(e, &p.unit, units))
         );
     }
     let rpy = |r: [f64; 3]| {
@@ -271,7 +271,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
                 c.score / (scale * scale),
                 c.independence,
                 o(c.val_rms),
-                match (c.status, &c.reason) {
+                match (c.status.as_str(), &c.reason) {
                     ("rival", Some(r)) => format!("rival ({r})"),
                     (s, _) => s.to_string(),
                 }

@@ -66,7 +66,7 @@ pub fn calibrate_tree(
 }
 
 /// A session of the data with `effects` whose geometric step has run, after the outlier screen
-/// of `options.outliers` ([`crate::outliers::screen`]) when it is on.
+/// of `options.outliers` ([`crate::calibrate::screen`]) when it is on.
 pub(crate) struct Fitted<'a> {
     pub(crate) session: Session<'a>,
     pub(crate) geo: Geometric,
@@ -86,7 +86,7 @@ pub(crate) fn fitted_session<'a>(
     effects: &[Arc<dyn Effect>],
 ) -> Result<Fitted<'a>, CalibError> {
     if options.outliers.screen {
-        crate::outliers::check_level(options)?;
+        check_level(options)?;
     }
     let mut session = Session::new(tree, data, options, effects, None)?;
     let geo = session.geometric()?;
@@ -97,7 +97,7 @@ pub(crate) fn fitted_session<'a>(
             scan: None,
         });
     }
-    let scan = crate::outliers::screen_from(tree, data, options, Some((&session, &geo)))?;
+    let scan = screen_from(tree, data, options, Some((&session, &geo)))?;
     if scan.kept || scan.outliers.is_empty() {
         return Ok(Fitted {
             session,

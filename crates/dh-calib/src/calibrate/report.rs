@@ -72,7 +72,7 @@ pub struct StepReport {
 /// How validation figures were obtained.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Validation {
-    /// On the samples marked [`Split::Validation`].
+    /// On the samples marked [`crate::data::Split::Validation`].
     Split {
         /// Their number.
         samples: usize,
@@ -207,7 +207,7 @@ pub struct Report {
     pub outliers: Option<crate::outliers::OutlierReport>,
     /// The test of the final model against the noise, and what it means.
     pub verdict: crate::findings::Verdict,
-    /// Covariance of the last step's free parameters (see [`crate::predict`]); `None` when
+    /// Covariance of the last step's free parameters (see [`crate::covariance`]); `None` when
     /// the residual's sigma is unknown (no more coordinates than parameters).
-    pub covariance: Option<crate::predict::Covariance>,
+    pub covariance: Option<crate::covariance::Covariance>,
 }

@@ -481,7 +481,7 @@ impl<'a> Session<'a> {
                 .iter()
                 .map(|&i| model.parameters()[i].name.clone())
                 .collect();
-            crate::predict::Covariance::new(names, c.clone()).ok()
+            crate::covariance::Covariance::new(names, c.clone()).ok()
         });
         notes.extend(crate::sessions::moved_note(
             self.session_names.len(),

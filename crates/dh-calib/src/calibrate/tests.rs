@@ -1,6 +1,7 @@
 //! Unit tests of the calibration pipeline.
 
 use super::*;
+use nalgebra::{Translation3, UnitQuaternion};
 #[test]
 fn registration_recovers_a_pose() {
     let t = Isometry3::from_parts(

@@ -1,7 +1,14 @@
 //! Preparing measurements for a fit: the joint rows of each sample in the tree's order, the
 //! sample contexts (sequence, config) and the calibration/validation split ([`Prepared`]).
 
-use super::*;
+use std::collections::HashMap;
+
+use nalgebra::Vector3;
+
+use crate::data::{Measurements, Split};
+use crate::fit::CalibError;
+use crate::model::{Observation, Observed, SampleContext};
+use crate::tree::DhTree;
 
 /// Calibration samples, validation samples and the pose group of each calibration sample.
 pub(crate) struct Prepared {

@@ -1,0 +1,258 @@
+//! A calibrated model as a written sheet holds it, read back for predictions: the covariance
+//! document ([`CovarianceDoc`]), the `calibration` section `calibrate` writes
+//! ([`CalibrationRecord`]: device frame, targets, covariance, other sessions' frames), the
+//! `truth` section of a simulated robot ([`TruthRecord`]), and the robot they make
+//! ([`CalibratedRobot::new`]). Poses are `T_device_base` (metres, URDF roll-pitch-yaw radians),
+//! targets in the tip frame (metres).
+
+use dh_core::pose::from_xyz_rpy;
+use dh_core::DhTable;
+use nalgebra::{DMatrix, Isometry3, Vector3};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::covariance::Covariance;
+use crate::effects::EffectContext;
+use crate::fit::CalibError;
+use crate::predict::{effects_from_parameters, Calibrated};
+
+/// Farthest a target may be from the tip (metres) and still be a position on a tool.
+pub const MAX_TARGET_DISTANCE: f64 = 100.0;
+
+/// The covariance of a calibration's free parameters as a calibrated sheet holds it (in the
+/// `calibration` section; SI units, parameter names as in [`crate::model`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CovarianceDoc {
+    /// The parameters, in the matrix's order.
+    pub parameters: Vec<String>,
+    /// Rows of the symmetric matrix.
+    pub matrix: Vec<Vec<f64>>,
+}
+
+impl CovarianceDoc {
+    /// The document of `c`.
+    pub fn of(c: &Covariance) -> Self {
+        CovarianceDoc {
+            parameters: c.parameters.clone(),
+            matrix: c
+                .matrix
+                .row_iter()
+                .map(|r| r.iter().copied().collect())
+                .collect(),
+        }
+    }
+
+    /// The covariance it holds.
+    ///
+    /// # Errors
+    /// [`CalibratedError::RaggedCovariance`], and as [`Covariance::new`].
+    pub fn covariance(&self) -> Result<Covariance, CalibratedError> {
+        let n = self.parameters.len();
+        if let Some(r) = self.matrix.iter().find(|r| r.len() != n) {
+            return Err(CalibratedError::RaggedCovariance {
+                expected: n,
+                found: r.len(),
+            });
+        }
+        let m =
+            DMatrix::from_row_iterator(self.matrix.len(), n, self.matrix.iter().flatten().copied());
+        Covariance::new(self.parameters.clone(), m).map_err(CalibratedError::Covariance)
+    }
+}
+
+/// A pose as a sheet holds it (metres, roll-pitch-yaw radians).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseRecord {
+    /// Translation (metres).
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (radians).
+    pub rpy: [f64; 3],
+}
+
+impl PoseRecord {
+    /// The pose.
+    pub fn pose(&self) -> Isometry3<f64> {
+        from_xyz_rpy(self.xyz, self.rpy)
+    }
+}
+
+/// A target as a sheet holds it: its position in the tip frame (metres).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TargetRecord {
+    /// Target name.
+    pub name: String,
+    /// Position in the tip frame (metres).
+    pub xyz: [f64; 3],
+}
+
+/// A session's device frame as a sheet holds it (metres, roll-pitch-yaw radians).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionRecord {
+    /// The session's name.
+    pub name: String,
+    /// Translation (metres).
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (radians).
+    pub rpy: [f64; 3],
+}
+
+/// What a prediction reads of a sheet's `calibration` section (other keys are the report's).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+pub struct CalibrationRecord {
+    /// `T_device_base` of the first session.
+    #[serde(default)]
+    pub device: Option<PoseRecord>,
+    /// The fitted targets.
+    #[serde(default)]
+    pub targets: Vec<TargetRecord>,
+    /// The covariance of the last step's free parameters.
+    #[serde(default)]
+    pub covariance: Option<CovarianceDoc>,
+    /// Every measurement session's device frame but the first's (`device`).
+    #[serde(default)]
+    pub sessions: Vec<SessionRecord>,
+}
+
+/// What a prediction reads of a `simulate` truth file's `truth` section: the simulated robot's
+/// device frame, targets and effect values (parameter name, value; SI units).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+pub struct TruthRecord {
+    /// True `T_device_base` of the first session.
+    #[serde(default)]
+    pub device: Option<PoseRecord>,
+    /// True targets.
+    #[serde(default)]
+    pub targets: Vec<TargetRecord>,
+    /// True effect values.
+    #[serde(default)]
+    pub effects: Vec<(String, f64)>,
+    /// With several sessions: every session's device frame, the first's (`device`) included.
+    #[serde(default)]
+    pub sessions: Vec<(String, PoseRecord)>,
+}
+
+impl TruthRecord {
+    /// The truth as a calibration section without covariance, and its effect values.
+    pub fn into_calibration(self) -> (CalibrationRecord, Vec<(String, f64)>) {
+        let record = CalibrationRecord {
+            device: self.device,
+            targets: self.targets,
+            covariance: None,
+            sessions: self
+                .sessions
+                .into_iter()
+                .skip(1)
+                .map(|(name, p)| SessionRecord {
+                    name,
+                    xyz: p.xyz,
+                    rpy: p.rpy,
+                })
+                .collect(),
+        };
+        (record, self.effects)
+    }
+}
+
+/// What stops a calibrated model from being read back.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CalibratedError {
+    /// Effect values that make no effect of the table (gravity effects need link masses).
+    #[error("effects: {0}")]
+    Effects(CalibError),
+    /// A target too far from the tip, or not finite.
+    #[error("calibration: target '{name}' at {position:?} m is not a position on a tool")]
+    Target {
+        /// The target.
+        name: String,
+        /// Its position in the tip frame (metres).
+        position: Vector3<f64>,
+    },
+    /// A covariance row of the wrong length.
+    #[error("covariance: expected {expected} values per row for {expected} parameters, found a row of {found}")]
+    RaggedCovariance {
+        /// Values per row expected.
+        expected: usize,
+        /// Values found.
+        found: usize,
+    },
+    /// A covariance that is not one (see [`Covariance::new`]).
+    #[error("{0}")]
+    Covariance(CalibError),
+    /// A covariance that does not fit the robot (see [`Calibrated::with_covariance`]).
+    #[error("calibration: {0}")]
+    Uncertainty(CalibError),
+    /// A robot that cannot be built from the table, effects, device and targets.
+    #[error("{0}")]
+    Robot(CalibError),
+}
+
+/// The calibrated robot of a sheet: ready to predict from the first session's device frame.
+#[derive(Clone, Debug)]
+pub struct CalibratedRobot {
+    /// The robot with its effects, device frame, targets and the first session's covariance.
+    pub calibrated: Calibrated,
+    /// Whether the record gave a device frame.
+    pub has_device: bool,
+    /// The other measurement sessions' device frames `T_device_base`, by name.
+    pub sessions: Vec<(String, Isometry3<f64>)>,
+    /// The covariance as the record holds it (every session's device frame in it).
+    pub covariance: Option<Covariance>,
+}
+
+impl CalibratedRobot {
+    /// The robot of `table` with the effect values `effects` (name, value; see
+    /// [`effects_from_parameters`]) and `record`'s frames, targets and covariance.
+    ///
+    /// # Errors
+    /// [`CalibratedError`]: effects that do not read, targets that are no positions on a tool,
+    /// a covariance that is not one.
+    pub fn new(
+        table: &DhTable,
+        effects: &[(String, f64)],
+        record: &CalibrationRecord,
+    ) -> Result<Self, CalibratedError> {
+        let ctx = EffectContext::serial(table);
+        let effects = effects_from_parameters(effects, &ctx).map_err(CalibratedError::Effects)?;
+        let sessions = record
+            .sessions
+            .iter()
+            .map(|s| (s.name.clone(), from_xyz_rpy(s.xyz, s.rpy)))
+            .collect();
+        let device = record
+            .device
+            .as_ref()
+            .map_or_else(Isometry3::identity, PoseRecord::pose);
+        let targets: Vec<(String, Vector3<f64>)> = record
+            .targets
+            .iter()
+            .map(|t| (t.name.clone(), Vector3::from(t.xyz)))
+            .collect();
+        for (name, p) in &targets {
+            if !p.iter().all(|v| v.is_finite()) || p.norm() > MAX_TARGET_DISTANCE {
+                return Err(CalibratedError::Target {
+                    name: name.clone(),
+                    position: *p,
+                });
+            }
+        }
+        let mut calibrated =
+            Calibrated::new(table, &effects, &device, &targets).map_err(CalibratedError::Robot)?;
+        let covariance = match &record.covariance {
+            Some(c) => Some(c.covariance()?),
+            None => None,
+        };
+        if let Some(c) = &covariance {
+            // The first session's frame is the device frame: the other sessions' are left out.
+            calibrated = calibrated
+                .with_covariance(&c.in_session(None))
+                .map_err(CalibratedError::Uncertainty)?;
+        }
+        Ok(CalibratedRobot {
+            calibrated,
+            has_device: record.device.is_some(),
+            sessions,
+            covariance,
+        })
+    }
+}

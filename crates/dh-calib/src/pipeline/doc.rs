@@ -1,0 +1,354 @@
+//! The report of a calibration as a plain document ([`CalibrationDoc`] and its parts): what
+//! `urdf-dh calibrate --format json` prints, serialisable both ways with serde. Every length is
+//! in metres, every angle in radians; [`unit_of`] names each parameter's unit. Poses are the
+//! robot's base link frame in the device frame (`T_device_base`), as translation and URDF
+//! roll-pitch-yaw.
+
+use dh_core::pose::to_xyz_rpy;
+use dh_core::Convention;
+use nalgebra::Isometry3;
+use serde::{Deserialize, Serialize};
+
+use super::findings_doc::{DiagnosisDoc, OutliersDoc, VerdictDoc};
+
+/// One row of the candidate table (JSON `candidates`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateDoc {
+    /// The effect's label.
+    pub label: String,
+    /// First-order reduction of the calibration sum of squares beyond the geometric fit (m²).
+    pub score: f64,
+    /// Held-out RMS with it added, linearised (metres).
+    pub val_rms: Option<f64>,
+    /// Sine between its columns and the geometric ones (below 1e-3: aliased).
+    pub independence: f64,
+    /// selected, aliased, rejected, not selected, inert, rival.
+    pub status: String,
+    /// Why a refitted candidate was not added (a rival's names the effect that did better).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+impl From<&crate::diagnose::CandidateReport> for CandidateDoc {
+    fn from(c: &crate::diagnose::CandidateReport) -> Self {
+        CandidateDoc {
+            label: c.label.clone(),
+            score: c.score,
+            val_rms: c.val_rms,
+            independence: c.independence,
+            status: c.status.name().to_string(),
+            reason: c.reason.clone(),
+        }
+    }
+}
+
+/// A step as reported (metres).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepDoc {
+    /// `nominal`, `geometric`, `effects`.
+    pub label: String,
+    /// Free parameters.
+    pub free: usize,
+    /// Solver iterations.
+    pub iterations: usize,
+    /// Calibration RMS before the step (the previous step's), `None` for the first.
+    pub rms_before: Option<f64>,
+    /// Validation RMS before the step.
+    pub val_rms_before: Option<f64>,
+    /// Calibration RMS.
+    pub rms: f64,
+    /// Calibration mean.
+    pub mean: f64,
+    /// Calibration max.
+    pub max: f64,
+    /// Validation RMS.
+    pub val_rms: Option<f64>,
+    /// Validation mean.
+    pub val_mean: Option<f64>,
+    /// Validation max.
+    pub val_max: Option<f64>,
+    /// Parameters the step would estimate but held at their start, not identifiable from the
+    /// data (in `nominal`: device or target coordinates), with what absorbs them.
+    pub fixed: Vec<FixedDoc>,
+}
+
+/// One parameter as reported.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParameterDoc {
+    /// Name (`<joint>.a`, `base.x`, `device.rz`, `target.<name>.x`, effect names).
+    pub name: String,
+    /// `m`, `rad` or `1`.
+    pub unit: String,
+    /// Nominal value (for device and targets: the `nominal` step's estimate).
+    pub nominal: f64,
+    /// Estimate.
+    pub estimate: f64,
+    /// Standard error; `None` when held fixed.
+    pub std_error: Option<f64>,
+    /// Estimated (`false`: held at nominal).
+    pub free: bool,
+}
+
+/// A parameter held at nominal.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FixedDoc {
+    /// Its name.
+    pub name: String,
+    /// The free parameters that absorb it.
+    pub aliases: Vec<String>,
+}
+
+impl From<&crate::calibrate::FixedParameter> for FixedDoc {
+    fn from(f: &crate::calibrate::FixedParameter) -> Self {
+        FixedDoc {
+            name: f.name.clone(),
+            aliases: f.aliases.clone(),
+        }
+    }
+}
+
+/// How validation was done.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ValidationDoc {
+    /// `split`, `k-fold` or `none`.
+    pub method: String,
+    /// Validation samples (split).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples: Option<usize>,
+    /// Folds (k-fold).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
+    /// Pose groups (k-fold).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub groups: Option<usize>,
+    /// Training samples each fold is fitted on, when the data are too many to fit every
+    /// fold on all of its training samples (k-fold beyond [`crate::calibrate::CV_TRAINING_MAX`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub training_subsample: Option<usize>,
+}
+
+/// Where the noise level comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoiseDoc {
+    /// Per-axis standard deviation (metres).
+    pub sigma: f64,
+    /// `given`, `samples` or `repeats`.
+    pub source: String,
+}
+
+/// A position with a name.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TargetDoc {
+    /// Target name.
+    pub name: String,
+    /// Position in the tip frame (metres).
+    pub xyz: [f64; 3],
+}
+
+/// A pose, metres and radians (URDF roll-pitch-yaw).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PoseSi {
+    /// Translation (metres).
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (radians).
+    pub rpy: [f64; 3],
+}
+
+impl PoseSi {
+    /// The pose of `p`.
+    pub fn of(p: &Isometry3<f64>) -> Self {
+        let (xyz, rpy) = to_xyz_rpy(p);
+        Self { xyz, rpy }
+    }
+}
+
+/// The JSON report; every length in metres, every angle in radians.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationDoc {
+    /// Model file, or `cpa of <data>`.
+    pub model: String,
+    /// Data file.
+    pub data: String,
+    /// Validation file.
+    pub validate: Option<String>,
+    /// Convention of the model.
+    pub convention: ConventionDoc,
+    /// Always `{length: m, angle: rad}`.
+    pub units: UnitsDoc,
+    /// Calibration samples.
+    pub samples: usize,
+    /// Validation samples (split).
+    pub validation_samples: usize,
+    /// How validation was done.
+    pub validation: ValidationDoc,
+    /// The steps, in order.
+    pub steps: Vec<StepDoc>,
+    /// Calibration RMS of `nominal`.
+    pub rms_before: f64,
+    /// Calibration RMS of the last step.
+    pub rms_after: f64,
+    /// Validation RMS of `nominal`.
+    pub val_rms_before: Option<f64>,
+    /// Validation RMS of the last step.
+    pub val_rms_after: Option<f64>,
+    /// RMS 3-D residual noise alone would leave (metres), when the noise is known.
+    pub noise_floor: Option<f64>,
+    /// The noise level behind it.
+    pub noise: Option<NoiseDoc>,
+    /// Condition number of the scaled Jacobian of the free parameters.
+    pub condition_number: f64,
+    /// Free parameters of the last step.
+    pub rank: usize,
+    /// Residual standard deviation per coordinate (metres).
+    pub sigma_hat: Option<f64>,
+    /// Every parameter.
+    pub parameters: Vec<ParameterDoc>,
+    /// The parameters held at nominal.
+    pub fixed: Vec<FixedDoc>,
+    /// Labels of the effects estimated in the last step.
+    pub selected_effects: Vec<String>,
+    /// The candidate table of `--effects auto` (empty otherwise).
+    pub candidates: Vec<CandidateDoc>,
+    /// Estimated robot base in the device frame (of the first session with several).
+    pub device: PoseSi,
+    /// With several measurement sessions: each one's device frame and RMS; absent otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sessions: Vec<SessionDoc>,
+    /// Estimated targets in the tip frame.
+    pub targets: Vec<TargetDoc>,
+    /// Remarks.
+    pub notes: Vec<String>,
+    /// The proof on the written model (`urdf-dh calibrate --out`): filled in by the writer, `None`
+    /// from [`CalibrationDoc::new`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub written: Option<WrittenDoc>,
+    /// The outlier screen; `null` when it did not run.
+    pub outliers: Option<OutliersDoc>,
+    /// The test of the final model and what it means.
+    pub verdict: VerdictDoc,
+    /// The rounds of `--effects` (every candidate's scores, every refit and why it was taken
+    /// or not, the final structure); `null` without a diagnosis.
+    pub diagnosis: Option<DiagnosisDoc>,
+}
+
+/// Units of the JSON report.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UnitsDoc {
+    /// `m`.
+    pub length: String,
+    /// `rad`.
+    pub angle: String,
+}
+
+/// The unit of a parameter, from its name (see [`crate::model`]).
+pub fn unit_of(name: &str) -> &'static str {
+    if name.contains(':') || name == "scale" || name == "drift" {
+        // Effect parameters (see `crate::effects`).
+        return match name.split(':').next() {
+            Some("compliance" | "lateral_compliance") => "rad/(N m)",
+            Some("gear_harmonic" | "gear_harmonic2" | "parallel_tilt" | "backlash") => "rad",
+            // Radians, metres for a prismatic joint (the report's effect table says which).
+            Some("backlash_direction") => "rad",
+            Some("gear_ratio" | "coupling") => "rad/rad",
+            _ => "1",
+        };
+    }
+    match name.rsplit('.').next() {
+        Some("a" | "d" | "x" | "y" | "z") => "m",
+        Some("alpha" | "theta" | "beta" | "rx" | "ry" | "rz") => "rad",
+        _ => "1",
+    }
+}
+
+/// The DH convention of a report's model: `standard` or `modified`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ConventionDoc {
+    /// Standard (distal) DH.
+    Standard,
+    /// Modified (Craig) DH.
+    Modified,
+}
+
+impl From<Convention> for ConventionDoc {
+    fn from(c: Convention) -> Self {
+        match c {
+            Convention::Standard => ConventionDoc::Standard,
+            Convention::Modified => ConventionDoc::Modified,
+        }
+    }
+}
+
+impl From<ConventionDoc> for Convention {
+    fn from(c: ConventionDoc) -> Self {
+        match c {
+            ConventionDoc::Standard => Convention::Standard,
+            ConventionDoc::Modified => Convention::Modified,
+        }
+    }
+}
+
+/// The proof on a written calibrated model: what reading it back found (metres).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WrittenDoc {
+    /// The file written (or, when the proof failed, not written).
+    pub path: String,
+    /// Predicted points compared.
+    pub points: usize,
+    /// Largest distance between the artefact's prediction and the fitted model's (metres).
+    pub max_deviation: f64,
+    /// The bound it must stay within.
+    pub bound: f64,
+    /// Largest written length (metres): `|a|`, `|d|`, base and tool offsets.
+    pub max_length: f64,
+    /// The bound on lengths: the nominal model's size plus a margin.
+    pub length_bound: f64,
+    /// Both within their bounds; the file is written only then.
+    pub passed: bool,
+}
+
+/// One measurement session in the report (see [`crate::sessions`]; metres, radians).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionDoc {
+    /// The session's name (the `session` column).
+    pub name: String,
+    /// Its device frame: the robot base in the device frame.
+    pub device: PoseSi,
+    /// Its calibration samples.
+    pub samples: usize,
+    /// RMS distance of its calibration samples at the final fit (metres).
+    pub rms: Option<f64>,
+    /// Its validation samples.
+    pub validation_samples: usize,
+    /// RMS distance of its validation samples at the final fit (metres).
+    pub val_rms: Option<f64>,
+    /// `true`: no calibration sample, the frame was fitted on its validation samples with the
+    /// robot fixed (6 parameters).
+    pub fitted_on_validation: bool,
+}
+
+/// A session's device frame as a calibrated sheet's `calibration.sessions` list holds it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SessionFrameDoc {
+    /// The session's name.
+    pub name: String,
+    /// Translation (metres).
+    pub xyz: [f64; 3],
+    /// Roll, pitch, yaw (radians).
+    pub rpy: [f64; 3],
+}
+
+impl SessionDoc {
+    /// The frames of every session of `docs` but the first (whose frame the report's and the
+    /// sheet's `device` holds).
+    pub fn frames(docs: &[SessionDoc]) -> Vec<SessionFrameDoc> {
+        docs.iter()
+            .skip(1)
+            .map(|s| SessionFrameDoc {
+                name: s.name.clone(),
+                xyz: s.device.xyz,
+                rpy: s.device.rpy,
+            })
+            .collect()
+    }
+}
