@@ -330,13 +330,7 @@ impl<'a> Session<'a> {
         free: usize,
     ) -> Result<(), CalibError> {
         let cal = &self.prep.cal;
-        let equations: usize = cal
-            .iter()
-            .map(|o| match o.observation {
-                Observation::Point { .. } => 3,
-                Observation::Pose(_) => 6,
-            })
-            .sum();
+        let equations: usize = cal.iter().map(|o| o.observation.residual_count()).sum();
         if free < equations {
             return Ok(());
         }

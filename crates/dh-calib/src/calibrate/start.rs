@@ -50,10 +50,7 @@ pub fn register(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Result<Isometry3<f64>
 }
 
 pub(super) fn observed_position(o: &Observed) -> Vector3<f64> {
-    match &o.observation {
-        Observation::Point { point, .. } => *point,
-        Observation::Pose(p) => p.translation.vector,
-    }
+    o.observation.position()
 }
 
 /// Closed-form target positions given the device frame: the mean of each target's measured

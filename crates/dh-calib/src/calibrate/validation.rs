@@ -96,7 +96,7 @@ pub(super) fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<
                     Vector3::new(r[0], r[1], r[2]).norm()
                 }
             },
-            Observation::Pose(_) => {
+            Observation::Pose(_) | Observation::TargetPose { .. } => {
                 model.residuals(x, o, &mut r);
                 Vector3::new(r[0], r[1], r[2]).norm()
             }
@@ -161,7 +161,7 @@ pub(super) fn coarse_subset(cal: &[Observed], keep: usize) -> Vec<usize> {
     let mut strata: Vec<Vec<usize>> = Vec::new();
     for (i, o) in cal.iter().enumerate() {
         let target = match o.observation {
-            Observation::Point { target, .. } => target,
+            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
             Observation::Pose(_) => usize::MAX,
         };
         let next = strata.len();

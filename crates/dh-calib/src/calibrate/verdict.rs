@@ -185,7 +185,7 @@ pub(crate) fn structure_checks(
     let mut units: Vec<(Vector3<f64>, usize, usize)> = Vec::new();
     for (i, o) in prep.cal.iter().enumerate() {
         let t = match o.observation {
-            Observation::Point { target, .. } => target,
+            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
             Observation::Pose(_) => usize::MAX,
         };
         let next = units.len();

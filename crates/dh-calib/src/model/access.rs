@@ -164,6 +164,7 @@ impl Model {
         for k in 0..self.targets.len() {
             let t = self.target_at(x, k);
             self.targets[k].1 = t;
+            self.rebase_target_rotation(x, k);
         }
         for (i, p) in self.parameters.iter().enumerate() {
             if matches!(

@@ -115,6 +115,7 @@ impl Model {
             effects: Vec::new(),
             pairs,
             session_chains: Vec::new(),
+            target_frames: vec![None; targets.len()],
         };
         m.push_pose_block("device", Block::Device, &Isometry3::identity());
         m.push_pose_block("base", Block::Base, &tree.trunk().base);

@@ -1,14 +1,16 @@
 //! Residuals (model minus measured) of one observation and their analytic Jacobian.
 //!
 //! A point gives 3 residuals (metres); a pose 6: the position difference (metres) and
-//! `orientation_scale · log(R_model R_measuredᵀ)` (metres per radian times radians). The
+//! `w · log(R_model R_measuredᵀ)` (metres per radian times radians), `w` the model's
+//! orientation scale for a tip pose ([`Observation::Pose`]) and the sample's own weight for a
+//! target frame ([`Observation::TargetPose`]). The
 //! orientation part's derivative uses SO(3)'s inverse left Jacobian (Barfoot, *State
 //! Estimation for Robotics*, 2017, eq. 7.77b).
 
-use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use super::ops::{Frame, OpKind};
-use super::{Block, Model, Observation, Observed};
+use super::{Block, Field, Model, Observation, Observed};
 
 impl Model {
     /// Residuals of one observation (model minus measured) into `out` (3 or 6 values).
@@ -29,7 +31,9 @@ impl Model {
 
     fn observation_chain(&self, obs: &Observed) -> usize {
         match &obs.observation {
-            Observation::Point { target, .. } => self.target_chain(*target),
+            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => {
+                self.target_chain(*target)
+            }
             Observation::Pose(_) => 0,
         }
     }
@@ -52,14 +56,18 @@ impl Model {
             Observation::Pose(m) => {
                 let r = f.t * scale - m.translation.vector;
                 out[..3].copy_from_slice(r.as_slice());
-                let rel = Rotation3::from_matrix_unchecked(
-                    f.r * m.rotation.to_rotation_matrix().matrix().transpose(),
-                );
-                let phi = UnitQuaternion::from_rotation_matrix(&rel).scaled_axis();
-                for k in 0..3 {
-                    out[3 + k] = self.orientation_scale * phi[k];
-                }
-                phi
+                orientation_residual(&f.r, m, self.orientation_scale, out)
+            }
+            Observation::TargetPose {
+                target,
+                pose,
+                weight,
+            } => {
+                let p = (f.t + f.r * self.target_at(x, *target)) * scale;
+                let r = p - pose.translation.vector;
+                out[..3].copy_from_slice(r.as_slice());
+                let (rk, _) = self.target_rotation_axes(x, *target);
+                orientation_residual(&(f.r * rk), pose, *weight, out)
             }
         }
     }
@@ -113,19 +121,25 @@ impl Model {
         let f = self.chain(v, Some((before, on)), ops);
         let scale = self.scale_factor(x, &obs.q, &obs.context);
         let phi = self.write_residuals(x, &f, scale, obs, residuals);
-        let (point, target, pose) = match &obs.observation {
+        let (point, target, weight) = match &obs.observation {
             Observation::Point { target, .. } => {
-                (f.t + f.r * self.target_at(x, *target), Some(*target), false)
+                (f.t + f.r * self.target_at(x, *target), Some(*target), None)
             }
-            Observation::Pose(_) => (f.t, None, true),
+            Observation::Pose(_) => (f.t, None, Some(self.orientation_scale)),
+            Observation::TargetPose { target, weight, .. } => (
+                f.t + f.r * self.target_at(x, *target),
+                Some(*target),
+                Some(*weight),
+            ),
         };
-        let jl_inv = if pose {
-            left_jacobian_inverse(&phi) * self.orientation_scale
-        } else {
-            Matrix3::zeros()
+        let jl_inv = match weight {
+            Some(w) => left_jacobian_inverse(&phi) * w,
+            None => Matrix3::zeros(),
         };
+        // The target's orientation axes in the device frame (zero for a point target).
+        let target_axes = target.map(|t| self.target_rotation_axes(x, t).1.map(|a| f.r * a));
         let nc = columns.len();
-        let rows = if pose { 6 } else { 3 };
+        let rows = obs.observation.residual_count();
         for (k, &c) in columns.iter().enumerate() {
             let mut dp = Vector3::zeros();
             let mut dw = Vector3::zeros();
@@ -146,10 +160,23 @@ impl Model {
                 }
             };
             match self.parameters.get(c).map(|p| p.block) {
-                Some(Block::Target(t)) if target == Some(t) => {
-                    let axis = (c - self.target_params) % 3;
-                    dp = f.r.column(axis).into_owned();
-                }
+                Some(Block::Target(t)) if target == Some(t) => match self.parameters[c].field {
+                    Field::X => dp = f.r.column(0).into_owned(),
+                    Field::Y => dp = f.r.column(1).into_owned(),
+                    Field::Z => dp = f.r.column(2).into_owned(),
+                    // An orientation turns the target's frame about its origin: the position
+                    // stays, the orientation moves about the axis.
+                    field => {
+                        let i = match field {
+                            Field::Rx => 0,
+                            Field::Ry => 1,
+                            _ => 2,
+                        };
+                        if let Some(axes) = &target_axes {
+                            dw = axes[i];
+                        }
+                    }
+                },
                 Some(Block::Target(_)) => {}
                 Some(Block::Effect(e)) => {
                     let slot = &self.effects[e];
@@ -182,6 +209,24 @@ impl Model {
             }
         }
     }
+}
+
+/// Writes `weight · log(R_model R_measuredᵀ)` into `out[3..6]` and returns the rotation
+/// vector `log(R_model R_measuredᵀ)` (device frame, radians).
+fn orientation_residual(
+    model: &Matrix3<f64>,
+    measured: &Isometry3<f64>,
+    weight: f64,
+    out: &mut [f64],
+) -> Vector3<f64> {
+    let rel = Rotation3::from_matrix_unchecked(
+        model * measured.rotation.to_rotation_matrix().matrix().transpose(),
+    );
+    let phi = UnitQuaternion::from_rotation_matrix(&rel).scaled_axis();
+    for k in 0..3 {
+        out[3 + k] = weight * phi[k];
+    }
+    phi
 }
 
 /// Inverse of SO(3)'s left Jacobian at rotation vector `phi` (Barfoot, *State Estimation for

@@ -78,6 +78,7 @@ mod ops;
 mod options;
 mod params;
 mod problem;
+mod target_frame;
 
 use nalgebra::{Isometry3, Vector3, Vector6};
 
@@ -113,6 +114,9 @@ pub struct Model {
     /// Per session with its own device block: the session index and its op indices of each
     /// chain (its block instead of the device block).
     session_chains: Vec<(usize, Vec<Vec<usize>>)>,
+    /// Per target: its orientation parameters when it is a full frame (see
+    /// [`Model::add_target_orientation`]).
+    target_frames: Vec<Option<target_frame::TargetFrame>>,
 }
 
 pub(super) fn finite(what: &str, v: f64) -> Result<f64, CalibError> {

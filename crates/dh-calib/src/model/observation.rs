@@ -16,6 +16,40 @@ pub enum Observation {
     /// The tip frame's pose in the device frame (6 residuals: position difference in metres,
     /// then `orientation_scale · log(R_model R_measuredᵀ)` as a rotation vector).
     Pose(Isometry3<f64>),
+    /// A target's frame in the device frame, measured by a 6-DoF device (a tracker's 6-DoF
+    /// probe, an optical marker body): 6 residuals, the position difference (metres) as for
+    /// [`Observation::Point`], then `weight · log(R_model R_measuredᵀ)` (a rotation vector in
+    /// the device frame, radians, times `weight`). With `weight = σ_position / σ_rotation`
+    /// (metres per radian) all six are in metres of equal variance: dividing them by
+    /// `σ_position` whitens them. The target needs an orientation
+    /// ([`crate::model::Model::add_target_orientation`]), else its frame is the tip frame's
+    /// orientation.
+    TargetPose {
+        /// Target index.
+        target: usize,
+        /// Measured pose of the target frame in the device frame (metres, rotation).
+        pose: Isometry3<f64>,
+        /// Metres per radian of orientation residual (`σ_position / σ_rotation`), positive.
+        weight: f64,
+    },
+}
+
+impl Observation {
+    /// Number of residuals: 3 for a point, 6 for a pose.
+    pub fn residual_count(&self) -> usize {
+        match self {
+            Observation::Point { .. } => 3,
+            Observation::Pose(_) | Observation::TargetPose { .. } => 6,
+        }
+    }
+
+    /// The measured position in the device frame (metres).
+    pub fn position(&self) -> Vector3<f64> {
+        match self {
+            Observation::Point { point, .. } => *point,
+            Observation::Pose(p) | Observation::TargetPose { pose: p, .. } => p.translation.vector,
+        }
+    }
 }
 
 /// Where a sample sits in the measurement sequence (the file's sample order): what effects

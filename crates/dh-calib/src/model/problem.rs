@@ -1,7 +1,7 @@
 //! A model with its observations as a [`Problem`] for [`crate::fit::solve`]: all samples
 //! ([`ModelProblem`]) or some by index ([`SubsetProblem`]); 3 residuals per point, 6 per pose.
 
-use super::{Model, Observation, Observed};
+use super::{Model, Observed};
 use crate::fit::Problem;
 
 /// A model with observations: the [`Problem`] that [`crate::fit::solve`] minimises.
@@ -41,10 +41,8 @@ impl<S: Samples> Problem for S {
         self.count()
     }
     fn block_size(&self, block: usize) -> usize {
-        match self.sample(block).map(|o| &o.observation) {
-            Some(Observation::Pose(_)) => 6,
-            _ => 3,
-        }
+        self.sample(block)
+            .map_or(3, |o| o.observation.residual_count())
     }
     fn residuals(&self, x: &[f64], block: usize, out: &mut [f64]) {
         if let Some(o) = self.sample(block) {
