@@ -305,6 +305,7 @@ pub fn simulate(
                 let p = model.point_in(&x, q, context, k);
                 let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * o.sigma);
                 samples.push(Sample {
+                    orientation: None,
                     session,
                     q: q.clone(),
                     target: k,
