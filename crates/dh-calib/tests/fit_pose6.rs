@@ -97,7 +97,7 @@ fn simulate(model: &Model) -> Set {
                 q.clone(),
                 Observation::TargetPose {
                     target: 0,
-                    pose: model.target_pose_in(&vec![0.0; n], q, 0, 0),
+                    pose: model.target_pose_in(&vec![0.0; n], q, &Default::default(), 0, 0),
                     weight: SIGMA_P / SIGMA_R,
                 },
             )
@@ -118,7 +118,7 @@ fn simulate(model: &Model) -> Set {
     let mut poses = Vec::new();
     let mut points = Vec::new();
     for q in &qs {
-        let exact = model.target_pose_in(&truth, q, 0, 0);
+        let exact = model.target_pose_in(&truth, q, &Default::default(), 0, 0);
         let dp = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * SIGMA_P);
         let dr = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * SIGMA_R);
         let measured = Isometry3::from_parts(

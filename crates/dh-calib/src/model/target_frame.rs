@@ -101,26 +101,26 @@ impl Model {
         (f.r, axes)
     }
 
-    /// Target `k`'s frame in session `session`'s device frame at `x` and joint values `q`, in
-    /// the neutral context: its position as [`Model::point`] gives it (metres, the device
-    /// scale applied), its rotation the tip's times [`Model::target_rotation_at`] (the scale
-    /// does not turn it).
+    /// Target `k`'s frame in session `session`'s device frame at `x`, joint values `q` and
+    /// place in the sequence `ctx`: its position as [`Model::point_in`] gives it (metres, the
+    /// device scale applied), its rotation the tip's times [`Model::target_rotation_at`] (the
+    /// scale does not turn it).
     pub fn target_pose_in(
         &self,
         x: &[f64],
         q: &[f64],
+        ctx: &SampleContext,
         target: usize,
         session: usize,
     ) -> Isometry3<f64> {
-        let ctx = SampleContext::default();
         let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &ctx, &mut v);
+        self.op_values(x, q, ctx, &mut v);
         let f = self.chain(
             &v,
             None,
             self.session_ops(self.target_chain(target), session),
         );
-        let p = (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, &ctx);
+        let p = (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, ctx);
         let (rk, _) = self.target_rotation_axes(x, target);
         Isometry3::from_parts(
             Translation3::from(p),
