@@ -87,12 +87,10 @@ fn six_dof_calibration_recovers_planted_errors_at_both_noise_floors() {
         let p = r.parameters.iter().find(|p| p.name == name).unwrap();
         assert!(p.free, "{name} not estimated");
     }
-    let mut worst = 0.0_f64;
     for (name, planted) in &errors {
         let p = r.parameters.iter().find(|p| &p.name == name).unwrap();
         let se = p.std_error.unwrap();
         let z = (p.estimate - p.nominal - planted) / se;
-        worst = worst.max(z.abs());
         assert!(
             z.abs() < 3.0,
             "{name}: planted {planted:e}, found {:e} ± {se:e}",
@@ -103,16 +101,8 @@ fn six_dof_calibration_recovers_planted_errors_at_both_noise_floors() {
     let last = r.steps.last().unwrap();
     let angle = last.angle_rms.unwrap();
     let angle_floor = floor.angle_rms.unwrap();
-    eprintln!(
-        "{} DH errors planted, worst |z| {worst:.2}; RMS distance {:.2} µm (floor {:.2}), RMS \
-         angle {:.2} µrad (floor {:.2}); truth target rotation {:?}",
-        errors.len(),
-        r.rms_after * 1e6,
-        floor.rms * 1e6,
-        angle * 1e6,
-        angle_floor * 1e6,
-        truth.target_rotations[0]
-    );
+    // The true target rotation is a random one, not the identity the model starts from.
+    assert!(truth.target_rotations[0].angle() > 0.1);
     for (rms, floor) in [(r.rms_after, floor.rms), (angle, angle_floor)] {
         let ratio = rms / floor;
         assert!((ratio - 1.0).abs() < 0.1, "rms {rms:e}, floor {floor:e}");
@@ -143,7 +133,6 @@ fn the_same_samples_without_orientation_give_larger_standard_errors() {
     );
     for (name, _) in &errors {
         let (sp, so) = (std_error(&points, name), std_error(&poses, name).unwrap());
-        eprintln!("{name:<10} points {sp:?}  poses {so:.3e}");
         // Free with points too: a larger standard error; else not identified at all.
         if let Some(sp) = sp {
             assert!(so < sp, "{name}: poses {so:e}, points {sp:e}");

@@ -52,7 +52,7 @@ const PARTICIPATION_THRESHOLD: f64 = 1e-2;
 /// independent, and for each fixed one the free parameters it aliases with.
 ///
 /// `jacobian` is the Jacobian of all `n` parameters or any matrix with the same Gram matrix
-/// `JᵀJ` (such as [`Factor::r`] of all columns, with `scales` all 1 since it is scaled already).
+/// `JᵀJ` (such as [`Factor::r`](super::Factor::r) of all columns, with `scales` all 1 since it is scaled already).
 /// `priorities` (one per column) says which to fix first: among the parameters that take part
 /// in the null space, lower priority values are fixed first; within one priority the one that
 /// takes the largest part is fixed first (a pivoted selection on the rows of the null-space
@@ -77,7 +77,7 @@ pub fn identifiability(
 /// parameter, summed in quadrature over the rows) count as zero too, so that a combination the
 /// data determines only to many times the noise is held fixed and named with its aliases
 /// instead of being estimated. The calibration passes
-/// `FitOptions::min_sensitivity · sqrt(rows / 3)` (see [`MIN_SENSITIVITY`]).
+/// `FitOptions::min_sensitivity · sqrt(rows / 3)` (see [`MIN_SENSITIVITY`](super::MIN_SENSITIVITY)).
 ///
 /// # Errors
 /// As [`identifiability`].

@@ -36,7 +36,7 @@ pub trait Problem: Sync {
 /// Largest residual block a [`Problem`] may have.
 pub const MAX_BLOCK: usize = 16;
 
-/// Options of [`solve`].
+/// Options of [`solve`](super::solve).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitOptions {
     /// Most Levenberg-Marquardt iterations (each one Jacobian evaluation).
@@ -56,7 +56,7 @@ pub struct FitOptions {
     /// Smallest sensitivity of an identifiable combination of parameters, in metres of RMS
     /// point displacement per metre of scaled parameter (an angle counts as metres at the
     /// column's scale, the robot's characteristic length). Used by the calibration's
-    /// identifiability test ([`crate::calibrate`]), not by [`solve`]: a singular direction of
+    /// identifiability test ([`crate::calibrate`]), not by [`solve`](super::solve): a singular direction of
     /// the scaled Jacobian whose singular value is below `min_sensitivity · sqrt(rows / 3)`
     /// moves the measured points by less than that RMS and is held fixed, however far it is
     /// from rounding. Default [`MIN_SENSITIVITY`].
@@ -89,7 +89,7 @@ impl Default for FitOptions {
     }
 }
 
-/// Why [`solve`] stopped.
+/// Why [`solve`](super::solve) stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Termination {
     /// The sum of squares cannot decrease by more than `cost_tolerance` of itself.
@@ -102,7 +102,7 @@ pub enum Termination {
     Stalled,
 }
 
-/// The result of [`solve`].
+/// The result of [`solve`](super::solve).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitOutcome {
     /// All parameters; only the free ones differ from `x0`.

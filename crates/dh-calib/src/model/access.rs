@@ -25,8 +25,8 @@ impl Model {
         &self.tree
     }
 
-    /// Rows (tree joint order) with a zero tilt about `y` that an [`EffectField::Beta`] effect
-    /// can free: the rows that would carry `beta` of a pair within [`NEAR_PARALLEL`] of
+    /// Rows (tree joint order) with a zero tilt about `y` that an [`EffectField::Beta`](super::EffectField::Beta) effect
+    /// can free: the rows that would carry `beta` of a pair within [`NEAR_PARALLEL`](super::NEAR_PARALLEL) of
     /// parallel that does not use Hayati-Mirmirani.
     pub fn tilt_rows(&self) -> Vec<usize> {
         self.rows

@@ -21,7 +21,7 @@ pub enum EffectField {
     /// The row's link twist (radians): a rotation about the `x` axis that carries `alpha`.
     Alpha,
     /// The row's Hayati-Mirmirani tilt about `y` (radians), where the row has one (see
-    /// [`Model::tilt_rows`]).
+    /// [`Model::tilt_rows`](super::Model::tilt_rows)).
     Beta,
     /// The measuring device's length scale: modelled positions are multiplied by `1 + delta`.
     /// The effect's [`Effect::joint`] is ignored.
@@ -31,7 +31,7 @@ pub enum EffectField {
 /// A non-geometric error source: a change of one row's `theta`, `d`, `alpha` or tilt, or of the
 /// device's scale, that depends on the joint values and on the effect's own parameters (gear
 /// ratio errors, joint compliance, coupling between joints). Added to a model with
-/// [`Model::add_effect`]; its parameters become extra Jacobian columns.
+/// [`Model::add_effect`](super::Model::add_effect); its parameters become extra Jacobian columns.
 pub trait Effect: fmt::Debug + Send + Sync {
     /// Full names of the effect's parameters (e.g. `gear_ratio:j2`).
     fn parameter_names(&self) -> Vec<String>;

@@ -25,6 +25,9 @@
 //!   small motion of the robot expressed in its own base link frame, so that `device.z` is a
 //!   lift along the robot's base z axis and `device.rz` a turn about it;
 //! - `target.<name>.x|y|z`: offset of the target's position in the tip frame (metres);
+//! - `target.<name>.rx|ry|rz`: only for a target measured as a 6-DoF pose
+//!   ([`Observation::TargetPose`], [`Model::add_target_orientation`]): a small rotation of its
+//!   frame (radians, see `target_frame`), appended after the parameters present so far;
 //! - `<branch>.base.x|y|z|rx|ry|rz`: for a tree ([`crate::tree`]), the small motion of branch
 //!   `<branch>`'s mount in the trunk's branch point frame, laid out as `base.*`;
 //! - effect parameters, named by their [`Effect`].

@@ -54,7 +54,7 @@ impl Observation {
 
 /// Where a sample sits in the measurement sequence (the file's sample order): what effects
 /// of the motion history and of time see besides the joint values
-/// ([`Effect::delta_in`]). Built by [`crate::effects_order::sequence_contexts`]; the default
+/// ([`Effect::delta_in`](super::Effect::delta_in)). Built by [`crate::effects_order::sequence_contexts`]; the default
 /// (no direction, order 0) is the neutral context of a pose outside any sequence (a
 /// prediction, a synthetic sample).
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -83,7 +83,7 @@ pub struct Observed {
     /// The measurement.
     pub observation: Observation,
     /// Measurement session (index into [`crate::data::Measurements::sessions`]): which device
-    /// frame measured it. Sessions without their own block ([`Model::add_session`]) use the
+    /// frame measured it. Sessions without their own block ([`Model::add_session`](super::Model::add_session)) use the
     /// `device` block.
     pub session: usize,
     /// Its place in the measurement sequence (neutral by default).

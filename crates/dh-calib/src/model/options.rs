@@ -23,7 +23,7 @@ pub struct PairParametrisation {
     pub dropped_d: Option<String>,
 }
 
-/// Options of [`Model::new`].
+/// Options of [`Model::new`](super::Model::new).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ModelOptions {
     /// Pairs of consecutive axes within this angle of parallel (radians) at the nominal zero
@@ -53,7 +53,7 @@ impl Default for ModelOptions {
 }
 
 /// Consecutive axes within this angle of parallel (radians, 5 degrees) that do not use
-/// Hayati-Mirmirani get a tilt about `y` held at zero, which an [`EffectField::Beta`] effect
+/// Hayati-Mirmirani get a tilt about `y` held at zero, which an [`EffectField::Beta`](super::EffectField::Beta) effect
 /// (the `parallel_tilt` candidate) can free.
 pub const NEAR_PARALLEL: f64 = 5.0 * std::f64::consts::PI / 180.0;
 

@@ -64,7 +64,7 @@ pub enum Field {
     Effect(usize),
 }
 
-/// One estimable quantity of a [`Model`].
+/// One estimable quantity of a [`Model`](super::Model).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Parameter {
     /// Name, part of the report's contract (see the module docs).
