@@ -109,6 +109,11 @@ pub fn noise(s: &str) -> Result<f64, String> {
     ranged(s, "a length in metres", 0.0, 1.0, false)
 }
 
+/// `simulate --orientation-noise`: radians in `(0, 1]`.
+pub fn orientation_noise(s: &str) -> Result<f64, String> {
+    ranged(s, "an angle in radians", 0.0, 1.0, true)
+}
+
 /// `compensate --max-change`: radians (metres for prismatic joints) in `(0, 1]`.
 pub fn max_change(s: &str) -> Result<f64, String> {
     ranged(s, "radians (metres for prismatic joints)", 0.0, 1.0, true)

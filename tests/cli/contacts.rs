@@ -135,6 +135,7 @@ fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u6
                     continue;
                 };
                 samples.push(Sample {
+                    orientation: None,
                     session: 0,
                     q,
                     target: 0,

@@ -15,6 +15,7 @@ mod import_columns;
 mod invalid;
 mod measured;
 mod outputs;
+mod pose6;
 mod predict;
 mod roundtrip;
 mod sessions;

@@ -38,6 +38,9 @@ pub struct SimulateArgs {
     pub poses: usize,
     /// Noise standard deviation per device axis (metres).
     pub noise: f64,
+    /// A 6-DoF device: the noise standard deviation of each measured orientation per axis
+    /// (radians); `None`: points (see `dh_calib::simulate::SimulationOptions::orientation_sigma`).
+    pub orientation_noise: Option<f64>,
     /// Sweep one joint at a time instead of random poses.
     pub cpa: bool,
     /// Width of each CPA sweep (radians); `None`: a quarter turn or the narrowest joint range.
@@ -296,8 +299,19 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         validation_fraction: args.validation,
         repeats: args.repeats,
         sessions: args.sessions,
+        orientation_sigma: args.orientation_noise,
         ..SimulationOptions::default()
     };
+    if args.orientation_noise.is_some() {
+        if args.noise == 0.0 {
+            anyhow::bail!(
+                "--orientation-noise: expected --noise > 0 as well (the position sigma weighs the angle), found --noise 0"
+            );
+        }
+        if !effects.is_empty() {
+            anyhow::bail!("--orientation-noise: expected no --effect (effects are added to the positions only), found {}", effects.len());
+        }
+    }
     let (mut data, truth) = run_simulation(table, &options).map_err(|e| {
         let msg = format!("simulation failed: {e}");
         match e {
@@ -439,6 +453,11 @@ pub struct SimulateCli {
     /// Gaussian noise, standard deviation per device axis (metres).
     #[arg(long, value_name = "SIGMA", default_value_t = 0.0, value_parser = crate::guard::noise)]
     noise: f64,
+    /// A 6-DoF device (a tracker's 6-DoF probe): every sample also measures the target frame's
+    /// orientation (columns qw,qx,qy,qz,sigma_rot) with this Gaussian noise per axis
+    /// (radians); needs --noise > 0.
+    #[arg(long, value_name = "SIGMA_ROT", value_parser = crate::guard::orientation_noise)]
+    orientation_noise: Option<f64>,
     /// Sweep one joint at a time (circle-point analysis data) instead of random poses.
     #[arg(long)]
     cpa: bool,
@@ -491,6 +510,7 @@ impl SimulateCli {
             convention: self.convention.into(),
             poses: self.poses,
             noise: self.noise,
+            orientation_noise: self.orientation_noise,
             cpa: self.cpa,
             arc: self.arc,
             effects: self.effects,

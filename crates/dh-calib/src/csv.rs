@@ -30,7 +30,12 @@
 //!   its standard deviation, in the length unit (both needed when `partner` is given);
 //! - optional `session`: the measurement session (a non-empty name): the device was moved
 //!   between sessions, each has its own device frame (see [`crate::sessions`]); without the
-//!   column every row is in one session.
+//!   column every row is in one session;
+//! - optional `qw`, `qx`, `qy`, `qz` (all four, scalar first, as trackers export it) and
+//!   `sigma_rot`: a 6-DoF device's measured orientation of the target frame in the device
+//!   frame, a unit quaternion, and the standard deviation of each component of its rotation
+//!   vector in radians (whatever the angle unit). A row with the four cells empty is a point;
+//!   see [`QUATERNION_NORM_TOLERANCE`] for the norm.
 //!
 //! Other columns are ignored. Cells may be double-quoted (`""` inside quotes is one quote).
 //! Column names and cells are trimmed of surrounding spaces.
@@ -60,6 +65,8 @@ mod columns;
 pub use columns::*;
 mod reader;
 pub use reader::*;
+mod orientation;
+pub use orientation::*;
 mod writer;
 pub use writer::*;
 #[cfg(test)]

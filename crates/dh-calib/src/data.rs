@@ -1,9 +1,10 @@
 //! Measurement sets: joint values and measured target positions.
 //!
 //! Frames and units: joint values in radians (metres for prismatic joints); measured points in
-//! the measuring device's own frame, metres.
+//! the measuring device's own frame, metres; a measured orientation (6-DoF devices) is the
+//! target frame's rotation in the device frame, its standard deviation in radians.
 
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Which part of the data a sample belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -38,6 +39,19 @@ pub struct Sample {
     /// Samples of one session share one device frame `T_device_base`; the device (a laser
     /// tracker) was moved between sessions.
     pub session: usize,
+    /// The measured orientation of the target's frame, for a 6-DoF device (a tracker's 6-DoF
+    /// probe, an optical marker body); `None` for a point.
+    pub orientation: Option<Orientation>,
+}
+
+/// A measured orientation: the rotation of the target's frame in the device frame, with the
+/// standard deviation of each component of its rotation vector.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Orientation {
+    /// `R_device_target`.
+    pub rotation: UnitQuaternion<f64>,
+    /// Standard deviation per axis (radians), > 0.
+    pub sigma: f64,
 }
 
 /// An unknown fixed point that a target was placed in (a ball in a socket): every sample naming

@@ -69,7 +69,7 @@ use crate::data::Measurements;
 use crate::effects::{self, EffectContext};
 use crate::fit::{CalibError, FitOutcome};
 use crate::gravity::{GravityModel, Inertials};
-use crate::model::{Effect, Model, Observation, Observed};
+use crate::model::{Effect, Model, Observed};
 use crate::rivals;
 use crate::stats;
 use crate::tree::DhTree;

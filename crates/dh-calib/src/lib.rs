@@ -5,7 +5,8 @@
 //! - Data: measurement sets ([`data`]), the canonical CSV ([`csv`]: reading, writing, units,
 //!   column names), published datasets ([`import`]), joint-value files ([`joints`]) and
 //!   measurement sessions with their own device frames ([`sessions`]).
-//! - Models: the parametrised measurement model ([`model`]) of serial robots and trees
+//! - Models: the parametrised measurement model ([`model`]: points, and 6-DoF target poses
+//!   with their own angular sigma) of serial robots and trees
 //!   ([`tree`]); non-geometric effects ([`effects`]: labels, candidates, models), effects of
 //!   the measurement order ([`effects_order`]) and gravity ([`gravity`]).
 //! - Fitting: nonlinear least squares with identifiability analysis ([`fit`]); circle-point

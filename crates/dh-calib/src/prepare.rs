@@ -3,9 +3,9 @@
 
 use std::collections::HashMap;
 
-use nalgebra::Vector3;
+use nalgebra::{Isometry3, Translation3, Vector3};
 
-use crate::data::{Measurements, Split};
+use crate::data::{Measurements, Sample, Split};
 use crate::fit::CalibError;
 use crate::model::{Observation, Observed, SampleContext};
 use crate::tree::DhTree;
@@ -18,6 +18,8 @@ pub(crate) struct Prepared {
     pub(crate) group_count: usize,
     pub(crate) repeat_keys: Vec<Option<(usize, usize)>>,
     pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
+    /// `sigma_rot` of each calibration sample that measures an orientation (radians).
+    pub(crate) sigmas_rot: Vec<Option<f64>>,
     /// Pose group of each validation sample (numbered apart from the calibration groups).
     pub(crate) val_groups: Vec<usize>,
 }
@@ -85,6 +87,35 @@ pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<Sampl
     crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
 }
 
+/// What sample `s` measured: a point, or with an orientation a target pose whose angle is
+/// weighed by `σ_position / σ_rotation` (metres per radian, `σ_position` the RMS of the
+/// sample's per-axis sigma; see [`Observation::TargetPose`]).
+///
+/// # Errors
+/// [`CalibError::BadOption`] for an orientation without a position sigma.
+fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
+    let Some(o) = &s.orientation else {
+        return Ok(Observation::Point {
+            target: s.target,
+            point: s.point,
+        });
+    };
+    let sigma = s.sigma.map(|v| (v.norm_squared() / 3.0).sqrt());
+    match sigma {
+        Some(sp) if sp > 0.0 && o.sigma > 0.0 => Ok(Observation::TargetPose {
+            target: s.target,
+            pose: Isometry3::from_parts(Translation3::from(s.point), o.rotation),
+            weight: sp / o.sigma,
+        }),
+        _ => Err(CalibError::BadOption {
+            what: format!("sample at line {}", s.line),
+            reason: "expected a position sigma (sigma or sx, sy, sz) with an orientation, \
+                     found none: it weighs the angle against the position"
+                .into(),
+        }),
+    }
+}
+
 /// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
 /// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
 /// whole file: [`fitted_session`]), `None` to take `data`'s own order.
@@ -107,6 +138,7 @@ pub(crate) fn prepare(
         group_count: 0,
         repeat_keys: vec![],
         sigmas: vec![],
+        sigmas_rot: vec![],
         val_groups: vec![],
     };
     let mut val_ids: HashMap<String, usize> = HashMap::new();
@@ -130,10 +162,7 @@ pub(crate) fn prepare(
         let obs = Observed {
             session: s.session,
             q,
-            observation: Observation::Point {
-                target: s.target,
-                point: s.point,
-            },
+            observation: observation_of(s)?,
             context,
         };
         match s.split {
@@ -158,6 +187,7 @@ pub(crate) fn prepare(
                 out.repeat_keys
                     .push(s.config.as_ref().map(|_| (g, s.target)));
                 out.sigmas.push(s.sigma);
+                out.sigmas_rot.push(s.orientation.as_ref().map(|o| o.sigma));
                 out.cal.push(obs);
             }
         }

@@ -133,7 +133,7 @@ pub(crate) fn add_blocks(model: &mut Model, data: &Measurements, cal: &[Observed
 /// The model's point of `o` in the robot's base link frame (no device frame, no scale).
 fn base_point(model: &Model, x: &[f64], o: &Observed) -> Vector3<f64> {
     match &o.observation {
-        Observation::Point { target, .. } => {
+        Observation::Point { target, .. } | Observation::TargetPose { target, .. } => {
             let fk = model.robot_fk_of(x, &o.q, model.target_chain(*target));
             (fk * Point3::from(model.target_at(x, *target))).coords
         }
@@ -142,10 +142,7 @@ fn base_point(model: &Model, x: &[f64], o: &Observed) -> Vector3<f64> {
 }
 
 fn measured(o: &Observed) -> Vector3<f64> {
-    match &o.observation {
-        Observation::Point { point, .. } => *point,
-        Observation::Pose(p) => p.translation.vector,
-    }
+    o.observation.position()
 }
 
 /// Per session of `obs` in `sessions`: the rigid registration of the model's base-frame points
@@ -310,7 +307,9 @@ pub(crate) fn val_for_linearisation(model: &Model, x: &[f64], prep: &Prepared) -
                     Observation::Point { point, .. } => {
                         *point = (to_device * Point3::from(*point)).coords;
                     }
-                    Observation::Pose(p) => *p = to_device * *p,
+                    Observation::Pose(p) | Observation::TargetPose { pose: p, .. } => {
+                        *p = to_device * *p;
+                    }
                 }
             }
             o

@@ -97,6 +97,13 @@ pub struct SimulationOptions {
     /// sample order see the poses in the order simulated, repeats of one pose sharing its
     /// place ([`crate::effects_order`]).
     pub effects: Vec<String>,
+    /// With `Some(sigma_rot)` (radians, > 0): a 6-DoF device. Every target is a frame with a
+    /// random orientation on the tip, and every sample also measures its orientation in the
+    /// device frame, with noise `exp(n) · R`, `n` of standard deviation `sigma_rot` per axis
+    /// of the device frame ([`crate::data::Orientation`]). Needs `sigma > 0` (the position
+    /// sigma weighs the angle against the position). `None` (default): points, and the same
+    /// random draws as without the option.
+    pub orientation_sigma: Option<f64>,
 }
 
 /// Largest translation between two simulated sessions' device frames (metres).
@@ -122,6 +129,7 @@ impl Default for SimulationOptions {
             model: ModelOptions::default(),
             sessions: 1,
             effects: Vec::new(),
+            orientation_sigma: None,
         }
     }
 }
@@ -141,6 +149,9 @@ pub struct Truth {
     pub sigma: f64,
     /// True `T_device_base` of every session (one entry, `device`, without sessions).
     pub sessions: Vec<Isometry3<f64>>,
+    /// True rotation of each target's frame in the tip frame (identity for point targets,
+    /// see [`SimulationOptions::orientation_sigma`]).
+    pub target_rotations: Vec<UnitQuaternion<f64>>,
 }
 
 fn bad(what: &str, reason: String) -> CalibError {
@@ -219,6 +230,32 @@ pub fn simulate(
     for label in &o.effects {
         model.add_effect(crate::effects::parse_label(label, nominal)?)?;
     }
+    let sigma_rot = match o.orientation_sigma {
+        None => None,
+        Some(s) if s.is_finite() && s > 0.0 && o.sigma > 0.0 => Some(s),
+        Some(s) => {
+            return Err(bad(
+                "orientation sigma",
+                format!(
+                    "expected a finite value > 0 with a position sigma > 0, found {s} (position \
+                     sigma {})",
+                    o.sigma
+                ),
+            ))
+        }
+    };
+    // Drawn only for a 6-DoF device: point sets keep their random draws.
+    let target_rot: Vec<UnitQuaternion<f64>> = match sigma_rot {
+        Some(_) => (0..target_pos.len())
+            .map(|k| {
+                let r = random_pose(&mut rng, 0.0).rotation;
+                model.add_target_orientation(k);
+                model.set_target_rotation(k, &r);
+                r
+            })
+            .collect(),
+        None => vec![UnitQuaternion::identity(); target_pos.len()],
+    };
     let mut x = vec![0.0; model.parameter_count()];
     match &o.errors {
         Errors::None => {}
@@ -304,7 +341,16 @@ pub fn simulate(
             for k in 0..target_pos.len() {
                 let p = model.point_in(&x, q, context, k);
                 let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * o.sigma);
+                let orientation = sigma_rot.map(|s| {
+                    let r = model.target_pose_in(&x, q, context, k, 0).rotation;
+                    let n = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * s);
+                    crate::data::Orientation {
+                        rotation: UnitQuaternion::from_scaled_axis(n) * r,
+                        sigma: s,
+                    }
+                });
                 samples.push(Sample {
+                    orientation,
                     session,
                     q: q.clone(),
                     target: k,
@@ -345,6 +391,7 @@ pub fn simulate(
         errors,
         sigma: o.sigma,
         sessions: frames,
+        target_rotations: target_rot,
     };
     Ok((data, truth))
 }

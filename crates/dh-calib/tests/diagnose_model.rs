@@ -284,6 +284,7 @@ fn simulate_tree(
         for k in 0..2 {
             let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * sigma);
             samples.push(Sample {
+                orientation: None,
                 session: 0,
                 q: q.clone(),
                 target: k,

@@ -116,6 +116,14 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     );
+    // 6-DoF poses: the orientation residuals beside the positions (absent for points).
+    if let Some(a) = doc.steps.last().and_then(|s| s.angle_rms) {
+        let floor = doc
+            .angle_noise_floor
+            .map(|f| format!("; noise floor {:.1} µrad RMS", f * 1e6))
+            .unwrap_or_default();
+        let _ = writeln!(s, "angle: RMS {:.1} µrad per axis{floor}", a * 1e6);
+    }
     match (&doc.noise, doc.noise_floor) {
         (Some(n), Some(f)) => {
             let _ = writeln!(

@@ -120,10 +120,7 @@ pub(crate) fn one_step_cross_validation(
 
 /// Residual rows of an observation: 3 for a point, 6 for a pose.
 fn block_rows(o: &Observed) -> usize {
-    match o.observation {
-        Observation::Pose(_) => 6,
-        Observation::Point { .. } => 3,
-    }
+    o.observation.residual_count()
 }
 
 /// Copies the lower triangle (where the passes accumulate) to the upper.

@@ -58,6 +58,9 @@ pub struct StepReport {
     pub val_max: Option<f64>,
     /// Number of free parameters.
     pub free: usize,
+    /// RMS per axis of the orientation residuals `log(R_model R_measuredᵀ)` of the
+    /// calibration samples that measure a 6-DoF pose (radians); `None` without such samples.
+    pub angle_rms: Option<f64>,
     /// Solver iterations.
     pub iterations: usize,
     /// Why the solver stopped.
@@ -112,11 +115,15 @@ pub enum NoiseSource {
 /// The RMS 3-D residual that noise alone would leave after the fit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseFloor {
-    /// `sqrt(E‖e‖² · (1 − p / (3N)))` with `E‖e‖²` the expected squared 3-D noise of one point
-    /// (`3σ²` for isotropic σ), `p` free parameters and `N` calibration points (metres).
+    /// `sqrt(E‖e‖² · (1 − p / m))` with `E‖e‖²` the expected squared 3-D noise of one point
+    /// (`3σ²` for isotropic σ), `p` free parameters and `m` calibration residuals (3 per
+    /// point, 6 per 6-DoF pose: `3N` for points only) (metres).
     pub rms: f64,
     /// Per-axis noise standard deviation it corresponds to, `sqrt(E‖e‖² / 3)` (metres).
     pub sigma: f64,
+    /// For 6-DoF poses, the floor of [`StepReport::angle_rms`]: the RMS of the samples'
+    /// `sigma_rot` times `sqrt(1 − p / m)` (radians); `None` without poses.
+    pub angle_rms: Option<f64>,
     /// Where it comes from.
     pub source: NoiseSource,
 }

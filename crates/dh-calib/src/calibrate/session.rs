@@ -90,6 +90,7 @@ impl<'a> Session<'a> {
         let chains = target_chains(tree, data, options)?;
         let mut model = Model::new_tree(tree, &chains, &options.model)?;
         crate::sessions::add_blocks(&mut model, data, &prep.cal);
+        add_target_orientations(&mut model, &prep.cal);
         for e in effects {
             model.add_effect(e.clone())?;
         }
@@ -106,6 +107,7 @@ impl<'a> Session<'a> {
             let sample: Vec<Observed> = coarse.iter().map(|&i| prep.cal[i].clone()).collect();
             initialise(&mut model, &x, &sample, options)?;
         }
+        orient_targets(&mut model, &x, &prep.cal);
         let validation = if !prep.val.is_empty() {
             Validation::Split {
                 samples: prep.val.len(),
@@ -123,7 +125,9 @@ impl<'a> Session<'a> {
         // Targets never measured stay where they are and are reported as fixed.
         let mut measured = vec![false; model.targets().len()];
         for o in &prep.cal {
-            if let Observation::Point { target, .. } = &o.observation {
+            if let Observation::Point { target, .. } | Observation::TargetPose { target, .. } =
+                &o.observation
+            {
                 measured[*target] = true;
             }
         }
@@ -263,6 +267,7 @@ impl<'a> Session<'a> {
             val_mean: val.map(|v| v.mean),
             val_max: val.map(|v| v.max),
             free: free.len(),
+            angle_rms: angle_rms(&self.model, &outcome.x, &self.prep.cal),
             iterations: outcome.iterations,
             termination: outcome.termination,
             fixed: Vec::new(),
@@ -366,13 +371,7 @@ impl<'a> Session<'a> {
         free: usize,
     ) -> Result<(), CalibError> {
         let cal = &self.prep.cal;
-        let equations: usize = cal
-            .iter()
-            .map(|o| match o.observation {
-                Observation::Point { .. } => 3,
-                Observation::Pose(_) => 6,
-            })
-            .sum();
+        let equations: usize = cal.iter().map(|o| o.observation.residual_count()).sum();
         if free < equations {
             return Ok(());
         }

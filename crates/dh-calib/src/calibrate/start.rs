@@ -5,10 +5,7 @@
 use super::*;
 
 pub(super) fn observed_position(o: &Observed) -> Vector3<f64> {
-    match &o.observation {
-        Observation::Point { point, .. } => *point,
-        Observation::Pose(p) => p.translation.vector,
-    }
+    o.observation.position()
 }
 
 /// Closed-form target positions given the device frame: the mean of each target's measured
@@ -107,4 +104,31 @@ pub(super) fn replaced_by_beta(model: &Model) -> Vec<FixedParameter> {
             })
         })
         .collect()
+}
+
+/// Gives every target that `cal` measures as a pose ([`Observation::TargetPose`]) its
+/// orientation parameters ([`Model::add_target_orientation`]); targets measured as points
+/// only get none, so a model of point data is unchanged.
+pub(super) fn add_target_orientations(model: &mut Model, cal: &[Observed]) {
+    for o in cal {
+        if let Observation::TargetPose { target, .. } = o.observation {
+            model.add_target_orientation(target);
+        }
+    }
+}
+
+/// The closed-form start of each oriented target's rotation on the tip, given the device
+/// frame: `R_tipᵀ · R_measured` of its first pose sample (a target's rotation is rigid on the
+/// tip, so one sample locates it up to the noise and the model's error).
+pub(super) fn orient_targets(model: &mut Model, x: &[f64], cal: &[Observed]) {
+    let mut done = vec![false; model.targets().len()];
+    for o in cal {
+        if let Observation::TargetPose { target, pose, .. } = &o.observation {
+            if done.get(*target) == Some(&false) {
+                let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
+                model.set_target_rotation(*target, &(tip.rotation.inverse() * pose.rotation));
+                done[*target] = true;
+            }
+        }
+    }
 }

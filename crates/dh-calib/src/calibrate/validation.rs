@@ -11,6 +11,21 @@ use super::*;
 /// whole data between them instead of `folds` fits.
 pub const CV_TRAINING_MAX: usize = 100_000;
 
+/// RMS per axis (radians) of the orientation residuals of the 6-DoF poses in `obs` (the
+/// weight undone, see [`Observation::TargetPose`]); `None` without poses.
+pub(crate) fn angle_rms(model: &Model, x: &[f64], obs: &[Observed]) -> Option<f64> {
+    let (mut ss, mut n) = (0.0, 0usize);
+    let mut r = [0.0; 6];
+    for o in obs {
+        if let Observation::TargetPose { weight, .. } = o.observation {
+            model.residuals(x, o, &mut r);
+            ss += r[3..].iter().map(|v| (v / weight).powi(2)).sum::<f64>();
+            n += 3;
+        }
+    }
+    (n > 0).then(|| (ss / n as f64).sqrt())
+}
+
 /// Distance (metres) between model and measurement of every observation in `obs`.
 pub(crate) fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
     let idx: Vec<usize> = (0..obs.len()).collect();
@@ -96,7 +111,7 @@ pub(super) fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<
                     Vector3::new(r[0], r[1], r[2]).norm()
                 }
             },
-            Observation::Pose(_) => {
+            Observation::Pose(_) | Observation::TargetPose { .. } => {
                 model.residuals(x, o, &mut r);
                 Vector3::new(r[0], r[1], r[2]).norm()
             }
@@ -161,7 +176,7 @@ pub(super) fn coarse_subset(cal: &[Observed], keep: usize) -> Vec<usize> {
     let mut strata: Vec<Vec<usize>> = Vec::new();
     for (i, o) in cal.iter().enumerate() {
         let target = match o.observation {
-            Observation::Point { target, .. } => target,
+            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
             Observation::Pose(_) => usize::MAX,
         };
         let next = strata.len();
@@ -303,10 +318,23 @@ pub(super) fn noise_floor(
         }
         (ss / dof as f64, NoiseSource::Repeats { groups: count, dof })
     };
-    let factor = (1.0 - p as f64 / (3.0 * n as f64)).max(0.0);
+    // 3 per point, 6 per 6-DoF target pose (a tip pose counts its position only, as before).
+    let m: usize = prep
+        .cal
+        .iter()
+        .map(|o| match o.observation {
+            Observation::TargetPose { .. } => 6,
+            _ => 3,
+        })
+        .sum();
+    let factor = (1.0 - p as f64 / m as f64).max(0.0);
+    let angle: Vec<f64> = prep.sigmas_rot.iter().flatten().copied().collect();
+    let angle_rms = (!angle.is_empty())
+        .then(|| (angle.iter().map(|s| s * s).sum::<f64>() / angle.len() as f64 * factor).sqrt());
     Some(NoiseFloor {
         rms: (e2 * factor).sqrt(),
         sigma: (e2 / 3.0).sqrt(),
         source,
+        angle_rms,
     })
 }

@@ -117,6 +117,14 @@ pub(crate) fn residual_test(session: &Session<'_>, fit: &FitOutcome, alpha: f64)
             for a in 0..3 {
                 chi2 += (r[a] / s[a]).powi(2);
             }
+            // A 6-DoF pose's angle residuals are in metres of the position's RMS sigma
+            // (`Observation::TargetPose`): 3 more degrees of freedom, counted in `m`.
+            if matches!(o.observation, Observation::TargetPose { .. }) {
+                let sp = (s.norm_squared() / 3.0).sqrt();
+                for v in &r[3..] {
+                    chi2 += (v / sp).powi(2);
+                }
+            }
         }
         let pv = stats::chi2_sf(chi2, dof);
         let noise = (sig.iter().map(|s| s.norm_squared()).sum::<f64>() / sig.len() as f64).sqrt();
@@ -185,7 +193,7 @@ pub(crate) fn structure_checks(
     let mut units: Vec<(Vector3<f64>, usize, usize)> = Vec::new();
     for (i, o) in prep.cal.iter().enumerate() {
         let t = match o.observation {
-            Observation::Point { target, .. } => target,
+            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
             Observation::Pose(_) => usize::MAX,
         };
         let next = units.len();

@@ -12,6 +12,7 @@ fn set(qs: &[[f64; 2]]) -> Measurements {
             .iter()
             .enumerate()
             .map(|(i, q)| crate::data::Sample {
+                orientation: None,
                 session: 0,
                 q: q.to_vec(),
                 target: 0,

@@ -40,6 +40,8 @@ pub(super) struct Columns {
     pub(super) sigma: Sigma,
     pub(super) set: Option<usize>,
     pub(super) session: Option<usize>,
+    /// The quaternion columns `qw`, `qx`, `qy`, `qz` and `sigma_rot`, when the file has them.
+    pub(super) orientation: Option<OrientationColumns>,
 }
 
 pub(super) enum Sigma {
@@ -145,7 +147,9 @@ pub(super) fn header_columns(
             });
         }
     };
+    let orientation = orientation_columns(line, &find, names)?;
     Ok(Columns {
+        orientation,
         joints,
         xyz,
         socket,

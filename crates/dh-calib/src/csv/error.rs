@@ -227,7 +227,7 @@ pub(super) fn list(items: &[String]) -> String {
 }
 
 /// Columns of the canonical CSV that are not joints: a model's joint may not take these names.
-pub const RESERVED_COLUMNS: [&str; 15] = [
+pub const RESERVED_COLUMNS: [&str; 20] = [
     "x",
     "y",
     "z",
@@ -243,4 +243,9 @@ pub const RESERVED_COLUMNS: [&str; 15] = [
     "distance",
     "distance_sigma",
     "session",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "sigma_rot",
 ];

@@ -318,7 +318,12 @@ pub fn parse_measurements_noting(
                 }
             },
         };
+        let orientation = match &cols.orientation {
+            Some(o) => orientation_cells(o, line, &cell, &name)?,
+            None => None,
+        };
         m.samples.push(Sample {
+            orientation,
             session,
             q,
             target,

@@ -183,6 +183,7 @@ fn suspicious_units_say_what_to_pass() {
 #[test]
 fn writing_round_trips_exactly() {
     let mk = |q: Vec<f64>, target, point, sigma, config: Option<&str>, split| Sample {
+        orientation: None,
         session: 0,
         q,
         target,
@@ -230,4 +231,55 @@ fn writing_round_trips_exactly() {
         }
     }
     assert_eq!(back.samples[1].line, 4);
+}
+
+#[test]
+fn reads_orientation_columns_and_writes_them_back() {
+    let text = "\
+j1,x,y,z,sigma,qw,qx,qy,qz,sigma_rot
+0.1,1,2,3,2e-5,0.7071068,0,0.7071068,0,5e-5
+0.2,1,2,3,2e-5,,,,,
+";
+    let m = parse_measurements(text, &names(&["j1"]), &CsvOptions::default()).unwrap();
+    let o = m.samples[0].orientation.as_ref().unwrap();
+    assert_eq!(o.sigma, 5e-5);
+    // Rounded to 7 digits, normalised: a quarter turn about y.
+    let expected =
+        nalgebra::UnitQuaternion::from_euler_angles(0.0, std::f64::consts::FRAC_PI_2, 0.0);
+    assert!(o.rotation.angle_to(&expected) < 1e-7);
+    assert!((o.rotation.quaternion().norm() - 1.0).abs() < 1e-15);
+    assert_eq!(m.samples[1].orientation, None);
+    let back = parse_measurements(
+        &write_measurements(&m),
+        &names(&["j1"]),
+        &CsvOptions::default(),
+    )
+    .unwrap();
+    for (a, b) in m.samples.iter().zip(&back.samples) {
+        assert_eq!(a.orientation, b.orientation);
+    }
+}
+
+#[test]
+fn bad_orientations_name_line_and_column() {
+    let head = "j1,x,y,z,qw,qx,qy,qz,sigma_rot\n";
+    for (row, expected) in [
+        (
+            "0.1,1,2,3,1.2,0,0,0,5e-5",
+            "line 2: expected a unit quaternion in columns qw, qx, qy, qz (norm within 0.001 of 1), found norm 1.2",
+        ),
+        ("0.1,1,2,3,1,NaN,0,0,5e-5", "line 2"),
+        ("0.1,1,2,3,1,0,,0,5e-5", "line 2: expected all of qw, qx, qy, qz or none, found an empty 'qy'"),
+        ("0.1,1,2,3,1,0,0,0,", "line 2: expected a standard deviation in column 'sigma_rot'"),
+        ("0.1,1,2,3,1,0,0,0,-1", "line 2: expected a standard deviation > 0 and <= 1 rad in column 'sigma_rot', found '-1'"),
+    ] {
+        let e = err(&format!("{head}{row}\n"), &["j1"]);
+        assert!(e.starts_with(expected), "{e}");
+    }
+    let nan = err(&format!("{head}0.1,1,2,3,1,NaN,0,0,5e-5\n"), &["j1"]);
+    assert!(nan.contains("qx"), "{nan}");
+    let e = err("j1,x,y,z,qw,qx,qy,qz\n0.1,1,2,3,1,0,0,0\n", &["j1"]);
+    assert!(e.contains("missing point column 'sigma_rot'"), "{e}");
+    let e = err("j1,x,y,z,qw,qx,qy\n0.1,1,2,3,1,0,0\n", &["j1"]);
+    assert!(e.contains("missing point column 'qz'"), "{e}");
 }

@@ -12,7 +12,8 @@ use super::*;
 /// known standard deviation is isotropic, else `sx,sy,sz`; `set` when any sample is for
 /// validation; `socket` when any sample is a contact, with `partner,distance,distance_sigma`
 /// when any socket has a partner (contact rows leave `x,y,z` empty); `session` when the set
-/// names sessions. Targets are written by name, so a target that no sample uses is not kept, and the
+/// names sessions; `qw,qx,qy,qz,sigma_rot` when any sample has an orientation (point rows
+/// leave them empty). Targets are written by name, so a target that no sample uses is not kept, and the
 /// targets come back numbered in order of first use.
 pub fn write_measurements(m: &Measurements) -> String {
     let any_config = m.samples.iter().any(|s| s.config.is_some());
@@ -53,6 +54,11 @@ pub fn write_measurements(m: &Measurements) -> String {
     let any_session = !m.sessions.is_empty();
     if any_session {
         header.push("session".into());
+    }
+    let any_orientation = m.samples.iter().any(|s| s.orientation.is_some());
+    if any_orientation {
+        header.extend(QUATERNION_COLUMNS.map(String::from));
+        header.push("sigma_rot".into());
     }
     out.push_str(&header.join(","));
     out.push('\n');
@@ -108,6 +114,15 @@ pub fn write_measurements(m: &Measurements) -> String {
         }
         if any_session {
             cells.push(quote(&m.session_name(s.session)));
+        }
+        if any_orientation {
+            match &s.orientation {
+                Some(o) => {
+                    let q = o.rotation.quaternion();
+                    cells.extend([q.w, q.i, q.j, q.k, o.sigma].map(|v| format!("{v:?}")));
+                }
+                None => cells.extend((0..5).map(|_| String::new())),
+            }
         }
         out.push_str(&cells.join(","));
         out.push('\n');

@@ -14,13 +14,7 @@ pub(super) fn dense(
     columns: &[usize],
     scales: &[f64],
 ) -> (DMatrix<f64>, DVector<f64>, Vec<usize>) {
-    let sizes: Vec<usize> = obs
-        .iter()
-        .map(|o| match o.observation {
-            Observation::Pose(_) => 6,
-            Observation::Point { .. } => 3,
-        })
-        .collect();
+    let sizes: Vec<usize> = obs.iter().map(|o| o.observation.residual_count()).collect();
     let m: usize = sizes.iter().sum();
     let n = columns.len();
     let mut j = DMatrix::zeros(m, n);

@@ -51,6 +51,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         for target in 0..3 {
             let p = &v[3 * target..3 * target + 3];
             samples.push(Sample {
+                orientation: None,
                 session: 0,
                 q: q.clone(),
                 target,

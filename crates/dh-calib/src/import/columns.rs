@@ -333,6 +333,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             }
         };
         m.samples.push(Sample {
+            orientation: None,
             session,
             q,
             target,

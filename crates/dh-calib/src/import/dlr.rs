@@ -93,6 +93,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         }
         for (target, p) in xyz.chunks_exact(3).enumerate() {
             samples.push(Sample {
+                orientation: None,
                 session: 0,
                 q: q.clone(),
                 target,

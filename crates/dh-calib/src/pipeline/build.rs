@@ -92,6 +92,7 @@ impl CalibrationDoc {
                     val_rms: s.val_rms,
                     val_mean: s.val_mean,
                     val_max: s.val_max,
+                    angle_rms: s.angle_rms,
                     fixed: s.fixed.iter().map(FixedDoc::from).collect(),
                 })
                 .collect(),
@@ -100,6 +101,7 @@ impl CalibrationDoc {
             val_rms_before: report.val_rms_before,
             val_rms_after: report.val_rms_after,
             noise_floor: report.noise_floor.as_ref().map(|n| n.rms),
+            angle_noise_floor: report.noise_floor.as_ref().and_then(|n| n.angle_rms),
             noise: report.noise_floor.as_ref().map(|n| NoiseDoc {
                 sigma: n.sigma,
                 source: match n.source {

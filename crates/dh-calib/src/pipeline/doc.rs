@@ -67,6 +67,10 @@ pub struct StepDoc {
     pub val_mean: Option<f64>,
     /// Validation max.
     pub val_max: Option<f64>,
+    /// RMS per axis of the orientation residuals of 6-DoF pose samples (radians); absent
+    /// without such samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle_rms: Option<f64>,
     /// Parameters the step would estimate but held at their start, not identifiable from the
     /// data (in `nominal`: device or target coordinates), with what absorbs them.
     pub fixed: Vec<FixedDoc>,
@@ -193,6 +197,10 @@ pub struct CalibrationDoc {
     pub val_rms_after: Option<f64>,
     /// RMS 3-D residual noise alone would leave (metres), when the noise is known.
     pub noise_floor: Option<f64>,
+    /// RMS per axis of the orientation residuals noise alone would leave (radians), with
+    /// 6-DoF pose samples; absent without them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle_noise_floor: Option<f64>,
     /// The noise level behind it.
     pub noise: Option<NoiseDoc>,
     /// Condition number of the scaled Jacobian of the free parameters.

@@ -1,0 +1,121 @@
+//! The orientation columns of a 6-DoF device: `qw`, `qx`, `qy`, `qz` (a unit quaternion,
+//! scalar first, the rotation of the target frame in the device frame) and `sigma_rot` (the
+//! standard deviation of each component of the rotation vector, radians).
+
+use nalgebra::{Quaternion, UnitQuaternion};
+
+use super::*;
+use crate::data::Orientation;
+
+/// The quaternion columns, scalar first.
+pub const QUATERNION_COLUMNS: [&str; 4] = ["qw", "qx", "qy", "qz"];
+
+/// How far from 1 a quaternion's norm may be (dimensionless): exports round each component
+/// to 6 or 7 digits, which moves the norm by about 1e-6; a norm off by more than this is not
+/// rounding but a wrong column or unit, and the row is refused. Within it the quaternion is
+/// normalised.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
+
+/// Largest plausible `sigma_rot` (radians): a standard deviation of a radian says nothing.
+const MAX_SIGMA_ROT: f64 = 1.0;
+
+/// Column indices of `qw`, `qx`, `qy`, `qz` and `sigma_rot`.
+pub(super) struct OrientationColumns {
+    quaternion: [usize; 4],
+    sigma: usize,
+}
+
+/// The orientation columns of a header, `None` when it has none of `qw`, `qx`, `qy`, `qz`.
+///
+/// # Errors
+/// [`DataError::MissingCoordinate`] when some of the four are there but not all, or
+/// `sigma_rot` is missing.
+pub(super) fn orientation_columns(
+    line: usize,
+    find: &impl Fn(&str) -> Option<usize>,
+    names: &[String],
+) -> Result<Option<OrientationColumns>, DataError> {
+    if QUATERNION_COLUMNS.iter().all(|c| find(c).is_none()) {
+        return Ok(None);
+    }
+    let column = |column: &'static str| {
+        find(column).ok_or_else(|| DataError::MissingCoordinate {
+            line,
+            column,
+            found: names.to_vec(),
+        })
+    };
+    let mut quaternion = [0; 4];
+    for (slot, c) in quaternion.iter_mut().zip(QUATERNION_COLUMNS) {
+        *slot = column(c)?;
+    }
+    Ok(Some(OrientationColumns {
+        quaternion,
+        sigma: column("sigma_rot")?,
+    }))
+}
+
+/// The orientation of one row, `None` when its four quaternion cells are empty (a point).
+///
+/// # Errors
+/// [`DataError::Format`] naming the line and columns when some quaternion cells are empty,
+/// the norm is more than [`QUATERNION_NORM_TOLERANCE`] from 1, or `sigma_rot` is empty, not
+/// positive or above a radian; [`DataError::NotANumber`] / [`DataError::NonFinite`] for a
+/// cell that is not a finite number.
+pub(super) fn orientation_cells<'a>(
+    cols: &OrientationColumns,
+    line: usize,
+    cell: &impl Fn(usize) -> &'a str,
+    name: &impl Fn(usize) -> &'a str,
+) -> Result<Option<Orientation>, DataError> {
+    let empty = cols.quaternion.map(|c| cell(c).is_empty());
+    if empty.iter().all(|e| *e) {
+        return Ok(None);
+    }
+    if let Some(k) = empty.iter().position(|e| *e) {
+        return Err(DataError::Format {
+            line,
+            expected: "all of qw, qx, qy, qz or none".into(),
+            found: format!("an empty '{}'", name(cols.quaternion[k])),
+        });
+    }
+    let mut v = [0.0; 4];
+    for (slot, &c) in v.iter_mut().zip(&cols.quaternion) {
+        *slot = number(cell(c), line, name(c))?;
+    }
+    let q = Quaternion::new(v[0], v[1], v[2], v[3]);
+    let norm = q.norm();
+    if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+        return Err(DataError::Format {
+            line,
+            expected: format!(
+                "a unit quaternion in columns qw, qx, qy, qz (norm within \
+                 {QUATERNION_NORM_TOLERANCE} of 1)"
+            ),
+            found: format!("norm {norm}"),
+        });
+    }
+    let s = cols.sigma;
+    if cell(s).is_empty() {
+        return Err(DataError::Format {
+            line,
+            expected: "a standard deviation in column 'sigma_rot' (radians) for an orientation"
+                .into(),
+            found: "an empty cell".into(),
+        });
+    }
+    let sigma = number(cell(s), line, name(s))?;
+    if !(sigma > 0.0 && sigma <= MAX_SIGMA_ROT) {
+        return Err(DataError::Format {
+            line,
+            expected: format!(
+                "a standard deviation > 0 and <= {MAX_SIGMA_ROT} rad in column 'sigma_rot'"
+            ),
+            found: format!("'{}'", cell(s)),
+        });
+    }
+    Ok(Some(Orientation {
+        rotation: UnitQuaternion::from_quaternion(q),
+        sigma,
+    }))
+}

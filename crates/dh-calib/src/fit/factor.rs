@@ -1,0 +1,323 @@
+//! The triangular factor of the column-scaled Jacobian, built block by block.
+//!
+//! A "tall skinny QR": blocks are stacked a few hundred rows at a time under the factor of
+//! everything seen so far and re-factored by Householder reflections, so memory is `O(p²)`
+//! and the accuracy that of a QR of the full Jacobian. The residual rides along as an extra
+//! column (`Qᵀr` for free). Large problems are factored in segments on several threads and
+//! the segments' factors stacked, deterministically in segment order.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{CalibError, Problem, MAX_BLOCK};
+
+/// The triangular factor of the column-scaled Jacobian of some columns, with the residuals.
+///
+/// `[J·diag(s) | r] = Q [[r_factor, qtr], [0, ρ]]`, so `‖r + J·diag(s)·u‖² = ‖qtr + r_factor·u‖² + ρ²`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Factor {
+    /// Upper triangular `p × p` factor of the scaled Jacobian.
+    pub r: DMatrix<f64>,
+    /// `Qᵀ r` restricted to the first `p` rows.
+    pub qtr: DVector<f64>,
+    /// Sum of squared residuals.
+    pub ssr: f64,
+    /// Number of residuals.
+    pub rows: usize,
+}
+
+/// Incremental QR of a tall matrix given a row at a time: the triangular factor `R` of the
+/// rows so far, and a chunk of new rows `B` that is folded into it by Householder reflections
+/// when full (the QR of `[R; B]`).
+///
+/// The reflections use the structure of `[R; B]`: the reflection of column `j` touches row `j`
+/// of `R` and the chunk only (the rows of `R` below `j` are zero in that column), so a chunk
+/// of `m` rows costs `2 m p²` operations, with no copy of the stack. Both are stored by
+/// column, so every reflection runs over contiguous memory.
+pub(super) struct Tsqr {
+    cols: usize,
+    pub(super) chunk: usize,
+    /// `R`, `cols × cols`, by column: element `(i, k)` at `k · cols + i`.
+    r: Vec<f64>,
+    /// The chunk, `chunk × cols`, by column: element `(i, k)` at `k · chunk + i`.
+    b: Vec<f64>,
+    filled: usize,
+}
+
+impl Tsqr {
+    pub(super) fn new(cols: usize) -> Self {
+        let chunk = (8 * cols).max(256);
+        Self {
+            cols,
+            chunk,
+            r: vec![0.0; cols * cols],
+            b: vec![0.0; chunk * cols],
+            filled: 0,
+        }
+    }
+
+    pub(super) fn push(&mut self, row: &[f64]) {
+        if self.filled == self.chunk {
+            self.flush();
+        }
+        for (k, v) in row.iter().enumerate().take(self.cols) {
+            self.b[k * self.chunk + self.filled] = *v;
+        }
+        self.filled += 1;
+    }
+
+    /// Folds the chunk into `R` (Golub & Van Loan, Matrix Computations, 4th ed., §5.1.2,
+    /// Householder vectors with `v₀ = x₀ − α`, `α = −sign(x₀)‖x‖`).
+    fn flush(&mut self) {
+        let (p, n, m) = (self.cols, self.chunk, self.filled);
+        if m == 0 {
+            return;
+        }
+        for j in 0..p {
+            let (before, rest) = self.b.split_at_mut((j + 1) * n);
+            let bj = &before[j * n..j * n + m];
+            let sigma = dot(bj, bj);
+            if sigma == 0.0 {
+                continue;
+            }
+            let x0 = self.r[j * p + j];
+            let norm = (x0 * x0 + sigma).sqrt();
+            let alpha = if x0 >= 0.0 { -norm } else { norm };
+            let v0 = x0 - alpha;
+            let beta = 2.0 / (v0 * v0 + sigma);
+            for k in j + 1..p {
+                let bk = &mut rest[(k - j - 1) * n..(k - j - 1) * n + m];
+                let rjk = self.r[k * p + j];
+                let w = beta * (v0 * rjk + dot(bj, bk));
+                self.r[k * p + j] = rjk - w * v0;
+                for (y, x) in bk.iter_mut().zip(bj) {
+                    *y -= w * x;
+                }
+            }
+            self.r[j * p + j] = alpha;
+        }
+        self.filled = 0;
+    }
+
+    pub(super) fn finish(mut self) -> DMatrix<f64> {
+        self.flush();
+        DMatrix::from_column_slice(self.cols, self.cols, &self.r)
+    }
+}
+
+/// `Σ aᵢ bᵢ` in four independent sums (which the compiler can keep in vector registers).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+pub(super) fn check_columns(n: usize, columns: &[usize], scales: &[f64]) -> Result<(), CalibError> {
+    if scales.len() != n {
+        return Err(CalibError::Length {
+            what: "scales".into(),
+            expected: n,
+            found: scales.len(),
+        });
+    }
+    for &c in columns {
+        if c >= n {
+            return Err(CalibError::BadParameter {
+                index: c,
+                reason: format!("expected an index below {n}"),
+            });
+        }
+        let s = scales[c];
+        if !(s.is_finite() && s > 0.0) {
+            return Err(CalibError::BadParameter {
+                index: c,
+                reason: format!("expected a positive finite scale, found {s}"),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Factors the column-scaled Jacobian of `columns` at `x` (see [`Factor`]); the columns of
+/// `r` are in the order of `columns`.
+///
+/// # Errors
+/// [`CalibError::NonFinite`] when a residual or derivative is not finite;
+/// [`CalibError::BadParameter`] / [`CalibError::Length`] for bad `columns` or `scales`.
+pub fn factor<P: Problem + ?Sized>(
+    problem: &P,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+) -> Result<Factor, CalibError> {
+    let n = problem.parameter_count();
+    check_columns(n, columns, scales)?;
+    let p = columns.len();
+    let blocks = problem.block_count();
+    if blocks <= SEGMENT_BLOCKS {
+        let (full, ssr, rows) = factor_blocks(problem, x, columns, scales, 0..blocks)?;
+        return Ok(split_factor(&full, p, ssr, rows));
+    }
+    // Segments in parallel, their factors stacked in segment order: the same result whatever
+    // the number of threads.
+    let parts = segments(blocks, |range| {
+        factor_blocks(problem, x, columns, scales, range)
+    })?;
+    let mut tsqr = Tsqr::new(p + 1);
+    let (mut ssr, mut rows) = (0.0, 0);
+    let mut row = vec![0.0; p + 1];
+    for (r, s, m) in parts {
+        for i in 0..r.nrows() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = r[(i, j)];
+            }
+            tsqr.push(&row);
+        }
+        ssr += s;
+        rows += m;
+    }
+    Ok(split_factor(&tsqr.finish(), p, ssr, rows))
+}
+
+/// Blocks per segment of a problem factored (or summed) in parallel: problems of at most this
+/// many blocks take the serial path, bit for bit as before threads were used.
+pub const SEGMENT_BLOCKS: usize = 16_384;
+
+/// Runs `work` on consecutive ranges of [`SEGMENT_BLOCKS`] blocks on up to
+/// `available_parallelism` threads; returns the results in range order (the first error in
+/// that order, if any).
+fn segments<T: Send>(
+    blocks: usize,
+    work: impl Fn(std::ops::Range<usize>) -> Result<T, CalibError> + Sync,
+) -> Result<Vec<T>, CalibError> {
+    parallel_map(blocks.div_ceil(SEGMENT_BLOCKS), |k| {
+        work(k * SEGMENT_BLOCKS..((k + 1) * SEGMENT_BLOCKS).min(blocks))
+    })
+}
+
+/// `work(0..count)` on up to `available_parallelism` threads, results in index order (the
+/// first error in that order, if any): the same results whatever the number of threads, as
+/// long as `work(k)` depends on `k` alone.
+pub(crate) fn parallel_map<T: Send>(
+    count: usize,
+    work: impl Fn(usize) -> Result<T, CalibError> + Sync,
+) -> Result<Vec<T>, CalibError> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(count);
+    if threads <= 1 {
+        return (0..count).map(work).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let slots: Mutex<Vec<Option<Result<T, CalibError>>>> =
+        Mutex::new((0..count).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= count {
+                    break;
+                }
+                let out = work(k);
+                if let Ok(mut s) = slots.lock() {
+                    s[k] = Some(out);
+                }
+            });
+        }
+    });
+    let slots = slots.into_inner().map_err(|_| CalibError::NonFinite {
+        what: "a worker thread panicked".into(),
+    })?;
+    slots
+        .into_iter()
+        .map(|s| {
+            s.unwrap_or_else(|| {
+                Err(CalibError::NonFinite {
+                    what: "a worker thread panicked".into(),
+                })
+            })
+        })
+        .collect()
+}
+
+/// `(r_factor, qtr)` out of the `(p + 1) × (p + 1)` factor of `[J | r]`.
+fn split_factor(full: &DMatrix<f64>, p: usize, ssr: f64, rows: usize) -> Factor {
+    Factor {
+        r: full.view((0, 0), (p, p)).clone_owned(),
+        qtr: full.view((0, p), (p, 1)).column(0).clone_owned(),
+        ssr,
+        rows,
+    }
+}
+
+/// The triangular factor of `[J·diag(s) | r]` over `range` of blocks, its sum of squared
+/// residuals and its number of rows.
+fn factor_blocks<P: Problem + ?Sized>(
+    problem: &P,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+    range: std::ops::Range<usize>,
+) -> Result<(DMatrix<f64>, f64, usize), CalibError> {
+    let p = columns.len();
+    let mut tsqr = Tsqr::new(p + 1);
+    let mut res = [0.0; MAX_BLOCK];
+    let mut jac = vec![0.0; MAX_BLOCK * p];
+    let mut row = vec![0.0; p + 1];
+    let mut ssr = 0.0;
+    let mut rows = 0;
+    for b in range {
+        let m = problem.block_size(b).min(MAX_BLOCK);
+        problem.jacobian(x, b, columns, &mut res[..m], &mut jac[..m * p]);
+        for i in 0..m {
+            for (k, &c) in columns.iter().enumerate() {
+                row[k] = jac[i * p + k] * scales[c];
+            }
+            row[p] = res[i];
+            if row.iter().any(|v| !v.is_finite()) {
+                return Err(CalibError::NonFinite {
+                    what: format!("residual block {b}"),
+                });
+            }
+            ssr += res[i] * res[i];
+            tsqr.push(&row);
+        }
+        rows += m;
+    }
+    Ok((tsqr.finish(), ssr, rows))
+}
+
+/// Sum of squared residuals at `x`, or `None` when one is not finite.
+pub fn sum_of_squares<P: Problem + ?Sized>(problem: &P, x: &[f64]) -> Option<f64> {
+    let blocks = problem.block_count();
+    let ssr = if blocks <= SEGMENT_BLOCKS {
+        sum_blocks(problem, x, 0..blocks)
+    } else {
+        segments(blocks, |range| Ok(sum_blocks(problem, x, range)))
+            .ok()?
+            .into_iter()
+            .sum()
+    };
+    ssr.is_finite().then_some(ssr)
+}
+
+fn sum_blocks<P: Problem + ?Sized>(problem: &P, x: &[f64], range: std::ops::Range<usize>) -> f64 {
+    let mut res = [0.0; MAX_BLOCK];
+    let mut ssr = 0.0;
+    for b in range {
+        let m = problem.block_size(b).min(MAX_BLOCK);
+        problem.residuals(x, b, &mut res[..m]);
+        for v in &res[..m] {
+            ssr += v * v;
+        }
+    }
+    ssr
+}

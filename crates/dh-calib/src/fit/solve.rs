@@ -1,0 +1,220 @@
+//! Levenberg-Marquardt truncated to the numerically identifiable subspace, and the outcome
+//! (standard errors, covariance) of a fit.
+//!
+//! Nielsen's damping update ("Damping parameter in Marquardt's method", IMM-REP-1999-05) on
+//! the column-scaled problem; standard errors `σ̂ · sqrt(diag((JᵀJ)⁺))` in the parameters'
+//! own units (metres, radians).
+
+use nalgebra::{DMatrix, DVector, SVD};
+
+use super::factor::{check_columns, factor, sum_of_squares, Factor};
+use super::{CalibError, FitOptions, FitOutcome, Problem, Termination};
+
+/// Number of SVD sweeps allowed before giving up (nalgebra's default is unbounded).
+const SVD_MAX_ITERATIONS: usize = 10_000;
+
+pub(super) fn svd(
+    m: DMatrix<f64>,
+    what: &str,
+) -> Result<SVD<f64, nalgebra::Dyn, nalgebra::Dyn>, CalibError> {
+    if m.iter().any(|v| !v.is_finite()) {
+        return Err(CalibError::NonFinite { what: what.into() });
+    }
+    SVD::try_new(m, true, true, f64::EPSILON, SVD_MAX_ITERATIONS)
+        .ok_or_else(|| CalibError::NoConvergence { what: what.into() })
+}
+
+/// Minimises the problem's sum of squares over the parameters `free`, starting at `x0`.
+///
+/// Levenberg-Marquardt (Nielsen's damping update, "Damping parameter in Marquardt's method",
+/// IMM-REP-1999-05) on the column-scaled problem `J·diag(scales)`, with each step restricted to
+/// singular directions above `options.rank_tolerance · σ_max`: unidentifiable combinations stay
+/// where `x0` puts them instead of wandering off along the null space. Standard errors are
+/// `σ̂ · sqrt(diag((JᵀJ)⁺))` with `σ̂² = ssr / (m − rank)` (the usual linearised estimate).
+///
+/// # Errors
+/// [`CalibError::Length`] / [`CalibError::BadParameter`] for inconsistent inputs,
+/// [`CalibError::NonFinite`] when the problem returns NaN or infinity at `x0`,
+/// [`CalibError::NoConvergence`] when an SVD fails.
+pub fn solve<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    free: &[usize],
+    scales: &[f64],
+    options: &FitOptions,
+) -> Result<FitOutcome, CalibError> {
+    let n = problem.parameter_count();
+    if x0.len() != n {
+        return Err(CalibError::Length {
+            what: "x0".into(),
+            expected: n,
+            found: x0.len(),
+        });
+    }
+    check_columns(n, free, scales)?;
+    let p = free.len();
+    let mut x = x0.to_vec();
+    let mut f = factor(problem, &x, free, scales)?;
+    let mut iterations = 0;
+    let mut termination = Termination::MaxIterations;
+    let mut lambda = f64::NAN;
+    let mut nu = 2.0;
+    let mut x_new = x.clone();
+    'outer: loop {
+        if p == 0 {
+            break;
+        }
+        let dec = svd(f.r.clone(), "jacobian factor")?;
+        let s = &dec.singular_values;
+        let (Some(u), Some(vt)) = (&dec.u, &dec.v_t) else {
+            return Err(CalibError::NoConvergence {
+                what: "jacobian factor".into(),
+            });
+        };
+        let smax = s.max();
+        if smax <= 0.0 {
+            termination = Termination::Converged;
+            break;
+        }
+        if lambda.is_nan() {
+            lambda = options.initial_damping * smax * smax;
+        }
+        let rank = s
+            .iter()
+            .filter(|&&v| v > options.rank_tolerance * smax)
+            .count();
+        let utz: Vec<f64> = (0..rank).map(|i| u.column(i).dot(&f.qtr)).collect();
+        let u_norm: f64 = free
+            .iter()
+            .map(|&c| (x[c] / scales[c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let mut rejections = 0;
+        loop {
+            // Step in scaled coordinates: du = −Σ v_i s_i/(s_i² + λ) (u_iᵀ z).
+            let mut du = DVector::zeros(p);
+            for i in 0..rank {
+                let w = s[i] / (s[i] * s[i] + lambda) * utz[i];
+                du -= vt.row(i).transpose() * w;
+            }
+            let pred_res = &f.qtr + &f.r * &du;
+            let predicted = f.qtr.norm_squared() - pred_res.norm_squared();
+            if predicted.is_nan() || predicted <= options.cost_tolerance * f.ssr {
+                termination = Termination::Converged;
+                break 'outer;
+            }
+            let du_norm = du.norm();
+            for (k, &c) in free.iter().enumerate() {
+                x_new[c] = x[c] + du[k] * scales[c];
+            }
+            let actual = sum_of_squares(problem, &x_new).map(|new| f.ssr - new);
+            let rho = actual.map_or(-1.0, |a| a / predicted);
+            if rho > 1e-4 {
+                x.copy_from_slice(&x_new);
+                lambda *= (1.0 / 3.0_f64).max(1.0 - (2.0 * rho - 1.0).powi(3));
+                nu = 2.0;
+                iterations += 1;
+                let small = du_norm <= options.step_tolerance * (u_norm + options.step_tolerance);
+                let flat = actual.is_some_and(|a| a <= options.cost_tolerance * f.ssr);
+                f = factor(problem, &x, free, scales)?;
+                if small {
+                    termination = Termination::SmallStep;
+                    break 'outer;
+                }
+                if flat {
+                    termination = Termination::Converged;
+                    break 'outer;
+                }
+                if iterations >= options.max_iterations {
+                    termination = Termination::MaxIterations;
+                    break 'outer;
+                }
+                continue 'outer;
+            }
+            lambda *= nu;
+            nu *= 2.0;
+            rejections += 1;
+            if rejections > 60 || !lambda.is_finite() {
+                termination = Termination::Stalled;
+                break 'outer;
+            }
+        }
+    }
+    if p == 0 {
+        termination = Termination::Converged;
+    }
+    outcome(x, free, scales, f, iterations, termination, options)
+}
+
+fn outcome(
+    x: Vec<f64>,
+    free: &[usize],
+    scales: &[f64],
+    f: Factor,
+    iterations: usize,
+    termination: Termination,
+    options: &FitOptions,
+) -> Result<FitOutcome, CalibError> {
+    let p = free.len();
+    let n = x.len();
+    let mut std_errors = vec![None; n];
+    if p == 0 {
+        return Ok(FitOutcome {
+            x,
+            free: vec![],
+            ssr: f.ssr,
+            residual_count: f.rows,
+            iterations,
+            termination,
+            rank: 0,
+            singular_values: vec![],
+            condition_number: 1.0,
+            sigma: (f.rows > 0).then(|| (f.ssr / f.rows as f64).sqrt()),
+            covariance: None,
+            std_errors,
+        });
+    }
+    let dec = svd(f.r.clone(), "jacobian factor")?;
+    let s: Vec<f64> = dec.singular_values.iter().copied().collect();
+    let smax = s.first().copied().unwrap_or(0.0);
+    let rank = s
+        .iter()
+        .filter(|&&v| v > options.rank_tolerance * smax && v > 0.0)
+        .count();
+    let condition_number = match s.last() {
+        Some(&smin) if rank == p && smin > 0.0 => smax / smin,
+        _ => f64::INFINITY,
+    };
+    let sigma = (f.rows > rank).then(|| (f.ssr / (f.rows - rank) as f64).sqrt());
+    let mut covariance = None;
+    if let (Some(sig), Some(vt)) = (sigma, &dec.v_t) {
+        let mut cov = DMatrix::zeros(p, p);
+        for (i, si) in s.iter().enumerate().take(rank) {
+            let v = vt.row(i).transpose();
+            cov += &v * v.transpose() / (si * si);
+        }
+        for a in 0..p {
+            for b in 0..p {
+                cov[(a, b)] *= sig * sig * scales[free[a]] * scales[free[b]];
+            }
+        }
+        for (k, &c) in free.iter().enumerate() {
+            std_errors[c] = Some(cov[(k, k)].max(0.0).sqrt());
+        }
+        covariance = Some(cov);
+    }
+    Ok(FitOutcome {
+        x,
+        free: free.to_vec(),
+        ssr: f.ssr,
+        residual_count: f.rows,
+        iterations,
+        termination,
+        rank,
+        singular_values: s,
+        condition_number,
+        sigma,
+        covariance,
+        std_errors,
+    })
+}

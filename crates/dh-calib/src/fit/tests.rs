@@ -1,0 +1,155 @@
+//! Unit tests of the solver: the chunked QR, a circle fit, factors across chunks, aliases.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::factor::Tsqr;
+use super::*;
+
+/// The chunked, structured QR gives the factor of the whole matrix: `RᵀR = AᵀA`, `R`
+/// upper triangular, with several flushes, a rank-deficient column and a zero column.
+#[test]
+fn tsqr_factors_a_tall_matrix_in_chunks() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let (rows, cols) = (1000, 6);
+    let mut a = DMatrix::from_fn(rows, cols, |_, _| rng.random_range(-1.0..1.0));
+    for i in 0..rows {
+        a[(i, 3)] = 2.0 * a[(i, 0)] - a[(i, 1)];
+        a[(i, 4)] = 0.0;
+    }
+    let mut t = Tsqr::new(cols);
+    assert!(rows > 3 * t.chunk);
+    for i in 0..rows {
+        let row: Vec<f64> = (0..cols).map(|k| a[(i, k)]).collect();
+        t.push(&row);
+    }
+    let r = t.finish();
+    for i in 0..cols {
+        for k in 0..i {
+            assert_eq!(r[(i, k)], 0.0);
+        }
+    }
+    let (ata, rtr) = (a.transpose() * &a, r.transpose() * &r);
+    assert!((ata - rtr).abs().max() < 1e-10 * rows as f64);
+    assert!(r[(3, 3)].abs() < 1e-10 && r[(4, 4)] == 0.0);
+}
+
+/// Fit a circle's centre and radius to points: residual = |p − c| − r (1 per block).
+struct Circle(Vec<(f64, f64)>);
+
+impl Problem for Circle {
+    fn parameter_count(&self) -> usize {
+        3
+    }
+    fn block_count(&self) -> usize {
+        self.0.len()
+    }
+    fn block_size(&self, _: usize) -> usize {
+        1
+    }
+    fn residuals(&self, x: &[f64], b: usize, out: &mut [f64]) {
+        let (px, py) = self.0[b];
+        out[0] = ((px - x[0]).powi(2) + (py - x[1]).powi(2)).sqrt() - x[2];
+    }
+    fn jacobian(&self, x: &[f64], b: usize, cols: &[usize], r: &mut [f64], j: &mut [f64]) {
+        self.residuals(x, b, r);
+        let (px, py) = self.0[b];
+        let d = ((px - x[0]).powi(2) + (py - x[1]).powi(2)).sqrt();
+        for (k, &c) in cols.iter().enumerate() {
+            j[k] = match c {
+                0 => -(px - x[0]) / d,
+                1 => -(py - x[1]) / d,
+                _ => -1.0,
+            };
+        }
+    }
+}
+
+#[test]
+fn circle_fit_recovers_centre_and_radius() {
+    let pts: Vec<_> = (0..40)
+        .map(|i| {
+            let t = i as f64 * 0.3;
+            (1.0 + 2.0 * t.cos(), -0.5 + 2.0 * t.sin())
+        })
+        .collect();
+    let p = Circle(pts);
+    let out = solve(
+        &p,
+        &[0.2, 0.3, 1.0],
+        &[0, 1, 2],
+        &[1.0; 3],
+        &Default::default(),
+    )
+    .unwrap();
+    assert!((out.x[0] - 1.0).abs() < 1e-12, "{:?}", out.x);
+    assert!((out.x[1] + 0.5).abs() < 1e-12);
+    assert!((out.x[2] - 2.0).abs() < 1e-12);
+    assert!(out.ssr < 1e-24);
+    assert_eq!(out.rank, 3);
+    // Holding the radius fixed leaves it at x0 and fits the centre only.
+    let out = solve(
+        &p,
+        &[0.2, 0.3, 2.0],
+        &[0, 1],
+        &[1.0; 3],
+        &Default::default(),
+    )
+    .unwrap();
+    assert_eq!(out.x[2], 2.0);
+    assert!(out.std_errors[2].is_none() && out.std_errors[0].is_some());
+}
+
+#[test]
+fn factor_matches_dense_qr_across_chunks() {
+    // 700 rows forces several chunk flushes.
+    let pts: Vec<_> = (0..700)
+        .map(|i| ((i as f64 * 0.01).sin() * 3.0, (i as f64 * 0.017).cos()))
+        .collect();
+    let p = Circle(pts);
+    let x = [0.1, 0.2, 1.5];
+    let f = factor(&p, &x, &[0, 1, 2], &[1.0, 2.0, 3.0]).unwrap();
+    let mut j = DMatrix::zeros(700, 3);
+    let mut r = DVector::zeros(700);
+    for b in 0..700 {
+        let (mut rb, mut jb) = ([0.0], [0.0; 3]);
+        p.jacobian(&x, b, &[0, 1, 2], &mut rb, &mut jb);
+        r[b] = rb[0];
+        for c in 0..3 {
+            j[(b, c)] = jb[c] * [1.0, 2.0, 3.0][c];
+        }
+    }
+    let gram = j.transpose() * &j;
+    let gram_f = f.r.transpose() * &f.r;
+    assert!((gram - gram_f).amax() < 1e-9);
+    let jtr = j.transpose() * &r;
+    assert!((jtr - f.r.transpose() * &f.qtr).amax() < 1e-9);
+    assert!((f.ssr - r.norm_squared()).abs() < 1e-9);
+}
+
+#[test]
+fn aliased_columns_are_found_with_their_partners() {
+    // Columns: a, b = 2a (alias), c independent, d = 0 (no effect).
+    let j = DMatrix::from_row_slice(
+        4,
+        4,
+        &[
+            1.0, 2.0, 0.0, 0.0, //
+            0.5, 1.0, 1.0, 0.0, //
+            -1.0, -2.0, 3.0, 0.0, //
+            2.0, 4.0, 0.1, 0.0,
+        ],
+    );
+    // Prefer fixing b (priority 0) over a (priority 1).
+    let id = identifiability(&j, &[1.0; 4], &[1, 0, 1, 1], 1e-9).unwrap();
+    assert_eq!(id.rank, 2);
+    assert_eq!(id.free, vec![0, 2]);
+    assert_eq!(id.fixed.len(), 2);
+    let b = id.fixed.iter().find(|f| f.index == 1).unwrap();
+    assert_eq!(b.aliases, vec![0]);
+    // Moving b by t and a by −2t changes nothing.
+    assert!((b.combination[0] + 2.0).abs() < 1e-9, "{:?}", b.combination);
+    let d = id.fixed.iter().find(|f| f.index == 3).unwrap();
+    assert!(d.aliases.is_empty());
+    assert!(id.condition_number.is_finite());
+}

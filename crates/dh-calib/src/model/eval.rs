@@ -1,0 +1,212 @@
+//! Evaluating a [`Model`]: op values at `x` and joint values `q`, chains of frames, points
+//! and tip frames in the device frame (metres, the device scale applied), the robot's own
+//! forward kinematics, and the calibrated table or tree.
+
+use dh_core::DhTable;
+use nalgebra::{Isometry3, Vector3};
+
+use super::ops::{Frame, DEVICE_OPS};
+use super::{Block, Field, Model, SampleContext};
+use crate::tree::{Branch, DhTree};
+
+impl Model {
+    pub(super) fn op_values(&self, x: &[f64], q: &[f64], ctx: &SampleContext, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend(self.ops.iter().map(|o| {
+            o.value
+                + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0)
+                + o.joint.and_then(|j| q.get(j)).copied().unwrap_or(0.0)
+        }));
+        for slot in &self.effects {
+            if let Some(op) = slot.op {
+                let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                if params.iter().any(|p| *p != 0.0) {
+                    out[op] += slot.effect.delta_in(q, ctx, params);
+                }
+            }
+        }
+    }
+
+    /// `1 + Σ s` of the device scale effects at `x`, `q` and `ctx` (1 without one): the
+    /// scale effects add (a constant `scale` and a `drift` in time together).
+    pub(super) fn scale_factor(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
+        1.0 + self
+            .effects
+            .iter()
+            .filter(|s| s.op.is_none())
+            .map(|slot| {
+                let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                slot.effect.delta_in(q, ctx, params)
+            })
+            .sum::<f64>()
+    }
+
+    /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before
+    /// op `i` for the ops visited, and `on[i]` whether op `i` was visited.
+    pub(super) fn chain(
+        &self,
+        values: &[f64],
+        mut before: Option<(&mut Vec<Frame>, &mut Vec<bool>)>,
+        ops: &[usize],
+    ) -> Frame {
+        let mut f = Frame::IDENTITY;
+        if let Some((b, on)) = before.as_mut() {
+            b.clear();
+            b.resize(self.ops.len(), Frame::IDENTITY);
+            on.clear();
+            on.resize(self.ops.len(), false);
+        }
+        for &i in ops {
+            let o = &self.ops[i];
+            if let Some((b, on)) = before.as_mut() {
+                b[i] = f;
+                on[i] = true;
+            }
+            f.apply(o.kind, values[i], &o.fixed);
+        }
+        f
+    }
+
+    pub(super) fn chain_ops(&self, chain: usize) -> &[usize] {
+        self.chains
+            .get(chain)
+            .or_else(|| self.chains.first())
+            .map_or(&[], |c| c.as_slice())
+    }
+
+    /// [`Model::chain_ops`] of `chain` as measured in `session`.
+    pub(super) fn session_ops(&self, chain: usize, session: usize) -> &[usize] {
+        match self.session_chains.iter().find(|(s, _)| *s == session) {
+            Some((_, chains)) => chains
+                .get(chain)
+                .or_else(|| chains.first())
+                .map_or(&[], |c| c.as_slice()),
+            None => self.chain_ops(chain),
+        }
+    }
+
+    /// Chain `chain`'s tip frame in session `session`'s device frame at `x` and `q` (its
+    /// position scaled by the device scale), in the neutral context (see [`Model::point_in`]).
+    pub fn tip_in(&self, x: &[f64], q: &[f64], chain: usize, session: usize) -> Isometry3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        let ctx = SampleContext::default();
+        self.op_values(x, q, &ctx, &mut v);
+        let mut f = self.chain(&v, None, self.session_ops(chain, session));
+        f.t *= self.scale_factor(x, q, &ctx);
+        f.to_iso()
+    }
+
+    /// Where target `k` is in the device frame at parameters `x` and joint values `q` (one per
+    /// row), metres (the device scale applied), in the neutral context (no motion history,
+    /// order 0: see [`Model::point_in`]).
+    pub fn point(&self, x: &[f64], q: &[f64], target: usize) -> Vector3<f64> {
+        self.point_in(x, q, &SampleContext::default(), target)
+    }
+
+    /// [`Model::point`] for a sample at `ctx` in the measurement sequence (what the
+    /// effects of motion history and time see).
+    pub fn point_in(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        ctx: &SampleContext,
+        target: usize,
+    ) -> Vector3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, ctx, &mut v);
+        let f = self.chain(&v, None, self.chain_ops(self.target_chain(target)));
+        (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, ctx)
+    }
+
+    /// `1 + s` of the device scale effects at `x` and `q` in the neutral context (1 without
+    /// one): what multiplies a modelled position in the device frame.
+    pub fn scale_at(&self, x: &[f64], q: &[f64]) -> f64 {
+        self.scale_factor(x, q, &SampleContext::default())
+    }
+
+    /// The first chain's tip frame in the device frame at `x` and `q` (its position scaled by
+    /// the device scale).
+    pub fn tip(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
+        self.tip_of(x, q, 0)
+    }
+
+    /// Chain `chain`'s tip frame in the device frame at `x` and `q` (its position scaled by the
+    /// device scale).
+    pub fn tip_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
+        let ctx = SampleContext::default();
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &ctx, &mut v);
+        let mut f = self.chain(&v, None, self.chain_ops(chain));
+        f.t *= self.scale_factor(x, q, &ctx);
+        f.to_iso()
+    }
+
+    /// The robot's own forward kinematics at `x` and `q` (the first chain's tip in the base
+    /// link frame, without the device frame).
+    pub fn robot_fk(&self, x: &[f64], q: &[f64]) -> Isometry3<f64> {
+        self.robot_fk_of(x, q, 0)
+    }
+
+    /// Chain `chain`'s tip in the base link frame at `x` and `q` (without the device frame).
+    pub fn robot_fk_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
+        let mut v = Vec::with_capacity(self.ops.len());
+        self.op_values(x, q, &SampleContext::default(), &mut v);
+        let ops = self.chain_ops(chain);
+        self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]))
+            .to_iso()
+    }
+
+    /// The calibrated table at `x`: nominal values plus errors, base and tool with their small
+    /// motions, and every Hayati tilt in its row's [`dh_core::DhRow::beta`] (the placement
+    /// this model uses, so the table's FK is the model's exactly). Effects cannot be expressed
+    /// in DH and are never in the table.
+    ///
+    /// Tilts are not folded into plain DH values: that is exact too, but a tilt `beta` at link
+    /// length `a` puts the common normal about `a / beta` away (kilometres for a tenth of a
+    /// milliradian), the ill conditioning Hayati avoids.
+    ///
+    /// For a tree this is the trunk (its tool the nominal branch point); see
+    /// [`Model::tree_at`] for the whole tree.
+    pub fn table_at(&self, x: &[f64]) -> DhTable {
+        self.tree_at(x).trunk().clone()
+    }
+
+    /// The calibrated tree at `x`, as [`Model::table_at`] describes. Branch mounts carry their
+    /// small motions.
+    pub fn tree_at(&self, x: &[f64]) -> DhTree {
+        let mut trunk = self.tree.trunk().clone();
+        trunk.base = self.pose_at(x, Block::Base);
+        if self.tree.branches().is_empty() {
+            trunk.tool = self.pose_at(x, Block::Tool);
+        }
+        let mut branches: Vec<Branch> = self.tree.branches().to_vec();
+        for (b, br) in branches.iter_mut().enumerate() {
+            br.table.base = self.pose_at(x, Block::Mount(b));
+        }
+        for (c, p) in self.parameters.iter().enumerate() {
+            let v = x.get(c).copied().unwrap_or(0.0);
+            if let Block::Joint(g) = p.block {
+                let (t, i) = self.tree.place(g);
+                let table = match t {
+                    None => &mut trunk,
+                    Some(b) => &mut branches[b].table,
+                };
+                let row = &mut table.rows[i];
+                match p.field {
+                    Field::A => row.a += v,
+                    Field::Alpha => row.alpha += v,
+                    Field::D => row.d += v,
+                    Field::Theta => row.theta += v,
+                    Field::Beta => row.beta += v,
+                    _ => {}
+                }
+            }
+        }
+        if branches.is_empty() {
+            DhTree::serial(&trunk)
+        } else {
+            // The rows and names are the nominal tree's, which was valid.
+            DhTree::new(trunk, branches).unwrap_or_else(|_| self.tree.clone())
+        }
+    }
+}

@@ -1,0 +1,257 @@
+//! Residuals (model minus measured) of one observation and their analytic Jacobian.
+//!
+//! A point gives 3 residuals (metres); a pose 6: the position difference (metres) and
+//! `w · log(R_model R_measuredᵀ)` (metres per radian times radians), `w` the model's
+//! orientation scale for a tip pose ([`Observation::Pose`]) and the sample's own weight for a
+//! target frame ([`Observation::TargetPose`]). The
+//! orientation part's derivative uses SO(3)'s inverse left Jacobian (Barfoot, *State
+//! Estimation for Robotics*, 2017, eq. 7.77b).
+
+use nalgebra::{Isometry3, Matrix3, Rotation3, UnitQuaternion, Vector3};
+
+use super::ops::{Frame, OpKind};
+use super::{Block, Field, Model, Observation, Observed};
+
+impl Model {
+    /// Residuals of one observation (model minus measured) into `out` (3 or 6 values).
+    pub fn residuals(&self, x: &[f64], obs: &Observed, out: &mut [f64]) {
+        SCRATCH.with(|scratch| {
+            let mut scratch = scratch.borrow_mut();
+            let v = &mut scratch.values;
+            self.op_values(x, &obs.q, &obs.context, v);
+            let f = self.chain(
+                v,
+                None,
+                self.session_ops(self.observation_chain(obs), obs.session),
+            );
+            let s = self.scale_factor(x, &obs.q, &obs.context);
+            self.write_residuals(x, &f, s, obs, out);
+        });
+    }
+
+    fn observation_chain(&self, obs: &Observed) -> usize {
+        match &obs.observation {
+            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => {
+                self.target_chain(*target)
+            }
+            Observation::Pose(_) => 0,
+        }
+    }
+
+    fn write_residuals(
+        &self,
+        x: &[f64],
+        f: &Frame,
+        scale: f64,
+        obs: &Observed,
+        out: &mut [f64],
+    ) -> Vector3<f64> {
+        match &obs.observation {
+            Observation::Point { target, point } => {
+                let p = (f.t + f.r * self.target_at(x, *target)) * scale;
+                let r = p - point;
+                out[..3].copy_from_slice(r.as_slice());
+                Vector3::zeros()
+            }
+            Observation::Pose(m) => {
+                let r = f.t * scale - m.translation.vector;
+                out[..3].copy_from_slice(r.as_slice());
+                orientation_residual(&f.r, m, self.orientation_scale, out)
+            }
+            Observation::TargetPose {
+                target,
+                pose,
+                weight,
+            } => {
+                let p = (f.t + f.r * self.target_at(x, *target)) * scale;
+                let r = p - pose.translation.vector;
+                out[..3].copy_from_slice(r.as_slice());
+                let (rk, _) = self.target_rotation_axes(x, *target);
+                orientation_residual(&(f.r * rk), pose, *weight, out)
+            }
+        }
+    }
+
+    /// Residuals and the analytic Jacobian of one observation for the parameters `columns`
+    /// (row-major, `residual count × columns.len()`).
+    ///
+    /// Each parameter moves one elementary transform of the chain; with `F` the frame before
+    /// it, `w` = `F`'s axis (rotation) or `t` = `F`'s axis (translation), and `P` the measured
+    /// point in the device frame, `∂P = w × (P − F.origin)` or `∂P = t` (screw motion), and
+    /// the orientation moves by `w` or not at all. Orientation residuals use the exact
+    /// derivative of the logarithm map, `J_l⁻¹(φ) w`.
+    pub fn jacobian(
+        &self,
+        x: &[f64],
+        obs: &Observed,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+    ) {
+        SCRATCH.with(|scratch| {
+            let mut scratch = scratch.borrow_mut();
+            let Scratch {
+                values,
+                before,
+                on,
+                grad,
+            } = &mut *scratch;
+            self.jacobian_with(
+                x, obs, columns, residuals, jacobian, values, before, on, grad,
+            );
+        });
+    }
+
+    /// [`Model::jacobian`] with its work space (reused between calls on one thread).
+    #[allow(clippy::too_many_arguments)]
+    fn jacobian_with(
+        &self,
+        x: &[f64],
+        obs: &Observed,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+        v: &mut Vec<f64>,
+        before: &mut Vec<Frame>,
+        on: &mut Vec<bool>,
+        grad: &mut Vec<f64>,
+    ) {
+        self.op_values(x, &obs.q, &obs.context, v);
+        let ops = self.session_ops(self.observation_chain(obs), obs.session);
+        let f = self.chain(v, Some((before, on)), ops);
+        let scale = self.scale_factor(x, &obs.q, &obs.context);
+        let phi = self.write_residuals(x, &f, scale, obs, residuals);
+        let (point, target, weight) = match &obs.observation {
+            Observation::Point { target, .. } => {
+                (f.t + f.r * self.target_at(x, *target), Some(*target), None)
+            }
+            Observation::Pose(_) => (f.t, None, Some(self.orientation_scale)),
+            Observation::TargetPose { target, weight, .. } => (
+                f.t + f.r * self.target_at(x, *target),
+                Some(*target),
+                Some(*weight),
+            ),
+        };
+        let jl_inv = match weight {
+            Some(w) => left_jacobian_inverse(&phi) * w,
+            None => Matrix3::zeros(),
+        };
+        // The target's orientation axes in the device frame (zero for a point target).
+        let target_axes = target.map(|t| self.target_rotation_axes(x, t).1.map(|a| f.r * a));
+        let nc = columns.len();
+        let rows = obs.observation.residual_count();
+        for (k, &c) in columns.iter().enumerate() {
+            let mut dp = Vector3::zeros();
+            let mut dw = Vector3::zeros();
+            let op_motion = |o: usize, g: f64, dp: &mut Vector3<f64>, dw: &mut Vector3<f64>| {
+                if !on[o] {
+                    // Not on this observation's chain (the other arm of a tree).
+                    return;
+                }
+                let fr = &before[o];
+                match self.ops[o].kind {
+                    OpKind::Trans(a) => *dp += fr.r.column(a as usize) * g,
+                    OpKind::Rot(a) => {
+                        let w = fr.r.column(a as usize).into_owned();
+                        *dp += w.cross(&(point - fr.t)) * g;
+                        *dw += w * g;
+                    }
+                    OpKind::Fixed => {}
+                }
+            };
+            match self.parameters.get(c).map(|p| p.block) {
+                Some(Block::Target(t)) if target == Some(t) => match self.parameters[c].field {
+                    Field::X => dp = f.r.column(0).into_owned(),
+                    Field::Y => dp = f.r.column(1).into_owned(),
+                    Field::Z => dp = f.r.column(2).into_owned(),
+                    // An orientation turns the target's frame about its origin: the position
+                    // stays, the orientation moves about the axis.
+                    field => {
+                        let i = match field {
+                            Field::Rx => 0,
+                            Field::Ry => 1,
+                            _ => 2,
+                        };
+                        if let Some(axes) = &target_axes {
+                            dw = axes[i];
+                        }
+                    }
+                },
+                Some(Block::Target(_)) => {}
+                Some(Block::Effect(e)) => {
+                    let slot = &self.effects[e];
+                    grad.resize(slot.params.len(), 0.0);
+                    let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                    slot.effect.gradient_in(&obs.q, &obs.context, params, grad);
+                    let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
+                    match slot.op {
+                        Some(op) => op_motion(op, g, &mut dp, &mut dw),
+                        // Device scale: the unscaled position, undoing the factor below.
+                        None if scale != 0.0 => dp = point * (g / scale),
+                        None => {}
+                    }
+                }
+                Some(_) => {
+                    if let Some(o) = self.param_op[c] {
+                        op_motion(o, 1.0, &mut dp, &mut dw);
+                    }
+                }
+                None => {}
+            }
+            for i in 0..3 {
+                jacobian[i * nc + k] = dp[i] * scale;
+            }
+            if rows == 6 {
+                let dr = jl_inv * dw;
+                for i in 0..3 {
+                    jacobian[(3 + i) * nc + k] = dr[i];
+                }
+            }
+        }
+    }
+}
+
+/// Writes `weight · log(R_model R_measuredᵀ)` into `out[3..6]` and returns the rotation
+/// vector `log(R_model R_measuredᵀ)` (device frame, radians).
+fn orientation_residual(
+    model: &Matrix3<f64>,
+    measured: &Isometry3<f64>,
+    weight: f64,
+    out: &mut [f64],
+) -> Vector3<f64> {
+    let rel = Rotation3::from_matrix_unchecked(
+        model * measured.rotation.to_rotation_matrix().matrix().transpose(),
+    );
+    let phi = UnitQuaternion::from_rotation_matrix(&rel).scaled_axis();
+    for k in 0..3 {
+        out[3 + k] = weight * phi[k];
+    }
+    phi
+}
+
+/// Inverse of SO(3)'s left Jacobian at rotation vector `phi` (Barfoot, *State Estimation for
+/// Robotics*, 2017, eq. 7.77b in its left form).
+fn left_jacobian_inverse(phi: &Vector3<f64>) -> Matrix3<f64> {
+    let th = phi.norm();
+    let k = phi.cross_matrix();
+    let c = if th < 1e-4 {
+        1.0 / 12.0 + th * th / 720.0
+    } else {
+        1.0 / (th * th) - (1.0 + th.cos()) / (2.0 * th * th.sin())
+    };
+    Matrix3::identity() - k * 0.5 + k * k * c
+}
+
+/// Work space of [`Model::residuals`] and [`Model::jacobian`], one per thread, so that the
+/// millions of calls of a large fit allocate nothing.
+#[derive(Default)]
+struct Scratch {
+    values: Vec<f64>,
+    before: Vec<Frame>,
+    on: Vec<bool>,
+    grad: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}

@@ -1,0 +1,124 @@
+//! 6-DoF poses end to end: `simulate --orientation-noise` writes orientation columns,
+//! `calibrate` fits them (angle RMS at its noise floor, JSON and text), and bad orientation
+//! cells exit 2 naming the file, line and column.
+
+use serde_json::Value;
+
+use crate::common::{exec, ok};
+
+const MODEL: &str = "fixtures/robots/ur5/vendor.yaml";
+const HEADER: &str = "shoulder_pan_joint,shoulder_lift_joint,elbow_joint,wrist_1_joint,wrist_2_joint,wrist_3_joint,x,y,z,sigma,qw,qx,qy,qz,sigma_rot\n";
+
+#[test]
+fn simulated_six_dof_poses_calibrate_to_both_noise_floors() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("p.csv").to_string_lossy().into_owned();
+    ok(&[
+        "simulate",
+        "--model",
+        MODEL,
+        "--poses",
+        "120",
+        "--noise",
+        "20e-6",
+        "--orientation-noise",
+        "50e-6",
+        "--random-errors",
+        "0.0005,0.0003",
+        "--seed",
+        "3",
+        "--out",
+        &data,
+    ]);
+    let text = std::fs::read_to_string(&data).unwrap();
+    assert!(text.contains(",qw,qx,qy,qz,sigma_rot\n"), "{text}");
+    let report: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        MODEL,
+        "--data",
+        &data,
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    let last = report["steps"].as_array().unwrap().last().unwrap().clone();
+    let angle = last["angle_rms"].as_f64().unwrap();
+    let angle_floor = report["angle_noise_floor"].as_f64().unwrap();
+    let (rms, floor) = (
+        report["rms_after"].as_f64().unwrap(),
+        report["noise_floor"].as_f64().unwrap(),
+    );
+    for (r, f) in [(rms, floor), (angle, angle_floor)] {
+        assert!((r / f - 1.0).abs() < 0.1, "rms {r:e}, floor {f:e}");
+    }
+    let free: Vec<&str> = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["free"] == true)
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert!(free.contains(&"target.t1.rz"), "{free:?}");
+    let text = ok(&["calibrate", "--model", MODEL, "--data", &data]);
+    assert!(text.contains("\nangle: RMS "), "{text}");
+}
+
+#[test]
+fn bad_orientations_exit_2_naming_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = "0,0,0,0,0,0,1,2,3,2e-5,1,0,0,0,5e-5\n";
+    for (row, header, message) in [
+        (
+            "0,0,0,0,0.1,0,1,2,3,2e-5,1.2,0,0,0,5e-5\n",
+            HEADER,
+            "bad.csv: line 3: expected a unit quaternion in columns qw, qx, qy, qz (norm within 0.001 of 1), found norm 1.2",
+        ),
+        (
+            "0,0,0,0,0.1,0,1,2,3,2e-5,1,NaN,0,0,5e-5\n",
+            HEADER,
+            "bad.csv: line 3",
+        ),
+        (
+            "0,0,0,0,0.1,0,1,2,3,2e-5,1,0,0,0,\n",
+            HEADER,
+            "bad.csv: line 3: expected a standard deviation in column 'sigma_rot' (radians) for an orientation, found an empty cell",
+        ),
+    ] {
+        let path = dir.path().join("bad.csv");
+        std::fs::write(&path, format!("{header}{good}{row}")).unwrap();
+        let (code, out, err) = exec(&[
+            "calibrate",
+            "--model",
+            MODEL,
+            "--data",
+            &path.to_string_lossy(),
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(out.is_empty());
+        assert!(err.contains(message), "{err}");
+        if row.contains("NaN") {
+            assert!(err.contains("qx"), "{err}");
+        }
+    }
+    // The column sigma_rot itself missing.
+    let path = dir.path().join("bad.csv");
+    let header = HEADER.replace(",sigma_rot", "");
+    std::fs::write(
+        &path,
+        format!("{header}0,0,0,0,0,0,1,2,3,2e-5,1,0,0,0\n0,0,0,0,0.1,0,1,2,3,2e-5,1,0,0,0\n"),
+    )
+    .unwrap();
+    let (code, _, err) = exec(&[
+        "calibrate",
+        "--model",
+        MODEL,
+        "--data",
+        &path.to_string_lossy(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("bad.csv: line 1: missing point column 'sigma_rot'"),
+        "{err}"
+    );
+}
