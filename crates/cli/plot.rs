@@ -104,6 +104,30 @@ pub(crate) fn tick_label(v: f64, step: f64) -> String {
     format!("{v:.decimals$}")
 }
 
+/// The start of a chart's SVG document, `width` by `height` user units: the XML declaration,
+/// the `<svg>` element, `title` as its `<title>` and centred above the chart, on white.
+pub(crate) fn svg_open(width: f64, height: f64, title: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" font-family=\"sans-serif\" font-size=\"12\">",
+        c(width),
+        c(height),
+        c(width),
+        c(height)
+    );
+    let _ = writeln!(s, "<title>{}</title>", xml(title));
+    let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
+    let _ = writeln!(
+        s,
+        "<text x=\"{}\" y=\"24\" font-size=\"15\" text-anchor=\"middle\">{}</text>",
+        c(width / 2.0),
+        xml(title)
+    );
+    s
+}
+
 /// The SVG document of `chart`.
 pub fn residuals_svg(chart: &ResidualChart) -> String {
     let n = chart.panels.len().max(1) as f64;
@@ -112,24 +136,7 @@ pub fn residuals_svg(chart: &ResidualChart) -> String {
     let scale = 1.0 / chart.unit.metres();
     let unit = chart.unit.symbol();
     let poses = chart.poses.max(1) as f64;
-    let mut s = String::new();
-    let _ = writeln!(s, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" font-family=\"sans-serif\" font-size=\"12\">",
-        c(WIDTH),
-        c(height),
-        c(WIDTH),
-        c(height)
-    );
-    let _ = writeln!(s, "<title>{}</title>", xml(&chart.title));
-    let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"24\" font-size=\"15\" text-anchor=\"middle\">{}</text>",
-        c(WIDTH / 2.0),
-        xml(&chart.title)
-    );
+    let mut s = svg_open(WIDTH, height, &chart.title);
     for (k, panel) in chart.panels.iter().enumerate() {
         let top = TOP + k as f64 * (PANEL_HEIGHT + GAP);
         let bottom = top + PANEL_HEIGHT;

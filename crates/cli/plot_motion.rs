@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 use dh_calib::cpa::{JointCpa, MotionCheck};
 use dh_core::JointKind;
 
-use crate::plot::{c, nice_step, significant, tick_label, xml};
+use crate::plot::{c, nice_step, significant, svg_open, tick_label, xml};
 
 const WIDTH: f64 = 900.0;
 const PANEL_HEIGHT: f64 = 200.0;
@@ -121,24 +121,7 @@ pub fn motion_svg(title: &str, joints: &[JointCpa]) -> String {
     let n = joints.len().max(1) as f64;
     let height = TOP + n * PANEL_HEIGHT + (n - 1.0) * GAP + 40.0;
     let plot_w = WIDTH - LEFT - RIGHT;
-    let mut s = String::new();
-    let _ = writeln!(s, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {} {}\" font-family=\"sans-serif\" font-size=\"12\">",
-        c(WIDTH),
-        c(height),
-        c(WIDTH),
-        c(height)
-    );
-    let _ = writeln!(s, "<title>{}</title>", xml(title));
-    let _ = writeln!(s, "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>");
-    let _ = writeln!(
-        s,
-        "<text x=\"{}\" y=\"24\" font-size=\"15\" text-anchor=\"middle\">{}</text>",
-        c(WIDTH / 2.0),
-        xml(title)
-    );
+    let mut s = svg_open(WIDTH, height, title);
     for (k, joint) in joints.iter().enumerate() {
         let top = TOP + k as f64 * (PANEL_HEIGHT + GAP);
         panel(&mut s, joint, top, plot_w);

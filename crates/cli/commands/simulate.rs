@@ -379,14 +379,7 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
                 .map(|s| (data.session_name(s), PoseSi::of(&truth.sessions[s])))
                 .collect()
         },
-        targets: truth
-            .targets
-            .iter()
-            .map(|(n, p)| TargetDoc {
-                name: n.clone(),
-                xyz: [p.x, p.y, p.z],
-            })
-            .collect(),
+        targets: TargetDoc::list(&truth.targets),
         errors: truth.errors.clone(),
         effects: applied,
     };

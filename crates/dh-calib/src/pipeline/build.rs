@@ -131,14 +131,7 @@ impl CalibrationDoc {
             candidates: report.candidates.iter().map(CandidateDoc::from).collect(),
             device: PoseSi::of(&report.device),
             sessions: session_docs(report),
-            targets: report
-                .targets
-                .iter()
-                .map(|(n, p)| TargetDoc {
-                    name: n.clone(),
-                    xyz: [p.x, p.y, p.z],
-                })
-                .collect(),
+            targets: TargetDoc::list(&report.targets),
             notes: report.notes.clone(),
             written: None,
             outliers,

@@ -149,6 +149,19 @@ pub struct TargetDoc {
     pub xyz: [f64; 3],
 }
 
+impl TargetDoc {
+    /// The documents of named target positions (tip frame, metres), in order.
+    pub fn list(targets: &[(String, nalgebra::Vector3<f64>)]) -> Vec<TargetDoc> {
+        targets
+            .iter()
+            .map(|(n, p)| TargetDoc {
+                name: n.clone(),
+                xyz: [p.x, p.y, p.z],
+            })
+            .collect()
+    }
+}
+
 /// A pose, metres and radians (URDF roll-pitch-yaw).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PoseSi {
