@@ -82,7 +82,9 @@ enum Command {
     )]
     Compensate(compensate::CompensateCli),
     /// Circle-point analysis: joint axes from sweeps of one joint at a time, and their DH table.
-    #[command(after_help = "EXAMPLES:\n  urdf-dh cpa sweeps.csv --format yaml > measured-dh.yaml")]
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh cpa sweeps.csv --format yaml > measured-dh.yaml\n  urdf-dh cpa sweeps.csv --model robot.urdf --plot sweeps.svg"
+    )]
     Cpa(cpa::CpaCli),
     /// Simulate measurements of a model with known errors, noise and effects.
     #[command(
