@@ -219,28 +219,11 @@ mod tests {
     use super::*;
     use crate::effects::EffectContext;
     use crate::predict::effects_from_parameters;
-    use dh_core::{Convention, DhRow, DhTable};
     use std::f64::consts::FRAC_PI_2;
-
-    fn ur5() -> DhTable {
-        DhTable {
-            convention: Convention::Standard,
-            base: Isometry3::identity(),
-            tool: Isometry3::identity(),
-            rows: vec![
-                DhRow::revolute("j1", 0.0, FRAC_PI_2, 0.089159, 0.0),
-                DhRow::revolute("j2", -0.425, 0.0, 0.0, 0.0),
-                DhRow::revolute("j3", -0.39225, 0.0, 0.0, 0.0),
-                DhRow::revolute("j4", 0.0, FRAC_PI_2, 0.10915, 0.0),
-                DhRow::revolute("j5", 0.0, -FRAC_PI_2, 0.09465, 0.0),
-                DhRow::revolute("j6", 0.0, 0.0, 0.0823, 0.0),
-            ],
-        }
-    }
 
     #[test]
     fn the_calibrated_robot_reaches_the_nominal_goal() {
-        let nominal = ur5();
+        let nominal = crate::test_robots::ur5();
         let mut real = nominal.clone();
         real.rows[1].a += 5e-4;
         real.rows[2].theta += 1e-3;

@@ -51,6 +51,8 @@ pub mod sessions;
 pub mod simulate;
 pub mod socket;
 mod stats;
+#[cfg(test)]
+mod test_robots;
 pub mod tree;
 
 pub use fit::CalibError;

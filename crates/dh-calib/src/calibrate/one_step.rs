@@ -92,7 +92,7 @@ pub(crate) fn one_step_cross_validation(
             let mut m = &total_n - &normal[f];
             symmetrise_lower(&mut m);
             let g = &total_g - &gradient[f];
-            pseudo_solve(m, -g, rank_tolerance)
+            fit::pseudo_inverse(&m, rank_tolerance) * -g
         })
         .collect();
     // Pass 2: each sample's residual after its fold's step.
@@ -133,49 +133,16 @@ fn symmetrise_lower(m: &mut DMatrix<f64>) {
     }
 }
 
-/// The minimum-norm solution of `m δ = g` for a symmetric positive semi-definite `m`, with the
-/// eigen-directions below `rank_tolerance²` of the largest eigenvalue left out.
-fn pseudo_solve(m: DMatrix<f64>, g: DVector<f64>, rank_tolerance: f64) -> DVector<f64> {
-    let eig = m.symmetric_eigen();
-    let largest = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-    let floor = largest * rank_tolerance * rank_tolerance;
-    let mut out = DVector::zeros(g.len());
-    if largest <= 0.0 || !largest.is_finite() {
-        return out;
-    }
-    for (k, &lambda) in eig.eigenvalues.iter().enumerate() {
-        if lambda > floor {
-            let v = eig.eigenvectors.column(k);
-            out += v * (v.dot(&g) / lambda);
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::simulate::{simulate, Errors, SimulationOptions};
-    use dh_core::{Convention, DhRow};
-    use std::f64::consts::FRAC_PI_2;
 
     /// A UR5 (vendor DH) measured at 120 poses with 20 um noise and millimetre errors: the
     /// one-step folds give the refitted folds' held-out distances to far below the noise.
     #[test]
     fn one_step_folds_give_the_refitted_folds_distances() {
-        let table = DhTable {
-            convention: Convention::Standard,
-            base: Isometry3::identity(),
-            tool: Isometry3::identity(),
-            rows: vec![
-                DhRow::revolute("j1", 0.0, FRAC_PI_2, 0.089159, 0.0),
-                DhRow::revolute("j2", -0.425, 0.0, 0.0, 0.0),
-                DhRow::revolute("j3", -0.39225, 0.0, 0.0, 0.0),
-                DhRow::revolute("j4", 0.0, FRAC_PI_2, 0.10915, 0.0),
-                DhRow::revolute("j5", 0.0, -FRAC_PI_2, 0.09465, 0.0),
-                DhRow::revolute("j6", 0.0, 0.0, 0.0823, 0.0),
-            ],
-        };
+        let table = crate::test_robots::ur5();
         let (data, _) = simulate(
             &table,
             &SimulationOptions {
@@ -216,17 +183,5 @@ mod tests {
         assert!(worst < 1e-9, "largest difference {worst} m");
         assert!((rms(&exact) - rms(&approx)).abs() < 1e-6 * rms(&exact));
         assert!(rms(&exact) > 2e-5 && rms(&exact) < 6e-5, "{}", rms(&exact));
-    }
-
-    #[test]
-    fn a_rank_deficient_system_steps_only_where_it_is_determined() {
-        // x0 + x1 = 2 determined, x0 - x1 free: the minimum-norm solution is (1, 1).
-        let m = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
-        let g = DVector::from_row_slice(&[2.0, 2.0]);
-        let d = pseudo_solve(m, g, 1e-6);
-        assert!(
-            (d[0] - 1.0).abs() < 1e-12 && (d[1] - 1.0).abs() < 1e-12,
-            "{d}"
-        );
     }
 }

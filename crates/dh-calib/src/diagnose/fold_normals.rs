@@ -14,12 +14,15 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::fit::pseudo_inverse;
+
 /// A fold's own products with a candidate's columns `C_F`: `J_FᵀC_F`, `C_FᵀC_F`, `C_Fᵀr_F`,
 /// and `C_F` itself.
 type OwnProducts = (DMatrix<f64>, DMatrix<f64>, DVector<f64>, DMatrix<f64>);
 
-/// Eigenvalues below this fraction of the largest are left out of a pseudo-inverse.
-const EIGEN_FLOOR: f64 = 1e-12;
+/// Singular values below this fraction of the largest are left out (the fit's default rank
+/// tolerance, [`crate::fit::FitOptions::rank_tolerance`]).
+const RANK_TOLERANCE: f64 = 1e-6;
 
 /// One fold's rows and its training normal equations of the estimated parameters.
 struct Fold {
@@ -76,7 +79,7 @@ impl FoldNormals {
         let total_a = own.iter().fold(DMatrix::zeros(p, p), |acc, (n, _)| acc + n);
         let total_g = own.iter().fold(DVector::zeros(p), |acc, (_, g)| acc + g);
         for (f, (n, g)) in built.iter_mut().zip(&own) {
-            f.a_inv = pseudo_inverse(&(&total_a - n));
+            f.a_inv = pseudo_inverse(&(&total_a - n), RANK_TOLERANCE);
             f.a = &total_g - g;
         }
         Self { folds: built }
@@ -113,7 +116,7 @@ impl FoldNormals {
                 let bv = &total_bv - bv_own;
                 let x = &f.a_inv * &b;
                 let s = &d - b.tr_mul(&x);
-                let dc = -(pseudo_inverse(&s) * (&bv - x.tr_mul(&f.a)));
+                let dc = -(pseudo_inverse(&s, RANK_TOLERANCE) * (&bv - x.tr_mul(&f.a)));
                 let df = -(&f.a_inv * (&f.a + &b * &dc));
                 (df, dc)
             };
@@ -131,33 +134,6 @@ impl FoldNormals {
         }
         out
     }
-}
-
-/// The pseudo-inverse of a symmetric positive semi-definite matrix, eigen-directions below
-/// [`EIGEN_FLOOR`] of the largest left out.
-fn pseudo_inverse(m: &DMatrix<f64>) -> DMatrix<f64> {
-    let n = m.nrows();
-    let mut sym = m.clone();
-    for a in 0..n {
-        for b in 0..a {
-            let v = 0.5 * (sym[(a, b)] + sym[(b, a)]);
-            sym[(a, b)] = v;
-            sym[(b, a)] = v;
-        }
-    }
-    let eig = sym.symmetric_eigen();
-    let largest = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-    let mut out = DMatrix::zeros(n, n);
-    if !(largest > 0.0 && largest.is_finite()) {
-        return out;
-    }
-    for (i, &lambda) in eig.eigenvalues.iter().enumerate() {
-        if lambda > EIGEN_FLOOR * largest {
-            let v = eig.eigenvectors.column(i);
-            out += v * v.transpose() / lambda;
-        }
-    }
-    out
 }
 
 #[cfg(test)]

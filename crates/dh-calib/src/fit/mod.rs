@@ -30,6 +30,7 @@ mod error;
 mod factor;
 mod identify;
 mod problem;
+mod psd;
 mod solve;
 #[cfg(test)]
 mod tests;
@@ -42,4 +43,5 @@ pub use identify::{
     ALIAS_THRESHOLD,
 };
 pub use problem::{FitOptions, FitOutcome, Problem, Termination, MAX_BLOCK, MIN_SENSITIVITY};
+pub(crate) use psd::pseudo_inverse;
 pub use solve::solve;
