@@ -182,6 +182,11 @@ pub fn max_effects(s: &str) -> Result<usize, String> {
     counted(s, "a number of effects", 0, 100)
 }
 
+/// A significance level: `(0, 0.5]`.
+pub fn alpha(s: &str) -> Result<f64, String> {
+    ranged(s, "a significance level", 0.0, 0.5, true)
+}
+
 /// A gravity component (m/s²): `[-100, 100]`.
 pub fn gravity(s: &str) -> Result<f64, String> {
     ranged(s, "an acceleration in m/s²", -100.0, 100.0, false)

@@ -415,6 +415,61 @@ fn effects_auto_on_simulated_points_shows_the_candidates_and_the_planted_effect(
 }
 
 #[test]
+fn alpha_sets_the_level_of_every_test_of_the_selection_and_is_echoed() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = path(dir.path(), "gear.csv");
+    ok(&[
+        "simulate",
+        "--model",
+        "fixtures/robots/ur5/vendor.yaml",
+        "--poses",
+        "60",
+        "--noise",
+        "3e-5",
+        "--targets",
+        "2",
+        "--effect",
+        "gear_ratio:elbow_joint=0.002",
+        "--seed",
+        "5",
+        "--out",
+        &data,
+    ]);
+    let base = [
+        "calibrate",
+        "--model",
+        "fixtures/robots/ur5/vendor.yaml",
+        "--data",
+        &data,
+        "--effects",
+        "auto",
+        "--sigma",
+        "3e-5",
+    ];
+    for (alpha, level) in [(None, 0.01), (Some("0.05"), 0.05), (Some("1e-6"), 1e-6)] {
+        let mut args = base.to_vec();
+        if let Some(a) = alpha {
+            args.extend(["--alpha", a]);
+        }
+        let text = ok(&args);
+        assert!(
+            text.contains(&format!("tests at level {level};")),
+            "{alpha:?}: {text}"
+        );
+        args.extend(["--format", "json"]);
+        let doc: serde_json::Value = serde_json::from_str(&ok(&args)).unwrap();
+        assert_eq!(doc["diagnosis"]["alpha"].as_f64(), Some(level), "{alpha:?}");
+        assert_eq!(doc["verdict"]["alpha"].as_f64(), Some(level), "{alpha:?}");
+        // The planted ratio (2e-3 rad/rad, hundreds of sigmas) passes at every level.
+        let selected = doc["selected_effects"].as_array().unwrap();
+        assert!(
+            selected.iter().any(|e| e == "gear_ratio:elbow_joint"),
+            "{alpha:?}: {selected:?}"
+        );
+    }
+}
+
+#[test]
 fn mukca_panda_6_through_the_cli() {
     let Some(shared) = skip_without_shared("mukca_panda_6_through_the_cli") else {
         return;

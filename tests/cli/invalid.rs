@@ -422,6 +422,30 @@ const CASES: &[Case] = &[
         ],
     ),
     case(
+        "arg_alpha_above_half",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            VALID_CSV,
+            "--alpha",
+            "0.7",
+        ],
+    ),
+    case(
+        "arg_alpha_zero",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            VALID_CSV,
+            "--alpha",
+            "0",
+        ],
+    ),
+    case(
         "arg_too_many_poses",
         &[
             "simulate",

@@ -89,6 +89,8 @@ pub struct CalibrateArgs {
     pub payload: Option<Vec<f64>>,
     /// Most effects `--effects auto` adds (`dh_calib::diagnose::DiagnoseOptions::max_effects`).
     pub max_effects: usize,
+    /// Significance level of the diagnosis's tests (`PipelineOptions::alpha`).
+    pub alpha: f64,
     /// Fit the outliers with the rest (they are still named).
     pub keep_outliers: bool,
     /// No progress line on standard error.
@@ -182,6 +184,11 @@ pub struct CalibrateCli {
     /// stopped the selection).
     #[arg(long, value_name = "N", default_value_t = 12, value_parser = crate::guard::max_effects)]
     max_effects: usize,
+    /// Significance level of every test of the diagnosis: an effect enters when its F test
+    /// passes at ALPHA divided by the number of candidates and its held-out gain is
+    /// significant at ALPHA; the final verdict tests at ALPHA. Higher takes effects on weaker evidence (small sets).
+    #[arg(long, value_name = "ALPHA", default_value_t = 0.01, value_parser = crate::guard::alpha)]
+    alpha: f64,
     /// Fit every point: the outliers (points beyond a Bonferroni bound over the standardised
     /// residuals, see dh_calib::outliers) are still named but not left out.
     #[arg(long)]
@@ -217,6 +224,7 @@ impl CalibrateCli {
             gravity: self.gravity,
             payload: self.payload,
             max_effects: self.max_effects,
+            alpha: self.alpha,
             keep_outliers: self.keep_outliers,
             quiet: self.quiet,
         }

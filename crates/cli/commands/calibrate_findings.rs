@@ -15,13 +15,18 @@ pub fn text(outliers: Option<&OutliersDoc>, verdict: &VerdictDoc) -> String {
     if let Some(o) = outliers.filter(|o| !o.points.is_empty()) {
         let _ = writeln!(
             s,
-            "outliers: {} beyond {:.1} sigma (scale {:.4} mm per axis, {}; level {} over all points), {}; geometric RMS {:.4} mm with them, {:.4} mm without",
+            "outliers: {} beyond {:.1} sigma (scale {:.4} mm per axis, {}; level {} over all points), {}; {} RMS {:.4} mm with them, {:.4} mm without",
             o.points.len(),
             o.threshold,
             o.scale * 1e3,
             o.scale_source,
             o.level,
             if o.kept { "kept (--keep-outliers)" } else { "left out" },
+            if o.effects.is_empty() {
+                "geometric".to_string()
+            } else {
+                format!("geometry + {}", o.effects.join(", "))
+            },
             o.rms_with * 1e3,
             o.rms_without * 1e3,
         );

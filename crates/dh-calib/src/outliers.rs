@@ -11,6 +11,14 @@
 //!    the threshold grows like `sqrt(2 ln N)`, 5.1 σ at N = 1000 and `level` = 0.01);
 //! 4. refit without them and repeat until the flagged set no longer changes.
 //!
+//! The geometric fit knows no effect, so a pose that only an unmodelled effect puts far off
+//! (the most gravity-loaded poses before a compliance is added) is flagged too. The diagnosis
+//! ([`crate::diagnose::diagnose_tree`]) therefore judges the flagged points again against the
+//! geometry and the effects it selected ([`crate::calibrate::screen`] with
+//! `CalibrationOptions::effects`: each round fits every parameter the kept points identify),
+//! gives back those that are no outliers of that model and selects again with them; a
+//! second judgement only gives points back. Declared effects are judged with from the start.
+//!
 //! The scale is the larger of the known noise (the `sigma` option, else every sample's own)
 //! and a robust estimate from the kept points, `median ‖r‖ / sqrt(median χ²₃)` corrected for
 //! the `p` fitted parameters by `1 / sqrt(1 − p / 3N)`: a median is not moved by the outliers
@@ -109,11 +117,14 @@ pub struct OutlierReport {
     pub outliers: Vec<Outlier>,
     /// `true` when they were kept in the fit (`--keep-outliers`).
     pub kept: bool,
-    /// Geometric-fit RMS over every calibration point, outliers included (metres).
+    /// RMS of the screen's fit over every calibration point, outliers included (metres).
     pub rms_with: f64,
-    /// Geometric-fit RMS over the other calibration points, fitted without the outliers
+    /// RMS of the screen's fit over the other calibration points, fitted without the outliers
     /// (metres).
     pub rms_without: f64,
+    /// The effects the screen's model had besides the geometry (labels; empty: the geometric
+    /// model alone).
+    pub effects: Vec<String>,
     /// Fit-and-flag rounds run.
     pub rounds: usize,
     /// `false` when [`MAX_ROUNDS`] ended the iteration before the flagged set settled.

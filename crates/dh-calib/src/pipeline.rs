@@ -109,6 +109,10 @@ pub struct PipelineOptions {
     pub effects: EffectsChoice,
     /// Most effects [`EffectsChoice::Auto`] adds. Default 12.
     pub max_effects: usize,
+    /// Significance level of the diagnosis's tests (entry F test, held-out signed-rank test,
+    /// the final model's verdict), in (0, 0.5]. Default [`crate::findings::DEFAULT_ALPHA`]
+    /// (0.01); a higher level takes effects on weaker evidence.
+    pub alpha: f64,
     /// Folds of cross-validation without a validation split (at least 2). Default 5.
     pub folds: usize,
     /// Known per-axis measurement noise (metres); `None`: the samples' own or the scatter of
@@ -129,6 +133,7 @@ impl Default for PipelineOptions {
         PipelineOptions {
             effects: EffectsChoice::None,
             max_effects: 12,
+            alpha: crate::findings::DEFAULT_ALPHA,
             folds: 5,
             sigma: None,
             keep_outliers: false,

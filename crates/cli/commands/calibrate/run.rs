@@ -25,6 +25,7 @@ pub(crate) fn pipeline_options(
     PipelineOptions {
         effects: effects_choice(args),
         max_effects: args.max_effects,
+        alpha: args.alpha,
         folds: args.folds,
         sigma: args.sigma.map(|s| s * args.units.length.metres()),
         keep_outliers: args.keep_outliers,

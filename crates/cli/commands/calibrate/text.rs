@@ -258,9 +258,13 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         );
     }
     if !doc.candidates.is_empty() {
+        let level = doc
+            .diagnosis
+            .as_ref()
+            .map_or(String::new(), |d| format!("tests at level {}; ", d.alpha));
         let _ = writeln!(
             s,
-            "effect candidates (first round, best score first; score = SSR reduction beyond the geometric fit, held-out RMS linearised):"
+            "effect candidates (first round, best score first; {level}score = SSR reduction beyond the geometric fit, held-out RMS linearised):"
         );
         let _ = writeln!(
             s,

@@ -161,8 +161,9 @@ mod tests {
             folds: 10,
             ..CalibrationOptions::default()
         };
-        let fitted = super::super::fitted_session(&DhTree::serial(&table), &data, &options, &[])
-            .expect("a fit");
+        let fitted =
+            super::super::fitted_session(&DhTree::serial(&table), &data, &options, &[], &[], None)
+                .expect("a fit");
         let (session, geo) = (fitted.session, fitted.geo);
         assert!(matches!(
             session.validation,

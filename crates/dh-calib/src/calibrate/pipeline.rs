@@ -44,7 +44,14 @@ pub fn calibrate_tree(
                 ..
             },
         scan,
-    } = fitted_session(tree, data, options, &options.effects)?;
+    } = fitted_session(
+        tree,
+        data,
+        options,
+        &options.effects,
+        &options.effects,
+        None,
+    )?;
     let mut last = last.outcome;
     if !options.effects.is_empty() {
         let all: Vec<usize> = (0..session.model.parameter_count()).collect();
@@ -73,9 +80,11 @@ pub(crate) struct Fitted<'a> {
     pub(crate) scan: Option<crate::outliers::OutlierReport>,
 }
 
-/// Builds the session of `data` with `effects` and runs its geometric step; the screen's first
-/// round is that fit (the same calibration samples, the geometric parameters fitted without
-/// effects), so data without outliers are fitted once. When the screen leaves samples out
+/// Builds the session of `data` with `effects` and runs its geometric step. The screen judges
+/// the points against the geometry and `judged_with` (declared effects, or those a diagnosis
+/// selected), flagging only samples `within` when given; without them its first round is
+/// that fit (the same calibration samples, the
+/// geometric parameters fitted without effects), so data without outliers are fitted once. When the screen leaves samples out
 /// (and they are not kept), the session is built anew from the samples kept, placed in the
 /// whole file's sequence: a dropped pose was still visited, so the direction of the next
 /// one's motion and the time are the file's.
@@ -84,6 +93,8 @@ pub(crate) fn fitted_session<'a>(
     data: &Measurements,
     options: &'a CalibrationOptions,
     effects: &[Arc<dyn Effect>],
+    judged_with: &[Arc<dyn Effect>],
+    within: Option<&std::collections::BTreeSet<usize>>,
 ) -> Result<Fitted<'a>, CalibError> {
     if options.outliers.screen {
         check_level(options)?;
@@ -97,7 +108,14 @@ pub(crate) fn fitted_session<'a>(
             scan: None,
         });
     }
-    let scan = screen_from(tree, data, options, Some((&session, &geo)))?;
+    let scan = screen_from(
+        tree,
+        data,
+        options,
+        Some((&session, &geo)),
+        judged_with,
+        within,
+    )?;
     if scan.kept || scan.outliers.is_empty() {
         return Ok(Fitted {
             session,

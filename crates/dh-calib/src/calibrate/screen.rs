@@ -34,8 +34,11 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     })
 }
 
-/// Finds the outliers of `data` against the geometric model of `tree` (see the module docs).
-/// `options.effects` are not used: the screen fits the geometric model only.
+/// Finds the outliers of `data` against the geometric model of `tree` (see the module docs),
+/// and with `options.effects` against the geometry and those effects, each round fitting
+/// every parameter the kept points identify: a pose that only an unmodelled effect puts far
+/// off the geometric fit (a gravity-loaded pose before the compliance is added) is judged
+/// against the model that has the effect.
 ///
 /// # Errors
 /// [`CalibError::BadOption`] for a level outside (0, 1); those of
@@ -46,7 +49,7 @@ pub fn screen(
     options: &CalibrationOptions,
 ) -> Result<OutlierReport, CalibError> {
     check_level(options)?;
-    screen_from(tree, data, options, None)
+    screen_from(tree, data, options, None, &options.effects, None)
 }
 
 /// Refuses an outlier level outside (0, 1).
@@ -61,16 +64,21 @@ pub(crate) fn check_level(options: &CalibrationOptions) -> Result<(), CalibError
     Ok(())
 }
 
-/// [`screen`] whose first round is `first`: a session of all of `data` (prepared in its own
-/// order) whose geometric step has run. Its calibration samples are those the first round
-/// fits, and its geometric parameters are fitted without effects, so the round needs no fit
-/// of its own (on millions of samples, the fit is most of a calibration's time).
+/// [`screen`] against the geometry and `effects`, flagging only calibration samples in
+/// `within` when given (a second judgement gives points back, never takes more), whose first
+/// round is `first` (used only without `effects`): a session of all of `data` (prepared in its own order) whose geometric
+/// step has run. Its calibration samples are those the first round fits, and its geometric
+/// parameters are fitted without effects, so the round needs no fit of its own (on millions
+/// of samples, the fit is most of a calibration's time).
 pub(crate) fn screen_from(
     tree: &DhTree,
     data: &Measurements,
     options: &CalibrationOptions,
     first: Option<(&Session<'_>, &Geometric)>,
+    effects: &[Arc<dyn Effect>],
+    within: Option<&BTreeSet<usize>>,
 ) -> Result<OutlierReport, CalibError> {
+    let first = first.filter(|_| effects.is_empty());
     let level = options.outliers.level;
     let own_full;
     let full = match first {
@@ -108,14 +116,26 @@ pub(crate) fn screen_from(
         ..options.clone()
     };
     let (t_cal, t_val) = (threshold(nc, level), threshold(nv, level));
+    // The file's sequence, for effects that read the order of the poses: a sample left out
+    // was still visited.
+    let sequence = if effects.iter().any(|e| e.uses_sequence()) {
+        Some(crate::prepare::sequence_of(
+            &crate::prepare::rows_of(tree, data)?,
+            data,
+        ))
+    } else {
+        None
+    };
     let mut flagged: BTreeSet<usize> = BTreeSet::new();
     let mut rms_with = None;
     let mut rounds = 0;
     loop {
         rounds += 1;
         let own;
-        let (session, geo) = match first {
-            Some((s, g)) if flagged.is_empty() => (s, g),
+        let (session, x, free, rms) = match first {
+            Some((s, g)) if flagged.is_empty() => {
+                (s, g.last.outcome.x.clone(), g.free.len(), g.last.report.rms)
+            }
             _ => {
                 // The data themselves while nothing is left out and all are calibration
                 // samples (no copy of millions of samples), else the calibration samples not
@@ -128,19 +148,41 @@ pub(crate) fn screen_from(
                             s.split == Split::Calibration && !flagged.contains(&i)
                         }))
                     };
-                let mut session = Session::new(tree, &kept, &screen_options, &[], None)?;
+                let kept_sequence: Option<Vec<SampleContext>> = sequence.as_ref().map(|c| {
+                    c.iter()
+                        .zip(&data.samples)
+                        .enumerate()
+                        .filter(|(i, (_, s))| s.split == Split::Calibration && !flagged.contains(i))
+                        .map(|(_, (c, _))| c.clone())
+                        .collect()
+                });
+                let mut session = Session::new(
+                    tree,
+                    &kept,
+                    &screen_options,
+                    effects,
+                    kept_sequence.as_deref(),
+                )?;
                 session.validation = Validation::None;
                 let geo = session.geometric()?;
-                own = (session, geo);
-                (&own.0, &own.1)
+                let (x, free, rms) = if effects.is_empty() {
+                    (geo.last.outcome.x, geo.free.len(), geo.last.report.rms)
+                } else {
+                    let all: Vec<usize> = (0..session.model.parameter_count()).collect();
+                    let (free, _) = session.identify(&geo.last.outcome.x, &all)?;
+                    let step =
+                        session.step("effects", &geo.last.outcome.x, &free, geo.steps.last())?;
+                    (step.outcome.x, free.len(), step.report.rms)
+                };
+                own = session;
+                (&own, x, free, rms)
             }
         };
-        let x = &geo.last.outcome.x;
-        let rms = geo.last.report.rms;
+        let x = &x;
         rms_with.get_or_insert(rms);
         let cal_r = residual_vectors(session, x, &full.cal);
         let val_r = residual_vectors(session, x, &full.val);
-        let p = geo.free.len() as f64;
+        let p = free as f64;
         let n_kept = session.prep.cal.len().max(1) as f64;
         let kept_norms: Vec<f64> = place
             .iter()
@@ -176,7 +218,8 @@ pub(crate) fn screen_from(
                 source = src;
                 t
             };
-            if t > if v { t_val } else { t_cal } {
+            let eligible = v || within.is_none_or(|w| w.contains(&i));
+            if eligible && t > if v { t_val } else { t_cal } {
                 now.insert(i);
                 let s = &data.samples[i];
                 found.push(Outlier {
@@ -214,6 +257,10 @@ pub(crate) fn screen_from(
                     .map_or(0.0, |s| s.rms),
                 rounds,
                 converged: settled,
+                effects: effects
+                    .iter()
+                    .map(|e| crate::effects::label_of(e.as_ref()))
+                    .collect(),
             });
         }
         flagged = now_cal;

@@ -3,6 +3,8 @@
 //! refit and judge the best and their rivals, add the winner, repeat; then the final
 //! residual's structure and the notes.
 
+use std::collections::BTreeSet;
+
 use super::*;
 
 /// [`diagnose_tree`] for a serial robot.
@@ -50,6 +52,15 @@ pub(crate) fn effect_context(
 /// residual test's summary) are also appended to the report's notes.
 /// `options.effects` is ignored: [`DiagnoseOptions::effects`] says which effects.
 ///
+/// The outlier screen first judges the points against the geometric fit, before any effect is
+/// known; a pose that only an unmodelled effect puts far off (the most gravity-loaded poses
+/// before a compliance is added) is then left out, and with it the evidence for that effect.
+/// So when points were left out and effects selected, the points left out are judged again
+/// against the geometry and the selected effects (a second judgement only gives points back:
+/// the tighter scale of a better model never takes more); when it gives some back, the
+/// selection runs again with them (at most [`MAX_REJUDGE`] times), and a note says so.
+/// Declared labels are judged with from the start.
+///
 /// # Errors
 /// Those of [`crate::calibrate::calibrate_tree`]; [`CalibError::BadOption`] /
 /// [`CalibError::MissingJoint`] for a bad label, bad inertials or a bad `alpha`.
@@ -59,6 +70,84 @@ pub fn diagnose_tree(
     options: &CalibrationOptions,
     diag: &DiagnoseOptions,
 ) -> Result<Report, CalibError> {
+    let (mut report, mut effects) = diagnose_judged(tree, data, options, diag, None)?;
+    let labels = |e: &[Arc<dyn Effect>]| -> Vec<String> {
+        e.iter()
+            .map(|e| crate::effects::label_of(e.as_ref()))
+            .collect()
+    };
+    let left_out = |r: &Report| -> Option<BTreeSet<usize>> {
+        r.outliers.as_ref().filter(|s| !s.kept).map(|s| {
+            s.outliers
+                .iter()
+                .filter(|o| !o.validation)
+                .map(|o| o.sample)
+                .collect()
+        })
+    };
+    let first_count = left_out(&report).map_or(0, |b| b.len());
+    let mut passes = 0;
+    let mut confirmed = None;
+    for _ in 0..MAX_REJUDGE {
+        let Some(before) = left_out(&report).filter(|b| !b.is_empty()) else {
+            break;
+        };
+        let judged = report.outliers.as_ref().map(|s| s.effects.clone());
+        if effects.is_empty() || judged.as_ref() == Some(&labels(&effects)) {
+            break;
+        }
+        let again =
+            crate::calibrate::screen_from(tree, data, options, None, &effects, Some(&before))?;
+        let now: BTreeSet<usize> = again
+            .outliers
+            .iter()
+            .filter(|o| !o.validation)
+            .map(|o| o.sample)
+            .collect();
+        if now == before {
+            confirmed = Some(labels(&effects).join(", "));
+            break;
+        }
+        (report, effects) = diagnose_judged(tree, data, options, diag, Some((&effects, &before)))?;
+        passes += 1;
+    }
+    let count = left_out(&report).map_or(0, |b| b.len());
+    if passes > 0 {
+        let judged = report
+            .outliers
+            .as_ref()
+            .map(|s| s.effects.join(", "))
+            .unwrap_or_default();
+        report.notes.push(format!(
+            "outliers judged again against the geometry and {judged}: {count} point(s) left \
+             out instead of the {first_count} of the geometric fit; the selection ran again \
+             with the points given back ({passes} time(s))"
+        ));
+    } else if let Some(with) = confirmed {
+        report.notes.push(format!(
+            "the {count} point(s) left out are outliers of the final model too (judged again \
+             against the geometry and {with})"
+        ));
+    }
+    Ok(report)
+}
+
+/// Most times [`diagnose_tree`] judges the outliers again and reruns the selection.
+pub const MAX_REJUDGE: usize = 3;
+
+/// The effects a second outlier judgement uses, and the samples it may flag.
+type Judged<'a> = (&'a [Arc<dyn Effect>], &'a BTreeSet<usize>);
+
+/// One diagnosis whose outlier screen judges the points against the geometry and the effects
+/// of `judged`, flagging only its samples (`None`: the geometric model, or the declared
+/// labels, flagging any); returns the report and the effects it selected.
+fn diagnose_judged(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    diag: &DiagnoseOptions,
+    judged: Option<Judged<'_>>,
+) -> Result<(Report, Vec<Arc<dyn Effect>>), CalibError> {
     let ctx = effect_context(tree, diag)?;
     let mut notes = Vec::new();
     // Which candidates the model can carry.
@@ -80,8 +169,12 @@ pub fn diagnose_tree(
             (v, true)
         }
     };
+    let (judged_with, within) = match judged {
+        Some((e, w)) => (e, Some(w)),
+        None => (if forced { &pool[..] } else { &[][..] }, None),
+    };
     let crate::calibrate::Fitted { session, geo, scan } =
-        crate::calibrate::fitted_session(tree, data, options, &pool)?;
+        crate::calibrate::fitted_session(tree, data, options, &pool, judged_with, within)?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
     // The trials' held-out figures step each fold once from the fit (`Folds::OneStep`), and
@@ -377,5 +470,6 @@ pub fn diagnose_tree(
         structure,
         notes,
     });
-    Ok(report)
+    let effects = selected.iter().map(|&e| pool[e].clone()).collect();
+    Ok((report, effects))
 }

@@ -39,10 +39,13 @@ pub struct OutliersDoc {
     pub threshold: f64,
     /// `true` when they stayed in the fit (`--keep-outliers`).
     pub kept: bool,
-    /// Geometric RMS with them (metres).
+    /// RMS of the screen's fit with them (metres).
     pub rms_with: f64,
-    /// Geometric RMS without them (metres).
+    /// RMS of the screen's fit without them (metres).
     pub rms_without: f64,
+    /// The effects the screen's model had besides the geometry (empty: geometric only).
+    #[serde(default)]
+    pub effects: Vec<String>,
     /// Fit-and-flag rounds.
     pub rounds: usize,
     /// Whether the flagged set settled.
@@ -64,6 +67,7 @@ impl From<&OutlierReport> for OutliersDoc {
             kept: r.kept,
             rms_with: r.rms_with,
             rms_without: r.rms_without,
+            effects: r.effects.clone(),
             rounds: r.rounds,
             converged: r.converged,
             points: r

@@ -103,6 +103,7 @@ fn diagnose_options(options: &PipelineOptions, effects: EffectSelection) -> Diag
         inertials: options.inertials.clone(),
         gravity: options.gravity,
         max_effects: options.max_effects,
+        alpha: options.alpha,
         ..DiagnoseOptions::default()
     }
 }
@@ -270,6 +271,8 @@ fn calibrate_contacts(
         effects,
         inertials: options.inertials.clone(),
         gravity: options.gravity,
+        max_effects: options.max_effects,
+        alpha: options.alpha,
         ..DiagnoseOptions::default()
     };
     let report = diagnose_sockets(&DhTree::serial(table), data, &fit_options, &diag)
