@@ -229,3 +229,78 @@ impl Model {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use nalgebra::{Isometry3, Vector3};
+
+    use super::super::{GearRatio, Model, ModelOptions, Observation, Observed, SampleContext};
+    use super::DEVICE_BLOCK;
+    use crate::test_robots::ur5;
+
+    /// A UR5 model with a gear ratio on `j2` and a second session with its own device block,
+    /// and a parameter vector with every entry away from zero.
+    fn model() -> (Model, Vec<f64>) {
+        let table = ur5();
+        let mut m = Model::new(&table, &["t".into()], &ModelOptions::default()).unwrap();
+        m.add_effect(Arc::new(GearRatio::new(&table, "j2").unwrap()))
+            .unwrap();
+        m.add_session(1, "moved", &Isometry3::translation(0.5, -0.2, 0.1));
+        let x = (0..m.parameter_count())
+            .map(|i| 1e-3 * ((i as f64 * 0.7).sin() + 0.1))
+            .collect();
+        (m, x)
+    }
+
+    #[test]
+    fn prepared_chains_agree_with_op_by_op_chains() {
+        let (m, x) = model();
+        let ctx = SampleContext::default();
+        for k in 0..20 {
+            let q: Vec<f64> = (0..6)
+                .map(|j| ((k * 6 + j) as f64 * 1.3).sin() * 2.5)
+                .collect();
+            for session in [0, 1, DEVICE_BLOCK] {
+                let ops = if session == DEVICE_BLOCK {
+                    m.chain_ops(0)
+                } else {
+                    m.session_ops(0, session)
+                };
+                let mut v = Vec::new();
+                m.op_values(&x, &q, &ctx, &mut v);
+                let want = m.chain(&v, None, ops);
+                let got = m.with_prepared(&x, 0, session, |p| p.frame(&m, &x, &q, &ctx, None));
+                assert!((got.t - want.t).norm() < 1e-12, "{session}");
+                assert!((got.r - want.r).norm() < 1e-12, "{session}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_changed_model_is_prepared_again() {
+        let (mut m, x) = model();
+        let q = [0.3, -1.2, 0.8, 0.1, 1.5, -0.4];
+        let obs = Observed::new(
+            q.to_vec(),
+            Observation::Point {
+                target: 0,
+                point: Vector3::new(0.1, 0.2, 0.3),
+            },
+        );
+        let mut before = [0.0; 3];
+        m.residuals(&x, &obs, &mut before);
+        // The same `x` after moving the device: the cached chains must not be used.
+        let moved = Isometry3::translation(1.0, 0.0, 0.0);
+        m.set_device(&moved);
+        let mut after = [0.0; 3];
+        m.residuals(&x, &obs, &mut after);
+        let mut fresh = model().0;
+        fresh.set_device(&moved);
+        let mut want = [0.0; 3];
+        fresh.residuals(&x, &obs, &mut want);
+        assert!((after[0] - before[0] - 1.0).abs() < 1e-9);
+        assert_eq!(after, want);
+    }
+}
