@@ -1,11 +1,13 @@
-//! Geometric calibration speed: 150 poses of a 6R arm (target: 20 ms for the geometric step)
-//! and 100 000 samples (target: 10 s, memory linear in the samples).
+//! Geometric calibration speed: 150 poses of a 6R arm (target: 20 ms for the geometric step),
+//! the per-sample cost of the model's residuals and analytic Jacobian (what every Gauss-Newton
+//! pass over a large set spends most of its time on) and 100 000 samples (target: 10 s, memory
+//! linear in the samples).
 #![allow(missing_docs)]
 
 use std::hint::black_box;
 use std::time::Duration;
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use dh_calib::calibrate::{calibrate, CalibrationOptions};
 use dh_calib::data::{Measurements, Split};
 use dh_calib::fit::{self, FitOptions};
@@ -143,6 +145,37 @@ fn bench(c: &mut Criterion) {
             fit::identifiability(&f.r, &vec![1.0; all.len()], &prio, 1e-6).unwrap()
         })
     });
+    g.finish();
+
+    // One Gauss-Newton pass's model work per sample, at fitted parameters (every op of the
+    // chain away from zero, as after a fit's first step): residuals alone, and residuals with
+    // the Jacobian of the free columns. Criterion reports the time per sample.
+    let fitted = fit::solve(&problem, &x0, &free, &scales, &FitOptions::default())
+        .unwrap()
+        .x;
+    let mut g = c.benchmark_group("per sample");
+    g.throughput(Throughput::Elements(obs.len() as u64));
+    g.bench_function("residuals", |b| {
+        let mut r = [0.0; 3];
+        b.iter(|| {
+            for o in &obs {
+                model.residuals(black_box(&fitted), o, &mut r);
+                black_box(&r);
+            }
+        })
+    });
+    g.bench_function("residuals and Jacobian", |b| {
+        let (mut r, mut j) = ([0.0; 3], vec![0.0; 3 * free.len()]);
+        b.iter(|| {
+            for o in &obs {
+                model.jacobian(black_box(&fitted), o, &free, &mut r, &mut j);
+                black_box(&j);
+            }
+        })
+    });
+    g.finish();
+
+    let mut g = c.benchmark_group("150 poses");
     let held_out = data(150, 0.2);
     g.bench_function("calibrate, validation split", |b| {
         b.iter(|| calibrate(&table, black_box(&held_out), &CalibrationOptions::default()).unwrap())

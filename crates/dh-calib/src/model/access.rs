@@ -141,12 +141,14 @@ impl Model {
 
     /// Sets the reference device frame `T_device_base`.
     pub fn set_device(&mut self, device: &Isometry3<f64>) {
+        self.revision = super::prepared::next_revision();
         self.ops[0].fixed = Frame::from_iso(device);
     }
 
     /// Sets target `k`'s reference position in the tip frame (metres); ignored when out of
     /// range.
     pub fn set_target(&mut self, k: usize, position: Vector3<f64>) {
+        self.revision = super::prepared::next_revision();
         if let Some(t) = self.targets.get_mut(k) {
             t.1 = position;
         }
@@ -154,6 +156,7 @@ impl Model {
 
     /// Moves the device and target offsets of `x` into the reference and zeroes them.
     pub fn rebase(&mut self, x: &mut [f64]) {
+        self.revision = super::prepared::next_revision();
         let device = self.device_at(x);
         self.set_device(&device);
         let sessions: Vec<usize> = self.session_chains.iter().map(|(s, _)| *s).collect();
@@ -231,6 +234,7 @@ impl Model {
     /// Sets the reference device frame of `session` ([`Model::set_device`] for a session
     /// without its own block).
     pub fn set_session_device(&mut self, session: usize, device: &Isometry3<f64>) {
+        self.revision = super::prepared::next_revision();
         let op = self
             .parameters
             .iter()

@@ -9,7 +9,9 @@ use nalgebra::{Isometry3, Vector3};
 
 use super::ops::{unit_of, Axis, EffectSlot, Frame, Op, OpKind, RowOps, DEVICE_OPS, POSE_FIELDS};
 use super::options::{plan_table, RowPlan};
-use super::{finite, Block, Effect, EffectField, Field, Model, ModelOptions, Parameter, Unit};
+use super::{
+    finite, prepared, Block, Effect, EffectField, Field, Model, ModelOptions, Parameter, Unit,
+};
 use crate::fit::CalibError;
 use crate::tree::DhTree;
 
@@ -116,6 +118,7 @@ impl Model {
             pairs,
             session_chains: Vec::new(),
             target_frames: vec![None; targets.len()],
+            revision: prepared::next_revision(),
         };
         m.push_pose_block("device", Block::Device, &Isometry3::identity());
         m.push_pose_block("base", Block::Base, &tree.trunk().base);
@@ -166,6 +169,7 @@ impl Model {
 
     /// Pushes the ops and parameters of row `i` of `table` (global row `g`).
     pub(super) fn push_row(&mut self, table: &DhTable, i: usize, g: usize, plan: RowPlan) {
+        self.revision = super::prepared::next_revision();
         let row = &table.rows[i];
         let revolute = (row.kind == JointKind::Revolute).then_some(g);
         let prismatic = (row.kind == JointKind::Prismatic).then_some(g);
@@ -236,6 +240,7 @@ impl Model {
         field: Field,
         unit: Unit,
     ) -> usize {
+        self.revision = super::prepared::next_revision();
         self.parameters.push(Parameter {
             name,
             block,
@@ -253,6 +258,7 @@ impl Model {
         joint: Option<usize>,
         param: Option<usize>,
     ) -> usize {
+        self.revision = super::prepared::next_revision();
         let idx = self.ops.len();
         self.ops.push(Op {
             kind,
@@ -273,6 +279,7 @@ impl Model {
         block: Block,
         reference: &Isometry3<f64>,
     ) {
+        self.revision = super::prepared::next_revision();
         let f = self.push_op(OpKind::Fixed, 0.0, None, None);
         self.ops[f].fixed = Frame::from_iso(reference);
         for (field, s, kind) in POSE_FIELDS {
@@ -288,6 +295,7 @@ impl Model {
     /// [`CalibError::BadOption`] for a tilt effect on a row without a tilt (see
     /// [`Model::tilt_rows`]) or one that already estimates it, and for a second device scale.
     pub fn add_effect(&mut self, effect: Arc<dyn Effect>) -> Result<Range<usize>, CalibError> {
+        self.revision = super::prepared::next_revision();
         let label = effect.label();
         if self.effects.iter().any(|s| s.effect.label() == label) {
             return Err(CalibError::BadOption {
@@ -348,6 +356,7 @@ impl Model {
     /// appended to the parameters. Observations of other sessions keep the `device` block.
     /// Adding a session twice is a no-op.
     pub fn add_session(&mut self, session: usize, name: &str, frame: &Isometry3<f64>) {
+        self.revision = super::prepared::next_revision();
         if self.session_chains.iter().any(|(s, _)| *s == session) {
             return;
         }

@@ -6,6 +6,7 @@ use dh_core::DhTable;
 use nalgebra::{Isometry3, Vector3};
 
 use super::ops::{Frame, DEVICE_OPS};
+use super::prepared::DEVICE_BLOCK;
 use super::{Block, Field, Model, SampleContext};
 use crate::tree::{Branch, DhTree};
 
@@ -88,10 +89,8 @@ impl Model {
     /// Chain `chain`'s tip frame in session `session`'s device frame at `x` and `q` (its
     /// position scaled by the device scale), in the neutral context (see [`Model::point_in`]).
     pub fn tip_in(&self, x: &[f64], q: &[f64], chain: usize, session: usize) -> Isometry3<f64> {
-        let mut v = Vec::with_capacity(self.ops.len());
         let ctx = SampleContext::default();
-        self.op_values(x, q, &ctx, &mut v);
-        let mut f = self.chain(&v, None, self.session_ops(chain, session));
+        let mut f = self.with_prepared(x, chain, session, |p| p.frame(self, x, q, &ctx, None));
         f.t *= self.scale_factor(x, q, &ctx);
         f.to_iso()
     }
@@ -112,9 +111,9 @@ impl Model {
         ctx: &SampleContext,
         target: usize,
     ) -> Vector3<f64> {
-        let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, ctx, &mut v);
-        let f = self.chain(&v, None, self.chain_ops(self.target_chain(target)));
+        // The device block's chain, whatever the session (see `prepared::DEVICE_BLOCK`).
+        let chain = self.target_chain(target);
+        let f = self.with_prepared(x, chain, DEVICE_BLOCK, |p| p.frame(self, x, q, ctx, None));
         (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, ctx)
     }
 

@@ -10,23 +10,18 @@
 use nalgebra::{Isometry3, Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use super::ops::{Frame, OpKind};
+use super::prepared::PreparedChain;
 use super::{Block, Field, Model, Observation, Observed};
 
 impl Model {
     /// Residuals of one observation (model minus measured) into `out` (3 or 6 values).
     pub fn residuals(&self, x: &[f64], obs: &Observed, out: &mut [f64]) {
-        SCRATCH.with(|scratch| {
-            let mut scratch = scratch.borrow_mut();
-            let v = &mut scratch.values;
-            self.op_values(x, &obs.q, &obs.context, v);
-            let f = self.chain(
-                v,
-                None,
-                self.session_ops(self.observation_chain(obs), obs.session),
-            );
-            let s = self.scale_factor(x, &obs.q, &obs.context);
-            self.write_residuals(x, &f, s, obs, out);
+        let chain = self.observation_chain(obs);
+        let f = self.with_prepared(x, chain, obs.session, |p| {
+            p.frame(self, x, &obs.q, &obs.context, None)
         });
+        let s = self.scale_factor(x, &obs.q, &obs.context);
+        self.write_residuals(x, &f, s, obs, out);
     }
 
     fn observation_chain(&self, obs: &Observed) -> usize {
@@ -88,21 +83,18 @@ impl Model {
         residuals: &mut [f64],
         jacobian: &mut [f64],
     ) {
-        SCRATCH.with(|scratch| {
-            let mut scratch = scratch.borrow_mut();
-            let Scratch {
-                values,
-                before,
-                on,
-                grad,
-            } = &mut *scratch;
-            self.jacobian_with(
-                x, obs, columns, residuals, jacobian, values, before, on, grad,
-            );
+        let chain = self.observation_chain(obs);
+        self.with_prepared(x, chain, obs.session, |prepared| {
+            SCRATCH.with(|scratch| {
+                let mut scratch = scratch.borrow_mut();
+                let Scratch { starts, grad } = &mut *scratch;
+                self.jacobian_with(x, obs, columns, residuals, jacobian, prepared, starts, grad);
+            })
         });
     }
 
-    /// [`Model::jacobian`] with its work space (reused between calls on one thread).
+    /// [`Model::jacobian`] on a prepared chain, with its work space (reused between calls on
+    /// one thread).
     #[allow(clippy::too_many_arguments)]
     fn jacobian_with(
         &self,
@@ -111,14 +103,11 @@ impl Model {
         columns: &[usize],
         residuals: &mut [f64],
         jacobian: &mut [f64],
-        v: &mut Vec<f64>,
-        before: &mut Vec<Frame>,
-        on: &mut Vec<bool>,
+        prepared: &PreparedChain,
+        starts: &mut Vec<Frame>,
         grad: &mut Vec<f64>,
     ) {
-        self.op_values(x, &obs.q, &obs.context, v);
-        let ops = self.session_ops(self.observation_chain(obs), obs.session);
-        let f = self.chain(v, Some((before, on)), ops);
+        let f = prepared.frame(self, x, &obs.q, &obs.context, Some(starts));
         let scale = self.scale_factor(x, &obs.q, &obs.context);
         let phi = self.write_residuals(x, &f, scale, obs, residuals);
         let (point, target, weight) = match &obs.observation {
@@ -144,16 +133,18 @@ impl Model {
             let mut dp = Vector3::zeros();
             let mut dw = Vector3::zeros();
             let op_motion = |o: usize, g: f64, dp: &mut Vector3<f64>, dw: &mut Vector3<f64>| {
-                if !on[o] {
-                    // Not on this observation's chain (the other arm of a tree).
+                // `None`: not on this observation's chain (the other arm of a tree).
+                let Some(place) = prepared.place(o) else {
                     return;
-                }
-                let fr = &before[o];
+                };
+                // The frame before op `o`: the start of its step times its place in the step.
+                let start = &starts[place.step];
                 match self.ops[o].kind {
-                    OpKind::Trans(a) => *dp += fr.r.column(a as usize) * g,
-                    OpKind::Rot(a) => {
-                        let w = fr.r.column(a as usize).into_owned();
-                        *dp += w.cross(&(point - fr.t)) * g;
+                    OpKind::Trans(_) => *dp += (start.r * place.axis) * g,
+                    OpKind::Rot(_) => {
+                        let w = start.r * place.axis;
+                        let origin = start.t + start.r * place.origin;
+                        *dp += w.cross(&(point - origin)) * g;
                         *dw += w * g;
                     }
                     OpKind::Fixed => {}
@@ -246,9 +237,8 @@ fn left_jacobian_inverse(phi: &Vector3<f64>) -> Matrix3<f64> {
 /// millions of calls of a large fit allocate nothing.
 #[derive(Default)]
 struct Scratch {
-    values: Vec<f64>,
-    before: Vec<Frame>,
-    on: Vec<bool>,
+    /// The frame at the start of each step of the prepared chain.
+    starts: Vec<Frame>,
     grad: Vec<f64>,
 }
 

@@ -80,6 +80,7 @@ mod observation;
 mod ops;
 mod options;
 mod params;
+mod prepared;
 mod problem;
 mod target_frame;
 
@@ -120,6 +121,9 @@ pub struct Model {
     /// Per target: its orientation parameters when it is a full frame (see
     /// [`Model::add_target_orientation`]).
     target_frames: Vec<Option<target_frame::TargetFrame>>,
+    /// Renewed by every change of the model (see `prepared`): what the per-thread cache of
+    /// prepared chains is keyed by, with the parameter vector.
+    revision: u64,
 }
 
 pub(super) fn finite(what: &str, v: f64) -> Result<f64, CalibError> {

@@ -34,6 +34,7 @@ impl Model {
     /// reference rotation starts at identity (set it with [`Model::set_target_rotation`]).
     /// `None` when `k` is out of range; a target that already has them returns its range.
     pub fn add_target_orientation(&mut self, k: usize) -> Option<Range<usize>> {
+        self.revision = super::prepared::next_revision();
         let name = self.targets.get(k)?.0.clone();
         if let Some(range) = self.target_orientation(k) {
             return Some(range);
@@ -66,6 +67,7 @@ impl Model {
     /// Sets target `k`'s reference rotation in the tip frame; ignored when the target has no
     /// orientation.
     pub fn set_target_rotation(&mut self, k: usize, rotation: &UnitQuaternion<f64>) {
+        self.revision = super::prepared::next_revision();
         if let Some(Some(f)) = self.target_frames.get_mut(k) {
             f.reference = *rotation.to_rotation_matrix().matrix();
         }
@@ -131,6 +133,7 @@ impl Model {
     /// Moves target `k`'s orientation offsets of `x` into its reference (the caller zeroes
     /// them, see [`Model::rebase`]).
     pub(super) fn rebase_target_rotation(&mut self, x: &[f64], k: usize) {
+        self.revision = super::prepared::next_revision();
         let (r, _) = self.target_rotation_axes(x, k);
         if let Some(Some(f)) = self.target_frames.get_mut(k) {
             f.reference = r;
