@@ -35,7 +35,7 @@ pub struct SampleArrays {
 }
 
 /// The error for row `row` (1-based), column `column`.
-fn bad(
+pub(crate) fn array_error(
     row: usize,
     column: &str,
     expected: impl Into<String>,
@@ -50,9 +50,49 @@ fn bad(
 }
 
 impl SampleArrays {
-    /// Number of rows, after checking that every column has it.
-    fn rows(&self) -> Result<usize, DataError> {
-        let n = self.points.len() / 3;
+    /// The same arrays with the joint columns `joints`, in that order (a DataFrame's columns
+    /// may be in any order and include others).
+    ///
+    /// # Errors
+    /// [`DataError::Content`] naming the joints without a column.
+    pub fn with_joints(&self, joints: &[String]) -> Result<SampleArrays, DataError> {
+        let missing: Vec<String> = joints
+            .iter()
+            .filter(|j| !self.joint_names.contains(j))
+            .cloned()
+            .collect();
+        if !missing.is_empty() {
+            return Err(DataError::Content {
+                expected: format!("joint column(s) {}", list(&missing)),
+                found: format!("the columns {}", list(&self.joint_names)),
+            });
+        }
+        let width = self.joint_names.len();
+        let n = if width == 0 { 0 } else { self.q.len() / width };
+        let cols: Vec<usize> = joints
+            .iter()
+            .filter_map(|j| self.joint_names.iter().position(|n| n == j))
+            .collect();
+        let q = (0..n)
+            .flat_map(|i| cols.iter().map(move |&c| i * width + c))
+            .filter_map(|k| self.q.get(k).copied())
+            .collect();
+        Ok(SampleArrays {
+            joint_names: joints.to_vec(),
+            q,
+            ..self.clone()
+        })
+    }
+
+    /// Number of rows, after checking that every column has it; `points`: the set has points
+    /// (else `points` must be empty and the joints give the count).
+    pub(crate) fn rows(&self, points: bool) -> Result<usize, DataError> {
+        let width = self.joint_names.len();
+        let n = match (points, width) {
+            (true, _) => self.points.len() / 3,
+            (false, 0) => 0,
+            (false, w) => self.q.len() / w,
+        };
         let shape = |what: &str, len: usize, want: usize| {
             if len == want {
                 Ok(())
@@ -63,7 +103,11 @@ impl SampleArrays {
                 })
             }
         };
-        shape("points (rows x 3)", self.points.len(), 3 * n)?;
+        shape(
+            "points (rows x 3)",
+            self.points.len(),
+            if points { 3 * n } else { 0 },
+        )?;
         shape(
             &format!("q (rows x {} joints)", self.joint_names.len()),
             self.q.len(),
@@ -105,7 +149,7 @@ impl Measurements {
         arrays: &SampleArrays,
         opts: &CsvOptions,
     ) -> Result<(Measurements, Vec<String>), DataError> {
-        let n = arrays.rows()?;
+        let n = arrays.rows(true)?;
         let names = &arrays.joint_names;
         for (k, j) in names.iter().enumerate() {
             check_name(j, 0, &format!("{}", k + 1))?;
@@ -141,7 +185,7 @@ impl Measurements {
             for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
                 let value = finite(arrays.points[3 * i + k], row, axis)?;
                 if opts.length_unit == LengthUnit::Metre && value.abs() > MAX_PLAUSIBLE_METRES {
-                    return Err(bad(
+                    return Err(array_error(
                         row,
                         axis,
                         format!("a coordinate within {MAX_PLAUSIBLE_METRES} m"),
@@ -150,7 +194,7 @@ impl Measurements {
                 }
                 point[k] = length(value);
                 if point[k].abs() > MAX_PLAUSIBLE_METRES {
-                    return Err(bad(
+                    return Err(array_error(
                         row,
                         axis,
                         format!("a coordinate within {MAX_PLAUSIBLE_METRES} m"),
@@ -166,7 +210,7 @@ impl Measurements {
                     Some(Vector3::repeat(SIGMA_FLOOR))
                 }
                 Some(v) if !(v > 0.0 && v.is_finite()) => {
-                    return Err(bad(
+                    return Err(array_error(
                         row,
                         "sigma",
                         "a standard deviation > 0",
@@ -174,7 +218,7 @@ impl Measurements {
                     ))
                 }
                 Some(v) if length(v) > MAX_PLAUSIBLE_METRES => {
-                    return Err(bad(
+                    return Err(array_error(
                         row,
                         "sigma",
                         format!("a standard deviation within {MAX_PLAUSIBLE_METRES} m"),
@@ -189,7 +233,7 @@ impl Measurements {
                         None => Ok(None),
                         Some(c) => {
                             check_name(&c[i], row, name).map_err(|_| {
-                                bad(
+                                array_error(
                                     row,
                                     name,
                                     "a name without control characters",
@@ -206,7 +250,7 @@ impl Measurements {
             let split = match text(&arrays.set, "set")?.as_deref() {
                 None | Some("") => Split::Calibration,
                 Some(s) => parse_split(s).ok_or_else(|| {
-                    bad(
+                    array_error(
                         row,
                         "set",
                         "train, calibration, test or validation",
@@ -217,7 +261,12 @@ impl Measurements {
             let session = match text(&arrays.session, "session")? {
                 None => 0,
                 Some(s) if s.is_empty() => {
-                    return Err(bad(row, "session", "a session name", "an empty cell"))
+                    return Err(array_error(
+                        row,
+                        "session",
+                        "a session name",
+                        "an empty cell",
+                    ))
                 }
                 Some(s) => index_of(&mut m.sessions, &s),
             };
@@ -246,16 +295,21 @@ impl Measurements {
 }
 
 /// `value` if finite, else the error naming `row` and `column`.
-fn finite(value: f64, row: usize, column: &str) -> Result<f64, DataError> {
+pub(crate) fn finite(value: f64, row: usize, column: &str) -> Result<f64, DataError> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(bad(row, column, "a finite number", format!("{value}")))
+        Err(array_error(
+            row,
+            column,
+            "a finite number",
+            format!("{value}"),
+        ))
     }
 }
 
 /// A joint value in metres or radians, refused as the CSV reader refuses its cell.
-fn joint_value(
+pub(crate) fn joint_value(
     value: f64,
     revolute: bool,
     row: usize,
@@ -264,7 +318,7 @@ fn joint_value(
 ) -> Result<f64, DataError> {
     let value = finite(value, row, name)?;
     if revolute && opts.angle_unit == AngleUnit::Radian && value.abs() > MAX_PLAUSIBLE_RADIANS {
-        return Err(bad(
+        return Err(array_error(
             row,
             name,
             format!("a joint value within {MAX_PLAUSIBLE_RADIANS:.1} rad"),
@@ -281,7 +335,7 @@ fn joint_value(
         (opts.length_unit.to_metres(value), MAX_PLAUSIBLE_METRES, "m")
     };
     if si.abs() > cap {
-        return Err(bad(
+        return Err(array_error(
             row,
             name,
             format!("a joint value within {cap:.1} {unit}"),
