@@ -217,19 +217,19 @@ pub fn parse_joint_values(
 
 /// The joint-value rows of `arrays` (their joint columns, in order, and the optional `config`,
 /// `target` and `session` columns; no points), converted to metres and radians with `opts` as
-/// [`parse_joint_values`] converts a file's cells. `JointRow::line` is the 1-based row; empty
-/// names are `None`.
+/// [`parse_joint_values`] converts a file's cells. `JointRow::line` is the line the row would
+/// have in the same CSV file (row `i` at line `i + 2`); empty names are `None`.
 ///
 /// # Errors
 /// Columns of different lengths, no rows, points given ([`DataError::Content`],
 /// [`DataError::Empty`]); a value that is not finite or beyond four turns (8π rad) or 100 m, a
-/// name with control characters: [`DataError::Array`] naming the row and the column.
+/// name with control characters: [`DataError::Array`] naming the row (0-based) and the column.
 pub fn joint_rows(arrays: &SampleArrays, opts: &CsvOptions) -> Result<Vec<JointRow>, DataError> {
     let n = arrays.rows(false)?;
     let width = arrays.joint_names.len();
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
-        let row = i + 1;
+        let row = i;
         let mut q = Vec::with_capacity(width);
         for (k, name) in arrays.joint_names.iter().enumerate() {
             let revolute = !opts.prismatic.contains(name);
@@ -258,7 +258,7 @@ pub fn joint_rows(arrays: &SampleArrays, opts: &CsvOptions) -> Result<Vec<JointR
             }
         };
         out.push(JointRow {
-            line: row,
+            line: i + 2,
             config: name(&arrays.config, "config")?,
             target: name(&arrays.target, "target")?,
             session: name(&arrays.session, "session")?,
@@ -348,13 +348,14 @@ mod tests {
         for (a, f) in rows.iter().zip(&file) {
             assert_eq!(a.q, f.q);
             assert_eq!(a.config, f.config);
+            assert_eq!(a.line, f.line);
         }
         let mut bad = arrays.clone();
         bad.q[3] = f64::NAN;
         let e = joint_rows(&bad, &opts).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "row 2, column 'j1': expected a finite number, found NaN"
+            "row 1, column 'j1': expected a finite number, found NaN"
         );
         let e = arrays.with_joints(&["j3".to_string()]).unwrap_err();
         assert!(e.to_string().contains("'j3'"), "{e}");

@@ -34,7 +34,7 @@ pub struct SampleArrays {
     pub set: Option<Vec<String>>,
 }
 
-/// The error for row `row` (1-based), column `column`.
+/// The error for row `row` (0-based, as numpy and pandas count), column `column`.
 pub(crate) fn array_error(
     row: usize,
     column: &str,
@@ -138,13 +138,14 @@ impl Measurements {
     /// beyond 8π rad in radians, a coordinate beyond 100 m, a negative standard deviation, an
     /// unknown `set`, an empty session name, control characters in a name), standard
     /// deviations of 0 floored at [`SIGMA_FLOOR`] (the returned notes say how many).
-    /// `Sample::line` is the 1-based row.
+    /// `Sample::line` is the line the row would have in the same CSV file (row `i` at line
+    /// `i + 2`, the header being line 1), so that reports name samples as for the file.
     ///
     /// # Errors
     /// Columns of different lengths, no rows, a joint named as a reserved column or twice
     /// ([`DataError::Content`], [`DataError::ReservedJointName`],
-    /// [`DataError::DuplicateColumn`]); a bad cell: [`DataError::Array`] naming the 1-based row
-    /// and the column.
+    /// [`DataError::DuplicateColumn`]); a bad cell: [`DataError::Array`] naming the row (0-based,
+    /// as numpy and pandas count) and the column.
     pub fn from_arrays(
         arrays: &SampleArrays,
         opts: &CsvOptions,
@@ -175,7 +176,7 @@ impl Measurements {
         };
         let mut zero_sigmas = Vec::new();
         for i in 0..n {
-            let row = i + 1;
+            let row = i;
             let mut q = Vec::with_capacity(width);
             for (k, name) in names.iter().enumerate() {
                 let value = arrays.q[i * width + k];
@@ -277,7 +278,7 @@ impl Measurements {
                 sigma,
                 config,
                 split,
-                line: row,
+                line: i + 2,
                 socket: None,
                 session,
                 orientation: None,
@@ -392,9 +393,9 @@ mod tests {
             assert_eq!(a.split, c.split);
             assert_eq!(a.target, c.target);
         }
-        assert_eq!(m.samples[1].line, 2);
+        assert_eq!(m.samples[1].line, csv.samples[1].line);
         assert_eq!(notes.len(), 1, "{notes:?}");
-        assert!(notes[0].contains("first at row 2"), "{notes:?}");
+        assert!(notes[0].contains("first at row 1"), "{notes:?}");
     }
 
     /// [`arrays`] in metres and radians (plausible values in the default units).
@@ -416,18 +417,18 @@ mod tests {
         let e = Measurements::from_arrays(&a, &opts).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "row 2, column 'j2': expected a finite number, found NaN"
+            "row 1, column 'j2': expected a finite number, found NaN"
         );
         let mut a = si();
         a.q[2] = 90.0; // degrees read as radians
         let e = Measurements::from_arrays(&a, &opts).unwrap_err();
-        assert!(e.to_string().starts_with("row 2, column 'j1': "), "{e}");
+        assert!(e.to_string().starts_with("row 1, column 'j1': "), "{e}");
         let mut a = si();
         a.points[4] = f64::INFINITY;
         let e = Measurements::from_arrays(&a, &opts).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "row 2, column 'y': expected a finite number, found inf"
+            "row 1, column 'y': expected a finite number, found inf"
         );
         let mut a = si();
         a.points.pop();
@@ -438,11 +439,11 @@ mod tests {
         let e = Measurements::from_arrays(&a, &opts).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "row 2, column 'set': expected train, calibration, test or validation, found 'later'"
+            "row 1, column 'set': expected train, calibration, test or validation, found 'later'"
         );
         let mut a = si();
         a.sigma = Some(vec![-1.0, 0.1]);
         let e = Measurements::from_arrays(&a, &opts).unwrap_err();
-        assert!(e.to_string().starts_with("row 1, column 'sigma': "), "{e}");
+        assert!(e.to_string().starts_with("row 0, column 'sigma': "), "{e}");
     }
 }
