@@ -58,14 +58,20 @@ def test_dataframe_and_array_give_identical_reports(data):
     frame = read(path)
     array = frame[JOINTS + ["x", "y", "z"]].to_numpy()
     # Columns in another order and a column that is no joint: used by name.
-    shuffled = frame[["z", "target"] + JOINTS[::-1] + ["x", "y"]].assign(operator="me")
+    shuffled = frame[["z"] + JOINTS[::-1] + ["x", "y"]].assign(operator="me")
     from_frame = urdf_dh.calibrate(UR5, shuffled).to_dict()
     from_array = urdf_dh.calibrate(UR5, array).to_dict()
     assert from_frame == from_array
-    # The file's fit: the same numbers (the report names the file instead of <data>).
+    assert from_array["data"] == "<data>"
+    # The whole file as a DataFrame (its target column too): the file's fit, the same numbers
+    # (the report names the file instead of <data>).
     from_file = urdf_dh.calibrate(UR5, path).to_dict()
-    assert from_file["rms_after"] == from_array["rms_after"]
-    assert from_file["parameters"] == from_array["parameters"]
+    whole = urdf_dh.calibrate(UR5, frame).to_dict()
+    assert whole["parameters"] == from_file["parameters"]
+    assert whole["steps"] == from_file["steps"]
+    assert {k: v for k, v in whole.items() if k != "data"} == {
+        k: v for k, v in from_file.items() if k != "data"
+    }
 
 
 def test_predict_and_compensate_arrays_match_the_file(data, tmp_path):

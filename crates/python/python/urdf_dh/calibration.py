@@ -99,11 +99,13 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
     return names, q.ravel().tolist(), xyz, sigma, labels
 
 
-def _arrays(table: Any, columns: Optional[Sequence[str]], what: str, points: bool) -> _Arrays:
+def _arrays(
+    table: Any, columns: Optional[Sequence[str]], what: str, points: bool, strict: bool
+) -> _Arrays:
     """The arrays of a DataFrame (its own columns) or a 2-D array (``columns``, then x, y, z
-    when ``points``)."""
+    when ``points``); ``strict``: no model, a DataFrame's columns are all joints or reserved."""
     if _is_frame(table):
-        return _frame_arrays(table, what, points, strict=columns is None)
+        return _frame_arrays(table, what, points, strict)
     if columns is None:
         raise _native.UrdfDhError(
             f"{what}: a plain array needs a model, whose joints name its columns; pass a DataFrame or a CSV path"
@@ -123,11 +125,13 @@ def _arrays(table: Any, columns: Optional[Sequence[str]], what: str, points: boo
     return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}
 
 
-def _source(data: Any, columns: Optional[Sequence[str]], what: str, points: bool) -> Tuple[str, Optional[_Arrays]]:
+def _source(
+    data: Any, columns: Optional[Sequence[str]], what: str, points: bool, strict: bool = False
+) -> Tuple[str, Optional[_Arrays]]:
     """A file path as is, or a DataFrame / array as arrays named ``<what>`` in messages."""
     if _is_path(data):
         return os.fspath(data), None
-    return f"<{what}>", _arrays(data, columns, what, points)
+    return f"<{what}>", _arrays(data, columns, what, points, strict)
 
 
 def _joints(model: PathLike, base: Optional[str], tip: Optional[str]) -> List[str]:
@@ -249,7 +253,7 @@ def calibrate(
     columns = None
     if model is not None and not _is_path(data) and not _is_frame(data):
         columns = _joints(model, base, tip)
-    data_name, arrays = _source(data, columns, "data", points=True)
+    data_name, arrays = _source(data, columns, "data", points=True, strict=model is None)
     validate_name, validate_arrays = None, None
     if validate is not None:
         if arrays is None and not _is_path(validate):
@@ -259,7 +263,7 @@ def calibrate(
         vcols = columns
         if model is not None and vcols is None and not _is_path(validate) and not _is_frame(validate):
             vcols = _joints(model, base, tip)
-        validate_name, validate_arrays = _source(validate, vcols, "validate", points=True)
+        validate_name, validate_arrays = _source(validate, vcols, "validate", points=True, strict=model is None)
     if isinstance(effects, str) or effects is None:
         effects_text = effects
     else:
