@@ -276,7 +276,7 @@ fn measured_joints(
     tip: Option<String>,
 ) -> PyResult<Vec<String>> {
     let go = || -> anyhow::Result<Vec<String>> {
-        let m = urdf_dh_cli::measured::load_model(
+        let m = dh_sheet::model::load_model(
             model,
             base.as_deref(),
             tip.as_deref(),

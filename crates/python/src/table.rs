@@ -4,12 +4,13 @@
 use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
+use dh_sheet::input::{display_name, read_robot};
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
 use urdf_dh_cli::commands::extract::{
     load_chain_bytes, prove_extracted, run_extract_bytes, ExtractArgs,
 };
-use urdf_dh_cli::input::{display_name, read_robot, read_text};
+use urdf_dh_cli::input::read_text;
 
 use crate::to_py;
 
