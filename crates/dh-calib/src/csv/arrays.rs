@@ -68,7 +68,7 @@ impl SampleArrays {
             });
         }
         let width = self.joint_names.len();
-        let n = if width == 0 { 0 } else { self.q.len() / width };
+        let n = self.q.len().checked_div(width).unwrap_or(0);
         let cols: Vec<usize> = joints
             .iter()
             .filter_map(|j| self.joint_names.iter().position(|n| n == j))
@@ -206,7 +206,7 @@ impl Measurements {
             let sigma = match arrays.sigma.as_ref().map(|s| s[i]) {
                 None => None,
                 Some(v) if v.is_nan() => None,
-                Some(v) if v == 0.0 => {
+                Some(0.0) => {
                     zero_sigmas.push(row);
                     Some(Vector3::repeat(SIGMA_FLOOR))
                 }
