@@ -430,53 +430,9 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             err,
         ),
         Command::Import(a) => import::import(&a.into_args()?, out, err),
-        Command::Calibrate(a) => {
-            let args = a.into_args();
-            let inputs: Vec<(&str, &str)> = [
-                ("--model", args.model.as_deref()),
-                ("--data", Some(args.data.as_str())),
-                ("--validate", args.validate.as_deref()),
-                ("--inertials", args.inertials.as_deref()),
-            ]
-            .into_iter()
-            .filter_map(|(o, p)| Some((o, p?)))
-            .collect();
-            let outputs: Vec<(&str, &str)> = [("--out", &args.out), ("--plot", &args.plot)]
-                .into_iter()
-                .filter_map(|(o, p)| Some((o, p.as_deref()?)))
-                .collect();
-            check_destinations(&inputs, &outputs)?;
-            match calibrate_tree::tree_model(&args)? {
-                Some((tree, origin)) => {
-                    calibrate_tree::calibrate_tree(&args, &tree, &origin, out, err)
-                }
-                None => calibrate::calibrate(&args, out, err),
-            }
-        }
-        Command::Predict(a) => {
-            let args = a.into_args();
-            let outputs: Vec<(&str, &str)> =
-                args.out.iter().map(|o| ("--out", o.as_str())).collect();
-            check_destinations(
-                &[("--model", &args.model), ("--joints", &args.joints)],
-                &outputs,
-            )?;
-            predict::predict(&args, out, err)
-        }
-        Command::Compensate(a) => {
-            let args = a.into_args();
-            let outputs: Vec<(&str, &str)> =
-                args.out.iter().map(|o| ("--out", o.as_str())).collect();
-            check_destinations(
-                &[
-                    ("--nominal", &args.nominal),
-                    ("--model", &args.model),
-                    ("--joints", &args.joints),
-                ],
-                &outputs,
-            )?;
-            compensate::compensate(&args, out, err)
-        }
+        Command::Calibrate(a) => run_calibrate(&a.into_args(), out, err),
+        Command::Predict(a) => run_predict(&a.into_args(), out, err),
+        Command::Compensate(a) => run_compensate(&a.into_args(), out, err),
         Command::Cpa(a) => {
             let args = a.into_args()?;
             if let Some(plot) = &args.plot {
@@ -503,4 +459,77 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             Ok(Outcome::Pass)
         }
     }
+}
+
+/// Runs `calibrate` with `args` as the command line does (the library entry of
+/// `urdf-dh calibrate`): outputs checked against inputs, a tree sheet model calibrated as a tree,
+/// else as a serial chain ([`calibrate::calibrate`]). The report goes to `out` (to `err` when an
+/// artefact is piped to `-`), warnings and progress to `err`.
+///
+/// # Errors
+/// As [`calibrate::calibrate`].
+pub fn run_calibrate(
+    args: &calibrate::CalibrateArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
+    let inputs: Vec<(&str, &str)> = [
+        ("--model", args.model.as_deref()),
+        ("--data", Some(args.data.as_str())),
+        ("--validate", args.validate.as_deref()),
+        ("--inertials", args.inertials.as_deref()),
+    ]
+    .into_iter()
+    .filter_map(|(o, p)| Some((o, p?)))
+    .collect();
+    let outputs: Vec<(&str, &str)> = [("--out", &args.out), ("--plot", &args.plot)]
+        .into_iter()
+        .filter_map(|(o, p)| Some((o, p.as_deref()?)))
+        .collect();
+    check_destinations(&inputs, &outputs)?;
+    match calibrate_tree::tree_model(args)? {
+        Some((tree, origin)) => calibrate_tree::calibrate_tree(args, &tree, &origin, out, err),
+        None => calibrate::calibrate(args, out, err),
+    }
+}
+
+/// Runs `predict` with `args` as the command line does (the library entry of `urdf-dh predict`):
+/// the output checked against the inputs, then [`predict::predict`].
+///
+/// # Errors
+/// As [`predict::predict`].
+pub fn run_predict(
+    args: &predict::PredictArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
+    let outputs: Vec<(&str, &str)> = args.out.iter().map(|o| ("--out", o.as_str())).collect();
+    check_destinations(
+        &[("--model", &args.model), ("--joints", &args.joints)],
+        &outputs,
+    )?;
+    predict::predict(args, out, err)
+}
+
+/// Runs `compensate` with `args` as the command line does (the library entry of
+/// `urdf-dh compensate`): the output checked against the inputs, then
+/// [`compensate::compensate`].
+///
+/// # Errors
+/// As [`compensate::compensate`].
+pub fn run_compensate(
+    args: &compensate::CompensateArgs,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
+    let outputs: Vec<(&str, &str)> = args.out.iter().map(|o| ("--out", o.as_str())).collect();
+    check_destinations(
+        &[
+            ("--nominal", &args.nominal),
+            ("--model", &args.model),
+            ("--joints", &args.joints),
+        ],
+        &outputs,
+    )?;
+    compensate::compensate(args, out, err)
 }

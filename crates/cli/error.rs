@@ -1,34 +1,9 @@
 //! Errors the CLI reports with a hint, and the exit-code contract.
 
-use std::fmt;
-
 use dh_sheet::SheetError;
 use urdf_axes::UrdfError;
 
-/// An error with a `hint:` line telling the user what to do.
-#[derive(Debug)]
-pub struct Hinted {
-    /// What is wrong.
-    pub message: String,
-    /// What to do about it.
-    pub hint: String,
-}
-
-impl fmt::Display for Hinted {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.message)
-    }
-}
-
-impl std::error::Error for Hinted {}
-
-/// An error with a hint.
-pub fn hinted(message: impl Into<String>, hint: impl Into<String>) -> anyhow::Error {
-    anyhow::Error::new(Hinted {
-        message: message.into(),
-        hint: hint.into(),
-    })
-}
+pub use dh_sheet::error::{hinted, Hinted};
 
 /// The `hint:` line for an error: a [`Hinted`] one's own, a [`SheetError`]'s own, else one for
 /// the library errors whose remedy is a command-line option or a tool (the libraries know no

@@ -95,6 +95,20 @@ pub struct CalibrateArgs {
     pub keep_outliers: bool,
     /// No progress line on standard error.
     pub quiet: bool,
+    /// Measurements a library caller hands over as arrays instead of the files `data` and
+    /// `validate` (which then only name them in messages); `None` on the command line.
+    pub given: Option<GivenData>,
+}
+
+/// Measurements given as arrays (see [`dh_calib::csv::SampleArrays`]; units those of
+/// [`CalibrateArgs::units`]), read as `calibrate` reads its files: the model's measured joints
+/// are taken from the arrays' joint columns by name.
+#[derive(Clone, Debug)]
+pub struct GivenData {
+    /// The measurements (`--data`).
+    pub data: dh_calib::csv::SampleArrays,
+    /// The validation measurements (`--validate`), if any.
+    pub validate: Option<dh_calib::csv::SampleArrays>,
 }
 
 /// Command-line arguments of `calibrate`.
@@ -227,6 +241,7 @@ impl CalibrateCli {
             alpha: self.alpha,
             keep_outliers: self.keep_outliers,
             quiet: self.quiet,
+            given: None,
         }
     }
 }

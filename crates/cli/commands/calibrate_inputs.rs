@@ -8,6 +8,7 @@ use std::io::Write;
 
 use anyhow::{Context, Result};
 use dh_calib::cpa::{analyse, CpaOptions};
+use dh_calib::csv::SampleArrays;
 use dh_calib::data::Measurements;
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
 use dh_calib::pipeline::{merge_validation, PipelineError};
@@ -188,8 +189,12 @@ pub(crate) fn keep_targets(data: &mut Measurements, keep: &[String], origin: &st
 
 pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
     let data_name = display_name(&args.data);
-    let file = DataFile::read(&args.data)?;
-    let (model, joints, prismatic) = match &args.model {
+    // The data file is read before the model, so that its faults are reported first.
+    let file = match &args.given {
+        None => Some(DataFile::read(&args.data)?),
+        Some(_) => None,
+    };
+    let model = match &args.model {
         Some(m) => {
             let model = load_model(
                 m,
@@ -200,16 +205,11 @@ pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<I
             for w in &model.warnings {
                 writeln!(err, "urdf-dh: warning: {w}")?;
             }
-            let (j, p) = (model.measured_joints(), model.prismatic());
-            (Some(model), j, p)
+            Some(model)
         }
-        None => (None, header_joints(&file)?, Vec::new()),
+        None => None,
     };
-    let mut data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
-    if let Some(v) = &args.validate {
-        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
-        merge_validation(&mut data, extra);
-    }
+    let mut data = read_sets(args, model.as_ref(), file, err)?;
     if let Some(m) = &model {
         m.couple(&mut data)
             .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;
@@ -266,6 +266,68 @@ pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<I
     })
 }
 
+/// The measurements of `args` for `model` (without a model: every joint column of the data),
+/// the validation set merged as validation samples: read from the files `--data` and
+/// `--validate` (`file`: the data file if already read), or from the arrays a library caller
+/// handed over ([`CalibrateArgs::given`]; a validation file beside given data is read).
+///
+/// # Errors
+/// Unreadable files, bad cells (naming the file or array, the line or row, and the column).
+pub(crate) fn read_sets(
+    args: &CalibrateArgs,
+    model: Option<&LoadedModel>,
+    file: Option<DataFile>,
+    err: &mut dyn Write,
+) -> Result<Measurements> {
+    let prismatic = model.map(LoadedModel::prismatic).unwrap_or_default();
+    let Some(given) = &args.given else {
+        let file = match file {
+            Some(f) => f,
+            None => DataFile::read(&args.data)?,
+        };
+        let joints = match model {
+            Some(m) => m.measured_joints(),
+            None => header_joints(&file)?,
+        };
+        let mut data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
+        if let Some(v) = &args.validate {
+            let extra =
+                read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
+            merge_validation(&mut data, extra);
+        }
+        return Ok(data);
+    };
+    let joints = match model {
+        Some(m) => m.measured_joints(),
+        None => given.data.joint_names.clone(),
+    };
+    let opts = args.units.csv_options(&prismatic);
+    let read = |arrays: &SampleArrays, name: &str, err: &mut dyn Write| -> Result<Measurements> {
+        let (data, notes) = arrays
+            .with_joints(&joints)
+            .and_then(|a| Measurements::from_arrays(&a, &opts))
+            .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        for n in notes {
+            writeln!(err, "urdf-dh: warning: {name}: {n}")?;
+        }
+        Ok(data)
+    };
+    let mut data = read(&given.data, &display_name(&args.data), err)?;
+    match (&given.validate, &args.validate) {
+        (Some(v), name) => {
+            let name = display_name(name.as_deref().unwrap_or("<validate>"));
+            merge_validation(&mut data, read(v, &name, err)?);
+        }
+        (None, Some(path)) => {
+            let file = DataFile::read(path)?;
+            let extra = read_measurements(&file, &joints, &prismatic, args.units, err)?;
+            merge_validation(&mut data, extra);
+        }
+        (None, None) => {}
+    }
+    Ok(data)
+}
+
 /// Refuses, before any fitting, point data that cannot determine its own unknowns
 /// (`dh_calib::pipeline::enough_samples`), naming the data file `data_name`.
 pub(crate) fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
@@ -296,18 +358,7 @@ pub(crate) fn read_data_for(
     err: &mut dyn Write,
 ) -> Result<Measurements> {
     let data_name = display_name(&args.data);
-    let (joints, prismatic) = (model.measured_joints(), model.prismatic());
-    let mut data = read_measurements(
-        &DataFile::read(&args.data)?,
-        &joints,
-        &prismatic,
-        args.units,
-        err,
-    )?;
-    if let Some(v) = &args.validate {
-        let extra = read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
-        merge_validation(&mut data, extra);
-    }
+    let mut data = read_sets(args, Some(model), None, err)?;
     model
         .couple(&mut data)
         .with_context(|| format!("{data_name}: applying the model's coupled joints"))?;

@@ -78,6 +78,9 @@ pub struct CompensateArgs {
     pub units: DataUnits,
     /// Output path (`None` or `-`: standard output).
     pub out: Option<String>,
+    /// Joint values a library caller hands over as arrays instead of the file `joints` (which
+    /// then only names them in messages); `None` on the command line.
+    pub given: Option<dh_calib::csv::SampleArrays>,
 }
 
 impl CompensateCli {
@@ -98,6 +101,7 @@ impl CompensateCli {
                 angle: self.angle_unit,
             },
             out: self.out,
+            given: None,
         }
     }
 }
@@ -158,7 +162,7 @@ pub fn compensate(
     {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
-    let input = read_joints(&args.joints, &model, args.units)?;
+    let input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
     let options = CompensateOptions {
         orientation: !args.position_only,
         max_change: args.max_change,

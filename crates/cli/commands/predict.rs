@@ -90,6 +90,9 @@ pub struct PredictArgs {
     pub units: DataUnits,
     /// Output path (`None` or `-`: standard output).
     pub out: Option<String>,
+    /// Joint values a library caller hands over as arrays instead of the file `joints` (which
+    /// then only names them in messages); `None` on the command line.
+    pub given: Option<dh_calib::csv::SampleArrays>,
 }
 
 impl PredictCli {
@@ -108,6 +111,7 @@ impl PredictCli {
                 angle: self.angle_unit,
             },
             out: self.out,
+            given: None,
         }
     }
 }
@@ -122,13 +126,14 @@ pub(crate) struct JointInput {
     pub(crate) prismatic: Vec<bool>,
 }
 
-/// Reads `path`'s joint values for `model`'s measured columns.
+/// Reads `path`'s joint values for `model`'s measured columns, or those of `given` (arrays a
+/// library caller handed over; `path` then names them in messages).
 pub(crate) fn read_joints(
     path: &str,
+    given: Option<&dh_calib::csv::SampleArrays>,
     model: &CalibratedModel,
     units: DataUnits,
 ) -> Result<JointInput> {
-    let file = DataFile::read(path)?;
     let columns = &model.joints.columns;
     let prismatic_rows: Vec<&str> = model
         .loaded
@@ -153,9 +158,18 @@ pub(crate) fn read_joints(
         .filter(|(_, p)| **p)
         .map(|(c, _)| c.clone())
         .collect();
-    let rows =
-        dh_calib::joints::parse_joint_values(&file.text, columns, &units.csv_options(&names))
-            .map_err(|e| anyhow::anyhow!("{}: {e}", file.name))?;
+    let opts = units.csv_options(&names);
+    let rows = match given {
+        Some(arrays) => arrays
+            .with_joints(columns)
+            .and_then(|a| dh_calib::joints::joint_rows(&a, &opts))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", display_name(path)))?,
+        None => {
+            let file = DataFile::read(path)?;
+            dh_calib::joints::parse_joint_values(&file.text, columns, &opts)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", file.name))?
+        }
+    };
     Ok(JointInput { rows, prismatic })
 }
 
@@ -219,7 +233,7 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         (Some(FrameChoice::Device), true) | (None, true) => Frame::Device,
         (Some(FrameChoice::Base), _) | (None, false) => Frame::Base,
     };
-    let input = read_joints(&args.joints, &model, args.units)?;
+    let input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
     let known = model.calibrated.targets();
     let index_of = |t: &str| -> Result<usize> {
         known.iter().position(|(n, _)| n == t).ok_or_else(|| {

@@ -1,6 +1,8 @@
 //! Unit tests of `measured`.
 
 use super::*;
+use crate::tree_sheet::TreeSheet;
+use dh_core::Convention;
 
 #[test]
 fn header_cells_are_split_unquoted_and_trimmed() {

@@ -69,5 +69,7 @@ mod orientation;
 pub use orientation::*;
 mod writer;
 pub use writer::*;
+mod arrays;
+pub use arrays::*;
 #[cfg(test)]
 mod tests;

@@ -14,8 +14,8 @@ use dh_core::DhTable;
 use nalgebra::DMatrix;
 
 use crate::csv::{
-    check_name, number, AngleUnit, CsvOptions, DataError, Records, MAX_PLAUSIBLE_METRES,
-    MAX_PLAUSIBLE_RADIANS,
+    array_error, check_name, joint_value, number, AngleUnit, CsvOptions, DataError, Records,
+    SampleArrays, MAX_PLAUSIBLE_METRES, MAX_PLAUSIBLE_RADIANS,
 };
 
 /// The linear map from measured joint columns to a table's row values (see the module docs).
@@ -215,6 +215,59 @@ pub fn parse_joint_values(
     Ok(out)
 }
 
+/// The joint-value rows of `arrays` (their joint columns, in order, and the optional `config`,
+/// `target` and `session` columns; no points), converted to metres and radians with `opts` as
+/// [`parse_joint_values`] converts a file's cells. `JointRow::line` is the line the row would
+/// have in the same CSV file (row `i` at line `i + 2`); empty names are `None`.
+///
+/// # Errors
+/// Columns of different lengths, no rows, points given ([`DataError::Content`],
+/// [`DataError::Empty`]); a value that is not finite or beyond four turns (8π rad) or 100 m, a
+/// name with control characters: [`DataError::Array`] naming the row (0-based) and the column.
+pub fn joint_rows(arrays: &SampleArrays, opts: &CsvOptions) -> Result<Vec<JointRow>, DataError> {
+    let n = arrays.rows(false)?;
+    let width = arrays.joint_names.len();
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let row = i;
+        let mut q = Vec::with_capacity(width);
+        for (k, name) in arrays.joint_names.iter().enumerate() {
+            let revolute = !opts.prismatic.contains(name);
+            q.push(joint_value(
+                arrays.q[i * width + k],
+                revolute,
+                row,
+                name,
+                opts,
+            )?);
+        }
+        let name = |col: &Option<Vec<String>>, what: &str| -> Result<Option<String>, DataError> {
+            match col.as_ref().map(|c| c[i].clone()) {
+                Some(c) if !c.is_empty() => {
+                    check_name(&c, row, what).map_err(|_| {
+                        array_error(
+                            row,
+                            what,
+                            "a name without control characters",
+                            format!("{c:?}"),
+                        )
+                    })?;
+                    Ok(Some(c))
+                }
+                _ => Ok(None),
+            }
+        };
+        out.push(JointRow {
+            line: i + 2,
+            config: name(&arrays.config, "config")?,
+            target: name(&arrays.target, "target")?,
+            session: name(&arrays.session, "session")?,
+            q,
+        });
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -273,5 +326,40 @@ mod tests {
         let e = parse_joint_values("a,b\n90,0\n", &joints, &CsvOptions::default()).unwrap_err();
         assert!(e.to_string().contains("--angle-unit deg"), "{e}");
         assert!(parse_joint_values("a,b\n", &joints, &CsvOptions::default()).is_err());
+    }
+
+    #[test]
+    fn joint_rows_read_arrays_as_the_file_reader_reads_cells() {
+        let arrays = SampleArrays {
+            joint_names: vec!["j2".into(), "j1".into()],
+            q: vec![90.0, 1.0, -45.0, 2.0],
+            config: Some(vec!["p1".into(), String::new()]),
+            ..SampleArrays::default()
+        };
+        let opts = CsvOptions {
+            angle_unit: AngleUnit::Degree,
+            ..CsvOptions::default()
+        };
+        let joints = vec!["j1".to_string(), "j2".to_string()];
+        let rows = joint_rows(&arrays.with_joints(&joints).unwrap(), &opts).unwrap();
+        let text = "j1,j2,config\n1,90,p1\n2,-45,\n";
+        let file = parse_joint_values(text, &joints, &opts).unwrap();
+        assert_eq!(rows.len(), 2);
+        for (a, f) in rows.iter().zip(&file) {
+            assert_eq!(a.q, f.q);
+            assert_eq!(a.config, f.config);
+            assert_eq!(a.line, f.line);
+        }
+        let mut bad = arrays.clone();
+        bad.q[3] = f64::NAN;
+        let e = joint_rows(&bad, &opts).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "row 1, column 'j1': expected a finite number, found NaN"
+        );
+        let e = arrays.with_joints(&["j3".to_string()]).unwrap_err();
+        assert!(e.to_string().contains("'j3'"), "{e}");
+        bad.q.pop();
+        assert!(joint_rows(&bad, &opts).is_err());
     }
 }

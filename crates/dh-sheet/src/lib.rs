@@ -14,7 +14,9 @@
 //! | [`read_back`] | reading every written format back (the CSV, text and Markdown tables) |
 //! | [`check`] | [`compare`]: a URDF chain against a sheet, as a [`CheckReport`] |
 //! | [`text`] | escaping names for messages and tables |
-//! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint) |
+//! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint); [`Hinted`](error::Hinted), a message with a hint |
+//! | [`input`] | reading robot files (URDF, `.xacro`, standard input) and a URDF's chain |
+//! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
 //! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
 //! type read from one ([`Sheet`], [`TreeSheet`], the `dh_core` tables) is in metres and radians.
@@ -42,6 +44,8 @@
 
 pub mod check;
 pub mod error;
+pub mod input;
+pub mod model;
 pub mod read_back;
 pub mod render;
 pub mod sheet;

@@ -175,6 +175,18 @@ pub enum DataError {
         /// The line where the quote opened.
         line: usize,
     },
+    /// A bad value in measurements given as arrays ([`Measurements::from_arrays`]).
+    #[error("row {row}, column '{column}': expected {expected}, found {found}")]
+    Array {
+        /// The 1-based row.
+        row: usize,
+        /// Column name.
+        column: String,
+        /// What the column needs.
+        expected: String,
+        /// What is there.
+        found: String,
+    },
     /// A dataset layout found something other than it expects.
     #[error("line {line}: expected {expected}, found {found}")]
     Format {

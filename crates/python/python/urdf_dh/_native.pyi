@@ -1,6 +1,6 @@
 """Type stubs of the Rust extension ``urdf_dh._native`` (use the ``urdf_dh`` package instead)."""
 
-from typing import List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 Matrix = List[List[float]]
 RowTuple = Tuple[
@@ -8,6 +8,12 @@ RowTuple = Tuple[
     Optional[Tuple[str, float, float]],
 ]
 
+# Measurements or joint values as arrays: joint names, joint values (rows x joints) and points
+# (rows x 3, empty for joint values) flattened row-major, the sigma column or None, and the
+# text columns (target, config, session, set) by name.
+Arrays = Tuple[List[str], List[float], List[float], Optional[List[float]], Dict[str, List[str]]]
+
+RESERVED_COLUMNS: List[str]
 CHECK_LINEAR: float
 CHECK_ANGULAR: float
 DEFAULT_LINEAR: float
@@ -50,4 +56,50 @@ def check(
     angular: float = ...,
 ) -> str: ...
 def run(argv: List[str]) -> Tuple[str, str, bool]: ...
+def calibrate(
+    model: Optional[str],
+    data_name: str,
+    data: Optional[Arrays],
+    validate_name: Optional[str],
+    validate: Optional[Arrays],
+    base: Optional[str],
+    tip: Optional[str],
+    effects: Optional[str],
+    max_effects: Optional[str],
+    targets: List[str],
+    sigma: Optional[str],
+    folds: Optional[str],
+    keep_outliers: bool,
+    inertials: Optional[str],
+    length_unit: str,
+    angle_unit: str,
+    out: Optional[str],
+) -> Tuple[str, str, bool]:
+    """(JSON report, warnings, whether the written model failed its proof)."""
+def predict(
+    model: str,
+    joints_name: str,
+    joints: Optional[Arrays],
+    base: Optional[str],
+    tip: Optional[str],
+    targets: List[str],
+    frame_name: Optional[str],
+    session: Optional[str],
+    length_unit: str,
+    angle_unit: str,
+) -> Tuple[str, str]:
+    """(the CSV text predict writes, its standard error)."""
+def compensate(
+    nominal: str,
+    model: str,
+    joints_name: str,
+    joints: Optional[Arrays],
+    base: Optional[str],
+    tip: Optional[str],
+    position_only: bool,
+    max_change: Optional[str],
+    length_unit: str,
+    angle_unit: str,
+) -> Tuple[str, str]:
+    """(the CSV text compensate writes, its standard error)."""
 def measured_joints(model: str, base: Optional[str] = None, tip: Optional[str] = None) -> List[str]: ...

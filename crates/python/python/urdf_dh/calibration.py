@@ -1,22 +1,22 @@
 """Calibration from measured points, and using its result: ``calibrate``, ``predict``,
 ``compensate``.
 
-Each runs the ``urdf-dh`` command of the same name in process (the Rust extension), so the
-results, the checks on the input and the messages are the command line's own. Measurements may
-be a file path, a pandas ``DataFrame`` (columns named as in the measurement CSV: one per joint,
-``x``, ``y``, ``z``, optional ``target``, ``config``, ``sigma``, ``set``...) or a numpy array
-(one column per measured joint of the model in its order, then ``x``, ``y``, ``z``); a
-DataFrame or an array is handed over as the same CSV text, in a temporary file. Units are those
-of the options (``length_unit``, ``angle_unit``); every report is in metres and radians.
+Each calls the ``urdf-dh`` library's entry for the command of the same name in process (the Rust
+extension), so the results, the checks on the input and the messages are the command line's own.
+Measurements may be a file path, a pandas ``DataFrame`` (columns named as in the measurement CSV:
+one per joint, ``x``, ``y``, ``z``, optional ``target``, ``config``, ``sigma``, ``set``,
+``session``) or a numpy array (one column per measured joint of the model in its order, then
+``x``, ``y``, ``z``). A DataFrame or an array is handed over as arrays, no file is written: the
+library checks its values as it checks a file's cells, and an error names the row (0-based, as
+numpy and pandas count) and the column. Units are those of the options (``length_unit``,
+``angle_unit``); every report is in metres and radians.
 """
 
 from __future__ import annotations
 
 import csv
-import io
 import json
 import os
-import tempfile
 import warnings
 from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
@@ -26,6 +26,14 @@ from . import _native
 
 PathLike = Union[str, "os.PathLike[str]"]
 
+# Text columns handed over by name; every other reserved column of the CSV layout needs a file.
+_LABELS = ("target", "config", "session", "set")
+_POINT_COLUMNS = ("x", "y", "z", "sigma")
+
+# What the library is given for a DataFrame or array: joint names, joint values and points
+# (flattened row-major), the sigma column, the text columns.
+_Arrays = Tuple[List[str], List[float], List[float], Optional[List[float]], Dict[str, List[str]]]
+
 
 def _warn(stderr: str) -> None:
     for line in stderr.splitlines():
@@ -33,60 +41,101 @@ def _warn(stderr: str) -> None:
             warnings.warn(line[len("urdf-dh: warning: ") :], stacklevel=3)
 
 
-def _csv_text(table: Any, columns: Optional[Sequence[str]], what: str) -> str:
-    """CSV text of a DataFrame (its own columns) or a 2-D array (``columns``)."""
-    if hasattr(table, "to_csv") and hasattr(table, "columns"):
-        return str(table.to_csv(index=False, float_format="%.17g"))
+def _is_path(data: Any) -> bool:
+    return isinstance(data, (str, os.PathLike))
+
+
+def _is_frame(data: Any) -> bool:
+    return hasattr(data, "columns") and hasattr(data, "to_numpy")
+
+
+def _text(values: Any) -> List[str]:
+    """A text column's cells: missing ones (NaN, None) empty, others as text."""
+    out = []
+    for v in values:
+        if v is None or (isinstance(v, float) and np.isnan(v)):
+            out.append("")
+        else:
+            out.append(str(v))
+    return out
+
+
+def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
+    """The arrays of a DataFrame, its columns used by name. ``points``: measurements (x, y, z,
+    sigma read; other reserved columns refused), else joint values (points ignored). ``strict``:
+    every other column is a joint and must be numeric (no model names the joints)."""
+    reserved = set(_native.RESERVED_COLUMNS)
+    columns = [str(c) for c in frame.columns]
+    if points:
+        other = [c for c in columns if c in reserved and c not in _LABELS + _POINT_COLUMNS]
+        if other:
+            raise _native.UrdfDhError(
+                f"{what}: column(s) {', '.join(other)} can be read from a CSV file only; pass its path"
+            )
+        for c in "xyz":
+            if c not in columns:
+                raise _native.UrdfDhError(f"{what}: missing point column '{c}'; the columns are {', '.join(columns)}")
+    names: List[str] = []
+    values = []
+    for c, original in zip(columns, frame.columns):
+        if c in reserved:
+            continue
+        try:
+            values.append(np.asarray(frame[original], dtype=float))
+        except (TypeError, ValueError):
+            if strict:
+                raise _native.UrdfDhError(f"{what}: column '{c}': expected numbers (a joint's values)") from None
+            continue
+        names.append(c)
+    rows = len(frame)
+    q = np.column_stack(values) if values else np.zeros((rows, 0))
+    xyz = (
+        np.column_stack([np.asarray(frame[c], dtype=float) for c in "xyz"]).ravel().tolist()
+        if points
+        else []
+    )
+    sigma = np.asarray(frame["sigma"], dtype=float).tolist() if points and "sigma" in columns else None
+    labels = {c: _text(frame[c]) for c in _LABELS if c in columns}
+    return names, q.ravel().tolist(), xyz, sigma, labels
+
+
+def _arrays(
+    table: Any, columns: Optional[Sequence[str]], what: str, points: bool, strict: bool
+) -> _Arrays:
+    """The arrays of a DataFrame (its own columns) or a 2-D array (``columns``, then x, y, z
+    when ``points``); ``strict``: no model, a DataFrame's columns are all joints or reserved."""
+    if _is_frame(table):
+        return _frame_arrays(table, what, points, strict)
+    if columns is None:
+        raise _native.UrdfDhError(
+            f"{what}: a plain array needs a model, whose joints name its columns; pass a DataFrame or a CSV path"
+        )
     array = np.asarray(table, dtype=float)
     if array.ndim != 2:
-        raise ValueError(f"{what}: expected a 2-D array (one row per sample), found shape {array.shape}")
-    if columns is None or array.shape[1] != len(columns):
-        raise ValueError(
-            f"{what}: expected {len(columns or [])} columns ({', '.join(columns or [])}), "
-            f"found {array.shape[1]}"
+        raise _native.UrdfDhError(
+            f"{what}: expected a 2-D array (one row per sample), found shape {array.shape}"
         )
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"{what}: expected finite numbers, found NaN or inf")
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(columns)
-    for row in array:
-        writer.writerow([repr(float(v)) for v in row])
-    return out.getvalue()
+    names = list(columns) + (["x", "y", "z"] if points else [])
+    if array.shape[1] != len(names):
+        raise _native.UrdfDhError(
+            f"{what}: expected {len(names)} columns ({', '.join(names)}), found {array.shape[1]}"
+        )
+    j = len(columns)
+    xyz = array[:, j:].ravel().tolist() if points else []
+    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}
 
 
-class _Files:
-    """Temporary files for in-memory inputs, removed on exit."""
-
-    def __init__(self) -> None:
-        self._dir = tempfile.TemporaryDirectory(prefix="urdf_dh_")
-
-    def __enter__(self) -> "_Files":
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self._dir.cleanup()
-
-    def path(self, data: Any, name: str, columns: Optional[Sequence[str]], what: str) -> str:
-        if isinstance(data, (str, os.PathLike)):
-            return os.fspath(data)
-        path = os.path.join(self._dir.name, name)
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(_csv_text(data, columns, what))
-        return path
+def _source(
+    data: Any, columns: Optional[Sequence[str]], what: str, points: bool, strict: bool = False
+) -> Tuple[str, Optional[_Arrays]]:
+    """A file path as is, or a DataFrame / array as arrays named ``<what>`` in messages."""
+    if _is_path(data):
+        return os.fspath(data), None
+    return f"<{what}>", _arrays(data, columns, what, points, strict)
 
 
 def _joints(model: PathLike, base: Optional[str], tip: Optional[str]) -> List[str]:
     return list(_native.measured_joints(os.fspath(model), base, tip))
-
-
-def _chain(base: Optional[str], tip: Optional[str]) -> List[str]:
-    argv: List[str] = []
-    if base is not None:
-        argv += ["--base", base]
-    if tip is not None:
-        argv += ["--tip", tip]
-    return argv
 
 
 def _pose(xyz: Sequence[float], rpy: Sequence[float]) -> np.ndarray:
@@ -185,9 +234,11 @@ def calibrate(
     measured points, as ``urdf-dh calibrate`` does.
 
     Args:
-        data: measurements: a CSV path, a pandas DataFrame, or a numpy array (the model's
-            measured joints, then x, y, z).
-        validate: validation measurements, same forms.
+        data: measurements: a CSV path, a pandas DataFrame (columns by name: joints, x, y, z,
+            optional target, config, sigma, set, session), or a numpy array (the model's
+            measured joints, then x, y, z). A DataFrame or array is handed to the library as
+            arrays (no file); with model None a DataFrame's non-reserved columns are the joints.
+        validate: validation measurements, same forms (a file only beside a file).
         effects: None, ``"auto"``, or effect labels (``["gear_ratio:elbow_joint"]``).
         out: write the calibrated model there (a sheet, or a URDF for ``.urdf``), proved as
             written; :func:`predict` and :func:`compensate` read it.
@@ -195,36 +246,47 @@ def calibrate(
 
     Raises:
         FileNotFoundError: a file does not exist.
-        UrdfDhError: bad model or data (the CLI's message and ``.hint``), or a written model
-            that failed its proof.
+        UrdfDhError: bad model or data (the CLI's message and ``.hint``; for an array or a
+            DataFrame, the 0-based row and the column of a bad value, or a wrong shape), or a
+            written model that failed its proof.
     """
     columns = None
-    if model is not None and not isinstance(data, (str, os.PathLike)) and not hasattr(data, "columns"):
-        columns = _joints(model, base, tip) + ["x", "y", "z"]
-    with _Files() as files:
-        argv = ["calibrate", "--data", files.path(data, "data.csv", columns, "data")]
-        if model is not None:
-            argv += ["--model", os.fspath(model)] + _chain(base, tip)
-        if validate is not None:
-            argv += ["--validate", files.path(validate, "validate.csv", columns, "validate")]
-        if effects is not None:
-            argv += ["--effects", effects if isinstance(effects, str) else ",".join(effects)]
-        if max_effects is not None:
-            argv += ["--max-effects", str(int(max_effects))]
-        if targets:
-            argv += ["--targets", ",".join(targets)]
-        if sigma is not None:
-            argv += ["--sigma", repr(float(sigma))]
-        if folds is not None:
-            argv += ["--folds", str(int(folds))]
-        if keep_outliers:
-            argv.append("--keep-outliers")
-        if inertials is not None:
-            argv += ["--inertials", os.fspath(inertials)]
-        if out is not None:
-            argv += ["--out", os.fspath(out)]
-        argv += ["--length-unit", length_unit, "--angle-unit", angle_unit, "--format", "json", "--quiet"]
-        stdout, stderr, failed = _native.run(argv)
+    if model is not None and not _is_path(data) and not _is_frame(data):
+        columns = _joints(model, base, tip)
+    data_name, arrays = _source(data, columns, "data", points=True, strict=model is None)
+    validate_name, validate_arrays = None, None
+    if validate is not None:
+        if arrays is None and not _is_path(validate):
+            raise _native.UrdfDhError(
+                "validate: with data given as a file, give the validation measurements as a file too"
+            )
+        vcols = columns
+        if model is not None and vcols is None and not _is_path(validate) and not _is_frame(validate):
+            vcols = _joints(model, base, tip)
+        validate_name, validate_arrays = _source(validate, vcols, "validate", points=True, strict=model is None)
+    if isinstance(effects, str) or effects is None:
+        effects_text = effects
+    else:
+        effects_text = ",".join(effects)
+    stdout, stderr, failed = _native.calibrate(
+        None if model is None else os.fspath(model),
+        data_name,
+        arrays,
+        validate_name,
+        validate_arrays,
+        base,
+        tip,
+        effects_text,
+        None if max_effects is None else str(int(max_effects)),
+        list(targets or []),
+        None if sigma is None else repr(float(sigma)),
+        None if folds is None else str(int(folds)),
+        keep_outliers,
+        None if inertials is None else os.fspath(inertials),
+        length_unit,
+        angle_unit,
+        None if out is None else os.fspath(out),
+    )
     _warn(stderr)
     report = Report(json.loads(stdout))
     if failed:
@@ -233,6 +295,15 @@ def calibrate(
             f"(max deviation {report.written and report.written.get('max_deviation')} m); nothing was written"
         )
     return report
+
+
+def _names(targets: Union[None, str, Sequence[str]]) -> List[str]:
+    """Target names of a ``targets`` option (comma-separated text, or a list)."""
+    if targets is None:
+        return []
+    if isinstance(targets, str):
+        return [t.strip() for t in targets.split(",") if t.strip()]
+    return list(targets)
 
 
 def _rows(text: str) -> Iterator[Dict[str, str]]:
@@ -307,20 +378,13 @@ def predict(
         UrdfDhError: bad model or joint values (the CLI's message).
     """
     columns = None
-    if not isinstance(joints, (str, os.PathLike)) and not hasattr(joints, "columns"):
+    if not _is_path(joints) and not _is_frame(joints):
         columns = _joints(model, base, tip)
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
-    with _Files() as files:
-        argv = ["predict", "--model", os.fspath(model), "--joints", files.path(joints, "q.csv", columns, "joints")]
-        argv += _chain(base, tip)
-        if targets is not None:
-            argv += ["--targets", targets if isinstance(targets, str) else ",".join(targets)]
-        if frame is not None:
-            argv += ["--frame", frame]
-        if session is not None:
-            argv += ["--session", session]
-        argv += ["--length-unit", length_unit, "--angle-unit", angle_unit]
-        stdout, stderr, _ = _native.run(argv)
+    name, arrays = _source(joints, columns, "joints", points=False)
+    stdout, stderr = _native.predict(
+        os.fspath(model), name, arrays, base, tip, _names(targets), frame, session, length_unit, angle_unit
+    )
     _warn(stderr)
     return Prediction(stdout)
 
@@ -351,19 +415,21 @@ def compensate(
         UrdfDhError: bad models or joint values (the CLI's message).
     """
     columns = _joints(model, None, None)
-    if not isinstance(joints, (str, os.PathLike)) and not hasattr(joints, "columns"):
+    if not _is_path(joints) and not _is_frame(joints):
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
-    with _Files() as files:
-        argv = [
-            "compensate", "--nominal", os.fspath(nominal), "--model", os.fspath(model),
-            "--joints", files.path(joints, "q.csv", columns, "joints"),
-        ] + _chain(base, tip)
-        if position_only:
-            argv.append("--position-only")
-        if max_change is not None:
-            argv += ["--max-change", repr(float(max_change))]
-        argv += ["--length-unit", length_unit, "--angle-unit", angle_unit]
-        stdout, stderr, _ = _native.run(argv)
+    name, arrays = _source(joints, columns, "joints", points=False)
+    stdout, stderr = _native.compensate(
+        os.fspath(nominal),
+        os.fspath(model),
+        name,
+        arrays,
+        base,
+        tip,
+        position_only,
+        None if max_change is None else repr(float(max_change)),
+        length_unit,
+        angle_unit,
+    )
     _warn(stderr)
     rows = list(_rows(stdout))
     q = np.array([[float(r[c]) for c in columns] for r in rows]).reshape(-1, len(columns))

@@ -1,0 +1,449 @@
+//! Measurements given as arrays rather than CSV text ([`SampleArrays`],
+//! [`Measurements::from_arrays`]): what a numpy or DataFrame caller hands over, checked as the
+//! CSV reader checks a file's cells, with errors naming the row and the column.
+
+use super::*;
+
+/// A measurement set as columns of equal length, one entry per sample, in the units of the
+/// [`CsvOptions`] it is read with (as a CSV file's cells would be).
+///
+/// Frames: `points` are in the measuring device's frame. `q` and `points` are row-major: row
+/// `i` of `q` is `q[i * joint_names.len()..(i + 1) * joint_names.len()]`, row `i` of `points`
+/// is `points[3 * i..3 * i + 3]` (x, y, z).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SampleArrays {
+    /// The joint columns, in the order of each row of `q`.
+    pub joint_names: Vec<String>,
+    /// Joint values, `rows × joint_names.len()`, row-major (radians or degrees; length unit for
+    /// prismatic joints).
+    pub q: Vec<f64>,
+    /// Measured points, `rows × 3`, row-major (length unit).
+    pub points: Vec<f64>,
+    /// The `target` column (reflector names), or `None`: every sample measures
+    /// [`DEFAULT_TARGET`].
+    pub target: Option<Vec<String>>,
+    /// The `sigma` column (isotropic standard deviation of each point, length unit; NaN for
+    /// "not given", as an empty cell), or `None`.
+    pub sigma: Option<Vec<f64>>,
+    /// The `config` column (pose identifiers; empty for none), or `None`.
+    pub config: Option<Vec<String>>,
+    /// The `session` column (measurement sessions), or `None`.
+    pub session: Option<Vec<String>>,
+    /// The `set` column (`train`/`calibration`, `test`/`validation`, empty for calibration), or
+    /// `None`.
+    pub set: Option<Vec<String>>,
+}
+
+/// The error for row `row` (0-based, as numpy and pandas count), column `column`.
+pub(crate) fn array_error(
+    row: usize,
+    column: &str,
+    expected: impl Into<String>,
+    found: impl Into<String>,
+) -> DataError {
+    DataError::Array {
+        row,
+        column: column.to_string(),
+        expected: expected.into(),
+        found: found.into(),
+    }
+}
+
+impl SampleArrays {
+    /// The same arrays with the joint columns `joints`, in that order (a DataFrame's columns
+    /// may be in any order and include others).
+    ///
+    /// # Errors
+    /// [`DataError::Content`] naming the joints without a column.
+    pub fn with_joints(&self, joints: &[String]) -> Result<SampleArrays, DataError> {
+        let missing: Vec<String> = joints
+            .iter()
+            .filter(|j| !self.joint_names.contains(j))
+            .cloned()
+            .collect();
+        if !missing.is_empty() {
+            return Err(DataError::Content {
+                expected: format!("joint column(s) {}", list(&missing)),
+                found: format!("the columns {}", list(&self.joint_names)),
+            });
+        }
+        let width = self.joint_names.len();
+        let n = self.q.len().checked_div(width).unwrap_or(0);
+        let cols: Vec<usize> = joints
+            .iter()
+            .filter_map(|j| self.joint_names.iter().position(|n| n == j))
+            .collect();
+        let q = (0..n)
+            .flat_map(|i| cols.iter().map(move |&c| i * width + c))
+            .filter_map(|k| self.q.get(k).copied())
+            .collect();
+        Ok(SampleArrays {
+            joint_names: joints.to_vec(),
+            q,
+            ..self.clone()
+        })
+    }
+
+    /// Number of rows, after checking that every column has it; `points`: the set has points
+    /// (else `points` must be empty and the joints give the count).
+    pub(crate) fn rows(&self, points: bool) -> Result<usize, DataError> {
+        let width = self.joint_names.len();
+        let n = match (points, width) {
+            (true, _) => self.points.len() / 3,
+            (false, 0) => 0,
+            (false, w) => self.q.len() / w,
+        };
+        let shape = |what: &str, len: usize, want: usize| {
+            if len == want {
+                Ok(())
+            } else {
+                Err(DataError::Content {
+                    expected: format!("{want} values in {what} ({n} rows)"),
+                    found: format!("{len}"),
+                })
+            }
+        };
+        shape(
+            "points (rows x 3)",
+            self.points.len(),
+            if points { 3 * n } else { 0 },
+        )?;
+        shape(
+            &format!("q (rows x {} joints)", self.joint_names.len()),
+            self.q.len(),
+            n * self.joint_names.len(),
+        )?;
+        for (what, len) in [
+            ("'target'", self.target.as_ref().map(Vec::len)),
+            ("'sigma'", self.sigma.as_ref().map(Vec::len)),
+            ("'config'", self.config.as_ref().map(Vec::len)),
+            ("'session'", self.session.as_ref().map(Vec::len)),
+            ("'set'", self.set.as_ref().map(Vec::len)),
+        ] {
+            if let Some(len) = len {
+                shape(what, len, n)?;
+            }
+        }
+        if n == 0 {
+            return Err(DataError::Empty { found: "no rows" });
+        }
+        Ok(n)
+    }
+}
+
+impl Measurements {
+    /// The measurement set of `arrays`, read with the units of `opts` as
+    /// [`parse_measurements_noting`] reads a file with the same columns: values converted to
+    /// metres and radians, the same refusals (a value that is not finite, a revolute joint
+    /// beyond 8π rad in radians, a coordinate beyond 100 m, a negative standard deviation, an
+    /// unknown `set`, an empty session name, control characters in a name), standard
+    /// deviations of 0 floored at [`SIGMA_FLOOR`] (the returned notes say how many).
+    /// `Sample::line` is the line the row would have in the same CSV file (row `i` at line
+    /// `i + 2`, the header being line 1), so that reports name samples as for the file.
+    ///
+    /// # Errors
+    /// Columns of different lengths, no rows, a joint named as a reserved column or twice
+    /// ([`DataError::Content`], [`DataError::ReservedJointName`],
+    /// [`DataError::DuplicateColumn`]); a bad cell: [`DataError::Array`] naming the row (0-based,
+    /// as numpy and pandas count) and the column.
+    pub fn from_arrays(
+        arrays: &SampleArrays,
+        opts: &CsvOptions,
+    ) -> Result<(Measurements, Vec<String>), DataError> {
+        let n = arrays.rows(true)?;
+        let names = &arrays.joint_names;
+        for (k, j) in names.iter().enumerate() {
+            check_name(j, 0, &format!("{}", k + 1))?;
+            if RESERVED_COLUMNS.contains(&j.as_str()) {
+                return Err(DataError::ReservedJointName {
+                    line: 0,
+                    joint: j.clone(),
+                });
+            }
+            if names[..k].contains(j) {
+                return Err(DataError::DuplicateColumn {
+                    line: 0,
+                    column: j.clone(),
+                });
+            }
+        }
+        let width = names.len();
+        let revolute: Vec<bool> = names.iter().map(|j| !opts.prismatic.contains(j)).collect();
+        let length = |v: f64| opts.length_unit.to_metres(v);
+        let mut m = Measurements {
+            joint_names: names.clone(),
+            ..Measurements::default()
+        };
+        let mut zero_sigmas = Vec::new();
+        for i in 0..n {
+            let row = i;
+            let mut q = Vec::with_capacity(width);
+            for (k, name) in names.iter().enumerate() {
+                let value = arrays.q[i * width + k];
+                q.push(joint_value(value, revolute[k], row, name, opts)?);
+            }
+            let mut point = Vector3::zeros();
+            for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
+                let value = finite(arrays.points[3 * i + k], row, axis)?;
+                if opts.length_unit == LengthUnit::Metre && value.abs() > MAX_PLAUSIBLE_METRES {
+                    return Err(array_error(
+                        row,
+                        axis,
+                        format!("a coordinate within {MAX_PLAUSIBLE_METRES} m"),
+                        format!("{value} m: looks like millimetres; pass length_unit='mm'"),
+                    ));
+                }
+                point[k] = length(value);
+                if point[k].abs() > MAX_PLAUSIBLE_METRES {
+                    return Err(array_error(
+                        row,
+                        axis,
+                        format!("a coordinate within {MAX_PLAUSIBLE_METRES} m"),
+                        format!("{value}"),
+                    ));
+                }
+            }
+            let sigma = match arrays.sigma.as_ref().map(|s| s[i]) {
+                None => None,
+                Some(v) if v.is_nan() => None,
+                Some(0.0) => {
+                    zero_sigmas.push(row);
+                    Some(Vector3::repeat(SIGMA_FLOOR))
+                }
+                Some(v) if !(v > 0.0 && v.is_finite()) => {
+                    return Err(array_error(
+                        row,
+                        "sigma",
+                        "a standard deviation > 0",
+                        format!("{v}"),
+                    ))
+                }
+                Some(v) if length(v) > MAX_PLAUSIBLE_METRES => {
+                    return Err(array_error(
+                        row,
+                        "sigma",
+                        format!("a standard deviation within {MAX_PLAUSIBLE_METRES} m"),
+                        format!("{v}"),
+                    ))
+                }
+                Some(v) => Some(Vector3::repeat(length(v))),
+            };
+            let text =
+                |col: &Option<Vec<String>>, name: &str| -> Result<Option<String>, DataError> {
+                    match col {
+                        None => Ok(None),
+                        Some(c) => {
+                            check_name(&c[i], row, name).map_err(|_| {
+                                array_error(
+                                    row,
+                                    name,
+                                    "a name without control characters",
+                                    format!("{:?}", c[i]),
+                                )
+                            })?;
+                            Ok(Some(c[i].clone()))
+                        }
+                    }
+                };
+            let target_name = text(&arrays.target, "target")?.unwrap_or(DEFAULT_TARGET.into());
+            let target = index_of(&mut m.targets, &target_name);
+            let config = text(&arrays.config, "config")?.filter(|c| !c.is_empty());
+            let split = match text(&arrays.set, "set")?.as_deref() {
+                None | Some("") => Split::Calibration,
+                Some(s) => parse_split(s).ok_or_else(|| {
+                    array_error(
+                        row,
+                        "set",
+                        "train, calibration, test or validation",
+                        format!("'{s}'"),
+                    )
+                })?,
+            };
+            let session = match text(&arrays.session, "session")? {
+                None => 0,
+                Some(s) if s.is_empty() => {
+                    return Err(array_error(
+                        row,
+                        "session",
+                        "a session name",
+                        "an empty cell",
+                    ))
+                }
+                Some(s) => index_of(&mut m.sessions, &s),
+            };
+            m.samples.push(Sample {
+                q,
+                target,
+                point,
+                sigma,
+                config,
+                split,
+                line: i + 2,
+                socket: None,
+                session,
+                orientation: None,
+            });
+        }
+        let mut notes = Vec::new();
+        if let Some(first) = zero_sigmas.first() {
+            notes.push(format!(
+                "{} sample(s) give a standard deviation of 0 (first at row {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
+                zero_sigmas.len()
+            ));
+        }
+        Ok((m, notes))
+    }
+}
+
+/// `value` if finite, else the error naming `row` and `column`.
+pub(crate) fn finite(value: f64, row: usize, column: &str) -> Result<f64, DataError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(array_error(
+            row,
+            column,
+            "a finite number",
+            format!("{value}"),
+        ))
+    }
+}
+
+/// A joint value in metres or radians, refused as the CSV reader refuses its cell.
+pub(crate) fn joint_value(
+    value: f64,
+    revolute: bool,
+    row: usize,
+    name: &str,
+    opts: &CsvOptions,
+) -> Result<f64, DataError> {
+    let value = finite(value, row, name)?;
+    if revolute && opts.angle_unit == AngleUnit::Radian && value.abs() > MAX_PLAUSIBLE_RADIANS {
+        return Err(array_error(
+            row,
+            name,
+            format!("a joint value within {MAX_PLAUSIBLE_RADIANS:.1} rad"),
+            format!("{value} rad: looks like degrees; pass angle_unit='deg'"),
+        ));
+    }
+    let (si, cap, unit) = if revolute {
+        (
+            opts.angle_unit.to_radians(value),
+            MAX_PLAUSIBLE_RADIANS,
+            "rad",
+        )
+    } else {
+        (opts.length_unit.to_metres(value), MAX_PLAUSIBLE_METRES, "m")
+    };
+    if si.abs() > cap {
+        return Err(array_error(
+            row,
+            name,
+            format!("a joint value within {cap:.1} {unit}"),
+            format!("{value}"),
+        ));
+    }
+    Ok(si)
+}
+
+/// The index of `name` in `names`, appended when new.
+fn index_of(names: &mut Vec<String>, name: &str) -> usize {
+    match names.iter().position(|n| n == name) {
+        Some(i) => i,
+        None => {
+            names.push(name.to_string());
+            names.len() - 1
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arrays() -> SampleArrays {
+        SampleArrays {
+            joint_names: vec!["j1".into(), "j2".into()],
+            q: vec![0.1, 0.2, 90.0, -45.0],
+            points: vec![1000.0, 0.0, 500.0, 1.0, 2.0, 3.0],
+            target: Some(vec!["A".into(), "B".into()]),
+            sigma: Some(vec![f64::NAN, 0.0]),
+            config: None,
+            session: None,
+            set: Some(vec!["train".into(), "test".into()]),
+        }
+    }
+
+    #[test]
+    fn converts_units_like_the_csv_reader() {
+        let opts = CsvOptions {
+            length_unit: LengthUnit::Millimetre,
+            angle_unit: AngleUnit::Degree,
+            prismatic: vec!["j2".into()],
+        };
+        let (m, notes) = Measurements::from_arrays(&arrays(), &opts).unwrap();
+        let text =
+            "j1,j2,x,y,z,target,sigma,set\n0.1,0.2,1000,0,500,A,,train\n90,-45,1,2,3,B,0,test\n";
+        let (csv, _) = parse_measurements_noting(text, &m.joint_names, &opts).unwrap();
+        assert_eq!(m.targets, csv.targets);
+        for (a, c) in m.samples.iter().zip(&csv.samples) {
+            assert_eq!(a.q, c.q);
+            assert_eq!(a.point, c.point);
+            assert_eq!(a.sigma, c.sigma);
+            assert_eq!(a.split, c.split);
+            assert_eq!(a.target, c.target);
+        }
+        assert_eq!(m.samples[1].line, csv.samples[1].line);
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].contains("first at row 1"), "{notes:?}");
+    }
+
+    /// [`arrays`] in metres and radians (plausible values in the default units).
+    fn si() -> SampleArrays {
+        let mut a = arrays();
+        a.points[0] = 1.0;
+        a.points[2] = 0.5;
+        a.q[2] = 1.0;
+        a.q[3] = -0.5;
+        a
+    }
+
+    #[test]
+    fn refuses_bad_cells_naming_row_and_column() {
+        let opts = CsvOptions::default();
+        assert!(Measurements::from_arrays(&si(), &opts).is_ok());
+        let mut a = si();
+        a.q[3] = f64::NAN;
+        let e = Measurements::from_arrays(&a, &opts).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "row 1, column 'j2': expected a finite number, found NaN"
+        );
+        let mut a = si();
+        a.q[2] = 90.0; // degrees read as radians
+        let e = Measurements::from_arrays(&a, &opts).unwrap_err();
+        assert!(e.to_string().starts_with("row 1, column 'j1': "), "{e}");
+        let mut a = si();
+        a.points[4] = f64::INFINITY;
+        let e = Measurements::from_arrays(&a, &opts).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "row 1, column 'y': expected a finite number, found inf"
+        );
+        let mut a = si();
+        a.points.pop();
+        let e = Measurements::from_arrays(&a, &opts).unwrap_err();
+        assert!(e.to_string().contains("points (rows x 3)"), "{e}");
+        let mut a = si();
+        a.set = Some(vec!["train".into(), "later".into()]);
+        let e = Measurements::from_arrays(&a, &opts).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "row 1, column 'set': expected train, calibration, test or validation, found 'later'"
+        );
+        let mut a = si();
+        a.sigma = Some(vec![-1.0, 0.1]);
+        let e = Measurements::from_arrays(&a, &opts).unwrap_err();
+        assert!(e.to_string().starts_with("row 0, column 'sigma': "), "{e}");
+    }
+}

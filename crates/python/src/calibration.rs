@@ -1,0 +1,299 @@
+//! Calibration from measured points and using its result: `calibrate`, `predict`, `compensate`,
+//! run by the `urdf-dh` library entries the command line runs (`cli::run_calibrate`,
+//! `cli::run_predict`, `cli::run_compensate`), in process and without files: measurements and
+//! joint values cross as arrays ([`ArraysIn`], read by `dh_calib::csv::SampleArrays` with the
+//! CSV reader's checks), or as a file path. Also `measured_joints` and the generic `run`.
+//!
+//! Units: the arrays are in the caller's `length_unit` and `angle_unit`; reports are in metres
+//! and radians, predicted and compensated values in the caller's units.
+
+use std::collections::HashMap;
+
+use dh_calib::csv::SampleArrays;
+use dh_core::Convention;
+use pyo3::prelude::*;
+use urdf_dh_cli::cli::{run_calibrate, run_compensate, run_predict};
+use urdf_dh_cli::commands::calibrate::{CalibrateArgs, CalibrateFormat, EffectsChoice, GivenData};
+use urdf_dh_cli::commands::compensate::CompensateArgs;
+use urdf_dh_cli::commands::predict::{FrameChoice, PredictArgs};
+use urdf_dh_cli::error::Outcome;
+use urdf_dh_cli::measured::DataUnits;
+use urdf_dh_cli::units::{AngleUnit, LengthUnit};
+
+use crate::to_py;
+
+/// Measurements or joint values from Python: the joint column names, the joint values
+/// (`rows × names`, flattened row-major), the points (`rows × 3` flattened; empty for joint
+/// values), the `sigma` column or None, and the text columns (`target`, `config`, `session`,
+/// `set`) by name.
+type ArraysIn = (
+    Vec<String>,
+    Vec<f64>,
+    Vec<f64>,
+    Option<Vec<f64>>,
+    HashMap<String, Vec<String>>,
+);
+
+/// The [`SampleArrays`] of `a`.
+///
+/// # Errors
+/// A text column that is not one of `target`, `config`, `session`, `set`.
+fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
+    let (joint_names, q, points, sigma, mut labels) = a;
+    let mut take = |k: &str| labels.remove(k);
+    let out = SampleArrays {
+        joint_names,
+        q,
+        points,
+        sigma,
+        target: take("target"),
+        config: take("config"),
+        session: take("session"),
+        set: take("set"),
+    };
+    if let Some(k) = labels.keys().next() {
+        anyhow::bail!("expected text columns target, config, session or set, found '{k}'");
+    }
+    Ok(out)
+}
+
+/// The units of `length` (`m`, `mm`) and `angle` (`rad`, `deg`).
+fn units(length: &str, angle: &str) -> anyhow::Result<DataUnits> {
+    Ok(DataUnits {
+        length: match length {
+            "m" => LengthUnit::M,
+            "mm" => LengthUnit::Mm,
+            other => anyhow::bail!("length_unit: expected 'm' or 'mm', found '{other}'"),
+        },
+        angle: match angle {
+            "rad" => AngleUnit::Rad,
+            "deg" => AngleUnit::Deg,
+            other => anyhow::bail!("angle_unit: expected 'rad' or 'deg', found '{other}'"),
+        },
+    })
+}
+
+/// A number option checked by the command line's own guard of it (`guard`), the error naming
+/// the Python argument `name`.
+fn guarded<T>(
+    name: &str,
+    value: Option<String>,
+    guard: fn(&str) -> Result<T, String>,
+) -> anyhow::Result<Option<T>> {
+    value
+        .map(|v| guard(&v).map_err(|e| anyhow::anyhow!("{name}: {e}")))
+        .transpose()
+}
+
+/// Runs `go` with in-memory standard output and error; returns both as text and the outcome.
+fn captured(
+    go: impl FnOnce(&mut Vec<u8>, &mut Vec<u8>) -> anyhow::Result<Outcome>,
+) -> anyhow::Result<(String, String, bool)> {
+    let (mut out, mut err) = (Vec::new(), Vec::new());
+    let outcome = go(&mut out, &mut err)?;
+    Ok((
+        String::from_utf8_lossy(&out).into_owned(),
+        String::from_utf8_lossy(&err).into_owned(),
+        outcome == Outcome::Differs,
+    ))
+}
+
+/// Fits `model` (None: circle-point analysis of the data) to measurements as
+/// `urdf-dh calibrate --format json --quiet` does; `data` (`validate`) are arrays, or None to
+/// read the file `data_name` (`validate_name`), which otherwise only names them in messages.
+/// Returns the JSON report, the warnings (`urdf-dh: warning:` lines) and whether the model
+/// written to `out` failed its proof (then nothing was written).
+#[pyfunction]
+#[pyo3(signature = (model, data_name, data, validate_name, validate, base, tip, effects, max_effects, targets, sigma, folds, keep_outliers, inertials, length_unit, angle_unit, out))]
+#[allow(clippy::too_many_arguments)]
+fn calibrate(
+    py: Python<'_>,
+    model: Option<String>,
+    data_name: String,
+    data: Option<ArraysIn>,
+    validate_name: Option<String>,
+    validate: Option<ArraysIn>,
+    base: Option<String>,
+    tip: Option<String>,
+    effects: Option<String>,
+    max_effects: Option<String>,
+    targets: Vec<String>,
+    sigma: Option<String>,
+    folds: Option<String>,
+    keep_outliers: bool,
+    inertials: Option<String>,
+    length_unit: &str,
+    angle_unit: &str,
+    out: Option<String>,
+) -> PyResult<(String, String, bool)> {
+    let go = || -> anyhow::Result<(String, String, bool)> {
+        use urdf_dh_cli::guard;
+        let given = match data {
+            Some(d) => Some(GivenData {
+                data: arrays(d)?,
+                validate: validate.map(arrays).transpose()?,
+            }),
+            None => None,
+        };
+        let args = CalibrateArgs {
+            model,
+            base,
+            tip,
+            convention: Convention::Standard,
+            data: data_name,
+            validate: validate_name,
+            units: units(length_unit, angle_unit)?,
+            effects: effects
+                .as_deref()
+                .map_or(Ok(EffectsChoice::None), str::parse)
+                .map_err(|e: String| anyhow::anyhow!("effects: {e}"))?,
+            targets,
+            sigma: guarded("sigma", sigma, guard::sigma)?,
+            folds: guarded("folds", folds, guard::folds)?.unwrap_or(5),
+            format: CalibrateFormat::Json,
+            out,
+            plot: None,
+            inertials,
+            gravity: None,
+            payload: None,
+            max_effects: guarded("max_effects", max_effects, guard::max_effects)?.unwrap_or(12),
+            keep_outliers,
+            quiet: true,
+            given,
+        };
+        captured(|o, e| run_calibrate(&args, o, e))
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
+/// The frame of `name` (`device`, `base`).
+fn frame(name: Option<&str>) -> anyhow::Result<Option<FrameChoice>> {
+    match name {
+        None => Ok(None),
+        Some("device") => Ok(Some(FrameChoice::Device)),
+        Some("base") => Ok(Some(FrameChoice::Base)),
+        Some(other) => anyhow::bail!("frame: expected 'device' or 'base', found '{other}'"),
+    }
+}
+
+/// A calibrated model's target positions or tool poses at joint values as `urdf-dh predict`
+/// computes them; `joints` are arrays, or None to read the file `joints_name`. Returns the CSV
+/// text `predict` writes and its standard error (the summary and warnings).
+#[pyfunction]
+#[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit))]
+#[allow(clippy::too_many_arguments)]
+fn predict(
+    py: Python<'_>,
+    model: String,
+    joints_name: String,
+    joints: Option<ArraysIn>,
+    base: Option<String>,
+    tip: Option<String>,
+    targets: Vec<String>,
+    frame_name: Option<String>,
+    session: Option<String>,
+    length_unit: &str,
+    angle_unit: &str,
+) -> PyResult<(String, String)> {
+    let go = || -> anyhow::Result<(String, String)> {
+        let args = PredictArgs {
+            model,
+            base,
+            tip,
+            joints: joints_name,
+            targets,
+            frame: frame(frame_name.as_deref())?,
+            session,
+            units: units(length_unit, angle_unit)?,
+            out: None,
+            given: joints.map(arrays).transpose()?,
+        };
+        let (out, err, _) = captured(|o, e| run_predict(&args, o, e))?;
+        Ok((out, err))
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
+/// Corrected joint values as `urdf-dh compensate` computes them; `joints` are arrays, or None to
+/// read the file `joints_name`. Returns the CSV text `compensate` writes and its standard error
+/// (the summary, and one indented line per pose it could not compensate).
+#[pyfunction]
+#[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit))]
+#[allow(clippy::too_many_arguments)]
+fn compensate(
+    py: Python<'_>,
+    nominal: String,
+    model: String,
+    joints_name: String,
+    joints: Option<ArraysIn>,
+    base: Option<String>,
+    tip: Option<String>,
+    position_only: bool,
+    max_change: Option<String>,
+    length_unit: &str,
+    angle_unit: &str,
+) -> PyResult<(String, String)> {
+    let go = || -> anyhow::Result<(String, String)> {
+        let args = CompensateArgs {
+            nominal,
+            base,
+            tip,
+            model,
+            joints: joints_name,
+            position_only,
+            max_change: guarded("max_change", max_change, urdf_dh_cli::guard::max_change)?
+                .unwrap_or(dh_calib::compensate::DEFAULT_MAX_CHANGE),
+            units: units(length_unit, angle_unit)?,
+            out: None,
+            given: joints.map(arrays).transpose()?,
+        };
+        let (out, err, _) = captured(|o, e| run_compensate(&args, o, e))?;
+        Ok((out, err))
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
+/// Runs one `urdf-dh` command in process (its arguments after the program name) and returns
+/// its standard output, standard error and whether it exited 1 (a difference found, a pose not
+/// compensated); an error is raised with the command's message and hint.
+#[pyfunction]
+fn run(py: Python<'_>, argv: Vec<String>) -> PyResult<(String, String, bool)> {
+    let go = || {
+        let args = std::iter::once("urdf-dh".to_string()).chain(argv);
+        captured(|o, e| urdf_dh_cli::cli::run_command(args, o, e))
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
+/// The joint columns a measurement or joint-value file needs for `model`, in row order (mimic
+/// and coupled rows follow theirs).
+#[pyfunction]
+#[pyo3(signature = (model, base=None, tip=None))]
+fn measured_joints(
+    py: Python<'_>,
+    model: &str,
+    base: Option<String>,
+    tip: Option<String>,
+) -> PyResult<Vec<String>> {
+    let go = || -> anyhow::Result<Vec<String>> {
+        let m = dh_sheet::model::load_model(
+            model,
+            base.as_deref(),
+            tip.as_deref(),
+            Convention::Standard,
+        )?;
+        Ok(m.measured_joints())
+    };
+    py.detach(go).map_err(|e| to_py(py, e))
+}
+
+/// Adds this module's functions and constants to the native module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(predict, m)?)?;
+    m.add_function(wrap_pyfunction!(compensate, m)?)?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(measured_joints, m)?)?;
+    m.add("RESERVED_COLUMNS", dh_calib::csv::RESERVED_COLUMNS.to_vec())?;
+    Ok(())
+}

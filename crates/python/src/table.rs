@@ -1,0 +1,236 @@
+//! Extraction (`extract`, with the proof of the YAML it writes) and `check`'s comparison of a
+//! URDF chain with a sheet; [`NativeTable`] is the extracted table.
+
+use anyhow::Context;
+use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
+use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
+use dh_sheet::input::{display_name, read_robot};
+use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
+use pyo3::prelude::*;
+use urdf_dh_cli::commands::extract::{
+    load_chain_bytes, prove_extracted, run_extract_bytes, ExtractArgs,
+};
+use urdf_dh_cli::input::read_text;
+
+use crate::to_py;
+
+/// A 4x4 homogeneous matrix, row-major.
+type Matrix = [[f64; 4]; 4];
+
+/// Name of URDF text passed as a string, in error messages.
+const XML_NAME: &str = "<string>";
+
+/// The URDF bytes and their display name: XML text as given, or the file at `path`.
+fn robot_bytes(source: &str, is_xml: bool) -> anyhow::Result<(Vec<u8>, String)> {
+    if is_xml {
+        Ok((source.as_bytes().to_vec(), XML_NAME.to_string()))
+    } else {
+        Ok((read_robot(source)?, display_name(source)))
+    }
+}
+
+fn convention(name: &str) -> anyhow::Result<Convention> {
+    match name {
+        "standard" => Ok(Convention::Standard),
+        "modified" => Ok(Convention::Modified),
+        other => anyhow::bail!("convention: expected 'standard' or 'modified', found '{other}'"),
+    }
+}
+
+fn homogeneous(iso: &nalgebra::Isometry3<f64>) -> Matrix {
+    let m = iso.to_homogeneous();
+    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
+}
+
+/// One row as a tuple: name, type, a, alpha, d, theta, lower, upper, mimic (joint, multiplier,
+/// offset) or None. Metres and radians.
+type RowTuple = (
+    String,
+    &'static str,
+    f64,
+    f64,
+    f64,
+    f64,
+    Option<f64>,
+    Option<f64>,
+    Option<(String, f64, f64)>,
+);
+
+/// An extracted DH table with its verification and the YAML sheet the CLI writes.
+#[pyclass(frozen, module = "urdf_dh._native")]
+struct NativeTable {
+    table: DhTable,
+    yaml: String,
+    sheet_json: String,
+    verification_json: String,
+    warnings: Vec<String>,
+}
+
+#[pymethods]
+impl NativeTable {
+    /// Rows as tuples (see `RowTuple`).
+    fn rows(&self) -> Vec<RowTuple> {
+        self.table
+            .rows
+            .iter()
+            .map(|r| {
+                (
+                    r.name.clone(),
+                    match r.kind {
+                        JointKind::Revolute => "revolute",
+                        JointKind::Prismatic => "prismatic",
+                    },
+                    r.a,
+                    r.alpha,
+                    r.d,
+                    r.theta,
+                    r.limits.map(|l| l.lower),
+                    r.limits.map(|l| l.upper),
+                    r.mimic
+                        .as_ref()
+                        .map(|m| (m.joint.clone(), m.multiplier, m.offset)),
+                )
+            })
+            .collect()
+    }
+
+    /// DH frame 0 in the base link frame.
+    fn base(&self) -> Matrix {
+        homogeneous(&self.table.base)
+    }
+
+    /// The tip link frame in the last DH frame.
+    fn tool(&self) -> Matrix {
+        homogeneous(&self.table.tool)
+    }
+
+    /// `standard` or `modified`.
+    fn convention(&self) -> &'static str {
+        match self.table.convention {
+            Convention::Standard => "standard",
+            Convention::Modified => "modified",
+        }
+    }
+
+    /// The YAML text `urdf-dh extract --format yaml` writes, verification included.
+    fn yaml(&self) -> &str {
+        &self.yaml
+    }
+
+    /// The same sheet as JSON (the keys of `--format json`).
+    fn sheet_json(&self) -> &str {
+        &self.sheet_json
+    }
+
+    /// The verification of the YAML as written, as JSON.
+    fn verification_json(&self) -> &str {
+        &self.verification_json
+    }
+
+    /// Extraction warnings (near-degenerate pairs and the like).
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// Forward kinematics: the tip link in the base link frame at joint values `q` (one per
+    /// row, radians or metres).
+    fn fk(&self, py: Python<'_>, q: Vec<f64>) -> PyResult<Matrix> {
+        self.table
+            .fk(&q)
+            .map(|t| homogeneous(&t))
+            .map_err(|e| to_py(py, anyhow::Error::new(e).context("fk")))
+    }
+}
+
+/// Extracts the DH table of a URDF chain and proves the YAML sheet it writes, as
+/// `urdf-dh extract --format yaml` does.
+#[pyfunction]
+#[pyo3(signature = (source, is_xml, base, tip, convention_name, samples, seed, linear, angular))]
+#[allow(clippy::too_many_arguments)]
+fn extract(
+    py: Python<'_>,
+    source: &str,
+    is_xml: bool,
+    base: Option<String>,
+    tip: Option<String>,
+    convention_name: &str,
+    samples: usize,
+    seed: u64,
+    linear: f64,
+    angular: f64,
+) -> PyResult<NativeTable> {
+    let run = || -> anyhow::Result<NativeTable> {
+        let (bytes, name) = robot_bytes(source, is_xml)?;
+        let args = ExtractArgs {
+            path: source.to_string(),
+            base,
+            tip,
+            convention: convention(convention_name)?,
+            format: Format::Yaml,
+            length_unit: LengthUnit::M,
+            angle_unit: AngleUnit::Rad,
+            tolerance: Tolerance::new(linear, angular)?,
+            samples: Some(samples),
+            seed,
+            svg: None,
+            q: None,
+        };
+        let mut ex = run_extract_bytes(&bytes, &name, &args)?;
+        let (yaml, _passed) = prove_extracted(&mut ex, Format::Yaml, samples, seed)?;
+        let verification = ex
+            .sheet
+            .verification
+            .as_ref()
+            .context("the proof attached no verification")?;
+        // The table Python sees is the proved artefact: the YAML read back (1e-12 m / rad), not
+        // the numbers in memory.
+        let table = Sheet::parse(&yaml, "written output")?.table;
+        let Extraction { warnings, .. } = ex.extraction;
+        Ok(NativeTable {
+            yaml,
+            sheet_json: serde_json::to_string(&ex.sheet)?,
+            verification_json: serde_json::to_string(verification)?,
+            warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            table,
+        })
+    };
+    py.detach(run).map_err(|e| to_py(py, e))
+}
+
+/// Compares a URDF chain with a DH sheet file as `urdf-dh check --format json` does; returns
+/// the report as JSON text.
+#[pyfunction]
+#[pyo3(signature = (source, is_xml, sheet, base, tip, linear=CHECK_LINEAR, angular=CHECK_ANGULAR))]
+#[allow(clippy::too_many_arguments)]
+fn check(
+    py: Python<'_>,
+    source: &str,
+    is_xml: bool,
+    sheet: &str,
+    base: Option<String>,
+    tip: Option<String>,
+    linear: f64,
+    angular: f64,
+) -> PyResult<String> {
+    let run = || -> anyhow::Result<String> {
+        let (bytes, name) = robot_bytes(source, is_xml)?;
+        let (_, chain) = load_chain_bytes(&bytes, &name, base.as_deref(), tip.as_deref())?;
+        let sheet_name = display_name(sheet);
+        let sheet = Sheet::parse(&read_text(sheet)?, &sheet_name)?;
+        let report = compare(&chain, &sheet, Tolerance::new(linear, angular)?)?;
+        Ok(serde_json::to_string(&report)?)
+    };
+    py.detach(run).map_err(|e| to_py(py, e))
+}
+
+/// Adds this module's class, functions and constants to the native module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<NativeTable>()?;
+    m.add_function(wrap_pyfunction!(extract, m)?)?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add("CHECK_LINEAR", CHECK_LINEAR)?;
+    m.add("CHECK_ANGULAR", CHECK_ANGULAR)?;
+    m.add("DEFAULT_LINEAR", Tolerance::DEFAULT_LINEAR)?;
+    m.add("DEFAULT_ANGULAR", Tolerance::DEFAULT_ANGULAR)?;
+    Ok(())
+}
