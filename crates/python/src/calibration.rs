@@ -104,7 +104,7 @@ fn captured(
 /// Returns the JSON report, the warnings (`urdf-dh: warning:` lines) and whether the model
 /// written to `out` failed its proof (then nothing was written).
 #[pyfunction]
-#[pyo3(signature = (model, data_name, data, validate_name, validate, base, tip, effects, max_effects, targets, sigma, folds, keep_outliers, inertials, length_unit, angle_unit, out))]
+#[pyo3(signature = (model, data_name, data, validate_name, validate, base, tip, effects, max_effects, alpha, targets, sigma, folds, keep_outliers, inertials, length_unit, angle_unit, out))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate(
     py: Python<'_>,
@@ -117,6 +117,7 @@ fn calibrate(
     tip: Option<String>,
     effects: Option<String>,
     max_effects: Option<String>,
+    alpha: Option<String>,
     targets: Vec<String>,
     sigma: Option<String>,
     folds: Option<String>,
@@ -157,6 +158,8 @@ fn calibrate(
             gravity: None,
             payload: None,
             max_effects: guarded("max_effects", max_effects, guard::max_effects)?.unwrap_or(12),
+            alpha: guarded("alpha", alpha, guard::alpha)?
+                .unwrap_or(dh_calib::findings::DEFAULT_ALPHA),
             keep_outliers,
             quiet: true,
             given,

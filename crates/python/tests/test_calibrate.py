@@ -176,3 +176,15 @@ def test_predict_takes_each_rows_session_frame(tmp_path):
     assert np.min(err[s1]) > 100 * NOISE
     with pytest.raises(urdf_dh.UrdfDhError, match="expected one of 's2'"):
         urdf_dh.predict(out, measured, session="s9")
+
+
+def test_alpha_sets_the_level_of_the_selection_and_is_checked(sets):
+    _, data, _ = sets
+    r = urdf_dh.calibrate(UR5, data, effects="auto", sigma=NOISE, alpha=0.05)
+    doc = r.to_dict()
+    assert doc["diagnosis"]["alpha"] == 0.05
+    assert doc["verdict"]["alpha"] == 0.05
+    assert urdf_dh.calibrate(UR5, data, effects="auto", sigma=NOISE).to_dict()["diagnosis"]["alpha"] == 0.01
+    for bad in (0.0, 0.7, float("nan")):
+        with pytest.raises(urdf_dh.UrdfDhError, match="alpha"):
+            urdf_dh.calibrate(UR5, data, effects="auto", alpha=bad)

@@ -66,6 +66,7 @@ def calibrate(
     tip: Optional[str],
     effects: Optional[str],
     max_effects: Optional[str],
+    alpha: Optional[str],
     targets: List[str],
     sigma: Optional[str],
     folds: Optional[str],

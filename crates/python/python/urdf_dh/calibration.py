@@ -221,6 +221,7 @@ def calibrate(
     tip: Optional[str] = None,
     effects: Union[None, str, Sequence[str]] = None,
     max_effects: Optional[int] = None,
+    alpha: Optional[float] = None,
     targets: Optional[Sequence[str]] = None,
     sigma: Optional[float] = None,
     folds: Optional[int] = None,
@@ -240,6 +241,8 @@ def calibrate(
             arrays (no file); with model None a DataFrame's non-reserved columns are the joints.
         validate: validation measurements, same forms (a file only beside a file).
         effects: None, ``"auto"``, or effect labels (``["gear_ratio:elbow_joint"]``).
+        alpha: level of the effect selection's tests and of the final verdict, in (0, 0.5]
+            (default 0.01, ``--alpha``).
         out: write the calibrated model there (a sheet, or a URDF for ``.urdf``), proved as
             written; :func:`predict` and :func:`compensate` read it.
         The other options are the CLI's (``--sigma`` in ``length_unit``, ...).
@@ -278,6 +281,7 @@ def calibrate(
         tip,
         effects_text,
         None if max_effects is None else str(int(max_effects)),
+        None if alpha is None else repr(float(alpha)),
         list(targets or []),
         None if sigma is None else repr(float(sigma)),
         None if folds is None else str(int(folds)),
