@@ -672,13 +672,19 @@ fn long_chain(n: usize) -> String {
     s
 }
 
+/// The fastest of three runs (a shared machine's load only ever adds time) and the output.
 fn timed_extract(urdf: &str) -> (Duration, String) {
-    let start = Instant::now();
-    let out = run(
-        &["extract", "-", "--format", "csv", "--samples", "10"],
-        Some(urdf.as_bytes()),
-    );
-    (start.elapsed(), out)
+    let mut best = Duration::MAX;
+    let mut out = String::new();
+    for _ in 0..3 {
+        let start = Instant::now();
+        out = run(
+            &["extract", "-", "--format", "csv", "--samples", "10"],
+            Some(urdf.as_bytes()),
+        );
+        best = best.min(start.elapsed());
+    }
+    (best, out)
 }
 
 /// An endless input (`extract - < /dev/zero`) is cut at the size limit with a clear error, not
