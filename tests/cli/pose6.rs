@@ -122,3 +122,94 @@ fn bad_orientations_exit_2_naming_file_line_and_column() {
         "{err}"
     );
 }
+
+/// The truth file gives every 6-DoF target's rotation, and the report the estimated one, both
+/// as URDF roll-pitch-yaw of the target's frame in the tip frame: with no geometric error
+/// planted (nothing for the targets to absorb), they agree to the noise.
+#[test]
+fn target_rotations_are_in_the_truth_and_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("r.csv").to_string_lossy().into_owned();
+    let truth_path = dir.path().join("r.truth.yaml");
+    ok(&[
+        "simulate",
+        "--model",
+        MODEL,
+        "--poses",
+        "120",
+        "--noise",
+        "20e-6",
+        "--orientation-noise",
+        "50e-6",
+        "--targets",
+        "2",
+        "--seed",
+        "3",
+        "--out",
+        &data,
+    ]);
+    let truth: serde_yaml::Value =
+        serde_yaml::from_str(&std::fs::read_to_string(&truth_path).unwrap()).unwrap();
+    let report: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        MODEL,
+        "--data",
+        &data,
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    let targets = report["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), 2);
+    for (k, t) in targets.iter().enumerate() {
+        let true_t = &truth["truth"]["targets"][k];
+        assert_eq!(t["name"].as_str(), true_t["name"].as_str());
+        for a in 0..3 {
+            let (est, tru) = (
+                t["rpy"][a].as_f64().unwrap(),
+                true_t["rpy"][a].as_f64().unwrap(),
+            );
+            // 240 poses at 50 µrad per axis: the frame is known to a few µrad; 1e-4 rad is
+            // twice the single-pose noise.
+            assert!(
+                (est - tru).abs() < 1e-4,
+                "{}: rpy[{a}] {est} vs {tru}",
+                t["name"]
+            );
+            let (est, tru) = (
+                t["xyz"][a].as_f64().unwrap(),
+                true_t["xyz"][a].as_f64().unwrap(),
+            );
+            assert!(
+                (est - tru).abs() < 2e-5,
+                "{}: xyz[{a}] {est} vs {tru}",
+                t["name"]
+            );
+        }
+    }
+    // A point set has no rotations, in the truth or the report.
+    let points = dir.path().join("p.csv").to_string_lossy().into_owned();
+    ok(&[
+        "simulate", "--model", MODEL, "--poses", "30", "--out", &points,
+    ]);
+    let report: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        MODEL,
+        "--data",
+        &points,
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    assert!(report["targets"][0].get("rpy").is_none());
+    let truth: serde_yaml::Value =
+        serde_yaml::from_str(&std::fs::read_to_string(dir.path().join("p.truth.yaml")).unwrap())
+            .unwrap();
+    let target = &truth["truth"]["targets"][0];
+    assert!(
+        target.get("xyz").is_some() && target.get("rpy").is_none(),
+        "{target:?}"
+    );
+}

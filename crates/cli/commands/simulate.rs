@@ -379,7 +379,12 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
                 .map(|s| (data.session_name(s), PoseSi::of(&truth.sessions[s])))
                 .collect()
         },
-        targets: TargetDoc::list(&truth.targets),
+        targets: if args.orientation_noise.is_some() {
+            let rotations: Vec<_> = truth.target_rotations.iter().copied().map(Some).collect();
+            TargetDoc::list_with(&truth.targets, &rotations)
+        } else {
+            TargetDoc::list(&truth.targets)
+        },
         errors: truth.errors.clone(),
         effects: applied,
     };

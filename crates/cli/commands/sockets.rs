@@ -260,19 +260,11 @@ fn written_table(r: &SocketReport) -> (DhTable, Vec<TargetDoc>) {
                 vec![TargetDoc {
                     name: name.clone(),
                     xyz: [0.0; 3],
+                    rpy: None,
                 }],
             )
         }
-        targets => (
-            table,
-            targets
-                .iter()
-                .map(|(n, p)| TargetDoc {
-                    name: n.clone(),
-                    xyz: [p.x, p.y, p.z],
-                })
-                .collect(),
-        ),
+        targets => (table, TargetDoc::list(targets)),
     }
 }
 

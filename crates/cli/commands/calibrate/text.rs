@@ -251,10 +251,15 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
     for t in &doc.targets {
         let _ = writeln!(
             s,
-            "target {} (tip frame): xyz [{}] {}",
+            "target {} (tip frame): xyz [{}] {}{}",
             t.name,
             lu.symbol(),
-            xyz(t.xyz)
+            xyz(t.xyz),
+            t.rpy.map_or(String::new(), |r| format!(
+                "  rpy [{}] {}",
+                units.angle.symbol(),
+                rpy(r)
+            ))
         );
     }
     if !doc.candidates.is_empty() {

@@ -199,6 +199,9 @@ pub struct Report {
     pub sessions: Vec<crate::sessions::SessionReport>,
     /// Estimated target positions in the tip frame.
     pub targets: Vec<(String, Vector3<f64>)>,
+    /// Estimated rotation of each target's frame in the tip frame, for targets measured as
+    /// 6-DoF poses (`None` for a point target), in the order of `targets`.
+    pub target_rotations: Vec<Option<nalgebra::UnitQuaternion<f64>>>,
     /// Remarks for the user (unused targets, approximations).
     pub notes: Vec<String>,
     /// For a tree: the calibrated tree (its trunk is `calibrated`); `None` for a serial robot.

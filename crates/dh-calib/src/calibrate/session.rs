@@ -517,6 +517,13 @@ impl<'a> Session<'a> {
             targets: (0..model.targets().len())
                 .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
                 .collect(),
+            target_rotations: (0..model.targets().len())
+                .map(|k| {
+                    model
+                        .target_orientation(k)
+                        .map(|_| model.target_rotation_at(&x, k))
+                })
+                .collect(),
             notes,
             tree: (!tree.branches().is_empty()).then_some(tree),
             candidates: vec![],

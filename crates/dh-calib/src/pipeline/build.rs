@@ -131,7 +131,7 @@ impl CalibrationDoc {
             candidates: report.candidates.iter().map(CandidateDoc::from).collect(),
             device: PoseSi::of(&report.device),
             sessions: session_docs(report),
-            targets: TargetDoc::list(&report.targets),
+            targets: TargetDoc::list_with(&report.targets, &report.target_rotations),
             notes: report.notes.clone(),
             written: None,
             outliers,

@@ -147,6 +147,10 @@ pub struct TargetDoc {
     pub name: String,
     /// Position in the tip frame (metres).
     pub xyz: [f64; 3],
+    /// For a target measured as a 6-DoF pose: its frame's rotation in the tip frame as URDF
+    /// roll, pitch, yaw (radians); absent for a point target.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rpy: Option<[f64; 3]>,
 }
 
 impl TargetDoc {
@@ -157,8 +161,25 @@ impl TargetDoc {
             .map(|(n, p)| TargetDoc {
                 name: n.clone(),
                 xyz: [p.x, p.y, p.z],
+                rpy: None,
             })
             .collect()
+    }
+
+    /// [`TargetDoc::list`] with each target's rotation in the tip frame where it has one
+    /// (`rotations` in the same order; missing entries are point targets).
+    pub fn list_with(
+        targets: &[(String, nalgebra::Vector3<f64>)],
+        rotations: &[Option<nalgebra::UnitQuaternion<f64>>],
+    ) -> Vec<TargetDoc> {
+        let mut docs = Self::list(targets);
+        for (d, r) in docs.iter_mut().zip(rotations) {
+            d.rpy = r.map(|q| {
+                let (roll, pitch, yaw) = q.euler_angles();
+                [roll, pitch, yaw]
+            });
+        }
+        docs
     }
 }
 
