@@ -132,6 +132,15 @@ pub struct OutlierReport {
 }
 
 impl OutlierReport {
+    /// The flagged calibration samples (indices into the data), not the validation ones.
+    pub fn flagged_calibration(&self) -> BTreeSet<usize> {
+        self.outliers
+            .iter()
+            .filter(|o| !o.validation)
+            .map(|o| o.sample)
+            .collect()
+    }
+
     /// `data` without the flagged samples.
     pub fn without(&self, data: &Measurements) -> Measurements {
         let drop: BTreeSet<usize> = self.outliers.iter().map(|o| o.sample).collect();

@@ -87,6 +87,22 @@ pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<Sampl
     crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
 }
 
+/// The places in `data`'s whole sequence `full` ([`sequence_of`]) of the samples `keep`
+/// keeps, in order: the sequence of `data.filtered(keep)`, whose left-out samples were still
+/// visited.
+pub(crate) fn kept_sequence(
+    full: &[SampleContext],
+    data: &Measurements,
+    keep: impl Fn(usize, &crate::data::Sample) -> bool,
+) -> Vec<SampleContext> {
+    full.iter()
+        .zip(&data.samples)
+        .enumerate()
+        .filter(|(i, (_, s))| keep(*i, s))
+        .map(|(_, (c, _))| c.clone())
+        .collect()
+}
+
 /// What sample `s` measured: a point, or with an orientation a target pose whose angle is
 /// weighed by `σ_position / σ_rotation` (metres per radian, `σ_position` the RMS of the
 /// sample's per-axis sigma; see [`Observation::TargetPose`]).

@@ -127,12 +127,10 @@ pub(crate) fn fitted_session<'a>(
     drop(session);
     let dropped: std::collections::BTreeSet<usize> =
         scan.outliers.iter().map(|o| o.sample).collect();
-    let sequence: Vec<SampleContext> = sequence_of(&rows_of(tree, data)?, data)
-        .into_iter()
-        .enumerate()
-        .filter(|(i, _)| !dropped.contains(i))
-        .map(|(_, c)| c)
-        .collect();
+    let sequence =
+        crate::prepare::kept_sequence(&sequence_of(&rows_of(tree, data)?, data), data, |i, _| {
+            !dropped.contains(&i)
+        });
     let cleaned = scan.without(data);
     let mut session = Session::new(tree, &cleaned, options, effects, Some(&sequence))?;
     let geo = session.geometric()?;

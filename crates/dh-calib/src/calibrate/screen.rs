@@ -140,22 +140,17 @@ pub(crate) fn screen_from(
                 // The data themselves while nothing is left out and all are calibration
                 // samples (no copy of millions of samples), else the calibration samples not
                 // flagged.
-                let kept =
-                    if flagged.is_empty() && nv == 0 {
-                        std::borrow::Cow::Borrowed(data)
-                    } else {
-                        std::borrow::Cow::Owned(data.filtered(|i, s| {
-                            s.split == Split::Calibration && !flagged.contains(&i)
-                        }))
-                    };
-                let kept_sequence: Option<Vec<SampleContext>> = sequence.as_ref().map(|c| {
-                    c.iter()
-                        .zip(&data.samples)
-                        .enumerate()
-                        .filter(|(i, (_, s))| s.split == Split::Calibration && !flagged.contains(i))
-                        .map(|(_, (c, _))| c.clone())
-                        .collect()
-                });
+                let keep = |i: usize, s: &crate::data::Sample| {
+                    s.split == Split::Calibration && !flagged.contains(&i)
+                };
+                let kept = if flagged.is_empty() && nv == 0 {
+                    std::borrow::Cow::Borrowed(data)
+                } else {
+                    std::borrow::Cow::Owned(data.filtered(keep))
+                };
+                let kept_sequence = sequence
+                    .as_ref()
+                    .map(|full| crate::prepare::kept_sequence(full, data, keep));
                 let mut session = Session::new(
                     tree,
                     &kept,

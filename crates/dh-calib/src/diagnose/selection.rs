@@ -77,13 +77,10 @@ pub fn diagnose_tree(
             .collect()
     };
     let left_out = |r: &Report| -> Option<BTreeSet<usize>> {
-        r.outliers.as_ref().filter(|s| !s.kept).map(|s| {
-            s.outliers
-                .iter()
-                .filter(|o| !o.validation)
-                .map(|o| o.sample)
-                .collect()
-        })
+        r.outliers
+            .as_ref()
+            .filter(|s| !s.kept)
+            .map(|s| s.flagged_calibration())
     };
     let first_count = left_out(&report).map_or(0, |b| b.len());
     let mut passes = 0;
@@ -98,13 +95,7 @@ pub fn diagnose_tree(
         }
         let again =
             crate::calibrate::screen_from(tree, data, options, None, &effects, Some(&before))?;
-        let now: BTreeSet<usize> = again
-            .outliers
-            .iter()
-            .filter(|o| !o.validation)
-            .map(|o| o.sample)
-            .collect();
-        if now == before {
+        if again.flagged_calibration() == before {
             confirmed = Some(labels(&effects).join(", "));
             break;
         }
