@@ -9,12 +9,13 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-use dh_calib::compensate::{compensate as solve, CompensateOptions};
+use dh_calib::compensate::CompensateOptions;
 use dh_core::Convention;
+use dh_sheet::compensate::same_joints;
 
-use crate::calibrated::{load_calibrated, CalibratedModel};
+use crate::calibrated::load_calibrated;
 use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
-use crate::error::{hinted, Outcome};
+use crate::error::Outcome;
 use crate::input::display_name;
 use crate::measured::{load_model, DataUnits};
 use crate::units::{AngleUnit, LengthUnit};
@@ -106,35 +107,6 @@ impl CompensateCli {
     }
 }
 
-/// Refuses a calibrated model whose joints are not the nominal model's.
-fn same_joints(
-    nominal: &dh_core::DhTable,
-    calibrated: &CalibratedModel,
-    origins: (&str, &str),
-) -> Result<()> {
-    let a: Vec<&str> = nominal.rows.iter().map(|r| r.name.as_str()).collect();
-    let b: Vec<&str> = calibrated
-        .loaded
-        .table
-        .rows
-        .iter()
-        .map(|r| r.name.as_str())
-        .collect();
-    if a != b {
-        return Err(hinted(
-            format!(
-                "{} and {} have different joints: {} against {}",
-                origins.0,
-                origins.1,
-                a.iter().map(|n| format!("'{}'", crate::guard::escape(n))).collect::<Vec<_>>().join(", "),
-                b.iter().map(|n| format!("'{}'", crate::guard::escape(n))).collect::<Vec<_>>().join(", ")
-            ),
-            "give the model the calibration started from as --nominal (with --base/--tip for a URDF)",
-        ));
-    }
-    Ok(())
-}
-
 /// Runs `compensate`. Exit 1 when a pose cannot be compensated (no convergence, or joint
 /// values beyond their limits), naming each.
 ///
@@ -196,60 +168,17 @@ pub fn compensate(
         (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut sum_before = 0.0;
     let mut sum_after = 0.0;
-    for row in &input.rows {
-        let goal = nominal.table.fk(&model.joints.rows(&row.q))?;
-        let c = solve(&model.calibrated, &model.joints, &goal, &row.q, &options);
-        let config = row
-            .config
-            .clone()
-            .unwrap_or_else(|| format!("line{}", row.line));
-        let mut why: Option<String> = None;
-        if !c.converged && !c.at_max_change.is_empty() {
-            why = Some(format!(
-                "needs more than --max-change {} (rad or m) of {} (a singular pose?): {:.3e} {} and {:.3e} {} remain at that bound",
-                args.max_change,
-                c.at_max_change
-                    .iter()
-                    .map(|&i| format!("'{}'", crate::guard::escape(&model.joints.columns[i])))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                c.position_error / lu.metres(),
-                lu.symbol(),
-                c.orientation_error / au.radians(),
-                au.symbol()
-            ));
-        } else if c.stalled {
-            why = Some(format!(
-                "beyond the calibrated robot's reach from the commanded values: the nearest pose leaves {:.3e} {} and {:.3e} {}",
-                c.position_error / lu.metres(),
-                lu.symbol(),
-                c.orientation_error / au.radians(),
-                au.symbol()
-            ));
-        } else if !c.converged {
-            why = Some(format!(
-                "no convergence after {} iterations (a singular pose?), {:.3e} {} and {:.3e} {} remain",
-                c.iterations,
-                c.position_error / lu.metres(),
-                lu.symbol(),
-                c.orientation_error / au.radians(),
-                au.symbol()
-            ));
-        } else if !c.beyond_limits.is_empty() {
-            why = Some(format!(
-                "beyond the limits of {}",
-                c.beyond_limits
-                    .iter()
-                    .map(|n| format!("'{}'", crate::guard::escape(n)))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        if let Some(why) = why {
+    let rows = dh_sheet::compensate::compensate(&nominal.table, &model, &input, &options)?;
+    for (row, given) in rows.iter().zip(&input.rows) {
+        let c = &row.result;
+        if let Some(f) = &row.failure {
+            let why = f.describe(c, args.max_change, lu, au);
             // Repeats of one pose (a measurement file's targets and repeats) are one entry.
             match failed.last_mut() {
-                Some((c, lines, w)) if *c == config && *w == why => lines.push(row.line),
-                _ => failed.push((config.clone(), vec![row.line], why)),
+                Some((config, lines, w)) if *config == row.config && *w == why => {
+                    lines.push(row.line)
+                }
+                _ => failed.push((row.config.clone(), vec![row.line], why)),
             }
         }
         before_max = before_max.max(c.error_before.0);
@@ -258,7 +187,7 @@ pub fn compensate(
         rot_after_max = rot_after_max.max(c.orientation_error);
         sum_before += c.error_before.0 * c.error_before.0;
         sum_after += c.position_error * c.position_error;
-        for ((a, b), p) in c.q.iter().zip(&row.q).zip(&input.prismatic) {
+        for ((a, b), p) in c.q.iter().zip(&given.q).zip(&input.prismatic) {
             if !p {
                 change_max = change_max.max((a - b).abs());
             }
@@ -268,7 +197,7 @@ pub fn compensate(
                 .zip(&input.prismatic)
                 .map(|(v, p)| joint_cell(*v, *p, args.units))
                 .collect();
-        cells.push(quoted(&config));
+        cells.push(quoted(&row.config));
         cells.push(cell(c.error_before.0 / lu.metres()));
         cells.push(cell(c.error_before.1 / au.radians()));
         cells.push(cell(c.position_error / lu.metres()));

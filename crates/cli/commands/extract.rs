@@ -1,17 +1,20 @@
 //! `urdf-dh extract`: URDF -> DH table in either convention, proved by forward kinematics.
+//! The extraction and its proof are the `dh-sheet` library's ([`dh_sheet::extract`]); this
+//! command reads the file, draws the frames (`--svg`) and prints.
 
-use anyhow::{Context, Result};
-use dh_core::{Convention, Extraction, Tolerance};
-use urdf_axes::{Chain, UrdfModel};
+use anyhow::Result;
+use dh_core::{Convention, Tolerance};
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_robot};
 // Loading a chain is `crate::input`'s; re-exported for the callers of `extract`'s API.
 pub use crate::input::{chain_error, load_chain, load_chain_bytes, urdf_warnings};
-use crate::readback::{failure_line, prove, Isometry3Pair, Source};
+use crate::readback::failure_line;
 use crate::render::Format;
-use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
+pub use dh_sheet::extract::{
+    default_samples, extract_bytes, extract_chain, prove_extracted, ExtractOptions, Extracted,
+};
 
 /// Everything `extract` needs.
 #[derive(Clone, Debug)]
@@ -42,58 +45,6 @@ pub struct ExtractArgs {
     pub q: Option<Vec<f64>>,
 }
 
-/// The result of an extraction and its verification, ready to print.
-pub struct Extracted {
-    /// The chain the table describes.
-    pub chain: Chain,
-    /// The extraction.
-    pub extraction: Extraction,
-    /// The sheet (table and facts, without the verification) in the requested units.
-    pub sheet: SheetDoc,
-    /// Warnings of reading the URDF that concern the chain (see [`urdf_warnings`]).
-    pub urdf_warnings: Vec<String>,
-}
-
-/// Renders the sheet of `ex` in `format` and proves what was written: the text is read back at
-/// its precision and compared with the URDF ([`crate::readback::prove`]); returns the text (with
-/// the verification attached) and whether it passed.
-///
-/// # Errors
-/// A writer bug (the text does not read back).
-pub fn prove_extracted(
-    ex: &mut Extracted,
-    format: Format,
-    samples: usize,
-    seed: u64,
-) -> Result<(String, bool)> {
-    let table = &ex.extraction.table;
-    let chain = &ex.chain;
-    let free = Isometry3Pair {
-        base: table.base,
-        tool: table.tool,
-    };
-    prove(
-        &mut ex.sheet,
-        format,
-        &free,
-        Source {
-            table,
-            bound: ex.extraction.bound,
-            oracle: |q: &[f64]| chain.fk(q),
-            against: None,
-            samples,
-            seed,
-        },
-    )
-}
-
-/// Joint-value samples of the self-check when none are asked for: 1000, fewer for chains beyond
-/// 10 000 joints so that the check costs at most 1e7 joint evaluations (a 100 000-joint chain: 100
-/// samples, each still moving every joint), and never fewer than 10.
-pub fn default_samples(joints: usize) -> usize {
-    (10_000_000 / joints.max(1)).clamp(10, 1000)
-}
-
 /// Extracts; the caller proves what it writes ([`prove_extracted`]) and prints.
 ///
 /// # Errors
@@ -109,21 +60,13 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
 /// # Errors
 /// As [`load_chain_bytes`], plus geometry errors (a chain without moving joints).
 pub fn run_extract_bytes(bytes: &[u8], name: &str, args: &ExtractArgs) -> Result<Extracted> {
-    let (model, chain) = load_chain_bytes(bytes, name, args.base.as_deref(), args.tip.as_deref())?;
-    extract_chain(&model, chain, name, &args.options())
-}
-
-/// What an extraction of one chain needs besides the chain.
-#[derive(Clone, Copy, Debug)]
-pub struct ExtractOptions {
-    /// DH convention of the table.
-    pub convention: Convention,
-    /// Length unit of the output.
-    pub length_unit: LengthUnit,
-    /// Angle unit of the output.
-    pub angle_unit: AngleUnit,
-    /// Tolerances for the axis classification.
-    pub tolerance: Tolerance,
+    extract_bytes(
+        bytes,
+        name,
+        args.base.as_deref(),
+        args.tip.as_deref(),
+        &args.options(),
+    )
 }
 
 impl ExtractArgs {
@@ -136,59 +79,6 @@ impl ExtractArgs {
             tolerance: self.tolerance,
         }
     }
-}
-
-/// Extracts the table of `chain` (of `model`, read from the file shown as `name`) and its sheet
-/// with the extraction's facts; the caller proves it ([`prove_extracted`]).
-///
-/// # Errors
-/// Geometry errors (non-finite values).
-pub fn extract_chain(
-    model: &UrdfModel,
-    chain: Chain,
-    name: &str,
-    options: &ExtractOptions,
-) -> Result<Extracted> {
-    let args = options;
-    let extraction = dh_core::extract(
-        chain.axes(),
-        &chain.tip_pose(),
-        args.tolerance,
-        args.convention,
-    )
-    .with_context(|| format!("{name}: extraction failed"))?;
-    let mut sheet = SheetDoc::from_table(&extraction.table, args.length_unit, args.angle_unit);
-    sheet.robot = Some(model.robot_name().to_string()).filter(|n| !n.is_empty());
-    sheet.base_link = Some(chain.base().to_string());
-    sheet.tip_link = Some(chain.tip().to_string());
-    let ex_rows = &extraction.table.rows;
-    sheet.pairs = Some(
-        extraction
-            .pairs
-            .iter()
-            .map(|p| PairDoc {
-                joints: [
-                    ex_rows[p.first].name.clone(),
-                    ex_rows[p.first + 1].name.clone(),
-                ],
-                relation: p.geometry.relation.to_string(),
-                angle: args.angle_unit.from_si_unwrapped(p.geometry.angle),
-                distance: args.length_unit.from_si(p.geometry.distance),
-            })
-            .collect(),
-    );
-    sheet.tolerances = Some(TolerancesDoc {
-        linear: args.tolerance.linear,
-        angular: args.tolerance.angular,
-    });
-    sheet.warnings = Some(extraction.warnings.iter().map(|w| w.to_string()).collect());
-    let urdf_warnings = urdf_warnings(name, model, &chain);
-    Ok(Extracted {
-        chain,
-        extraction,
-        sheet,
-        urdf_warnings,
-    })
 }
 
 /// Runs `extract`, writing the table to `out` and warnings to `err`.

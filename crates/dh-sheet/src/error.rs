@@ -304,3 +304,62 @@ pub fn hinted(message: impl Into<String>, hint: impl Into<String>) -> anyhow::Er
         hint: hint.into(),
     })
 }
+
+/// The `hint:` line for an error: a [`Hinted`] one's own, a [`SheetError`]'s own, else one for
+/// the URDF reader's errors whose remedy is a command-line option of `urdf-dh` (`--tip`,
+/// `--base`; the Python package's keyword arguments of the same names) or a tool.
+pub fn hint_for(e: &anyhow::Error) -> Option<String> {
+    if let Some(h) = e.chain().find_map(|c| c.downcast_ref::<Hinted>()) {
+        return Some(h.hint.clone());
+    }
+    if let Some(h) = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<SheetError>().and_then(SheetError::hint))
+    {
+        return Some(h);
+    }
+    let u = e
+        .chain()
+        .find_map(|c| c.downcast_ref::<urdf_axes::UrdfError>())?;
+    Some(match u {
+        urdf_axes::UrdfError::SeveralLeaves { leaves, .. } => format!(
+            "choose the tip with --tip, e.g. --tip {}",
+            leaves.first().map_or("LINK", String::as_str)
+        ),
+        urdf_axes::UrdfError::UnknownLink { role, .. } => {
+            format!("--{role} takes the name of a <link> of the URDF (not of a joint)")
+        }
+        urdf_axes::UrdfError::Disconnected {
+            reversed: false,
+            base,
+            ..
+        } => format!(
+            "the tip must lie in the link tree below the base; '{base}' is not above it \
+             (leave out --base to start at the root link)"
+        ),
+        urdf_axes::UrdfError::JointTypeInChain { joint, .. } => format!(
+            "a floating or planar joint has no axis line: start the chain below '{joint}' \
+             with --base (its child link), or end it above with --tip"
+        ),
+        urdf_axes::UrdfError::NoMovingJoint { .. } => "choose a --base and --tip with a revolute, \
+             continuous or prismatic joint between them"
+            .into(),
+        urdf_axes::UrdfError::EntityDeclaration { .. } => {
+            "expand the entities first (xacro, or by hand): urdf-dh reads plain URDF".into()
+        }
+        urdf_axes::UrdfError::TooLarge { .. } => "a robot description is a few megabytes at most (meshes live \
+             in their own files): check what is being read"
+            .into(),
+        urdf_axes::UrdfError::NotUtf8 { .. } => {
+            "convert the file to UTF-8, e.g. iconv -f latin1 -t utf-8 FILE > FILE.utf8".into()
+        }
+        urdf_axes::UrdfError::SeveralRoots { .. } => {
+            "join every link to one tree with a joint (a fixed one will do), or remove the stray links"
+                .into()
+        }
+        urdf_axes::UrdfError::Cycle { .. } | urdf_axes::UrdfError::NoRoot { .. } => {
+            "a URDF is a tree of links: remove one joint of the cycle".into()
+        }
+        _ => return None,
+    })
+}

@@ -49,6 +49,30 @@ pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
     Ok(buf)
 }
 
+/// Reads `path`, or standard input when it is `-`, as bytes.
+///
+/// # Errors
+/// The file cannot be read; the message names it (an [`std::io::Error`] in the chain).
+pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
+    if path == "-" {
+        let mut buf = Vec::new();
+        std::io::stdin()
+            .read_to_end(&mut buf)
+            .context("reading standard input")?;
+        return Ok(buf);
+    }
+    std::fs::read(path).with_context(|| format!("{path}: cannot read the file"))
+}
+
+/// Reads `path` (or `-`) as UTF-8 text, without the byte-order mark some editors put first
+/// (the YAML parser would take it for part of the first key; URDF and JSON readers skip it).
+///
+/// # Errors
+/// The file cannot be read or is not UTF-8 (the message gives the line of the first bad byte).
+pub fn read_text(path: &str) -> Result<String> {
+    utf8_text(path, read_bytes(path)?)
+}
+
 /// The bytes read from `path` as UTF-8 text.
 ///
 /// # Errors

@@ -12,10 +12,16 @@
 //! | [`units`] | [`LengthUnit`], [`AngleUnit`], and the rounding of printed values |
 //! | [`render`] | writing a sheet as a text table, YAML, JSON, CSV or Markdown ([`Format`]) |
 //! | [`read_back`] | reading every written format back (the CSV, text and Markdown tables) |
+//! | [`prove`] | proving a written sheet: read back at its precision and compared with its source by forward kinematics |
+//! | [`extract`] | a URDF chain's DH table as a sheet with the extraction's facts, and its proof ([`prove_extracted`](extract::prove_extracted)) |
 //! | [`check`] | [`compare`]: a URDF chain against a sheet, as a [`CheckReport`] |
 //! | [`text`] | escaping names for messages and tables |
 //! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint); [`Hinted`](error::Hinted), a message with a hint |
 //! | [`input`] | reading robot files (URDF, `.xacro`, standard input) and a URDF's chain |
+//! | [`measured`] | measurement files in the canonical CSV layout ([`DataFile`](measured::DataFile), [`DataUnits`](measured::DataUnits)), effect labels, joint values beyond their limits |
+//! | [`calibrated`] | a calibrated model as `calibrate --out` writes it (device frame, targets, sessions, covariance), read back to predict |
+//! | [`predict`] | a calibrated model's target positions or tool poses at joint values, with their uncertainty |
+//! | [`compensate`] | the joint values with which a calibrated robot reaches what the nominal model reaches at commanded values |
 //! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
 //! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
@@ -42,10 +48,16 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod calibrated;
 pub mod check;
+pub mod compensate;
 pub mod error;
+pub mod extract;
 pub mod input;
+pub mod measured;
 pub mod model;
+pub mod predict;
+pub mod prove;
 pub mod read_back;
 pub mod render;
 pub mod sheet;

@@ -34,7 +34,7 @@ pub(crate) fn to_py(py: Python<'_>, e: anyhow::Error) -> PyErr {
         return PyFileNotFoundError::new_err(message);
     }
     let err = UrdfDhError::new_err(message);
-    let hint = urdf_dh_cli::error::hint_for(&e);
+    let hint = dh_sheet::error::hint_for(&e);
     // Setting an attribute on a fresh exception object cannot fail in practice; if it does, the
     // exception still carries the message, and `hint` falls back to the class attribute.
     let _ = err.value(py).setattr("hint", hint);

@@ -4,13 +4,10 @@
 use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
-use dh_sheet::input::{display_name, read_robot};
+use dh_sheet::extract::{extract_bytes, prove_extracted, ExtractOptions};
+use dh_sheet::input::{display_name, load_chain_bytes, read_robot, read_text};
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
-use urdf_dh_cli::commands::extract::{
-    load_chain_bytes, prove_extracted, run_extract_bytes, ExtractArgs,
-};
-use urdf_dh_cli::input::read_text;
 
 use crate::to_py;
 
@@ -161,21 +158,13 @@ fn extract(
 ) -> PyResult<NativeTable> {
     let run = || -> anyhow::Result<NativeTable> {
         let (bytes, name) = robot_bytes(source, is_xml)?;
-        let args = ExtractArgs {
-            path: source.to_string(),
-            base,
-            tip,
+        let options = ExtractOptions {
             convention: convention(convention_name)?,
-            format: Format::Yaml,
             length_unit: LengthUnit::M,
             angle_unit: AngleUnit::Rad,
             tolerance: Tolerance::new(linear, angular)?,
-            samples: Some(samples),
-            seed,
-            svg: None,
-            q: None,
         };
-        let mut ex = run_extract_bytes(&bytes, &name, &args)?;
+        let mut ex = extract_bytes(&bytes, &name, base.as_deref(), tip.as_deref(), &options)?;
         let (yaml, _passed) = prove_extracted(&mut ex, Format::Yaml, samples, seed)?;
         let verification = ex
             .sheet

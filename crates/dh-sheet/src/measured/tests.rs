@@ -1,6 +1,7 @@
 //! Unit tests of `measured`.
 
 use super::*;
+use crate::model::{is_urdf, LoadedModel};
 use crate::tree_sheet::TreeSheet;
 use dh_core::Convention;
 

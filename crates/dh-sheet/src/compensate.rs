@@ -1,0 +1,191 @@
+//! Using a calibration on the robot: for each commanded joint row (what the nominal model uses
+//! to reach its targets), the joint values with which the calibrated robot puts its tool where
+//! the nominal model puts it ([`dh_calib::compensate::compensate`], numerical inverse kinematics
+//! seeded by the commanded values), with the error before and after, as `urdf-dh compensate`
+//! writes them and the Python package returns them.
+//!
+//! Frames and units: the tool's errors are in the base link frame, positions in metres and
+//! angles in radians; joint values in metres and radians ([`JointInput`]).
+
+use anyhow::Result;
+use dh_calib::compensate::{compensate as solve, CompensateOptions, Compensated};
+use dh_core::DhTable;
+
+use crate::calibrated::CalibratedModel;
+use crate::error::hinted;
+use crate::predict::JointInput;
+use crate::text::escape;
+use crate::units::{AngleUnit, LengthUnit};
+
+/// Why a pose was not compensated.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Failure {
+    /// The solution needs a larger change than [`CompensateOptions::max_change`] of these
+    /// columns (a singular pose?).
+    MaxChange {
+        /// The columns at the bound.
+        columns: Vec<String>,
+    },
+    /// The goal is beyond the calibrated robot's reach from the commanded values: the nearest
+    /// pose is what remains.
+    Unreachable,
+    /// No convergence after this many iterations (a singular pose?).
+    NoConvergence {
+        /// Iterations taken.
+        iterations: usize,
+    },
+    /// The corrected values leave these joints' limits.
+    BeyondLimits {
+        /// The joints (table rows).
+        joints: Vec<String>,
+    },
+}
+
+/// One commanded row, compensated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompensatedRow {
+    /// The row's pose name: its `config`, else `line<N>`.
+    pub config: String,
+    /// Its line in the joint file (1-based; the row for arrays).
+    pub line: usize,
+    /// The solver's result: corrected values in the model's measured columns, errors before
+    /// and after.
+    pub result: Compensated,
+    /// Why the row was not compensated, `None` when it was.
+    pub failure: Option<Failure>,
+}
+
+impl Failure {
+    /// The failure of `c`, a pose of the measured columns `columns`, or `None`.
+    fn of(c: &Compensated, columns: &[String]) -> Option<Failure> {
+        if !c.converged && !c.at_max_change.is_empty() {
+            Some(Failure::MaxChange {
+                columns: c
+                    .at_max_change
+                    .iter()
+                    .filter_map(|&i| columns.get(i).cloned())
+                    .collect(),
+            })
+        } else if c.stalled {
+            Some(Failure::Unreachable)
+        } else if !c.converged {
+            Some(Failure::NoConvergence {
+                iterations: c.iterations,
+            })
+        } else if !c.beyond_limits.is_empty() {
+            Some(Failure::BeyondLimits {
+                joints: c.beyond_limits.clone(),
+            })
+        } else {
+            None
+        }
+    }
+
+    /// The failure in words, with the errors of `c` in units `lu`, `au` (`max_change`: the
+    /// option's value, in rad or m).
+    pub fn describe(
+        &self,
+        c: &Compensated,
+        max_change: f64,
+        lu: LengthUnit,
+        au: AngleUnit,
+    ) -> String {
+        let quoted = |names: &[String]| {
+            names
+                .iter()
+                .map(|n| format!("'{}'", escape(n)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let (p, r) = (
+            c.position_error / lu.metres(),
+            c.orientation_error / au.radians(),
+        );
+        let (l, a) = (lu.symbol(), au.symbol());
+        match self {
+            Failure::MaxChange { columns } => format!(
+                "needs more than --max-change {max_change} (rad or m) of {} (a singular pose?): {p:.3e} {l} and {r:.3e} {a} remain at that bound",
+                quoted(columns)
+            ),
+            Failure::Unreachable => format!(
+                "beyond the calibrated robot's reach from the commanded values: the nearest pose leaves {p:.3e} {l} and {r:.3e} {a}"
+            ),
+            Failure::NoConvergence { iterations } => format!(
+                "no convergence after {iterations} iterations (a singular pose?), {p:.3e} {l} and {r:.3e} {a} remain"
+            ),
+            Failure::BeyondLimits { joints } => format!("beyond the limits of {}", quoted(joints)),
+        }
+    }
+}
+
+/// Refuses a calibrated model whose joints are not the nominal model's (`origins`: the two
+/// files' names, nominal first).
+///
+/// # Errors
+/// The joints differ, naming both lists.
+pub fn same_joints(
+    nominal: &DhTable,
+    calibrated: &CalibratedModel,
+    origins: (&str, &str),
+) -> Result<()> {
+    let a: Vec<&str> = nominal.rows.iter().map(|r| r.name.as_str()).collect();
+    let b: Vec<&str> = calibrated
+        .loaded
+        .table
+        .rows
+        .iter()
+        .map(|r| r.name.as_str())
+        .collect();
+    if a != b {
+        let list = |names: &[&str]| {
+            names
+                .iter()
+                .map(|n| format!("'{}'", escape(n)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        return Err(hinted(
+            format!(
+                "{} and {} have different joints: {} against {}",
+                origins.0,
+                origins.1,
+                list(&a),
+                list(&b)
+            ),
+            "give the model the calibration started from as --nominal (with --base/--tip for a URDF)",
+        ));
+    }
+    Ok(())
+}
+
+/// Compensates every row of `input`: the goal is the tool pose of `nominal` (the model the
+/// robot's controller uses) at the commanded values, reached by `model` (the calibrated robot,
+/// with the same joints: [`same_joints`]).
+///
+/// # Errors
+/// A nominal model whose forward kinematics fail at a row (non-finite values).
+pub fn compensate(
+    nominal: &DhTable,
+    model: &CalibratedModel,
+    input: &JointInput,
+    options: &CompensateOptions,
+) -> Result<Vec<CompensatedRow>> {
+    let columns = &model.joints.columns;
+    input
+        .rows
+        .iter()
+        .map(|row| {
+            let goal = nominal.fk(&model.joints.rows(&row.q))?;
+            let result = solve(&model.calibrated, &model.joints, &goal, &row.q, options);
+            Ok(CompensatedRow {
+                config: row
+                    .config
+                    .clone()
+                    .unwrap_or_else(|| format!("line{}", row.line)),
+                line: row.line,
+                failure: Failure::of(&result, columns),
+                result,
+            })
+        })
+        .collect()
+}

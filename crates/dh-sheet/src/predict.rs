@@ -1,0 +1,357 @@
+//! Using a calibration: the calibrated model's target positions (or tool poses) at given joint
+//! values, each with its standard uncertainty from the calibration's covariance
+//! ([`dh_calib::predict::Calibrated`]), as `urdf-dh predict` writes them and the Python package
+//! returns them.
+//!
+//! [`read_joints`] reads joint values (a file, or arrays a caller hands over) in the model's
+//! measured columns; [`frame_of`] chooses the frame (and the session's device frame);
+//! [`predict`] computes [`Predictions`]: one [`Predicted`] per joint row and target.
+//!
+//! Frames and units: every position is in metres, in the measuring device's frame of the
+//! calibration ([`Frame::Device`]) or the robot's base link frame ([`Frame::Base`]); a tool
+//! attitude is URDF roll, pitch, yaw in radians (`R = Rz(yaw) Ry(pitch) Rx(roll)`); a tool's
+//! rotation uncertainty is about the frame's axes, in radians.
+
+use anyhow::{Context, Result};
+use dh_calib::csv::SampleArrays;
+use dh_calib::joints::JointRow;
+use dh_calib::predict::{Calibrated, Frame};
+use dh_core::JointKind;
+use nalgebra::Vector3;
+
+use crate::calibrated::CalibratedModel;
+use crate::error::hinted;
+use crate::input::display_name;
+use crate::measured::{DataFile, DataUnits};
+use crate::text::escape;
+
+/// The target name that asks for the tip frame's pose.
+pub const TOOL: &str = "tool";
+
+/// Joint values in a model's measured columns, with their lines and configs.
+#[derive(Clone, Debug)]
+pub struct JointInput {
+    /// The rows, values in metres and radians ([`JointRow::q`]).
+    pub rows: Vec<JointRow>,
+    /// Per column: prismatic (its values are lengths).
+    pub prismatic: Vec<bool>,
+}
+
+/// Reads `path`'s joint values for `model`'s measured columns ([`crate::measured::DataFile`],
+/// `units` the file's), or those of `given` (arrays a library caller hands over in `units`;
+/// `path` then only names them in messages).
+///
+/// # Errors
+/// The file cannot be read; a missing column, a bad cell (naming the file, line and column).
+pub fn read_joints(
+    path: &str,
+    given: Option<&SampleArrays>,
+    model: &CalibratedModel,
+    units: DataUnits,
+) -> Result<JointInput> {
+    let columns = &model.joints.columns;
+    let table = &model.loaded.table;
+    let prismatic_rows: Vec<&str> = table
+        .rows
+        .iter()
+        .filter(|r| r.kind == JointKind::Prismatic)
+        .map(|r| r.name.as_str())
+        .chain(table.rows.iter().filter_map(|r| {
+            (r.kind == JointKind::Prismatic)
+                .then_some(r.mimic.as_ref().map(|m| m.joint.as_str()))
+                .flatten()
+        }))
+        .collect();
+    let prismatic: Vec<bool> = columns
+        .iter()
+        .map(|c| prismatic_rows.contains(&c.as_str()))
+        .collect();
+    let names: Vec<String> = columns
+        .iter()
+        .zip(&prismatic)
+        .filter(|(_, p)| **p)
+        .map(|(c, _)| c.clone())
+        .collect();
+    let opts = units.csv_options(&names);
+    let rows = match given {
+        Some(arrays) => arrays
+            .with_joints(columns)
+            .and_then(|a| dh_calib::joints::joint_rows(&a, &opts))
+            .map_err(|e| anyhow::anyhow!("{}: {e}", display_name(path)))?,
+        None => {
+            let file = DataFile::read(path)?;
+            dh_calib::joints::parse_joint_values(&file.text, columns, &opts)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", file.name))?
+        }
+    };
+    Ok(JointInput { rows, prismatic })
+}
+
+/// The frame of a prediction from `model` (read from the file shown as `origin`): `asked`, or
+/// the device frame when the model has one, else the base link frame. With `session`, the
+/// model is moved to that measurement session's device frame first
+/// ([`CalibratedModel::in_session`]). Returns the frame and the warnings to show.
+///
+/// # Errors
+/// An unknown session; the device frame asked of a model without one.
+pub fn frame_of(
+    model: &mut CalibratedModel,
+    asked: Option<Frame>,
+    session: Option<&str>,
+    origin: &str,
+) -> Result<(Frame, Vec<String>)> {
+    let mut warnings = Vec::new();
+    if let Some(name) = session {
+        model.in_session(name).map_err(|e| {
+            hinted(
+                format!("{origin}: {e}"),
+                "the sessions are listed in the `calibration` section's `sessions`",
+            )
+        })?;
+        if asked == Some(Frame::Base) {
+            warnings.push("--session changes the device frame only; --frame base predicts in the base link frame".to_string());
+        }
+    }
+    let frame = match (asked, model.has_device) {
+        (Some(Frame::Device), false) => {
+            return Err(hinted(
+                format!("{origin}: --frame device: the model has no device frame (no calibration section)"),
+                "predict in the robot's base link frame (--frame base), or give the sheet calibrate --out wrote",
+            ))
+        }
+        (Some(Frame::Device), true) | (None, true) => Frame::Device,
+        (Some(Frame::Base), _) | (None, false) => Frame::Base,
+    };
+    Ok((frame, warnings))
+}
+
+/// What the rows predict.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Wanted {
+    /// The tool pose ([`TOOL`]).
+    Tool,
+    /// These targets at every row.
+    Targets(Vec<String>),
+    /// Each row's own target (a measurement file's `target` column).
+    RowTarget,
+}
+
+/// One prediction: a row's target position, or its tool pose.
+#[derive(Clone, Debug)]
+pub struct Predicted {
+    /// The index of the joint row ([`JointInput::rows`]).
+    pub row: usize,
+    /// The target's name, or [`TOOL`].
+    pub target: String,
+    /// Position (m) in the prediction's frame.
+    pub position: Vector3<f64>,
+    /// The tool's attitude (roll, pitch, yaw; rad), for [`Wanted::Tool`].
+    pub rpy: Option<[f64; 3]>,
+    /// Standard uncertainty (1 sigma, first order): of the position's x, y, z (m), then for
+    /// the tool of the rotation about the frame's axes (rad); `None` without covariance.
+    pub uncertainty: Option<Vec<f64>>,
+}
+
+/// The predictions of [`predict`].
+#[derive(Clone, Debug)]
+pub struct Predictions {
+    /// The frame of every position.
+    pub frame: Frame,
+    /// What each row predicts.
+    pub wanted: Wanted,
+    /// Whether each row was predicted from its own measurement session's device frame (a
+    /// joint file with a `session` column, in the device frame, without a session asked).
+    pub per_session: bool,
+    /// Whether the model has a covariance (then every prediction has its uncertainty).
+    pub has_uncertainty: bool,
+    /// One per joint row and target, in row order.
+    pub predicted: Vec<Predicted>,
+}
+
+/// Predicts with `model` (in `frame`, see [`frame_of`]) at the joint rows of `input` (read
+/// from the file shown as `joints_name`): the `targets` named, or [`TOOL`]; with none, each
+/// row's own target (a measurement file whose every row names a target), else every target of
+/// the calibration, else the tool. `session`: the session asked (see [`frame_of`]); without it
+/// and in the device frame, the rows of a joint file with a `session` column are predicted from
+/// their sessions' device frames.
+///
+/// # Errors
+/// An unknown target (naming the file's line, or `--targets`), targets and the tool together,
+/// sessions of the file unknown to the model.
+pub fn predict(
+    model: &CalibratedModel,
+    frame: Frame,
+    input: &JointInput,
+    targets: &[String],
+    session: Option<&str>,
+    joints_name: &str,
+    origin: &str,
+) -> Result<Predictions> {
+    let known = model.calibrated.targets();
+    let index_of = |t: &str| -> Result<usize> {
+        known.iter().position(|(n, _)| n == t).ok_or_else(|| {
+            hinted(
+                format!(
+                    "{origin} has no target '{}'; it has {}",
+                    escape(t),
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known
+                            .iter()
+                            .map(|(n, _)| format!("'{}'", escape(n)))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    }
+                ),
+                "name the calibration's targets, or predict the tool frame with --targets tool",
+            )
+        })
+    };
+    let per_row =
+        targets.is_empty() && !known.is_empty() && input.rows.iter().all(|r| r.target.is_some());
+    let wanted: Vec<String> = if targets.is_empty() {
+        if known.is_empty() {
+            vec![TOOL.into()]
+        } else {
+            known.iter().map(|(n, _)| n.clone()).collect()
+        }
+    } else {
+        targets.to_vec()
+    };
+    let tool = !per_row && wanted.iter().any(|t| t == TOOL);
+    if tool && wanted.len() > 1 {
+        anyhow::bail!("--targets: expected target names or 'tool', found both");
+    }
+    // Per row: the targets' indices and names.
+    let mut plan: Vec<Vec<(usize, String)>> = Vec::with_capacity(input.rows.len());
+    if per_row {
+        for r in &input.rows {
+            let t = r.target.clone().unwrap_or_default();
+            let k = index_of(&t).with_context(|| {
+                format!(
+                    "{}: line {}, column 'target'",
+                    display_name(joints_name),
+                    r.line
+                )
+            })?;
+            plan.push(vec![(k, t)]);
+        }
+    } else if !tool {
+        let mut indices = Vec::new();
+        for t in &wanted {
+            indices.push((index_of(t).context("--targets")?, t.clone()));
+        }
+        plan = vec![indices; input.rows.len()];
+    }
+    let (frames, row_frame) = session_frames(model, input, frame, session, joints_name, origin)?;
+    let mut predicted = Vec::new();
+    for (i, row) in input.rows.iter().enumerate() {
+        let c = &frames[row_frame.get(i).copied().unwrap_or(0)];
+        let q = model.joints.rows(&row.q);
+        if tool {
+            let pose = c.tool(&q, frame);
+            let (xyz, rpy) = dh_core::pose::to_xyz_rpy(&pose);
+            predicted.push(Predicted {
+                row: i,
+                target: TOOL.into(),
+                position: Vector3::from(xyz),
+                rpy: Some(rpy),
+                uncertainty: c.tool_uncertainty(&q, frame).map(|u| u.as_slice().to_vec()),
+            });
+        } else {
+            for (k, name) in plan.get(i).into_iter().flatten() {
+                predicted.push(Predicted {
+                    row: i,
+                    target: name.clone(),
+                    position: c.point(&q, *k, frame),
+                    rpy: None,
+                    uncertainty: c
+                        .point_uncertainty(&q, *k, frame)
+                        .map(|u| u.as_slice().to_vec()),
+                });
+            }
+        }
+    }
+    Ok(Predictions {
+        frame,
+        wanted: if tool {
+            Wanted::Tool
+        } else if per_row {
+            Wanted::RowTarget
+        } else {
+            Wanted::Targets(wanted)
+        },
+        per_session: frames.len() > 1,
+        has_uncertainty: model.calibrated.has_covariance(),
+        predicted,
+    })
+}
+
+/// The robot each row is predicted with: `frames[row_frame[i]]` for row `i`. Without a session
+/// asked, in the device frame, a joint file with a `session` column (a measurement file of
+/// several sessions) has each row predicted from its own session's device frame: the model's
+/// `sessions`, and the model's device frame for the first session, whose name the model does
+/// not hold (so at most one of the file's sessions may be missing from the model).
+fn session_frames(
+    model: &CalibratedModel,
+    input: &JointInput,
+    frame: Frame,
+    session: Option<&str>,
+    joints_name: &str,
+    origin: &str,
+) -> Result<(Vec<Calibrated>, Vec<usize>)> {
+    let first = vec![model.calibrated.clone()];
+    let mut names: Vec<&str> = Vec::new();
+    for r in &input.rows {
+        if let Some(s) = r.session.as_deref() {
+            if !names.contains(&s) {
+                names.push(s);
+            }
+        }
+    }
+    if session.is_some() || frame == Frame::Base || names.is_empty() || model.sessions.is_empty() {
+        return Ok((first, vec![0; input.rows.len()]));
+    }
+    let unknown: Vec<&str> = names
+        .iter()
+        .copied()
+        .filter(|n| !model.sessions.iter().any(|(m, _)| m == n))
+        .collect();
+    if unknown.len() > 1 {
+        return Err(hinted(
+            format!(
+                "{}: sessions {} are not in {origin}, which holds the first session's device frame and those of {}: at most one of the file's sessions can be the first",
+                display_name(joints_name),
+                unknown
+                    .iter()
+                    .map(|n| format!("'{}'", escape(n)))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                model.session_list()
+            ),
+            "predict every row from one session's frame with --session NAME (or without it, the first's)",
+        ));
+    }
+    let mut frames = first;
+    let mut index: Vec<(&str, usize)> = Vec::new();
+    for n in names {
+        if unknown.contains(&n) {
+            index.push((n, 0));
+        } else {
+            frames.push(model.for_session(n)?);
+            index.push((n, frames.len() - 1));
+        }
+    }
+    let row_frame = input
+        .rows
+        .iter()
+        .map(|r| {
+            r.session
+                .as_deref()
+                .and_then(|s| index.iter().find(|(n, _)| *n == s))
+                .map_or(0, |(_, k)| *k)
+        })
+        .collect();
+    Ok((frames, row_frame))
+}
