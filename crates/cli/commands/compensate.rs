@@ -11,7 +11,7 @@ use std::path::Path;
 use anyhow::Result;
 use dh_calib::compensate::CompensateOptions;
 use dh_core::Convention;
-use dh_sheet::compensate::same_joints;
+use dh_sheet::compensate::{failed_poses, same_joints};
 
 use crate::calibrated::load_calibrated;
 use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
@@ -162,25 +162,14 @@ pub fn compensate(
     );
     text.push_str(&header.join(","));
     text.push('\n');
-    // (config, lines, reason) of the poses not compensated.
-    let mut failed: Vec<(String, Vec<usize>, String)> = Vec::new();
     let (mut before_max, mut after_max, mut rot_before_max, mut rot_after_max, mut change_max) =
         (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut sum_before = 0.0;
     let mut sum_after = 0.0;
     let rows = dh_sheet::compensate::compensate(&nominal.table, &model, &input, &options)?;
+    let failed = failed_poses(&rows, args.max_change, lu, au);
     for (row, given) in rows.iter().zip(&input.rows) {
         let c = &row.result;
-        if let Some(f) = &row.failure {
-            let why = f.describe(c, args.max_change, lu, au);
-            // Repeats of one pose (a measurement file's targets and repeats) are one entry.
-            match failed.last_mut() {
-                Some((config, lines, w)) if *config == row.config && *w == why => {
-                    lines.push(row.line)
-                }
-                _ => failed.push((row.config.clone(), vec![row.line], why)),
-            }
-        }
         before_max = before_max.max(c.error_before.0);
         rot_before_max = rot_before_max.max(c.error_before.1);
         after_max = after_max.max(c.position_error);
@@ -249,7 +238,7 @@ pub fn compensate(
         writeln!(report, "result: every pose compensated")?;
         Ok(Outcome::Pass)
     } else {
-        let rows: usize = failed.iter().map(|(_, l, _)| l.len()).sum();
+        let rows: usize = failed.iter().map(|f| f.lines.len()).sum();
         writeln!(
             report,
             "result: {} pose(s) not compensated{}:",
@@ -260,13 +249,7 @@ pub fn compensate(
                 String::new()
             }
         )?;
-        for (config, lines, why) in &failed {
-            let at = match lines.as_slice() {
-                [one] => format!("line {one}"),
-                [first, .., last] => format!("{} rows, lines {first}-{last}", lines.len()),
-                [] => String::new(),
-            };
-            let f = format!("{} ({at}): {why}", crate::guard::escape(config));
+        for f in &failed {
             writeln!(report, "  {f}")?;
         }
         Ok(Outcome::Differs)

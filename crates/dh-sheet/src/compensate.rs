@@ -118,6 +118,54 @@ impl Failure {
     }
 }
 
+/// Poses not compensated, repeats of one pose (a measurement file's targets and repeats, in
+/// consecutive rows with the same failure) as one entry.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FailedPose {
+    /// The pose's name ([`CompensatedRow::config`]).
+    pub config: String,
+    /// The lines of its rows.
+    pub lines: Vec<usize>,
+    /// Why, in words ([`Failure::describe`]).
+    pub why: String,
+}
+
+impl std::fmt::Display for FailedPose {
+    /// `config (line N): why`, or `config (K rows, lines A-B): why`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let at = match self.lines.as_slice() {
+            [one] => format!("line {one}"),
+            [first, .., last] => format!("{} rows, lines {first}-{last}", self.lines.len()),
+            [] => String::new(),
+        };
+        write!(f, "{} ({at}): {}", escape(&self.config), self.why)
+    }
+}
+
+/// The poses of `rows` that were not compensated ([`FailedPose`]), their errors in units `lu`,
+/// `au`; `max_change` is the option's value (rad or m).
+pub fn failed_poses(
+    rows: &[CompensatedRow],
+    max_change: f64,
+    lu: LengthUnit,
+    au: AngleUnit,
+) -> Vec<FailedPose> {
+    let mut failed: Vec<FailedPose> = Vec::new();
+    for row in rows {
+        let Some(f) = &row.failure else { continue };
+        let why = f.describe(&row.result, max_change, lu, au);
+        match failed.last_mut() {
+            Some(p) if p.config == row.config && p.why == why => p.lines.push(row.line),
+            _ => failed.push(FailedPose {
+                config: row.config.clone(),
+                lines: vec![row.line],
+                why,
+            }),
+        }
+    }
+    failed
+}
+
 /// Refuses a calibrated model whose joints are not the nominal model's (`origins`: the two
 /// files' names, nominal first).
 ///

@@ -15,6 +15,7 @@
 //! | [`prove`] | proving a written sheet: read back at its precision and compared with its source by forward kinematics |
 //! | [`extract`] | a URDF chain's DH table as a sheet with the extraction's facts, and its proof ([`prove_extracted`](extract::prove_extracted)) |
 //! | [`check`] | [`compare`]: a URDF chain against a sheet, as a [`CheckReport`] |
+//! | [`ranges`] | the ranges of the numeric options (tolerances, sigmas, counts, levels), one parser each |
 //! | [`text`] | escaping names for messages and tables |
 //! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint); [`Hinted`](error::Hinted), a message with a hint |
 //! | [`input`] | reading robot files (URDF, `.xacro`, standard input) and a URDF's chain |
@@ -58,6 +59,7 @@ pub mod measured;
 pub mod model;
 pub mod predict;
 pub mod prove;
+pub mod ranges;
 pub mod read_back;
 pub mod render;
 pub mod sheet;

@@ -12,13 +12,19 @@ use std::collections::HashMap;
 use dh_calib::csv::SampleArrays;
 use dh_core::Convention;
 use pyo3::prelude::*;
-use urdf_dh_cli::cli::{run_calibrate, run_compensate, run_predict};
+use dh_calib::compensate::{CompensateOptions, DEFAULT_MAX_CHANGE};
+use dh_calib::predict::Frame;
+use dh_sheet::calibrated::{load_calibrated, CalibratedModel};
+use dh_sheet::compensate::{failed_poses, same_joints};
+use dh_sheet::input::display_name;
+use dh_sheet::measured::DataUnits;
+use dh_sheet::model::load_model;
+use dh_sheet::predict::{frame_of, read_joints, Wanted};
+use dh_sheet::ranges;
+use dh_sheet::units::{AngleUnit, LengthUnit};
+use urdf_dh_cli::cli::run_calibrate;
 use urdf_dh_cli::commands::calibrate::{CalibrateArgs, CalibrateFormat, EffectsChoice, GivenData};
-use urdf_dh_cli::commands::compensate::CompensateArgs;
-use urdf_dh_cli::commands::predict::{FrameChoice, PredictArgs};
 use urdf_dh_cli::error::Outcome;
-use urdf_dh_cli::measured::DataUnits;
-use urdf_dh_cli::units::{AngleUnit, LengthUnit};
 
 use crate::to_py;
 
@@ -128,7 +134,7 @@ fn calibrate(
     out: Option<String>,
 ) -> PyResult<(String, String, bool)> {
     let go = || -> anyhow::Result<(String, String, bool)> {
-        use urdf_dh_cli::guard;
+        use dh_sheet::ranges as guard;
         let given = match data {
             Some(d) => Some(GivenData {
                 data: arrays(d)?,
@@ -170,18 +176,51 @@ fn calibrate(
 }
 
 /// The frame of `name` (`device`, `base`).
-fn frame(name: Option<&str>) -> anyhow::Result<Option<FrameChoice>> {
+fn frame(name: Option<&str>) -> anyhow::Result<Option<Frame>> {
     match name {
         None => Ok(None),
-        Some("device") => Ok(Some(FrameChoice::Device)),
-        Some("base") => Ok(Some(FrameChoice::Base)),
+        Some("device") => Ok(Some(Frame::Device)),
+        Some("base") => Ok(Some(Frame::Base)),
         Some(other) => anyhow::bail!("frame: expected 'device' or 'base', found '{other}'"),
     }
 }
 
-/// A calibrated model's target positions or tool poses at joint values as `urdf-dh predict`
-/// computes them; `joints` are arrays, or None to read the file `joints_name`. Returns the CSV
-/// text `predict` writes and its standard error (the summary and warnings).
+/// A calibrated model loaded for `predict` and `compensate`, with its warnings (those of its
+/// effects aside: they are the calibration's own).
+fn calibrated(
+    path: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> anyhow::Result<(CalibratedModel, Vec<String>)> {
+    let model = load_calibrated(path, base, tip)?;
+    let warnings = model
+        .loaded
+        .warnings
+        .iter()
+        .filter(|w| !w.contains(": effects: "))
+        .cloned()
+        .collect();
+    Ok((model, warnings))
+}
+
+/// What `predict` returns to Python: per prediction its target, its row's config and session
+/// (None without a session column), the position (in the length unit), the tool's roll, pitch,
+/// yaw (angle unit; None for targets), the uncertainty (3 lengths, then 3 angles for the tool;
+/// None without covariance); then the frame (`device`, `base`) and the warnings.
+type PredictOut = (
+    Vec<String>,
+    Vec<String>,
+    Option<Vec<String>>,
+    Vec<[f64; 3]>,
+    Option<Vec<[f64; 3]>>,
+    Option<Vec<Vec<f64>>>,
+    &'static str,
+    Vec<String>,
+);
+
+/// A calibrated model's target positions or tool poses at joint values
+/// ([`dh_sheet::predict::predict`], as `urdf-dh predict` computes them); `joints` are arrays,
+/// or None to read the file `joints_name`.
 #[pyfunction]
 #[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit))]
 #[allow(clippy::too_many_arguments)]
@@ -197,29 +236,90 @@ fn predict(
     session: Option<String>,
     length_unit: &str,
     angle_unit: &str,
-) -> PyResult<(String, String)> {
-    let go = || -> anyhow::Result<(String, String)> {
-        let args = PredictArgs {
-            model,
-            base,
-            tip,
-            joints: joints_name,
-            targets,
-            frame: frame(frame_name.as_deref())?,
-            session,
-            units: units(length_unit, angle_unit)?,
-            out: None,
-            given: joints.map(arrays).transpose()?,
-        };
-        let (out, err, _) = captured(|o, e| run_predict(&args, o, e))?;
-        Ok((out, err))
+) -> PyResult<PredictOut> {
+    let go = || -> anyhow::Result<PredictOut> {
+        let units = units(length_unit, angle_unit)?;
+        let asked = frame(frame_name.as_deref())?;
+        let (mut calibrated, mut warnings) = calibrated(&model, base.as_deref(), tip.as_deref())?;
+        let origin = display_name(&model);
+        let (frame, first) = frame_of(&mut calibrated, asked, session.as_deref(), &origin)?;
+        warnings.splice(0..0, first);
+        let given = joints.map(arrays).transpose()?;
+        let input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
+        let p = dh_sheet::predict::predict(
+            &calibrated,
+            frame,
+            &input,
+            &targets,
+            session.as_deref(),
+            &joints_name,
+            &origin,
+        )?;
+        let (l, a) = (units.length.metres(), units.angle.radians());
+        let row = |i: usize| input.rows.get(i);
+        let sessions = input
+            .rows
+            .iter()
+            .any(|r| r.session.is_some())
+            .then(|| {
+                p.predicted
+                    .iter()
+                    .map(|x| row(x.row).and_then(|r| r.session.clone()).unwrap_or_default())
+                    .collect()
+            });
+        let rpy = (p.wanted == Wanted::Tool).then(|| {
+            p.predicted
+                .iter()
+                .map(|x| x.rpy.unwrap_or_default().map(|v| v / a))
+                .collect()
+        });
+        let uncertainty = p.has_uncertainty.then(|| {
+            p.predicted
+                .iter()
+                .map(|x| {
+                    let u = x.uncertainty.as_deref().unwrap_or_default();
+                    u.iter()
+                        .enumerate()
+                        .map(|(k, v)| if k < 3 { v / l } else { v / a })
+                        .collect()
+                })
+                .collect()
+        });
+        Ok((
+            p.predicted.iter().map(|x| x.target.clone()).collect(),
+            p.predicted
+                .iter()
+                .map(|x| {
+                    row(x.row).map_or_else(String::new, |r| {
+                        r.config.clone().unwrap_or_else(|| format!("line{}", r.line))
+                    })
+                })
+                .collect(),
+            sessions,
+            p.predicted
+                .iter()
+                .map(|x| [x.position.x / l, x.position.y / l, x.position.z / l])
+                .collect(),
+            rpy,
+            uncertainty,
+            match p.frame {
+                Frame::Device => "device",
+                Frame::Base => "base",
+            },
+            warnings,
+        ))
     };
     py.detach(go).map_err(|e| to_py(py, e))
 }
 
-/// Corrected joint values as `urdf-dh compensate` computes them; `joints` are arrays, or None to
-/// read the file `joints_name`. Returns the CSV text `compensate` writes and its standard error
-/// (the summary, and one indented line per pose it could not compensate).
+/// What `compensate` returns to Python: the corrected joint values (poses x measured columns,
+/// in the units), per pose the tool's position and orientation errors before and after
+/// (position_before, orientation_before, position_error, orientation_error; in the units), the
+/// poses not compensated (`config (line N): why`), and the warnings.
+type CompensateOut = (Vec<Vec<f64>>, Vec<[f64; 4]>, Vec<String>, Vec<String>);
+
+/// Corrected joint values ([`dh_sheet::compensate::compensate`], as `urdf-dh compensate`
+/// computes them); `joints` are arrays, or None to read the file `joints_name`.
 #[pyfunction]
 #[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit))]
 #[allow(clippy::too_many_arguments)]
@@ -235,23 +335,61 @@ fn compensate(
     max_change: Option<String>,
     length_unit: &str,
     angle_unit: &str,
-) -> PyResult<(String, String)> {
-    let go = || -> anyhow::Result<(String, String)> {
-        let args = CompensateArgs {
-            nominal,
-            base,
-            tip,
-            model,
-            joints: joints_name,
-            position_only,
-            max_change: guarded("max_change", max_change, urdf_dh_cli::guard::max_change)?
-                .unwrap_or(dh_calib::compensate::DEFAULT_MAX_CHANGE),
-            units: units(length_unit, angle_unit)?,
-            out: None,
-            given: joints.map(arrays).transpose()?,
+) -> PyResult<CompensateOut> {
+    let go = || -> anyhow::Result<CompensateOut> {
+        let units = units(length_unit, angle_unit)?;
+        let max_change = guarded("max_change", max_change, ranges::max_change)?
+            .unwrap_or(DEFAULT_MAX_CHANGE);
+        let nominal_model =
+            load_model(&nominal, base.as_deref(), tip.as_deref(), Convention::Standard)?;
+        let (calibrated, warnings) = calibrated(&model, None, None)?;
+        same_joints(
+            &nominal_model.table,
+            &calibrated,
+            (&display_name(&nominal), &display_name(&model)),
+        )?;
+        let given = joints.map(arrays).transpose()?;
+        let input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
+        let options = CompensateOptions {
+            orientation: !position_only,
+            max_change,
+            ..CompensateOptions::default()
         };
-        let (out, err, _) = captured(|o, e| run_compensate(&args, o, e))?;
-        Ok((out, err))
+        let rows = dh_sheet::compensate::compensate(
+            &nominal_model.table,
+            &calibrated,
+            &input,
+            &options,
+        )?;
+        let (l, a) = (units.length.metres(), units.angle.radians());
+        let q = rows
+            .iter()
+            .map(|r| {
+                r.result
+                    .q
+                    .iter()
+                    .zip(&input.prismatic)
+                    .map(|(v, p)| if *p { v / l } else { v / a })
+                    .collect()
+            })
+            .collect();
+        let errors = rows
+            .iter()
+            .map(|r| {
+                let c = &r.result;
+                [
+                    c.error_before.0 / l,
+                    c.error_before.1 / a,
+                    c.position_error / l,
+                    c.orientation_error / a,
+                ]
+            })
+            .collect();
+        let failed = failed_poses(&rows, max_change, units.length, units.angle)
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        Ok((q, errors, failed, warnings))
     };
     py.detach(go).map_err(|e| to_py(py, e))
 }

@@ -5,6 +5,7 @@ known: the fit must find the planted errors, ``predict`` must match the true rob
 uncertainty, and ``compensate`` must bring the true robot's tool to the nominal goal.
 """
 
+import io
 import math
 
 import numpy as np
@@ -188,3 +189,31 @@ def test_alpha_sets_the_level_of_the_selection_and_is_checked(sets):
     for bad in (0.0, 0.7, float("nan")):
         with pytest.raises(urdf_dh.UrdfDhError, match="alpha"):
             urdf_dh.calibrate(UR5, data, effects="auto", alpha=bad)
+
+
+def test_predict_and_compensate_give_what_the_cli_writes(sets, tmp_path):
+    """The library calls behind ``predict`` and ``compensate`` and the CLI's CSV agree to the
+    digits the CSV writes (the shortest round-trip form): one computation, two renderings."""
+    tmp, data, _ = sets
+    cal = tmp / "cal3.yaml"
+    urdf_dh.calibrate(UR5, data, out=cal)
+    joints = tmp_path / "q.csv"
+    q = np.random.default_rng(5).uniform(-2.0, 2.0, size=(12, 6))
+    pd.DataFrame(q, columns=JOINTS).to_csv(joints, index=False)
+    for extra, targets in (([], None), (["--targets", "tool", "--frame", "base"], "tool")):
+        out, _, _ = _native.run(["predict", "--model", str(cal), "--joints", str(joints)] + extra)
+        cli = pd.read_csv(io.StringIO(out), comment="#", float_precision="round_trip")
+        p = urdf_dh.predict(cal, joints, targets=targets, frame="base" if targets else None)
+        np.testing.assert_array_equal(p.points, cli[["x", "y", "z"]].to_numpy())
+        assert p.targets == list(cli["target"]) and p.configs == list(cli["config"])
+        u = ["u_x", "u_y", "u_z"] + (["u_rx", "u_ry", "u_rz"] if targets else [])
+        np.testing.assert_array_equal(p.uncertainty, cli[u].to_numpy())
+        if targets:
+            np.testing.assert_array_equal(p.rpy, cli[["roll", "pitch", "yaw"]].to_numpy())
+    out, err, _ = _native.run(["compensate", "--nominal", str(UR5), "--model", str(cal), "--joints", str(joints)])
+    cli = pd.read_csv(io.StringIO(out), comment="#", float_precision="round_trip")
+    c_q, c_errors, failures = urdf_dh.compensate(UR5, cal, joints)
+    np.testing.assert_array_equal(c_q, cli[JOINTS].to_numpy())
+    keys = ["position_before", "orientation_before", "position_error", "orientation_error"]
+    np.testing.assert_array_equal(c_errors, cli[keys].to_numpy())
+    assert failures == [line.strip() for line in err.splitlines() if line.startswith("  ")]

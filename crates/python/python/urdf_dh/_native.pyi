@@ -88,8 +88,18 @@ def predict(
     session: Optional[str],
     length_unit: str,
     angle_unit: str,
-) -> Tuple[str, str]:
-    """(the CSV text predict writes, its standard error)."""
+) -> Tuple[
+    List[str],
+    List[str],
+    Optional[List[str]],
+    List[Tuple[float, float, float]],
+    Optional[List[Tuple[float, float, float]]],
+    Optional[List[List[float]]],
+    str,
+    List[str],
+]:
+    """(targets, configs, sessions or None, positions, tool rpy or None, uncertainties or None,
+    frame ("device" or "base"), warnings); lengths and angles in the units given."""
 def compensate(
     nominal: str,
     model: str,
@@ -101,6 +111,8 @@ def compensate(
     max_change: Optional[str],
     length_unit: str,
     angle_unit: str,
-) -> Tuple[str, str]:
-    """(the CSV text compensate writes, its standard error)."""
+) -> Tuple[List[List[float]], List[Tuple[float, float, float, float]], List[str], List[str]]:
+    """(corrected joint values, per pose position_before, orientation_before, position_error,
+    orientation_error, the poses not compensated as `config (line N): why`, warnings); in the
+    units given."""
 def measured_joints(model: str, base: Optional[str] = None, tip: Optional[str] = None) -> List[str]: ...

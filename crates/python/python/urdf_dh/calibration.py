@@ -14,11 +14,10 @@ numpy and pandas count) and the column. Units are those of the options (``length
 
 from __future__ import annotations
 
-import csv
 import json
 import os
 import warnings
-from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -310,8 +309,9 @@ def _names(targets: Union[None, str, Sequence[str]]) -> List[str]:
     return list(targets)
 
 
-def _rows(text: str) -> Iterator[Dict[str, str]]:
-    return csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))
+def _warn_all(lines: Sequence[str]) -> None:
+    for line in lines:
+        warnings.warn(line, stacklevel=3)
 
 
 class Prediction:
@@ -322,31 +322,27 @@ class Prediction:
         configs: the pose name of each row (``config``, else ``line<N>``).
         sessions: the measurement session each row was predicted in (the joint values'
             ``session`` column), or None when they had none.
+        frame: the frame of the positions: ``"device"`` (the measuring device's frame of the
+            calibration) or ``"base"`` (the robot's base link frame).
         points: positions, shape (rows, 3), in the length unit.
         rpy: tool attitudes (roll, pitch, yaw; rows x 3) in the angle unit, or None.
         uncertainty: standard uncertainties, shape (rows, 3) (positions) or (rows, 6) (tool: then
             rotations about the frame's axes), or None when the model has no covariance.
     """
 
-    def __init__(self, text: str) -> None:
-        rows = list(_rows(text))
-        tool = bool(rows) and "roll" in rows[0]
-        self.targets: List[str] = [r["target"] for r in rows]
-        self.configs: List[str] = [r["config"] for r in rows]
-        self.sessions: Optional[List[str]] = (
-            [r["session"] for r in rows] if rows and "session" in rows[0] else None
-        )
-        self.points: np.ndarray = np.array([[float(r[k]) for k in "xyz"] for r in rows]).reshape(-1, 3)
+    def __init__(self, native: Tuple[Any, ...]) -> None:
+        targets, configs, sessions, points, rpy, uncertainty, frame, _ = native
+        self.targets: List[str] = list(targets)
+        self.configs: List[str] = list(configs)
+        self.sessions: Optional[List[str]] = None if sessions is None else list(sessions)
+        self.frame: str = frame
+        self.points: np.ndarray = np.array(points, dtype=float).reshape(-1, 3)
         self.rpy: Optional[np.ndarray] = (
-            np.array([[float(r[k]) for k in ("roll", "pitch", "yaw")] for r in rows]).reshape(-1, 3)
-            if tool
-            else None
+            None if rpy is None else np.array(rpy, dtype=float).reshape(-1, 3)
         )
-        keys = ["u_x", "u_y", "u_z"] + (["u_rx", "u_ry", "u_rz"] if tool else [])
+        width = 6 if rpy is not None else 3
         self.uncertainty: Optional[np.ndarray] = (
-            np.array([[float(r[k]) for k in keys] for r in rows]).reshape(-1, len(keys))
-            if rows and "u_x" in rows[0]
-            else None
+            None if uncertainty is None else np.array(uncertainty, dtype=float).reshape(-1, width)
         )
 
     def __repr__(self) -> str:
@@ -386,11 +382,11 @@ def predict(
         columns = _joints(model, base, tip)
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
     name, arrays = _source(joints, columns, "joints", points=False)
-    stdout, stderr = _native.predict(
+    native = _native.predict(
         os.fspath(model), name, arrays, base, tip, _names(targets), frame, session, length_unit, angle_unit
     )
-    _warn(stderr)
-    return Prediction(stdout)
+    _warn_all(native[-1])
+    return Prediction(native)
 
 
 def compensate(
@@ -422,7 +418,7 @@ def compensate(
     if not _is_path(joints) and not _is_frame(joints):
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
     name, arrays = _source(joints, columns, "joints", points=False)
-    stdout, stderr = _native.compensate(
+    q, errors, failures, notes = _native.compensate(
         os.fspath(nominal),
         os.fspath(model),
         name,
@@ -434,10 +430,9 @@ def compensate(
         length_unit,
         angle_unit,
     )
-    _warn(stderr)
-    rows = list(_rows(stdout))
-    q = np.array([[float(r[c]) for c in columns] for r in rows]).reshape(-1, len(columns))
-    keys = ["position_before", "orientation_before", "position_error", "orientation_error"]
-    errors = np.array([[float(r[k]) for k in keys] for r in rows]).reshape(-1, 4)
-    failures = [line.strip() for line in stderr.splitlines() if line.startswith("  ")]
-    return q, errors, failures
+    _warn_all(notes)
+    return (
+        np.array(q, dtype=float).reshape(-1, len(columns)),
+        np.array(errors, dtype=float).reshape(-1, 4),
+        list(failures),
+    )
