@@ -12,7 +12,7 @@ use std::borrow::Cow;
 use std::io::Write;
 
 pub use dh_sheet::ranges::*;
-pub use dh_sheet::text::{column_width, escape, is_spoofing, MAX_COLUMN};
+pub use dh_sheet::text::{column_width, escape, is_spoofing, name_problem, MAX_COLUMN};
 
 /// A writer that passes text on with every [`is_spoofing`] character but the line feed
 /// [`escape`]d: standard error goes through it, so no message, warning or usage text can put a
@@ -35,22 +35,6 @@ impl Write for Escaping<'_> {
     fn flush(&mut self) -> std::io::Result<()> {
         self.0.flush()
     }
-}
-
-/// What is wrong with a name that a file or option gives (a joint, target, link or column), or
-/// `None`: empty, or holding a control or bidi character (found at character `k`, counted
-/// from 1). The URDF reader refuses the same characters.
-pub fn name_problem(name: &str) -> Option<String> {
-    if name.trim().is_empty() {
-        return Some("expected a name, found an empty one".into());
-    }
-    let (k, c) = name.chars().enumerate().find(|(_, c)| is_spoofing(*c))?;
-    Some(format!(
-        "'{}': expected a name without control or bidi characters, found U+{:04X} at character {}",
-        escape(name),
-        u32::from(c),
-        k + 1
-    ))
 }
 
 #[cfg(test)]

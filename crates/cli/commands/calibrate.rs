@@ -11,8 +11,8 @@
 //! The arguments, inputs and documents it shares with `crate::commands::sockets` and
 //! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args`,
 //! `crate::commands::calibrate_inputs` and `crate::commands::calibrate_doc`, re-exported here;
-//! the run itself is in `run`, the text report in `text`, the calibrated model (`--out`) in
-//! `calibrated`, the residual chart (`--plot`) in `chart`.
+//! the run itself is in `run`, the text report in `text`, the residual chart (`--plot`) in
+//! `chart`; the calibrated model (`--out`) is written by [`dh_sheet::calibrated_writer`].
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -20,25 +20,23 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use dh_calib::calibrate::Report;
 use dh_calib::data::{Measurements, Split};
-use dh_calib::effects::{label_of, EffectContext};
+use dh_calib::effects::label_of;
 use dh_calib::model::{Effect, Model, ModelOptions};
 use dh_calib::pipeline::{self, Calibration, Names, PipelineError, PipelineOptions, Plan, Start};
 use dh_core::pose::from_xyz_rpy;
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Vector3};
-use serde::Serialize;
 
-use crate::commands::written::{self, WrittenDoc};
 use crate::error::Outcome;
 use crate::input::display_name;
 use crate::measured::{parse_effect, DataUnits, LoadedModel};
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::progress::PipelineProgress;
-use crate::sheet::EffectDoc;
 use crate::units::{AngleUnit, LengthUnit};
+use dh_sheet::calibrated_writer::{model_text, row_values};
 
 pub use super::calibrate_args::*;
 pub use super::calibrate_doc::*;
@@ -50,8 +48,6 @@ mod run;
 pub use run::*;
 mod text;
 use text::*;
-mod calibrated;
-use calibrated::*;
 mod chart;
 use chart::*;
 #[cfg(test)]

@@ -175,6 +175,20 @@ pub(crate) struct Inputs {
     pub(crate) cpa: bool,
 }
 
+impl Inputs {
+    /// The nominal model as the calibrated model is written from it
+    /// ([`dh_sheet::calibrated_writer`]).
+    pub(crate) fn nominal(&self) -> dh_sheet::calibrated_writer::Nominal<'_> {
+        dh_sheet::calibrated_writer::Nominal {
+            table: &self.table,
+            robot: self.robot.as_deref(),
+            units: self.units,
+            links: (&self.links.0, &self.links.1),
+            coupled: &self.coupled,
+        }
+    }
+}
+
 /// Keeps the samples of `keep` (by name) and renumbers the targets
 /// (`dh_calib::pipeline::keep_targets`), naming the data file `origin` in the error.
 pub(crate) fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Result<()> {

@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 
 pub use dh_calib::pipeline::{SessionDoc, SessionFrameDoc};
-use nalgebra::Isometry3;
+pub use dh_sheet::calibrated_writer::read_back_deviation;
 
 /// The frames of every session but the first (whose frame the sheet's `device` holds).
 pub fn frames(docs: &[SessionDoc]) -> Vec<SessionFrameDoc> {
@@ -48,24 +48,4 @@ pub fn text(
             }
         );
     }
-}
-
-/// The largest difference (metres, or radians for the rotation) between the sessions written
-/// (`docs` but the first) and those read back.
-pub fn read_back_deviation(docs: &[SessionDoc], back: &[(String, Isometry3<f64>)]) -> f64 {
-    let written = frames(docs);
-    if written.len() != back.len() {
-        return f64::INFINITY;
-    }
-    written
-        .iter()
-        .zip(back)
-        .map(|(w, (name, b))| {
-            if &w.name != name {
-                return f64::INFINITY;
-            }
-            let d = dh_core::pose::from_xyz_rpy(w.xyz, w.rpy).inverse() * b;
-            d.translation.vector.norm().max(d.rotation.angle())
-        })
-        .fold(0.0, f64::max)
 }

@@ -21,5 +21,11 @@ pub mod predict;
 pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
-pub mod urdf_edit;
-pub mod written;
+/// The calibrated URDF as a minimal edit of the user's own (the `dh-sheet` library's).
+pub mod urdf_edit {
+    pub use dh_sheet::urdf_edit::*;
+}
+/// The proof of a calibrated model as written (the `dh-sheet` library's).
+pub mod written {
+    pub use dh_sheet::written::*;
+}

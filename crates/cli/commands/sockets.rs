@@ -309,7 +309,7 @@ fn contact_model_bytes(
     );
     calibrated_bytes(
         path,
-        inputs,
+        &inputs.nominal(),
         &table,
         source,
         serde_yaml::to_value(&section)?,

@@ -16,6 +16,9 @@
 //! | [`extract`] | a URDF chain's DH table as a sheet with the extraction's facts, and its proof ([`prove_extracted`](extract::prove_extracted)) |
 //! | [`check`] | [`compare`]: a URDF chain against a sheet, as a [`CheckReport`] |
 //! | [`ranges`] | the ranges of the numeric options (tolerances, sigmas, counts, levels), one parser each |
+//! | [`urdf_writer`] | a DH table written as a URDF with the same kinematics, and its proof (read back and extracted again) |
+//! | [`urdf_edit`] | a calibrated table written as a minimal edit of the user's own URDF (only the chain's joint origins change) |
+//! | [`written`] | the proof of a calibrated model as written: read back, it predicts every measured point as the fit did |
 //! | [`text`] | escaping names for messages and tables |
 //! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint); [`Hinted`](error::Hinted), a message with a hint |
 //! | [`input`] | reading robot files (URDF, `.xacro`, standard input) and a URDF's chain |
@@ -23,6 +26,7 @@
 //! | [`calibrated`] | a calibrated model as `calibrate --out` writes it (device frame, targets, sessions, covariance), read back to predict |
 //! | [`predict`] | a calibrated model's target positions or tool poses at joint values, with their uncertainty |
 //! | [`compensate`] | the joint values with which a calibrated robot reaches what the nominal model reaches at commanded values |
+//! | [`calibrated_writer`] | writing a calibrated model (`calibrate --out`): a sheet with its `calibration` section or a URDF, proved as written |
 //! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
 //! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
@@ -50,6 +54,7 @@
 )]
 
 pub mod calibrated;
+pub mod calibrated_writer;
 pub mod check;
 pub mod compensate;
 pub mod error;
@@ -66,6 +71,9 @@ pub mod sheet;
 pub mod text;
 pub mod tree_sheet;
 pub mod units;
+pub mod urdf_edit;
+pub mod urdf_writer;
+pub mod written;
 
 pub use check::{compare, CheckReport};
 pub use error::SheetError;

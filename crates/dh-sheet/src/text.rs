@@ -40,3 +40,19 @@ pub fn escape(name: &str) -> Cow<'_, str> {
     }
     Cow::Owned(s)
 }
+
+/// What is wrong with a name that a file or option gives (a joint, target, link or column), or
+/// `None`: empty, or holding a control or bidi character (found at character `k`, counted
+/// from 1). The URDF reader refuses the same characters.
+pub fn name_problem(name: &str) -> Option<String> {
+    if name.trim().is_empty() {
+        return Some("expected a name, found an empty one".into());
+    }
+    let (k, c) = name.chars().enumerate().find(|(_, c)| is_spoofing(*c))?;
+    Some(format!(
+        "'{}': expected a name without control or bidi characters, found U+{:04X} at character {}",
+        escape(name),
+        u32::from(c),
+        k + 1
+    ))
+}

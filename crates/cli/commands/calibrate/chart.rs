@@ -3,34 +3,6 @@
 
 use super::*;
 
-/// Joint values of every sample in `table`'s row order (mimic rows follow their drivers).
-pub(super) fn row_values(table: &DhTable, data: &Measurements) -> Result<Vec<Vec<f64>>> {
-    let column = |name: &str| data.joint_names.iter().position(|n| n == name);
-    let mut sources = Vec::with_capacity(table.rows.len());
-    for r in &table.rows {
-        let s = match (column(&r.name), &r.mimic) {
-            (Some(c), _) => (c, 1.0, 0.0),
-            (None, Some(m)) => (
-                column(&m.joint).with_context(|| format!("no column for joint '{}'", m.joint))?,
-                m.multiplier,
-                m.offset,
-            ),
-            (None, None) => anyhow::bail!("no column for joint '{}'", r.name),
-        };
-        sources.push(s);
-    }
-    Ok(data
-        .samples
-        .iter()
-        .map(|s| {
-            sources
-                .iter()
-                .map(|&(c, m, o)| m * s.q.get(c).copied().unwrap_or(0.0) + o)
-                .collect()
-        })
-        .collect())
-}
-
 /// Pose index of every sample: samples sharing `config` (or else joint values) are one pose,
 /// numbered in order of first appearance; and the number of poses.
 pub(super) fn pose_indices(data: &Measurements) -> (Vec<usize>, usize) {

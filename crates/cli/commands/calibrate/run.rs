@@ -119,7 +119,14 @@ pub fn calibrate(
     // all are written or none.
     let mut files = Vec::new();
     if let Some(path) = &args.out {
-        let (text, proof) = model_text(path, args.model.as_deref(), &inputs, &report, &doc)?;
+        let (text, proof) = model_text(
+            path,
+            args.model.as_deref(),
+            &inputs.nominal(),
+            &inputs.data,
+            &report,
+            &doc,
+        )?;
         let passed = proof.passed;
         doc.written = Some(proof);
         if passed {

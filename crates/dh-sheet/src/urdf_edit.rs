@@ -16,7 +16,7 @@ use dh_core::{Convention, DhTable};
 use nalgebra::Isometry3;
 use urdf_axes::UrdfModel;
 
-use crate::commands::to_urdf::origin;
+use crate::urdf_writer::origin;
 
 /// Largest pose difference (metres or radians) accepted where the edit cannot move a frame:
 /// a tip link without a fixed joint of its own must already sit where the calibrated tool says.
