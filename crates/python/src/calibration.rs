@@ -1,7 +1,7 @@
-//! Calibration from measured points and using its result: `calibrate`, `predict`, `compensate`,
-//! run by the `urdf-dh` library entries the command line runs (`cli::run_calibrate`,
-//! `cli::run_predict`, `cli::run_compensate`), in process and without files: measurements and
-//! joint values cross as arrays ([`ArraysIn`], read by `dh_calib::csv::SampleArrays` with the
+//! Calibration from measured points and using its result: `calibrate` (the `urdf-dh` library
+//! entry the command line runs, `cli::run_calibrate`), `predict` and `compensate` (the library's
+//! `dh_sheet::predict` and `dh_sheet::compensate`, returning numbers), in process and without
+//! files: measurements and joint values cross as arrays ([`ArraysIn`], read by `dh_calib::csv::SampleArrays` with the
 //! CSV reader's checks), or as a file path. Also `measured_joints` and the generic `run`.
 //!
 //! Units: the arrays are in the caller's `length_unit` and `angle_unit`; reports are in metres
@@ -9,11 +9,10 @@
 
 use std::collections::HashMap;
 
-use dh_calib::csv::SampleArrays;
-use dh_core::Convention;
-use pyo3::prelude::*;
 use dh_calib::compensate::{CompensateOptions, DEFAULT_MAX_CHANGE};
+use dh_calib::csv::SampleArrays;
 use dh_calib::predict::Frame;
+use dh_core::Convention;
 use dh_sheet::calibrated::{load_calibrated, CalibratedModel};
 use dh_sheet::compensate::{failed_poses, same_joints};
 use dh_sheet::input::display_name;
@@ -22,6 +21,7 @@ use dh_sheet::model::load_model;
 use dh_sheet::predict::{frame_of, read_joints, Wanted};
 use dh_sheet::ranges;
 use dh_sheet::units::{AngleUnit, LengthUnit};
+use pyo3::prelude::*;
 use urdf_dh_cli::cli::run_calibrate;
 use urdf_dh_cli::commands::calibrate::{CalibrateArgs, CalibrateFormat, EffectsChoice, GivenData};
 use urdf_dh_cli::error::Outcome;
@@ -257,16 +257,16 @@ fn predict(
         )?;
         let (l, a) = (units.length.metres(), units.angle.radians());
         let row = |i: usize| input.rows.get(i);
-        let sessions = input
-            .rows
-            .iter()
-            .any(|r| r.session.is_some())
-            .then(|| {
-                p.predicted
-                    .iter()
-                    .map(|x| row(x.row).and_then(|r| r.session.clone()).unwrap_or_default())
-                    .collect()
-            });
+        let sessions = input.rows.iter().any(|r| r.session.is_some()).then(|| {
+            p.predicted
+                .iter()
+                .map(|x| {
+                    row(x.row)
+                        .and_then(|r| r.session.clone())
+                        .unwrap_or_default()
+                })
+                .collect()
+        });
         let rpy = (p.wanted == Wanted::Tool).then(|| {
             p.predicted
                 .iter()
@@ -291,7 +291,9 @@ fn predict(
                 .iter()
                 .map(|x| {
                     row(x.row).map_or_else(String::new, |r| {
-                        r.config.clone().unwrap_or_else(|| format!("line{}", r.line))
+                        r.config
+                            .clone()
+                            .unwrap_or_else(|| format!("line{}", r.line))
                     })
                 })
                 .collect(),
@@ -338,10 +340,14 @@ fn compensate(
 ) -> PyResult<CompensateOut> {
     let go = || -> anyhow::Result<CompensateOut> {
         let units = units(length_unit, angle_unit)?;
-        let max_change = guarded("max_change", max_change, ranges::max_change)?
-            .unwrap_or(DEFAULT_MAX_CHANGE);
-        let nominal_model =
-            load_model(&nominal, base.as_deref(), tip.as_deref(), Convention::Standard)?;
+        let max_change =
+            guarded("max_change", max_change, ranges::max_change)?.unwrap_or(DEFAULT_MAX_CHANGE);
+        let nominal_model = load_model(
+            &nominal,
+            base.as_deref(),
+            tip.as_deref(),
+            Convention::Standard,
+        )?;
         let (calibrated, warnings) = calibrated(&model, None, None)?;
         same_joints(
             &nominal_model.table,
@@ -355,12 +361,8 @@ fn compensate(
             max_change,
             ..CompensateOptions::default()
         };
-        let rows = dh_sheet::compensate::compensate(
-            &nominal_model.table,
-            &calibrated,
-            &input,
-            &options,
-        )?;
+        let rows =
+            dh_sheet::compensate::compensate(&nominal_model.table, &calibrated, &input, &options)?;
         let (l, a) = (units.length.metres(), units.angle.radians());
         let q = rows
             .iter()

@@ -1,9 +1,11 @@
 //! `urdf_dh._native`: the Python face of the `urdf-dh` library, thin on purpose.
 //!
-//! Every computation is the library's: extraction and its proof (`table`), `check`'s comparison,
-//! and calibration, prediction and compensation (`calibration`: the `urdf-dh` library entries
-//! `run_calibrate`, `run_predict`, `run_compensate`, with measurements and joint values handed
-//! over as arrays, no files); this crate only converts arguments and results. Poses cross as 4x4
+//! Every computation is the library's: extraction and its proof and `check`'s comparison
+//! (`table`: `dh_sheet::extract`, `dh_sheet::check`), prediction and compensation
+//! (`calibration`: `dh_sheet::predict`, `dh_sheet::compensate`), and calibration (the `urdf-dh`
+//! library entry `cli::run_calibrate`, which reads the files and dispatches serial, tree and
+//! contact data to `dh_calib::pipeline`), with measurements and joint values handed over as
+//! arrays, no files; this crate only converts arguments and results. Poses cross as 4x4
 //! homogeneous matrices (nested lists, row-major; metres and radians), which the pure-Python
 //! package turns into numpy arrays. Errors carry the CLI's message (`{e:#}`, the whole context
 //! chain) and its `hint:` line.
