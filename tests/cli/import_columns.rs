@@ -249,3 +249,204 @@ fn the_innopolis_mat_file_imports_as_its_csv() {
         }
     }
 }
+
+/// A 6-DoF export: the rows of a simulated 6-DoF set laid out as a user's tool might write
+/// them (`;`, millimetres, degrees, the quaternion's scalar last or roll-pitch-yaw), imported
+/// with `--quaternion`/`--rpy` and `--sigma-rot`: the canonical reader gets the simulated
+/// values back, and the import calibrates as the simulated set does.
+#[test]
+fn a_six_dof_export_imports_as_the_set_it_came_from() {
+    const UR5: &str = "fixtures/robots/ur5/vendor.yaml";
+    let dir = tempfile::tempdir().unwrap();
+    let sim = dir.path().join("sim.csv").to_string_lossy().into_owned();
+    let (code, _, err) = exec(&[
+        "simulate",
+        "--model",
+        UR5,
+        "--poses",
+        "40",
+        "--noise",
+        "20e-6",
+        "--orientation-noise",
+        "50e-6",
+        "--random-errors",
+        "0.0005,0.0003",
+        "--seed",
+        "5",
+        "--out",
+        &sim,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let header: Vec<&str> = text
+        .lines()
+        .find(|l| !l.starts_with('#'))
+        .unwrap()
+        .split(',')
+        .collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let original = rows(&text);
+    // Numbers of a simulated row: 6 joints, x, y, z, sigma, qw, qx, qy, qz, sigma_rot.
+    assert_eq!(original[0].0.len(), 15);
+    assert_eq!((col("x"), col("qw")), (6, 12));
+    let deg = 180.0 / std::f64::consts::PI;
+    let mut quaternion = String::from("pose;J1;J2;J3;J4;J5;J6;X;Y;Z;S;QX;QY;QZ;QW;SR\n");
+    let mut rpy = String::from("pose;J1;J2;J3;J4;J5;J6;X;Y;Z;S;R;P;YW;SR\n");
+    for (i, (n, _)) in original.iter().enumerate() {
+        let joints: Vec<String> = n[..6].iter().map(|v| format!("{}", v * deg)).collect();
+        let mm: Vec<String> = n[6..10].iter().map(|v| format!("{}", v * 1e3)).collect();
+        let (w, x, y, z) = (n[10], n[11], n[12], n[13]);
+        let sr = n[14] * deg;
+        let common = format!("p{i};{};{}", joints.join(";"), mm.join(";"));
+        quaternion.push_str(&format!("{common};{x};{y};{z};{w};{sr}\n"));
+        // URDF roll-pitch-yaw of the same rotation.
+        let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+        let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+        let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+        rpy.push_str(&format!(
+            "{common};{};{};{};{sr}\n",
+            roll * deg,
+            pitch * deg,
+            yaw * deg
+        ));
+    }
+    let report = |data: &str| {
+        let (code, out, err) = exec(&["calibrate", "--model", UR5, "--data", data]);
+        assert_eq!(code, 0, "{err}");
+        out.lines()
+            .filter(|l| l.starts_with("result:") || l.starts_with("angle:"))
+            .map(String::from)
+            .collect::<Vec<_>>()
+    };
+    let expected = report(&sim);
+    assert_eq!(expected.len(), 2, "{expected:?}");
+    for (name, export, rotation) in [
+        (
+            "quaternion.csv",
+            quaternion,
+            ["--quaternion", "QW,QX,QY,QZ"],
+        ),
+        ("rpy.csv", rpy, ["--rpy", "R,P,YW"]),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, export).unwrap();
+        let out = dir.path().join(format!("imported-{name}"));
+        let (code, _, err) = exec(&[
+            "import",
+            "--layout",
+            "columns",
+            "--joints",
+            "J1,J2,J3,J4,J5,J6",
+            "--joint-names",
+            &header[..6].join(","),
+            "--points",
+            "X,Y,Z",
+            "--sigma",
+            "S",
+            rotation[0],
+            rotation[1],
+            "--sigma-rot",
+            "SR",
+            "--config",
+            "pose",
+            "--length-unit",
+            "mm",
+            "--angle-unit",
+            "deg",
+            &path.to_string_lossy(),
+            "--out",
+            &out.to_string_lossy(),
+        ]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let imported = std::fs::read_to_string(&out).unwrap();
+        let back = rows(&imported);
+        assert_eq!(back.len(), original.len());
+        for ((a, _), (b, _)) in back.iter().zip(&original) {
+            assert_eq!(a.len(), b.len(), "{name}");
+            // A quaternion and its negative are one rotation: compare up to the sign.
+            let sign = if a[10] * b[10] + a[11] * b[11] + a[12] * b[12] + a[13] * b[13] < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            for (k, (x, y)) in a.iter().zip(b).enumerate() {
+                let y = if (10..14).contains(&k) { sign * y } else { *y };
+                assert!(
+                    (x - y).abs() <= 1e-9 * y.abs().max(1e-3),
+                    "{name}: column {k}: {x} vs {y}"
+                );
+            }
+        }
+        assert_eq!(report(&out.to_string_lossy()), expected, "{name}");
+    }
+    // Orientation options that do not fit: usage errors, exit 2.
+    let path = dir
+        .path()
+        .join("quaternion.csv")
+        .to_string_lossy()
+        .into_owned();
+    for (extra, expected) in [
+        (
+            &[
+                "--quaternion",
+                "QW,QX,QY",
+                "--sigma-rot",
+                "SR",
+                "--sigma",
+                "S",
+            ][..],
+            "--quaternion: expected 4 columns (qw, qx, qy, qz), found 3",
+        ),
+        (
+            &["--quaternion", "QW,QX,QY,QZ", "--sigma", "S"][..],
+            "expected --sigma-rot",
+        ),
+        (
+            &["--quaternion", "QW,QX,QY,QZ", "--sigma-rot", "SR"][..],
+            "expected --sigma as well",
+        ),
+        (
+            &[
+                "--quaternion",
+                "QW,QX,QY,QZ",
+                "--sigma-rot",
+                "SQ",
+                "--sigma",
+                "S",
+            ][..],
+            "expected a column named 'SQ'",
+        ),
+        (
+            // Degrees read as radians (line 2 is the zero pose).
+            &[
+                "--rpy",
+                "J1,J2,J3",
+                "--sigma-rot",
+                "SR",
+                "--sigma",
+                "S",
+                "--angle-unit",
+                "rad",
+            ][..],
+            "quaternion.csv: line 3: expected an angle within a turn in column 'J",
+        ),
+    ] {
+        let mut args = vec![
+            "import",
+            "--layout",
+            "columns",
+            "--joints",
+            "QX,QY",
+            "--points",
+            "X,Y,Z",
+            "--length-unit",
+            "mm",
+        ];
+        args.extend_from_slice(extra);
+        args.push(&path);
+        let (code, out, err) = exec(&args);
+        assert_eq!(code, 2, "{extra:?}: {err}");
+        assert!(out.is_empty());
+        assert!(err.contains(expected), "{extra:?}: {err}");
+    }
+}

@@ -1,6 +1,7 @@
 //! 6-DoF poses end to end: `simulate --orientation-noise` writes orientation columns,
 //! `calibrate` fits them (angle RMS at its noise floor, JSON and text), and bad orientation
-//! cells exit 2 naming the file, line and column.
+//! cells exit 2 naming the file, line and column; an effect planted with `--effect` turns the
+//! orientations too.
 
 use serde_json::Value;
 
@@ -212,4 +213,91 @@ fn target_rotations_are_in_the_truth_and_the_report() {
         target.get("xyz").is_some() && target.get("rpy").is_none(),
         "{target:?}"
     );
+}
+
+/// An effect planted with `--effect` turns the simulated orientations too (the tip frame of
+/// the robot with the effect): `--effects auto` finds it and recovers its value within 3
+/// standard errors, position and angle RMS at their floors, and the truth's target rotation
+/// is still the one calibrate estimates.
+#[test]
+fn a_planted_effect_turns_the_orientations_and_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("e.csv").to_string_lossy().into_owned();
+    let truth_path = dir.path().join("e.truth.yaml");
+    ok(&[
+        "simulate",
+        "--model",
+        MODEL,
+        "--poses",
+        "120",
+        "--noise",
+        "20e-6",
+        "--orientation-noise",
+        "50e-6",
+        "--effect",
+        "gear_ratio:elbow_joint=1e-3",
+        "--seed",
+        "3",
+        "--out",
+        &data,
+    ]);
+    let truth: serde_yaml::Value =
+        serde_yaml::from_str(&std::fs::read_to_string(&truth_path).unwrap()).unwrap();
+    assert_eq!(
+        truth["truth"]["effects"][0][0].as_str(),
+        Some("gear_ratio:elbow_joint")
+    );
+    let report: Value = serde_json::from_str(&ok(&[
+        "calibrate",
+        "--model",
+        MODEL,
+        "--data",
+        &data,
+        "--effects",
+        "auto",
+        "--format",
+        "json",
+    ]))
+    .unwrap();
+    let selected: Vec<&str> = report["selected_effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap())
+        .collect();
+    assert_eq!(selected, ["gear_ratio:elbow_joint"]);
+    let p = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "gear_ratio:elbow_joint")
+        .unwrap();
+    let (est, se) = (
+        p["estimate"].as_f64().unwrap(),
+        p["std_error"].as_f64().unwrap(),
+    );
+    assert!((est - 1e-3).abs() < 3.0 * se, "{est:e} ± {se:e}");
+    let last = report["steps"].as_array().unwrap().last().unwrap().clone();
+    for (r, f) in [
+        (
+            report["rms_after"].as_f64().unwrap(),
+            report["noise_floor"].as_f64().unwrap(),
+        ),
+        (
+            last["angle_rms"].as_f64().unwrap(),
+            report["angle_noise_floor"].as_f64().unwrap(),
+        ),
+    ] {
+        assert!((r / f - 1.0).abs() < 0.1, "rms {r:e}, floor {f:e}");
+    }
+    assert_eq!(report["verdict"]["summary"], "model complete");
+    let (est, tru) = (
+        &report["targets"][0]["rpy"],
+        &truth["truth"]["targets"][0]["rpy"],
+    );
+    for a in 0..3 {
+        let (e, t) = (est[a].as_f64().unwrap(), tru[a].as_f64().unwrap());
+        // Twice one pose's orientation noise, as above.
+        assert!((e - t).abs() < 1e-4, "rpy[{a}] {e} vs {t}");
+    }
 }

@@ -242,6 +242,19 @@ pub struct ImportCli {
     /// sessions; each gets its own device frame).
     #[arg(long, value_name = "COL")]
     session: Option<String>,
+    /// `--layout columns`: a 6-DoF device's orientation of the target frame in the device
+    /// frame, as a quaternion: its columns in the order qw, qx, qy, qz (scalar first, whatever
+    /// the file's order); needs --sigma-rot and --sigma.
+    #[arg(long, value_name = "COLS", conflicts_with = "rpy")]
+    quaternion: Option<String>,
+    /// `--layout columns`: the orientation as roll, pitch, yaw columns (URDF's
+    /// Rz(yaw)·Ry(pitch)·Rx(roll), in --angle-unit); needs --sigma-rot and --sigma.
+    #[arg(long, value_name = "COLS")]
+    rpy: Option<String>,
+    /// `--layout columns`: the orientation's standard deviation per axis column (in
+    /// --angle-unit).
+    #[arg(long, value_name = "COL")]
+    sigma_rot: Option<String>,
     /// `--layout columns`: the separator [default: `,`, `;` or tab, detected].
     #[arg(long, value_enum)]
     delimiter: Option<Delimiter>,
@@ -299,8 +312,12 @@ impl ImportCli {
     /// Column options without `--layout columns`, or `--layout columns` without `--joints` and
     /// `--points` (three columns), or a malformed column list.
     pub fn into_args(self) -> Result<ImportArgs> {
-        use dh_calib::import::columns::{ColumnMap, ColumnRef};
-        let given_columns = self.joints.is_some() || self.points.is_some();
+        use dh_calib::import::columns::{ColumnMap, ColumnRef, OrientationMap, RotationColumns};
+        let given_columns = self.joints.is_some()
+            || self.points.is_some()
+            || self.quaternion.is_some()
+            || self.rpy.is_some()
+            || self.sigma_rot.is_some();
         let columns = match self.layout {
             Some(LayoutChoice::Columns) => {
                 let list = |option: &str, v: &Option<String>| -> Result<Vec<ColumnRef>> {
@@ -331,6 +348,47 @@ impl ImportCli {
                 let point = <[ColumnRef; 3]>::try_from(points).map_err(|p| {
                     anyhow::anyhow!("--points: expected 3 columns (x, y, z), found {}", p.len())
                 })?;
+                let rotation = match (&self.quaternion, &self.rpy) {
+                    (Some(_), _) => Some(RotationColumns::Quaternion(
+                        <[ColumnRef; 4]>::try_from(list("--quaternion", &self.quaternion)?)
+                            .map_err(|c| {
+                                anyhow::anyhow!(
+                                    "--quaternion: expected 4 columns (qw, qx, qy, qz), found {}",
+                                    c.len()
+                                )
+                            })?,
+                    )),
+                    (None, Some(_)) => Some(RotationColumns::Rpy(
+                        <[ColumnRef; 3]>::try_from(list("--rpy", &self.rpy)?).map_err(|c| {
+                            anyhow::anyhow!(
+                                "--rpy: expected 3 columns (roll, pitch, yaw), found {}",
+                                c.len()
+                            )
+                        })?,
+                    )),
+                    (None, None) => None,
+                };
+                let orientation = match (rotation, one("--sigma-rot", &self.sigma_rot)?) {
+                    (Some(rotation), Some(sigma)) => {
+                        if self.sigma.is_none() {
+                            return Err(hinted(
+                                "--quaternion/--rpy: expected --sigma as well (the position sigma weighs the angle against the position), found none".to_string(),
+                                "urdf-dh import --layout columns --joints 1-6 --points 7-9 --sigma 10 --quaternion 11-14 --sigma-rot 15 export.csv",
+                            ));
+                        }
+                        Some(OrientationMap { rotation, sigma })
+                    }
+                    (Some(_), None) => {
+                        return Err(hinted(
+                            "--quaternion/--rpy: expected --sigma-rot (the orientation's standard deviation column), found none".to_string(),
+                            "urdf-dh import --layout columns --joints 1-6 --points 7-9 --sigma 10 --quaternion 11-14 --sigma-rot 15 export.csv",
+                        ))
+                    }
+                    (None, Some(_)) => {
+                        anyhow::bail!("--sigma-rot: expected --quaternion or --rpy, found neither")
+                    }
+                    (None, None) => None,
+                };
                 if self.files.len() != 1 {
                     anyhow::bail!(
                         "--layout columns: expected one file, found {}",
@@ -346,6 +404,7 @@ impl ImportCli {
                     config: one("--config", &self.config)?,
                     set: one("--set", &self.set)?,
                     session: one("--session", &self.session)?,
+                    orientation,
                     delimiter: self.delimiter.map(|d| match d {
                         Delimiter::Comma => ',',
                         Delimiter::Semicolon => ';',
@@ -359,7 +418,7 @@ impl ImportCli {
             }
             _ if given_columns => {
                 return Err(hinted(
-                    "--joints/--points: expected --layout columns, found another layout".to_string(),
+                    "--joints/--points/--quaternion/--rpy/--sigma-rot: expected --layout columns, found another layout".to_string(),
                     "column options map your own export: urdf-dh import --layout columns --joints 1-6 --points 7-9 export.csv",
                 ))
             }

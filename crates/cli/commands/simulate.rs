@@ -5,13 +5,12 @@
 
 use std::io::Write;
 use std::path::Path;
-use std::sync::Arc;
 
 use anyhow::Result;
 use dh_calib::csv::write_measurements;
-use dh_calib::data::Measurements;
-use dh_calib::model::{Effect, Model, ModelOptions};
-use dh_calib::simulate::{simulate as run_simulation, Errors, Mode, SimulationOptions, Truth};
+use dh_calib::simulate::{
+    plant_effects, simulate as run_simulation, Errors, Mode, SimulationOptions,
+};
 use dh_core::{Convention, DhTable, JointKind};
 use serde::Serialize;
 
@@ -114,58 +113,6 @@ struct TruthSection {
     targets: Vec<TargetDoc>,
     errors: Vec<(String, f64)>,
     effects: Vec<(String, f64)>,
-}
-
-/// Adds the effects to the simulated points: the difference between the true model with and
-/// without them, at each sample (the noise is additive, so it is kept).
-fn apply_effects(
-    nominal: &DhTable,
-    data: &mut Measurements,
-    truth: &Truth,
-    effects: &[(Arc<dyn Effect>, Vec<f64>)],
-    options: &ModelOptions,
-) -> Result<Vec<(String, f64)>> {
-    let mut model = Model::new(nominal, &data.targets, options)?;
-    model.set_device(&truth.device);
-    for (k, (_, t)) in truth.targets.iter().enumerate() {
-        model.set_target(k, *t);
-    }
-    let mut ranges = Vec::new();
-    for (e, v) in effects {
-        let r = model.add_effect(e.clone())?;
-        if r.len() != v.len() {
-            anyhow::bail!(
-                "effect {}: expected {} value(s), found {}",
-                e.parameter_names().join(", "),
-                r.len(),
-                v.len()
-            );
-        }
-        ranges.push(r);
-    }
-    let mut x = vec![0.0; model.parameter_count()];
-    for (name, v) in &truth.errors {
-        if let Some(i) = model.index_of(name) {
-            x[i] = *v;
-        }
-    }
-    let plain = x.clone();
-    let mut applied = Vec::new();
-    for ((e, v), r) in effects.iter().zip(ranges) {
-        for ((i, val), name) in r.zip(v).zip(e.parameter_names()) {
-            x[i] = *val;
-            applied.push((name, *val));
-        }
-    }
-    // The effects of the sample order see each sample's place in the file's sequence.
-    let contexts = dh_calib::effects_order::measurement_contexts(data);
-    for (s, c) in data.samples.iter_mut().zip(&contexts) {
-        // Each session's own device frame (the difference is a vector in that frame).
-        model.set_device(truth.sessions.get(s.session).unwrap_or(&truth.device));
-        s.point +=
-            model.point_in(&x, &s.q, c, s.target) - model.point_in(&plain, &s.q, c, s.target);
-    }
-    Ok(applied)
 }
 
 /// The CPA sweeps: home at the middle of each joint's range, one arc for all.
@@ -302,15 +249,10 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         orientation_sigma: args.orientation_noise,
         ..SimulationOptions::default()
     };
-    if args.orientation_noise.is_some() {
-        if args.noise == 0.0 {
-            anyhow::bail!(
-                "--orientation-noise: expected --noise > 0 as well (the position sigma weighs the angle), found --noise 0"
-            );
-        }
-        if !effects.is_empty() {
-            anyhow::bail!("--orientation-noise: expected no --effect (effects are added to the positions only), found {}", effects.len());
-        }
+    if args.orientation_noise.is_some() && args.noise == 0.0 {
+        anyhow::bail!(
+            "--orientation-noise: expected --noise > 0 as well (the position sigma weighs the angle), found --noise 0"
+        );
     }
     let (mut data, truth) = run_simulation(table, &options).map_err(|e| {
         let msg = format!("simulation failed: {e}");
@@ -322,7 +264,8 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
             _ => anyhow::anyhow!(msg),
         }
     })?;
-    let applied = apply_effects(table, &mut data, &truth, &effects, &options.model)?;
+    // Effects change the positions and, for a 6-DoF device, the orientations.
+    let applied = plant_effects(table, &mut data, &truth, &effects, &options.model)?;
     // The simulator draws the rows' (serial) values; the file holds what the controller reports.
     model.uncouple(&mut data)?;
     if args.noise == 0.0 {

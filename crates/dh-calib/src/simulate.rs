@@ -5,6 +5,12 @@
 //! frame, measuring targets at random or given positions in the tip frame, with Gaussian noise
 //! of a given standard deviation on each device axis. Everything is drawn from one ChaCha8
 //! stream seeded by [`SimulationOptions::seed`], so a seed reproduces a data set exactly.
+//!
+//! Effects of the true robot are either part of the simulated model
+//! ([`SimulationOptions::effects`], their values among [`Errors::Explicit`]) or planted
+//! afterwards in data simulated without them, with values of their own ([`plant_effects`],
+//! what `urdf-dh simulate --effect` uses, whatever the geometric errors): both give the
+//! positions and, for a 6-DoF device, the orientations of the robot with the effects.
 
 use dh_core::{DhTable, JointSampler};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -15,6 +21,9 @@ use rand_distr::StandardNormal;
 use crate::data::{Measurements, Sample, Split};
 use crate::fit::CalibError;
 use crate::model::{Block, Field, Model, ModelOptions, Unit};
+
+mod plant;
+pub use plant::{plant_effects, PlantedEffect};
 
 /// Which parameter errors the true robot has.
 #[derive(Clone, Debug, PartialEq, Default)]

@@ -1,13 +1,14 @@
 //! The user's own export, laid out by a column map: which columns hold the joint values, the
 //! measured point, and optionally the target, the point's standard deviation, the pose
-//! identifier and the calibration/validation split; in which units; with which separator; with
-//! or without a header line.
+//! identifier, the calibration/validation split, the session and a 6-DoF device's orientation
+//! ([`orientation`]); in which units; with which separator; with or without a header line.
 //!
 //! # Frames and units
 //! Points are in the measuring device's frame, converted to metres with
 //! [`ColumnMap::length_scale`]; joint values to radians with [`ColumnMap::angle_scale`] (joints
-//! named in [`ColumnMap::prismatic`] to metres with the length scale). Lines starting with `#`
-//! are comments.
+//! named in [`ColumnMap::prismatic`] to metres with the length scale). Orientations are the
+//! target frame's rotation in the device frame, their angles in the angle unit (see
+//! [`orientation`]). Lines starting with `#` are comments.
 //!
 //! # Columns
 //! A [`ColumnRef`] is a 1-based column number or a header name. A decimal comma (`1,5`) is not
@@ -20,6 +21,9 @@ use crate::csv::{
     MAX_PLAUSIBLE_RADIANS as MAX_RADIANS, SIGMA_FLOOR,
 };
 use crate::data::{Measurements, Sample, Split};
+
+pub mod orientation;
+pub use orientation::{OrientationMap, RotationColumns};
 
 /// A column by 1-based number or by header name.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -85,6 +89,9 @@ pub struct ColumnMap {
     /// The measurement session column (a non-empty name per row; see [`crate::sessions`]):
     /// each session has its own device frame. Without it every row is in one session.
     pub session: Option<ColumnRef>,
+    /// A 6-DoF device's orientation columns ([`orientation`]); `None`: points. Needs
+    /// [`ColumnMap::sigma`] (the position sigma weighs the angle against the position).
+    pub orientation: Option<OrientationMap>,
     /// Separator; `None` detects `,`, `;` or tab from the first data line.
     pub delimiter: Option<char>,
     /// Whether the first non-comment line is a header.
@@ -181,6 +188,17 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         optional(&map.set)?,
     );
     let session_col = optional(&map.session)?;
+    let orientation_cols = match &map.orientation {
+        None => None,
+        Some(_) if sigma_col.is_none() => {
+            return Err(DataError::Content {
+                expected: "a sigma column with orientation columns (the position sigma weighs                            the angle against the position)"
+                    .into(),
+                found: "none".into(),
+            })
+        }
+        Some(o) => Some(o.resolve(&resolve)?),
+    };
     let joint_names: Vec<String> = if !map.joint_names.is_empty() {
         if map.joint_names.len() != joints.len() {
             return Err(DataError::Content {
@@ -332,8 +350,22 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
                 }
             }
         };
+        let orientation = match &orientation_cols {
+            Some(o) => o.cells(line, &cell, &column_name, map.angle_scale)?,
+            None => None,
+        };
+        if let (Some(_), None, Some(c)) = (&orientation, sigma, sigma_col) {
+            return Err(DataError::Format {
+                line,
+                expected: format!(
+                    "a standard deviation in column '{}' for a row with an orientation",
+                    column_name(c)
+                ),
+                found: "an empty cell".into(),
+            });
+        }
         m.samples.push(Sample {
-            orientation: None,
+            orientation,
             session,
             q,
             target,
@@ -385,6 +417,7 @@ mod tests {
             config: None,
             set: None,
             session: None,
+            orientation: None,
             delimiter: None,
             header: true,
             length_scale: 1e-3,
