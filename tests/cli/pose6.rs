@@ -301,3 +301,84 @@ fn a_planted_effect_turns_the_orientations_and_is_found() {
         assert!((e - t).abs() < 1e-4, "rpy[{a}] {e} vs {t}");
     }
 }
+
+/// The rows of a `predict` CSV by column name.
+fn predicted(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+/// A calibration on 6-DoF data predicts: the sheet `calibrate --out` writes reads back with its
+/// targets' rotations (the covariance names their `rx|ry|rz`), and `predict` gives each
+/// target's position and attitude with their uncertainties, which the true robot (the truth
+/// file, read the same way) agrees with at the rate the uncertainties state.
+#[test]
+fn a_six_dof_calibration_predicts_positions_and_attitudes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
+    let (data, cal, truth) = (path("d.csv"), path("cal.yaml"), path("d.truth.yaml"));
+    ok(&[
+        "simulate",
+        "--model",
+        MODEL,
+        "--poses",
+        "120",
+        "--noise",
+        "20e-6",
+        "--orientation-noise",
+        "50e-6",
+        "--random-errors",
+        "0.0005,0.0003",
+        "--seed",
+        "5",
+        "--out",
+        &data,
+    ]);
+    ok(&[
+        "calibrate",
+        "--model",
+        MODEL,
+        "--data",
+        &data,
+        "--out",
+        &cal,
+        "--quiet",
+    ]);
+    let est = predicted(&ok(&["predict", "--model", &cal, "--joints", &data]));
+    let tru = predicted(&ok(&["predict", "--model", &truth, "--joints", &data]));
+    assert_eq!(est.len(), 120);
+    let num = |r: &std::collections::HashMap<String, String>, k: &str| -> f64 {
+        r[k].parse()
+            .unwrap_or_else(|_| panic!("{k}: {:?}", r.get(k)))
+    };
+    let (mut z2, mut n, mut worst_angle_z) = (0.0, 0.0, 0.0f64);
+    for (e, t) in est.iter().zip(&tru) {
+        for (c, u) in [("x", "u_x"), ("y", "u_y"), ("z", "u_z")] {
+            let z = (num(e, c) - num(t, c)) / num(e, u);
+            z2 += z * z;
+            n += 1.0;
+        }
+        // The attitude: the angle between the estimated and the true rotation, against the
+        // largest rotation uncertainty.
+        let rot = |r: &std::collections::HashMap<String, String>| {
+            dh_core::pose::from_xyz_rpy([0.0; 3], [num(r, "roll"), num(r, "pitch"), num(r, "yaw")])
+                .rotation
+        };
+        let angle = rot(e).angle_to(&rot(t));
+        let u = ["u_rx", "u_ry", "u_rz"].map(|k| num(e, k));
+        assert!(u.iter().all(|v| *v > 0.0 && *v < 1e-3), "{u:?}");
+        worst_angle_z = worst_angle_z.max(angle / u.iter().copied().fold(0.0, f64::max));
+    }
+    let rms_z = (z2 / n).sqrt();
+    assert!((0.3..3.0).contains(&rms_z), "position z RMS {rms_z}");
+    assert!(worst_angle_z < 6.0, "worst attitude {worst_angle_z} sigma");
+}

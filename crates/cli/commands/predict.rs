@@ -219,7 +219,8 @@ fn render(
     let units = args.units;
     let lu = units.length;
     let au = units.angle;
-    let tool = predictions.wanted == Wanted::Tool;
+    // Attitude columns for the tool and for 6-DoF targets (empty cells for point targets).
+    let attitude = predictions.has_attitude;
     let with_u = predictions.has_uncertainty;
     let sessions = input.rows.iter().any(|r| r.session.is_some());
     let mut text = format!(
@@ -235,7 +236,7 @@ fn render(
         au.symbol(),
         lu.symbol(),
         lu.symbol(),
-        if tool {
+        if attitude {
             format!(", roll,pitch,yaw in {} (URDF rpy)", au.symbol())
         } else {
             String::new()
@@ -243,7 +244,7 @@ fn render(
         if with_u {
             format!(
                 "; u_* standard uncertainty (1 sigma, first order from the calibration's covariance){}",
-                if tool {
+                if attitude {
                     format!(", u_rx,u_ry,u_rz about the frame's axes in {}", au.symbol())
                 } else {
                     String::new()
@@ -255,7 +256,7 @@ fn render(
     );
     let mut header: Vec<String> = model.joints.columns.iter().map(|n| quoted(n)).collect();
     header.extend(["x", "y", "z"].map(String::from));
-    if tool {
+    if attitude {
         header.extend(["roll", "pitch", "yaw"].map(String::from));
     }
     header.extend(["target", "config"].map(String::from));
@@ -264,7 +265,7 @@ fn render(
     }
     if with_u {
         header.extend(["u_x", "u_y", "u_z"].map(String::from));
-        if tool {
+        if attitude {
             header.extend(["u_rx", "u_ry", "u_rz"].map(String::from));
         }
     }
@@ -283,8 +284,10 @@ fn render(
             .map(|(v, pr)| joint_cell(*v, *pr, units))
             .collect();
         cells.extend(p.position.iter().map(|v| length(*v)));
-        if let Some(rpy) = p.rpy {
-            cells.extend(rpy.iter().map(|v| angle(*v)));
+        match p.rpy {
+            Some(rpy) => cells.extend(rpy.iter().map(|v| angle(*v))),
+            None if attitude => cells.extend([String::new(), String::new(), String::new()]),
+            None => {}
         }
         cells.push(quoted(&p.target));
         // The config, and the session when the file has them.
@@ -299,6 +302,9 @@ fn render(
         if let Some(u) = &p.uncertainty {
             cells.extend(u.iter().take(3).map(|v| length(*v)));
             cells.extend(u.iter().skip(3).map(|v| angle(*v)));
+            if attitude && u.len() == 3 {
+                cells.extend([String::new(), String::new(), String::new()]);
+            }
         }
         text.push_str(&cells.join(","));
         text.push('\n');

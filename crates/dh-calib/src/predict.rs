@@ -27,7 +27,7 @@
 use std::sync::Arc;
 
 use dh_core::DhTable;
-use nalgebra::{DMatrix, Isometry3, Vector3, Vector6};
+use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3, Vector6};
 
 use crate::effects::{parse_label_in, EffectContext};
 use crate::fit::CalibError;
@@ -134,11 +134,32 @@ impl Calibrated {
             &effects,
             &report.device,
             &report.targets,
-        )?;
+        )?
+        .with_target_rotations(&report.target_rotations);
         match &report.covariance {
             Some(cov) => c.with_covariance(cov),
             None => Ok(c),
         }
+    }
+
+    /// The same robot with target `k` a full frame of rotation `rotations[k]` in the tip frame
+    /// (a 6-DoF probe's; `None`: a point target), so that a covariance over the targets'
+    /// orientation parameters (`target.<name>.rx|ry|rz`) fits it.
+    pub fn with_target_rotations(mut self, rotations: &[Option<UnitQuaternion<f64>>]) -> Self {
+        for (k, r) in rotations.iter().enumerate() {
+            if let Some(r) = r {
+                if self.model.add_target_orientation(k).is_some() {
+                    self.model.set_target_rotation(k, r);
+                }
+            }
+        }
+        self.x.resize(self.model.parameter_count(), 0.0);
+        self
+    }
+
+    /// Target `k`'s rotation in the tip frame (identity for a point target).
+    pub fn target_rotation(&self, k: usize) -> UnitQuaternion<f64> {
+        self.model.target_rotation_at(&self.x, k)
     }
 
     /// The same robot measured from another device frame `T_device_base` (another
@@ -201,6 +222,45 @@ impl Calibrated {
     /// device scale.
     pub fn tool(&self, q: &[f64], frame: Frame) -> Isometry3<f64> {
         self.tool_at(&self.x, q, frame)
+    }
+
+    /// A 6-DoF target's orientation at row values `q`: the tip's rotation in `frame` times the
+    /// target's rotation in the tip frame; `None` for a point target.
+    pub fn target_orientation(
+        &self,
+        q: &[f64],
+        target: usize,
+        frame: Frame,
+    ) -> Option<UnitQuaternion<f64>> {
+        self.model.target_orientation(target)?;
+        Some(self.orientation_at(&self.x, q, target, frame))
+    }
+
+    /// Standard uncertainty of [`Calibrated::target_orientation`]: the rotation about each axis
+    /// of `frame` (radians); `None` for a point target or without a covariance.
+    pub fn target_orientation_uncertainty(
+        &self,
+        q: &[f64],
+        target: usize,
+        frame: Frame,
+    ) -> Option<Vector3<f64>> {
+        let at = self.target_orientation(q, target, frame)?;
+        let g = self.derivative(3, |x| {
+            let r = (self.orientation_at(x, q, target, frame) * at.inverse()).scaled_axis();
+            [r.x, r.y, r.z, 0.0, 0.0, 0.0]
+        })?;
+        let u = self.propagate(&g)?;
+        Some(Vector3::new(u[0], u[1], u[2]))
+    }
+
+    fn orientation_at(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        target: usize,
+        frame: Frame,
+    ) -> UnitQuaternion<f64> {
+        self.tool_at(x, q, frame).rotation * self.model.target_rotation_at(x, target)
     }
 
     fn point_at(&self, x: &[f64], q: &[f64], target: usize, frame: Frame) -> Vector3<f64> {

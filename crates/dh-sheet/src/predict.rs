@@ -145,10 +145,11 @@ pub struct Predicted {
     pub target: String,
     /// Position (m) in the prediction's frame.
     pub position: Vector3<f64>,
-    /// The tool's attitude (roll, pitch, yaw; rad), for [`Wanted::Tool`].
+    /// The attitude (URDF roll, pitch, yaw; rad) of the tool ([`Wanted::Tool`]) or of a 6-DoF
+    /// target (one calibrated with orientations); `None` for a point target.
     pub rpy: Option<[f64; 3]>,
-    /// Standard uncertainty (1 sigma, first order): of the position's x, y, z (m), then for
-    /// the tool of the rotation about the frame's axes (rad); `None` without covariance.
+    /// Standard uncertainty (1 sigma, first order): of the position's x, y, z (m), then, with
+    /// an attitude, of the rotation about the frame's axes (rad); `None` without covariance.
     pub uncertainty: Option<Vec<f64>>,
 }
 
@@ -164,6 +165,8 @@ pub struct Predictions {
     pub per_session: bool,
     /// Whether the model has a covariance (then every prediction has its uncertainty).
     pub has_uncertainty: bool,
+    /// Whether any prediction has an attitude (the tool, or a 6-DoF target).
+    pub has_attitude: bool,
     /// One per joint row and target, in row order.
     pub predicted: Vec<Predicted>,
 }
@@ -261,14 +264,23 @@ pub fn predict(
             });
         } else {
             for (k, name) in plan.get(i).into_iter().flatten() {
+                // A 6-DoF target's orientation (and its uncertainty) follows its position.
+                let rotation = c.target_orientation(&q, *k, frame);
+                let mut uncertainty = c
+                    .point_uncertainty(&q, *k, frame)
+                    .map(|u| u.as_slice().to_vec());
+                if let (Some(u), Some(r)) = (
+                    uncertainty.as_mut(),
+                    c.target_orientation_uncertainty(&q, *k, frame),
+                ) {
+                    u.extend(r.iter());
+                }
                 predicted.push(Predicted {
                     row: i,
                     target: name.clone(),
                     position: c.point(&q, *k, frame),
-                    rpy: None,
-                    uncertainty: c
-                        .point_uncertainty(&q, *k, frame)
-                        .map(|u| u.as_slice().to_vec()),
+                    rpy: rotation.map(|r| dh_core::pose::rpy_of(&r.to_rotation_matrix())),
+                    uncertainty,
                 });
             }
         }
@@ -284,6 +296,7 @@ pub fn predict(
         },
         per_session: frames.len() > 1,
         has_uncertainty: model.calibrated.has_covariance(),
+        has_attitude: predicted.iter().any(|p| p.rpy.is_some()),
         predicted,
     })
 }

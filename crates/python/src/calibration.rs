@@ -18,7 +18,7 @@ use dh_sheet::compensate::{failed_poses, same_joints};
 use dh_sheet::input::display_name;
 use dh_sheet::measured::DataUnits;
 use dh_sheet::model::load_model;
-use dh_sheet::predict::{frame_of, read_joints, Wanted};
+use dh_sheet::predict::{frame_of, read_joints};
 use dh_sheet::ranges;
 use dh_sheet::units::{AngleUnit, LengthUnit};
 use pyo3::prelude::*;
@@ -204,9 +204,9 @@ fn calibrated(
 }
 
 /// What `predict` returns to Python: per prediction its target, its row's config and session
-/// (None without a session column), the position (in the length unit), the tool's roll, pitch,
-/// yaw (angle unit; None for targets), the uncertainty (3 lengths, then 3 angles for the tool;
-/// None without covariance); then the frame (`device`, `base`) and the warnings.
+/// (None without a session column), the position (in the length unit), the roll, pitch, yaw of
+/// the tool or a 6-DoF target (angle unit; NaN for point targets; None when no row has one),
+/// the uncertainty (3 lengths, then 3 angles with attitudes; None without covariance); then the frame (`device`, `base`) and the warnings.
 type PredictOut = (
     Vec<String>,
     Vec<String>,
@@ -267,20 +267,25 @@ fn predict(
                 })
                 .collect()
         });
-        let rpy = (p.wanted == Wanted::Tool).then(|| {
+        // Attitudes for the tool and 6-DoF targets; NaN in the rows of point targets.
+        let rpy = p.has_attitude.then(|| {
             p.predicted
                 .iter()
-                .map(|x| x.rpy.unwrap_or_default().map(|v| v / a))
+                .map(|x| x.rpy.map_or([f64::NAN; 3], |r| r.map(|v| v / a)))
                 .collect()
         });
+        let width = if p.has_attitude { 6 } else { 3 };
         let uncertainty = p.has_uncertainty.then(|| {
             p.predicted
                 .iter()
                 .map(|x| {
                     let u = x.uncertainty.as_deref().unwrap_or_default();
-                    u.iter()
-                        .enumerate()
-                        .map(|(k, v)| if k < 3 { v / l } else { v / a })
+                    (0..width)
+                        .map(|k| match u.get(k) {
+                            Some(v) if k < 3 => v / l,
+                            Some(v) => v / a,
+                            None => f64::NAN,
+                        })
                         .collect()
                 })
                 .collect()

@@ -7,7 +7,7 @@
 
 use dh_core::pose::from_xyz_rpy;
 use dh_core::DhTable;
-use nalgebra::{DMatrix, Isometry3, Vector3};
+use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -84,6 +84,10 @@ pub struct TargetRecord {
     pub name: String,
     /// Position in the tip frame (metres).
     pub xyz: [f64; 3],
+    /// A 6-DoF target's rotation in the tip frame (URDF roll, pitch, yaw; radians); absent for
+    /// a point target.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rpy: Option<[f64; 3]>,
 }
 
 /// A session's device frame as a sheet holds it (metres, roll-pitch-yaw radians).
@@ -236,8 +240,14 @@ impl CalibratedRobot {
                 });
             }
         }
-        let mut calibrated =
-            Calibrated::new(table, &effects, &device, &targets).map_err(CalibratedError::Robot)?;
+        let rotations: Vec<Option<UnitQuaternion<f64>>> = record
+            .targets
+            .iter()
+            .map(|t| t.rpy.map(|rpy| from_xyz_rpy([0.0; 3], rpy).rotation))
+            .collect();
+        let mut calibrated = Calibrated::new(table, &effects, &device, &targets)
+            .map_err(CalibratedError::Robot)?
+            .with_target_rotations(&rotations);
         let covariance = match &record.covariance {
             Some(c) => Some(c.covariance()?),
             None => None,

@@ -325,9 +325,11 @@ class Prediction:
         frame: the frame of the positions: ``"device"`` (the measuring device's frame of the
             calibration) or ``"base"`` (the robot's base link frame).
         points: positions, shape (rows, 3), in the length unit.
-        rpy: tool attitudes (roll, pitch, yaw; rows x 3) in the angle unit, or None.
-        uncertainty: standard uncertainties, shape (rows, 3) (positions) or (rows, 6) (tool: then
-            rotations about the frame's axes), or None when the model has no covariance.
+        rpy: attitudes (roll, pitch, yaw; rows x 3) in the angle unit of the tool or of 6-DoF
+            targets (a calibration on orientations; NaN in point targets' rows), or None.
+        uncertainty: standard uncertainties, shape (rows, 3) (positions) or (rows, 6) (with
+            attitudes: then rotations about the frame's axes), or None when the model has no
+            covariance.
     """
 
     def __init__(self, native: Tuple[Any, ...]) -> None:
