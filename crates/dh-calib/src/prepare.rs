@@ -87,6 +87,16 @@ pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<Sampl
     crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
 }
 
+/// [`sequence_of`] without the directions of motion (each context's `direction` empty).
+fn orders_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
+    crate::effects_order::sequence_orders(
+        rows_q
+            .iter()
+            .map(Vec::as_slice)
+            .zip(data.samples.iter().map(|s| s.config.as_deref())),
+    )
+}
+
 /// The places in `data`'s whole sequence `full` ([`sequence_of`]) of the samples `keep`
 /// keeps, in order: the sequence of `data.filtered(keep)`, whose left-out samples were still
 /// visited.
@@ -134,18 +144,22 @@ fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
 
 /// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
 /// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
-/// whole file: [`fitted_session`]), `None` to take `data`'s own order.
+/// whole file: [`fitted_session`]), `None` to take `data`'s own order; without `directions`
+/// (no effect of the fit reads the direction of motion) the contexts' `direction` is left
+/// empty when taken from `data`'s own order.
 pub(crate) fn prepare(
     tree: &DhTree,
     data: &Measurements,
     sequence: Option<&[SampleContext]>,
+    directions: bool,
 ) -> Result<Prepared, CalibError> {
     let rows_q = rows_of(tree, data)?;
     // The place of every sample in the sequence, calibration and validation alike (the robot
     // visited both, in file order).
     let contexts = match sequence {
         Some(c) if c.len() == data.samples.len() => c.to_vec(),
-        _ => sequence_of(&rows_q, data),
+        _ if directions => sequence_of(&rows_q, data),
+        _ => orders_of(&rows_q, data),
     };
     let mut out = Prepared {
         cal: vec![],
