@@ -18,8 +18,9 @@ pub(crate) struct Prepared {
     pub(crate) group_count: usize,
     pub(crate) repeat_keys: Vec<Option<(usize, usize)>>,
     pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
-    /// `sigma_rot` of each calibration sample that measures an orientation (radians).
-    pub(crate) sigmas_rot: Vec<Option<f64>>,
+    /// `sigma_rot` of the calibration samples that measure an orientation, in order (radians;
+    /// none for point samples, which are most of a large set).
+    pub(crate) sigmas_rot: Vec<f64>,
     /// Pose group of each validation sample (numbered apart from the calibration groups).
     pub(crate) val_groups: Vec<usize>,
 }
@@ -217,7 +218,9 @@ pub(crate) fn prepare(
                 out.repeat_keys
                     .push(s.config.as_ref().map(|_| (g, s.target)));
                 out.sigmas.push(s.sigma);
-                out.sigmas_rot.push(s.orientation.as_ref().map(|o| o.sigma));
+                if let Some(o) = &s.orientation {
+                    out.sigmas_rot.push(o.sigma);
+                }
                 out.cal.push(obs);
             }
         }
