@@ -148,14 +148,14 @@ fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u6
                         Split::Validation
                     },
                     line: 0,
-                    socket: Some(Socket {
+                    socket: Some(Box::new(Socket {
                         name: format!("p{p}/{hole}"),
                         partner: Some(SocketDistance {
                             socket: format!("p{p}/{}", 1 - hole),
                             distance: 0.05,
                             sigma: 1e-4,
                         }),
-                    }),
+                    })),
                 });
                 n += 1;
             }

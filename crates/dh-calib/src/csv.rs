@@ -65,6 +65,8 @@ mod columns;
 pub use columns::*;
 mod reader;
 pub use reader::*;
+mod chunks;
+use chunks::*;
 mod orientation;
 pub use orientation::*;
 mod writer;

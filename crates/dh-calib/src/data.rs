@@ -33,15 +33,16 @@ pub struct Sample {
     /// 1-based line in the source file (0 when generated).
     pub line: usize,
     /// `Some` for a contact sample (see [`crate::socket`]): the target sat in this unknown
-    /// fixed point, `point` is not a measurement and is ignored.
-    pub socket: Option<Socket>,
+    /// fixed point, `point` is not a measurement and is ignored. Boxed: most samples have
+    /// none, and millions of samples would carry its size.
+    pub socket: Option<Box<Socket>>,
     /// Measurement session: index into [`Measurements::sessions`] (0 when the set has none).
     /// Samples of one session share one device frame `T_device_base`; the device (a laser
     /// tracker) was moved between sessions.
     pub session: usize,
     /// The measured orientation of the target's frame, for a 6-DoF device (a tracker's 6-DoF
-    /// probe, an optical marker body); `None` for a point.
-    pub orientation: Option<Orientation>,
+    /// probe, an optical marker body); `None` for a point. Boxed as `socket`.
+    pub orientation: Option<Box<Orientation>>,
 }
 
 /// A measured orientation: the rotation of the target's frame in the device frame, with the

@@ -63,15 +63,8 @@ where
     // Pose index of each sample.
     let mut pose = Vec::with_capacity(samples.len());
     let mut firsts: Vec<usize> = Vec::new();
-    for (i, (q, config)) in samples.iter().enumerate() {
-        let same = i > 0 && {
-            let (pq, pc) = samples[i - 1];
-            match (config, pc) {
-                (Some(a), Some(b)) => *a == b,
-                (None, None) => pq.len() == q.len() && pq.iter().zip(*q).all(|(a, b)| a == b),
-                _ => false,
-            }
-        };
+    for (i, &sample) in samples.iter().enumerate() {
+        let same = i > 0 && same_pose(samples[i - 1], sample);
         if !same {
             firsts.push(i);
         }
@@ -102,6 +95,44 @@ where
         });
     }
     pose.iter().map(|&k| contexts[k].clone()).collect()
+}
+
+/// Whether two consecutive samples (joint values, config) are one pose: the same config, or
+/// without configs the same joint values.
+fn same_pose(a: (&[f64], Option<&str>), b: (&[f64], Option<&str>)) -> bool {
+    match (a.1, b.1) {
+        (Some(x), Some(y)) => x == y,
+        (None, None) => a.0.len() == b.0.len() && a.0.iter().zip(b.0).all(|(x, y)| x == y),
+        _ => false,
+    }
+}
+
+/// [`sequence_contexts`] without the directions of motion: each context's `order` as there,
+/// its `direction` empty (for fits whose effects read none; no vector per sample).
+pub(crate) fn sequence_orders<'a, I>(samples: I) -> Vec<SampleContext>
+where
+    I: IntoIterator<Item = (&'a [f64], Option<&'a str>)>,
+{
+    let mut pose: Vec<usize> = Vec::new();
+    let mut previous: Option<(&[f64], Option<&str>)> = None;
+    let mut count = 0usize;
+    for sample in samples {
+        if !previous.is_some_and(|p| same_pose(p, sample)) {
+            count += 1;
+        }
+        pose.push(count - 1);
+        previous = Some(sample);
+    }
+    pose.into_iter()
+        .map(|k| SampleContext {
+            direction: Vec::new(),
+            order: if count > 1 {
+                k as f64 / (count - 1) as f64
+            } else {
+                0.0
+            },
+        })
+        .collect()
 }
 
 /// [`sequence_contexts`] of the samples of `data`, with each sample's values in row order

@@ -18,8 +18,9 @@ pub(crate) struct Prepared {
     pub(crate) group_count: usize,
     pub(crate) repeat_keys: Vec<Option<(usize, usize)>>,
     pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
-    /// `sigma_rot` of each calibration sample that measures an orientation (radians).
-    pub(crate) sigmas_rot: Vec<Option<f64>>,
+    /// `sigma_rot` of the calibration samples that measure an orientation, in order (radians;
+    /// none for point samples, which are most of a large set).
+    pub(crate) sigmas_rot: Vec<f64>,
     /// Pose group of each validation sample (numbered apart from the calibration groups).
     pub(crate) val_groups: Vec<usize>,
 }
@@ -87,6 +88,16 @@ pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<Sampl
     crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
 }
 
+/// [`sequence_of`] without the directions of motion (each context's `direction` empty).
+fn orders_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
+    crate::effects_order::sequence_orders(
+        rows_q
+            .iter()
+            .map(Vec::as_slice)
+            .zip(data.samples.iter().map(|s| s.config.as_deref())),
+    )
+}
+
 /// The places in `data`'s whole sequence `full` ([`sequence_of`]) of the samples `keep`
 /// keeps, in order: the sequence of `data.filtered(keep)`, whose left-out samples were still
 /// visited.
@@ -134,18 +145,22 @@ fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
 
 /// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
 /// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
-/// whole file: [`fitted_session`]), `None` to take `data`'s own order.
+/// whole file: [`fitted_session`]), `None` to take `data`'s own order; without `directions`
+/// (no effect of the fit reads the direction of motion) the contexts' `direction` is left
+/// empty when taken from `data`'s own order.
 pub(crate) fn prepare(
     tree: &DhTree,
     data: &Measurements,
     sequence: Option<&[SampleContext]>,
+    directions: bool,
 ) -> Result<Prepared, CalibError> {
     let rows_q = rows_of(tree, data)?;
     // The place of every sample in the sequence, calibration and validation alike (the robot
     // visited both, in file order).
     let contexts = match sequence {
         Some(c) if c.len() == data.samples.len() => c.to_vec(),
-        _ => sequence_of(&rows_q, data),
+        _ if directions => sequence_of(&rows_q, data),
+        _ => orders_of(&rows_q, data),
     };
     let mut out = Prepared {
         cal: vec![],
@@ -203,7 +218,9 @@ pub(crate) fn prepare(
                 out.repeat_keys
                     .push(s.config.as_ref().map(|_| (g, s.target)));
                 out.sigmas.push(s.sigma);
-                out.sigmas_rot.push(s.orientation.as_ref().map(|o| o.sigma));
+                if let Some(o) = &s.orientation {
+                    out.sigmas_rot.push(o.sigma);
+                }
                 out.cal.push(obs);
             }
         }

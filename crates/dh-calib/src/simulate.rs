@@ -359,7 +359,7 @@ pub fn simulate(
                     }
                 });
                 samples.push(Sample {
-                    orientation,
+                    orientation: orientation.map(Box::new),
                     session,
                     q: q.clone(),
                     target: k,

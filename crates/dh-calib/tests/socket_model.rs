@@ -178,14 +178,14 @@ fn simulated_panda_contacts_recover_planted_errors_within_three_standard_errors(
                         Split::Validation
                     },
                     line: 0,
-                    socket: Some(Socket {
+                    socket: Some(Box::new(Socket {
                         name: format!("p{p}/{hole}"),
                         partner: Some(SocketDistance {
                             socket: format!("p{p}/{}", 1 - hole),
                             distance: 0.05,
                             sigma: 1e-4,
                         }),
-                    }),
+                    })),
                 });
                 n += 1;
             }

@@ -84,7 +84,7 @@ pub(crate) fn screen_from(
     let full = match first {
         Some((s, _)) => &s.prep,
         None => {
-            own_full = prepare(tree, data, None)?;
+            own_full = prepare(tree, data, None, effects.iter().any(|e| e.uses_sequence()))?;
             &own_full
         }
     };

@@ -72,7 +72,8 @@ impl<'a> Session<'a> {
         sequence: Option<&[SampleContext]>,
     ) -> Result<Session<'a>, CalibError> {
         crate::sessions::check(data)?;
-        let prep = prepare(tree, data, sequence)?;
+        let directions = effects.iter().any(|e| e.uses_sequence());
+        let prep = prepare(tree, data, sequence, directions)?;
         if prep.cal.len() < 3 {
             return Err(CalibError::TooFewSamples {
                 what: "calibration".into(),
@@ -81,7 +82,7 @@ impl<'a> Session<'a> {
             });
         }
         let mut prep = prep;
-        if !effects.iter().any(|e| e.uses_sequence()) {
+        if !directions {
             // No effect reads the direction of motion: 8 bytes per joint and sample freed.
             for o in prep.cal.iter_mut().chain(prep.val.iter_mut()) {
                 o.context.direction = Vec::new();

@@ -328,7 +328,7 @@ pub(super) fn noise_floor(
         })
         .sum();
     let factor = (1.0 - p as f64 / m as f64).max(0.0);
-    let angle: Vec<f64> = prep.sigmas_rot.iter().flatten().copied().collect();
+    let angle = &prep.sigmas_rot;
     let angle_rms = (!angle.is_empty())
         .then(|| (angle.iter().map(|s| s * s).sum::<f64>() / angle.len() as f64 * factor).sqrt());
     Some(NoiseFloor {

@@ -40,7 +40,6 @@ pub fn parse_measurements_noting(
     joint_names: &[String],
     opts: &CsvOptions,
 ) -> Result<(Measurements, Vec<String>), DataError> {
-    let mut zero_sigmas: Vec<usize> = Vec::new();
     // Row by row: the rows' cells are never all held at once.
     let mut rows = Records::new(text, ',', true).peekable();
     let header = rows.next().ok_or(DataError::Empty {
@@ -56,29 +55,102 @@ pub fn parse_measurements_noting(
         check_name(field, header.line, &format!("{}", k + 1))?;
     }
     let cols = header_columns(header, joint_names)?;
-    let length = |v: f64| opts.length_unit.to_metres(v);
-    let revolute: Vec<bool> = joint_names
-        .iter()
-        .map(|j| !opts.prismatic.contains(j))
-        .collect();
-
+    let reader = RowReader {
+        header,
+        cols: &cols,
+        revolute: joint_names
+            .iter()
+            .map(|j| !opts.prismatic.contains(j))
+            .collect(),
+        opts,
+    };
     let mut m = Measurements {
         sessions: Vec::new(),
         joint_names: joint_names.to_vec(),
         targets: Vec::new(),
         samples: Vec::new(),
     };
-    let expected = header.fields.len();
-    // Largest magnitude accepted so far per column: a value far beyond it that is also beyond
-    // the unit's plausible range means the file mixes units (an earlier row in the other one).
-    let mut largest = vec![0.0f64; expected];
-    let mixed = |largest: &[f64], col: usize, value: f64, ratio: f64| {
-        largest
-            .get(col)
-            .is_some_and(|&m| m > 0.0 && value.abs() > ratio * m)
-    };
-    for row in rows {
-        let row = row?;
+    let mut seen = RowState::new(header.fields.len());
+    // A large file without quotes in parallel chunks of lines (the same samples, names and
+    // notes; on any fault, the rows again in order for the exact error).
+    let chunked = (text.len() >= CHUNKED_MIN_BYTES)
+        .then(|| read_chunked(text, &reader, &mut m, &mut seen, CHUNK_BYTES))
+        .flatten();
+    if chunked.is_none() {
+        m.targets.clear();
+        m.sessions.clear();
+        m.samples = Vec::new();
+        seen = RowState::new(header.fields.len());
+        for row in rows {
+            let sample = reader.sample(&row?, &mut seen)?;
+            m.samples.push(sample);
+        }
+        m.targets = std::mem::take(&mut seen.targets);
+        m.sessions = std::mem::take(&mut seen.sessions);
+    }
+    let zero_sigmas = seen.zero_sigmas;
+    let mut notes = Vec::new();
+    if let Some(first) = zero_sigmas.first() {
+        notes.push(format!(
+            "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
+            zero_sigmas.len()
+        ));
+    }
+    Ok((m, notes))
+}
+
+/// The fixed part of reading a data row: the header, its columns and the units.
+pub(super) struct RowReader<'a> {
+    pub(super) header: &'a Record,
+    pub(super) cols: &'a Columns,
+    /// Per joint column: revolute (else prismatic).
+    pub(super) revolute: Vec<bool>,
+    pub(super) opts: &'a CsvOptions,
+}
+
+/// What the rows read so far have named and seen.
+pub(super) struct RowState {
+    /// Target names in order of first appearance.
+    pub(super) targets: Vec<String>,
+    /// Session names in order of first appearance.
+    pub(super) sessions: Vec<String>,
+    /// Largest magnitude accepted so far per column: a value far beyond it that is also beyond
+    /// the unit's plausible range means the file mixes units (an earlier row in the other one).
+    pub(super) largest: Vec<f64>,
+    /// Lines with a standard deviation of 0 (each once, in order).
+    pub(super) zero_sigmas: Vec<usize>,
+}
+
+impl RowState {
+    /// Nothing seen yet, for a header of `columns` columns.
+    pub(super) fn new(columns: usize) -> Self {
+        RowState {
+            targets: Vec::new(),
+            sessions: Vec::new(),
+            largest: vec![0.0; columns],
+            zero_sigmas: Vec::new(),
+        }
+    }
+}
+
+impl RowReader<'_> {
+    /// The sample of data row `row`, after the rows `seen` summarises (its targets and
+    /// sessions numbered there).
+    ///
+    /// # Errors
+    /// As [`parse_measurements`], for this row.
+    pub(super) fn sample(&self, row: &Record, seen: &mut RowState) -> Result<Sample, DataError> {
+        let (header, cols, opts) = (self.header, self.cols, self.opts);
+        let revolute_columns = &self.revolute;
+        let length = |v: f64| opts.length_unit.to_metres(v);
+        let expected = header.fields.len();
+        let mixed = |largest: &[f64], col: usize, value: f64, ratio: f64| {
+            largest
+                .get(col)
+                .is_some_and(|&m| m > 0.0 && value.abs() > ratio * m)
+        };
+        let largest = &mut seen.largest;
+        let zero_sigmas = &mut seen.zero_sigmas;
         let line = row.line;
         if row.fields.len() != expected {
             return Err(DataError::FieldCount {
@@ -90,8 +162,8 @@ pub fn parse_measurements_noting(
         let cell = |i: usize| row.fields[i].as_str();
         let name = |i: usize| header.fields[i].as_str();
 
-        let mut q = Vec::with_capacity(joint_names.len());
-        for (&col, &revolute) in cols.joints.iter().zip(&revolute) {
+        let mut q = Vec::with_capacity(cols.joints.len());
+        for (&col, &revolute) in cols.joints.iter().zip(revolute_columns) {
             let value = number(cell(col), line, name(col))?;
             if revolute
                 && opts.angle_unit == AngleUnit::Radian
@@ -103,7 +175,7 @@ pub fn parse_measurements_noting(
                     value,
                     unit: "rad",
                     // Degrees are 57 times radians.
-                    hint: if mixed(&largest, col, value, 20.0) {
+                    hint: if mixed(largest, col, value, 20.0) {
                         "looks like degrees, but the rows above look like radians: the file \
                          mixes units"
                     } else {
@@ -201,7 +273,7 @@ pub fn parse_measurements_noting(
                     column: name(col).into(),
                     value,
                     unit: "m",
-                    hint: if mixed(&largest, col, value, 100.0) {
+                    hint: if mixed(largest, col, value, 100.0) {
                         "looks like millimetres, but the rows above look like metres: the file \
                          mixes units"
                     } else {
@@ -282,11 +354,11 @@ pub fn parse_measurements_noting(
             check_name(cell(p), line, name(p))?;
         }
         let target_name = cols.target.map_or(DEFAULT_TARGET, cell);
-        let target = match m.targets.iter().position(|t| t == target_name) {
+        let target = match seen.targets.iter().position(|t| t == target_name) {
             Some(i) => i,
             None => {
-                m.targets.push(target_name.to_string());
-                m.targets.len() - 1
+                seen.targets.push(target_name.to_string());
+                seen.targets.len() - 1
             }
         };
         let config = cols
@@ -310,11 +382,11 @@ pub fn parse_measurements_noting(
                     found: "an empty cell".into(),
                 })
             }
-            Some(col) => match m.sessions.iter().position(|t| t == cell(col)) {
+            Some(col) => match seen.sessions.iter().position(|t| t == cell(col)) {
                 Some(i) => i,
                 None => {
-                    m.sessions.push(cell(col).to_string());
-                    m.sessions.len() - 1
+                    seen.sessions.push(cell(col).to_string());
+                    seen.sessions.len() - 1
                 }
             },
         };
@@ -322,8 +394,8 @@ pub fn parse_measurements_noting(
             Some(o) => orientation_cells(o, line, &cell, &name)?,
             None => None,
         };
-        m.samples.push(Sample {
-            orientation,
+        Ok(Sample {
+            orientation: orientation.map(Box::new),
             session,
             q,
             target,
@@ -332,17 +404,9 @@ pub fn parse_measurements_noting(
             config,
             split,
             line,
-            socket,
-        });
+            socket: socket.map(Box::new),
+        })
     }
-    let mut notes = Vec::new();
-    if let Some(first) = zero_sigmas.first() {
-        notes.push(format!(
-            "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
-            zero_sigmas.len()
-        ));
-    }
-    Ok((m, notes))
 }
 
 pub(crate) fn parse_split(text: &str) -> Option<Split> {

@@ -35,7 +35,16 @@ pub(crate) struct Records<'a> {
 impl<'a> Records<'a> {
     /// The records of `text` (see [`records`]).
     pub(crate) fn new(text: &'a str, delimiter: char, comments: bool) -> Self {
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        Self::lines_of(
+            text.strip_prefix('\u{feff}').unwrap_or(text),
+            delimiter,
+            comments,
+        )
+    }
+
+    /// The records of `text` as lines of a longer text (a byte-order mark kept, line numbers
+    /// counted from `text`'s first line as 1).
+    pub(crate) fn lines_of(text: &'a str, delimiter: char, comments: bool) -> Self {
         Records {
             lines: text.split('\n').enumerate().peekable(),
             delimiter,
@@ -56,6 +65,12 @@ impl Iterator for Records<'_> {
             let trimmed = raw.trim();
             if trimmed.is_empty() || self.comments && trimmed.starts_with('#') {
                 continue;
+            }
+            if !raw.contains('"') {
+                // No quotes: the cells between delimiters, trimmed (as the loop below reads
+                // them, without a copy of the line and a push per character).
+                let fields = raw.split(delimiter).map(|c| c.trim().to_string()).collect();
+                return Some(Ok(Record { line, fields }));
             }
             let mut fields = Vec::new();
             let mut cell = Cell::default();

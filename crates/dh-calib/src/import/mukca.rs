@@ -99,14 +99,14 @@ pub fn parse(sources: &[Source<'_>]) -> Result<Measurements, DataError> {
                     config: None,
                     split: Split::Calibration,
                     line,
-                    socket: Some(Socket {
+                    socket: Some(Box::new(Socket {
                         name: socket.clone(),
                         partner: Some(SocketDistance {
                             socket: partner.clone(),
                             distance: SOCKET_DISTANCE,
                             sigma: SOCKET_DISTANCE_SIGMA,
                         }),
-                    }),
+                    })),
                 });
             }
         }

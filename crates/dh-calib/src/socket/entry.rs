@@ -122,7 +122,7 @@ pub(super) fn run_sockets(
             ),
         });
     }
-    let prep = prepare(tree, data, None)?;
+    let prep = prepare(tree, data, None, true)?;
     let cal = contacts_of(data, &prep.cal, Split::Calibration)?;
     let val = contacts_of(data, &prep.val, Split::Validation)?;
     if cal.contacts.len() < 3 {
