@@ -365,7 +365,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             });
         }
         m.samples.push(Sample {
-            orientation,
+            orientation: orientation.map(Box::new),
             session,
             q,
             target,
