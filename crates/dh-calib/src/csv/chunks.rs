@@ -126,6 +126,8 @@ fn join(
     let sessions = number(&chunk.sessions, &mut seen.sessions);
     seen.zero_sigmas
         .extend(chunk.zero_sigmas.iter().map(|l| l + offset));
+    seen.zero_sigmas_rot
+        .extend(chunk.zero_sigmas_rot.iter().map(|l| l + offset));
     m.samples.extend(samples.into_iter().map(|mut s| {
         s.line += offset;
         s.target = targets.get(s.target).copied().unwrap_or(s.target);

@@ -19,6 +19,10 @@ pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-3;
 /// Largest plausible `sigma_rot` (radians): a standard deviation of a radian says nothing.
 const MAX_SIGMA_ROT: f64 = 1.0;
 
+/// What a `sigma_rot` of 0 is floored at (radians): a device that rounds its angles (to a
+/// microradian) gives 0 for the standard deviation of a rounded value; the fit divides by it.
+pub const SIGMA_ROT_FLOOR: f64 = 1e-6;
+
 /// Column indices of `qw`, `qx`, `qy`, `qz` and `sigma_rot`.
 pub(super) struct OrientationColumns {
     quaternion: [usize; 4],
@@ -55,19 +59,20 @@ pub(super) fn orientation_columns(
     }))
 }
 
-/// The orientation of one row, `None` when its four quaternion cells are empty (a point).
+/// The orientation of one row, `None` when its four quaternion cells are empty (a point), and
+/// whether its `sigma_rot` of 0 was floored at [`SIGMA_ROT_FLOOR`].
 ///
 /// # Errors
 /// [`DataError::Format`] naming the line and columns when some quaternion cells are empty,
-/// the norm is more than [`QUATERNION_NORM_TOLERANCE`] from 1, or `sigma_rot` is empty, not
-/// positive or above a radian; [`DataError::NotANumber`] / [`DataError::NonFinite`] for a
+/// the norm is more than [`QUATERNION_NORM_TOLERANCE`] from 1, or `sigma_rot` is empty,
+/// negative or above a radian; [`DataError::NotANumber`] / [`DataError::NonFinite`] for a
 /// cell that is not a finite number.
 pub(super) fn orientation_cells<'a>(
     cols: &OrientationColumns,
     line: usize,
     cell: &impl Fn(usize) -> &'a str,
     name: &impl Fn(usize) -> &'a str,
-) -> Result<Option<Orientation>, DataError> {
+) -> Result<Option<(Orientation, bool)>, DataError> {
     let empty = cols.quaternion.map(|c| cell(c).is_empty());
     if empty.iter().all(|e| *e) {
         return Ok(None);
@@ -105,17 +110,21 @@ pub(super) fn orientation_cells<'a>(
         });
     }
     let sigma = number(cell(s), line, name(s))?;
-    if !(sigma > 0.0 && sigma <= MAX_SIGMA_ROT) {
+    if !(sigma >= 0.0 && sigma <= MAX_SIGMA_ROT) {
         return Err(DataError::Format {
             line,
             expected: format!(
-                "a standard deviation > 0 and <= {MAX_SIGMA_ROT} rad in column 'sigma_rot'"
+                "a standard deviation >= 0 and <= {MAX_SIGMA_ROT} rad in column 'sigma_rot'"
             ),
             found: format!("'{}'", cell(s)),
         });
     }
-    Ok(Some(Orientation {
-        rotation: UnitQuaternion::from_quaternion(q),
-        sigma,
-    }))
+    let floored = sigma == 0.0;
+    Ok(Some((
+        Orientation {
+            rotation: UnitQuaternion::from_quaternion(q),
+            sigma: if floored { SIGMA_ROT_FLOOR } else { sigma },
+        },
+        floored,
+    )))
 }

@@ -96,6 +96,13 @@ pub fn parse_measurements_noting(
             zero_sigmas.len()
         ));
     }
+    if let Some(first) = seen.zero_sigmas_rot.first() {
+        notes.push(format!(
+            "{} sample(s) give a sigma_rot of 0 (first at line {first}; a rounded export?): floored at {:e} rad",
+            seen.zero_sigmas_rot.len(),
+            super::orientation::SIGMA_ROT_FLOOR
+        ));
+    }
     Ok((m, notes))
 }
 
@@ -119,6 +126,8 @@ pub(super) struct RowState {
     pub(super) largest: Vec<f64>,
     /// Lines with a standard deviation of 0 (each once, in order).
     pub(super) zero_sigmas: Vec<usize>,
+    /// Lines with a `sigma_rot` of 0, in order.
+    pub(super) zero_sigmas_rot: Vec<usize>,
 }
 
 impl RowState {
@@ -129,6 +138,7 @@ impl RowState {
             sessions: Vec::new(),
             largest: vec![0.0; columns],
             zero_sigmas: Vec::new(),
+            zero_sigmas_rot: Vec::new(),
         }
     }
 }
@@ -391,7 +401,12 @@ impl RowReader<'_> {
             },
         };
         let orientation = match &cols.orientation {
-            Some(o) => orientation_cells(o, line, &cell, &name)?,
+            Some(o) => orientation_cells(o, line, &cell, &name)?.map(|(o, floored)| {
+                if floored {
+                    seen.zero_sigmas_rot.push(line);
+                }
+                o
+            }),
             None => None,
         };
         Ok(Sample {

@@ -260,6 +260,29 @@ j1,x,y,z,sigma,qw,qx,qy,qz,sigma_rot
     }
 }
 
+/// A `sigma_rot` of 0 (a device that rounds its angles) is floored with a note naming how many
+/// and the first line, as a position sigma of 0 is.
+#[test]
+fn zero_orientation_sigmas_are_floored_with_a_note() {
+    let text = "j1,x,y,z,sigma,qw,qx,qy,qz,sigma_rot\n\
+                0.1,1,2,3,1e-5,1,0,0,0,5e-5\n\
+                0.2,1,2,3,1e-5,1,0,0,0,0\n\
+                0.3,1,2,3,1e-5,1,0,0,0,0\n";
+    let (m, notes) =
+        parse_measurements_noting(text, &["j1".to_string()], &CsvOptions::default()).unwrap();
+    let sigmas: Vec<f64> = m
+        .samples
+        .iter()
+        .map(|s| s.orientation.as_ref().unwrap().sigma)
+        .collect();
+    assert_eq!(sigmas, [5e-5, SIGMA_ROT_FLOOR, SIGMA_ROT_FLOOR]);
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(
+        notes[0].starts_with("2 sample(s) give a sigma_rot of 0 (first at line 3;"),
+        "{notes:?}"
+    );
+}
+
 #[test]
 fn bad_orientations_name_line_and_column() {
     let head = "j1,x,y,z,qw,qx,qy,qz,sigma_rot\n";
@@ -271,7 +294,7 @@ fn bad_orientations_name_line_and_column() {
         ("0.1,1,2,3,1,NaN,0,0,5e-5", "line 2"),
         ("0.1,1,2,3,1,0,,0,5e-5", "line 2: expected all of qw, qx, qy, qz or none, found an empty 'qy'"),
         ("0.1,1,2,3,1,0,0,0,", "line 2: expected a standard deviation in column 'sigma_rot'"),
-        ("0.1,1,2,3,1,0,0,0,-1", "line 2: expected a standard deviation > 0 and <= 1 rad in column 'sigma_rot', found '-1'"),
+        ("0.1,1,2,3,1,0,0,0,-1", "line 2: expected a standard deviation >= 0 and <= 1 rad in column 'sigma_rot', found '-1'"),
     ] {
         let e = err(&format!("{head}{row}\n"), &["j1"]);
         assert!(e.starts_with(expected), "{e}");

@@ -157,11 +157,12 @@ impl Resolved {
             });
         }
         let sigma = number(cell(s), line, &name(s))? * angle_scale;
-        if !(sigma > 0.0 && sigma <= MAX_SIGMA_ROT) {
+        // 0 passes (a rounded export): the reader floors it with a warning.
+        if !(sigma >= 0.0 && sigma <= MAX_SIGMA_ROT) {
             return Err(DataError::Format {
                 line,
                 expected: format!(
-                    "a standard deviation > 0 and <= {MAX_SIGMA_ROT} rad in column '{}'",
+                    "a standard deviation >= 0 and <= {MAX_SIGMA_ROT} rad in column '{}'",
                     name(s)
                 ),
                 found: format!("'{}'", cell(s)),
@@ -270,7 +271,7 @@ mod tests {
             ),
             ("0;0;1;2;3;0.02;0.6;0;0;0.9;0.005", "line 3: expected a unit quaternion in columns 'w', 'x4', 'y4', 'z4'"),
             ("0;0;1;2;3;0.02;0.6;0;0;0.8;", "line 3: expected a standard deviation in column 'sr' for an orientation"),
-            ("0;0;1;2;3;0.02;0.6;0;0;0.8;0", "line 3: expected a standard deviation > 0 and <= 1 rad in column 'sr'"),
+            ("0;0;1;2;3;0.02;0.6;0;0;0.8;-1", "line 3: expected a standard deviation >= 0 and <= 1 rad in column 'sr'"),
             ("0;0;1;2;3;;0.6;0;0;0.8;0.005", "line 3: expected a standard deviation in column 's' for a row with an orientation"),
             ("0;0;1;2;3;0.02;0.6;nan;0;0.8;0.005", "line 3"),
         ] {
