@@ -110,7 +110,7 @@ pub(super) fn orientation_cells<'a>(
         });
     }
     let sigma = number(cell(s), line, name(s))?;
-    if !(sigma >= 0.0 && sigma <= MAX_SIGMA_ROT) {
+    if !(0.0..=MAX_SIGMA_ROT).contains(&sigma) {
         return Err(DataError::Format {
             line,
             expected: format!(

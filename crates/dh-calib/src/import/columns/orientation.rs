@@ -158,7 +158,7 @@ impl Resolved {
         }
         let sigma = number(cell(s), line, &name(s))? * angle_scale;
         // 0 passes (a rounded export): the reader floors it with a warning.
-        if !(sigma >= 0.0 && sigma <= MAX_SIGMA_ROT) {
+        if !(0.0..=MAX_SIGMA_ROT).contains(&sigma) {
             return Err(DataError::Format {
                 line,
                 expected: format!(
