@@ -350,7 +350,7 @@ fn write_tree(
         effects: doc
             .parameters
             .iter()
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
+            .filter(|p| p.is_estimated_effect())
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
     };

@@ -151,11 +151,7 @@ fn text(doc: &ContactDoc) -> String {
         }
     } else {
         let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
-        for p in doc
-            .parameters
-            .iter()
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
-        {
+        for p in doc.parameters.iter().filter(|p| p.is_estimated_effect()) {
             let _ = writeln!(
                 s,
                 "  {} = {:.6e}{} {}",
@@ -298,7 +294,7 @@ fn contact_model_bytes(
         effects: doc
             .parameters
             .iter()
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
+            .filter(|p| p.is_estimated_effect())
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
     };

@@ -163,9 +163,7 @@ pub fn model_text(
         effects: doc
             .parameters
             .iter()
-            // Effect parameters are named `<kind>:<joints>` or `scale`
-            // (`dh_calib::effects`), whatever their unit.
-            .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
+            .filter(|p| p.is_estimated_effect())
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
         covariance: report.covariance.as_ref().map(CovarianceDoc::of),
@@ -177,7 +175,7 @@ pub fn model_text(
     let effects: Vec<EffectDoc> = doc
         .parameters
         .iter()
-        .filter(|p| p.free && (p.name.contains(':') || p.name == "scale" || p.name == "drift"))
+        .filter(|p| p.is_estimated_effect())
         .map(|p| EffectDoc {
             name: p.name.clone(),
             value: p.estimate,

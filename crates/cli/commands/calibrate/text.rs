@@ -304,11 +304,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
     }
     if !doc.selected_effects.is_empty() {
         let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
-        for p in doc
-            .parameters
-            .iter()
-            .filter(|p| p.name.contains(':') || p.name == "scale" || p.name == "drift")
-        {
+        for p in doc.parameters.iter().filter(|p| p.is_effect()) {
             let stiffness = (p.unit == "rad/(N m)" && p.estimate != 0.0).then(|| {
                 format!(
                     "  (stiffness {:.4e}{} N m/rad)",

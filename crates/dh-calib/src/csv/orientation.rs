@@ -59,6 +59,30 @@ pub(super) fn orientation_columns(
     }))
 }
 
+/// The rotation of the quaternion `[w, x, y, z]` read from `columns` at `line`, normalised.
+///
+/// # Errors
+/// [`DataError::Format`] when its norm is more than [`QUATERNION_NORM_TOLERANCE`] from 1.
+pub fn unit_quaternion(
+    v: [f64; 4],
+    line: usize,
+    columns: &str,
+) -> Result<UnitQuaternion<f64>, DataError> {
+    let q = Quaternion::new(v[0], v[1], v[2], v[3]);
+    let norm = q.norm();
+    if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+        return Err(DataError::Format {
+            line,
+            expected: format!(
+                "a unit quaternion in columns {columns} (norm within \
+                 {QUATERNION_NORM_TOLERANCE} of 1)"
+            ),
+            found: format!("norm {norm}"),
+        });
+    }
+    Ok(UnitQuaternion::from_quaternion(q))
+}
+
 /// The orientation of one row, `None` when its four quaternion cells are empty (a point), and
 /// whether its `sigma_rot` of 0 was floored at [`SIGMA_ROT_FLOOR`].
 ///
@@ -88,18 +112,7 @@ pub(super) fn orientation_cells<'a>(
     for (slot, &c) in v.iter_mut().zip(&cols.quaternion) {
         *slot = number(cell(c), line, name(c))?;
     }
-    let q = Quaternion::new(v[0], v[1], v[2], v[3]);
-    let norm = q.norm();
-    if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-        return Err(DataError::Format {
-            line,
-            expected: format!(
-                "a unit quaternion in columns qw, qx, qy, qz (norm within \
-                 {QUATERNION_NORM_TOLERANCE} of 1)"
-            ),
-            found: format!("norm {norm}"),
-        });
-    }
+    let rotation = unit_quaternion(v, line, "qw, qx, qy, qz")?;
     let s = cols.sigma;
     if cell(s).is_empty() {
         return Err(DataError::Format {
@@ -122,7 +135,7 @@ pub(super) fn orientation_cells<'a>(
     let floored = sigma == 0.0;
     Ok(Some((
         Orientation {
-            rotation: UnitQuaternion::from_quaternion(q),
+            rotation,
             sigma: if floored { SIGMA_ROT_FLOOR } else { sigma },
         },
         floored,

@@ -68,6 +68,13 @@ pub struct ContactParameterDoc {
     pub free: bool,
 }
 
+impl ContactParameterDoc {
+    /// Whether this is an estimated effect parameter (see [`super::is_effect`]).
+    pub fn is_estimated_effect(&self) -> bool {
+        self.free && super::is_effect(&self.name)
+    }
+}
+
 /// A fitted socket centre.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SocketDoc {

@@ -93,6 +93,19 @@ pub struct ParameterDoc {
     pub free: bool,
 }
 
+impl ParameterDoc {
+    /// Whether this is an effect's parameter (see [`super::is_effect`]), whatever its unit.
+    pub fn is_effect(&self) -> bool {
+        super::is_effect(&self.name)
+    }
+
+    /// Whether this is an estimated effect parameter: what a calibrated sheet's `effects` and
+    /// `calibration.effects` list.
+    pub fn is_estimated_effect(&self) -> bool {
+        self.free && self.is_effect()
+    }
+}
+
 /// A parameter held at nominal.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FixedDoc {
@@ -284,7 +297,7 @@ pub struct UnitsDoc {
 
 /// The unit of a parameter, from its name (see [`crate::model`]).
 pub fn unit_of(name: &str) -> &'static str {
-    if name.contains(':') || name == "scale" || name == "drift" {
+    if super::is_effect(name) {
         // Effect parameters (see `crate::effects`).
         return match name.split(':').next() {
             Some("compliance" | "lateral_compliance") => "rad/(N m)",

@@ -8,7 +8,7 @@
 //!
 //! - a quaternion: four columns named in the order `qw, qx, qy, qz` (scalar first, Hamilton
 //!   convention; an export that puts the scalar last names its columns in this order all the
-//!   same), normalised when its norm is within [`QUATERNION_NORM_TOLERANCE`] of 1, refused
+//!   same), normalised when its norm is within [`QUATERNION_NORM_TOLERANCE`](crate::csv::QUATERNION_NORM_TOLERANCE) of 1, refused
 //!   beyond;
 //! - roll, pitch, yaw: three columns in the map's angle unit
 //!   ([`ColumnMap::angle_scale`](super::ColumnMap::angle_scale)), URDF's fixed-axis convention
@@ -18,10 +18,10 @@
 //!
 //! A row whose rotation cells are all empty is a point; one with some empty is refused.
 
-use nalgebra::{Quaternion, UnitQuaternion};
+use nalgebra::UnitQuaternion;
 
 use super::ColumnRef;
-use crate::csv::{number, DataError, QUATERNION_NORM_TOLERANCE};
+use crate::csv::{number, unit_quaternion, DataError};
 use crate::data::Orientation;
 
 /// Largest `sigma_rot` (radians), as the canonical reader takes it: a standard deviation of a
@@ -114,20 +114,7 @@ impl Resolved {
             v.push(number(cell(c), line, &name(c))?);
         }
         let rotation = if self.quaternion {
-            let q = Quaternion::new(v[0], v[1], v[2], v[3]);
-            let norm = q.norm();
-            if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-                return Err(DataError::Format {
-                    line,
-                    expected: format!(
-                        "a unit quaternion in columns {} (norm within \
-                         {QUATERNION_NORM_TOLERANCE} of 1)",
-                        names()
-                    ),
-                    found: format!("norm {norm}"),
-                });
-            }
-            UnitQuaternion::from_quaternion(q)
+            unit_quaternion([v[0], v[1], v[2], v[3]], line, &names())?
         } else {
             let mut rpy = [0.0; 3];
             for ((slot, value), &c) in rpy.iter_mut().zip(&v).zip(&self.rotation) {
@@ -227,7 +214,7 @@ mod tests {
                     0;0;1;2;3;0.02;;;;;\n";
         let (m, _) = parse(text, &quaternion_map()).unwrap();
         let o = m.samples[0].orientation.as_ref().unwrap();
-        let want = UnitQuaternion::from_quaternion(Quaternion::new(0.8, 0.6, 0.0, 0.0));
+        let want = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(0.8, 0.6, 0.0, 0.0));
         assert!(o.rotation.angle_to(&want) < 1e-15);
         // 0.005 degrees in radians.
         assert!((o.sigma - 0.005_f64.to_radians()).abs() < 1e-18);
