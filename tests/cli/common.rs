@@ -170,3 +170,19 @@ pub fn corpus_chains(shared: &std::path::Path) -> Vec<CorpusChain> {
     }
     out
 }
+
+/// `(column name -> cell)` rows of CSV text written by the tool (its `#` comment lines left
+/// out; names and cells without quoted commas).
+pub fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(String::from))
+                .collect()
+        })
+        .collect()
+}

@@ -5,7 +5,7 @@
 
 use serde_json::Value;
 
-use crate::common::{exec, ok};
+use crate::common::{csv_rows, exec, ok};
 
 const MODEL: &str = "fixtures/robots/ur5/vendor.yaml";
 const HEADER: &str = "shoulder_pan_joint,shoulder_lift_joint,elbow_joint,wrist_1_joint,wrist_2_joint,wrist_3_joint,x,y,z,sigma,qw,qx,qy,qz,sigma_rot\n";
@@ -302,21 +302,6 @@ fn a_planted_effect_turns_the_orientations_and_is_found() {
     }
 }
 
-/// The rows of a `predict` CSV by column name.
-fn predicted(csv: &str) -> Vec<std::collections::HashMap<String, String>> {
-    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
-}
-
 /// A calibration on 6-DoF data predicts: the sheet `calibrate --out` writes reads back with its
 /// targets' rotations (the covariance names their `rx|ry|rz`), and `predict` gives each
 /// target's position and attitude with their uncertainties, which the true robot (the truth
@@ -353,8 +338,8 @@ fn a_six_dof_calibration_predicts_positions_and_attitudes() {
         &cal,
         "--quiet",
     ]);
-    let est = predicted(&ok(&["predict", "--model", &cal, "--joints", &data]));
-    let tru = predicted(&ok(&["predict", "--model", &truth, "--joints", &data]));
+    let est = csv_rows(&ok(&["predict", "--model", &cal, "--joints", &data]));
+    let tru = csv_rows(&ok(&["predict", "--model", &truth, "--joints", &data]));
     assert_eq!(est.len(), 120);
     let num = |r: &std::collections::HashMap<String, String>, k: &str| -> f64 {
         r[k].parse()

@@ -5,24 +5,13 @@
 
 use std::path::Path;
 
-use crate::common::{exec, ok};
+use crate::common::{csv_rows, exec, ok};
 
 const UR5: &str = "fixtures/robots/ur5/vendor.yaml";
 
-/// `(column name -> values)` rows of a CSV written by the tool.
+/// `(column name -> values)` rows of a CSV file written by the tool.
 fn table(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
-    lines
-        .map(|l| {
-            header
-                .iter()
-                .cloned()
-                .zip(l.split(',').map(String::from))
-                .collect()
-        })
-        .collect()
+    csv_rows(&std::fs::read_to_string(path).unwrap())
 }
 
 fn num(row: &std::collections::HashMap<String, String>, k: &str) -> f64 {
