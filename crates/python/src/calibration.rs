@@ -30,14 +30,17 @@ use crate::to_py;
 
 /// Measurements or joint values from Python: the joint column names, the joint values
 /// (`rows × names`, flattened row-major), the points (`rows × 3` flattened; empty for joint
-/// values), the `sigma` column or None, and the text columns (`target`, `config`, `session`,
-/// `set`) by name.
+/// values), the `sigma` column or None, the text columns (`target`, `config`, `session`,
+/// `set`) by name, and a 6-DoF device's orientation: `qw, qx, qy, qz` (`rows × 4` flattened,
+/// NaN rows for points) and `sigma_rot`, or None.
 type ArraysIn = (
     Vec<String>,
     Vec<f64>,
     Vec<f64>,
     Option<Vec<f64>>,
     HashMap<String, Vec<String>>,
+    Option<Vec<f64>>,
+    Option<Vec<f64>>,
 );
 
 /// The [`SampleArrays`] of `a`.
@@ -45,7 +48,7 @@ type ArraysIn = (
 /// # Errors
 /// A text column that is not one of `target`, `config`, `session`, `set`.
 fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
-    let (joint_names, q, points, sigma, mut labels) = a;
+    let (joint_names, q, points, sigma, mut labels, quaternion, sigma_rot) = a;
     let mut take = |k: &str| labels.remove(k);
     let out = SampleArrays {
         joint_names,
@@ -56,6 +59,8 @@ fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
         config: take("config"),
         session: take("session"),
         set: take("set"),
+        quaternion,
+        sigma_rot,
     };
     if let Some(k) = labels.keys().next() {
         anyhow::bail!("expected text columns target, config, session or set, found '{k}'");

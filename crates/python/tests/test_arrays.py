@@ -126,3 +126,25 @@ def test_bad_arrays_name_the_row_and_column(data):
         urdf_dh.predict(UR5, joints)
     with pytest.raises(urdf_dh.UrdfDhError, match=r"<joints>: row 2, column 'shoulder_pan_joint'"):
         urdf_dh.compensate(UR5, UR5, joints)
+
+
+def test_six_dof_dataframe_gives_the_file_report(tmp_path):
+    """A 6-DoF set (qw, qx, qy, qz, sigma_rot columns) as a DataFrame: the same report as its
+    CSV file, the target's rotation estimated; a missing orientation column is named."""
+    path, truth = tmp_path / "p6.csv", tmp_path / "p6.truth.yaml"
+    _native.run(
+        ["simulate", "--model", str(UR5), "--poses", "60", "--seed", "4", "--noise", "2e-5",
+         "--orientation-noise", "5e-5", "--out", str(path), "--truth", str(truth)]
+    )
+    frame = read(path)
+    assert {"qw", "qx", "qy", "qz", "sigma_rot"} <= set(frame.columns)
+    from_file = urdf_dh.calibrate(UR5, path).to_dict()
+    from_frame = urdf_dh.calibrate(UR5, frame).to_dict()
+    for doc in (from_file, from_frame):
+        doc.pop("data", None)
+        doc.get("names", {}).pop("data", None)
+    assert from_frame["rms_after"] == from_file["rms_after"]
+    assert from_frame["targets"] == from_file["targets"]
+    assert "rpy" in from_frame["targets"][0]
+    with pytest.raises(urdf_dh.UrdfDhError, match="missing sigma_rot"):
+        urdf_dh.calibrate(UR5, frame.drop(columns=["sigma_rot"]))

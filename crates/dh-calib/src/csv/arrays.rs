@@ -32,6 +32,13 @@ pub struct SampleArrays {
     /// The `set` column (`train`/`calibration`, `test`/`validation`, empty for calibration), or
     /// `None`.
     pub set: Option<Vec<String>>,
+    /// The orientation columns `qw, qx, qy, qz` of a 6-DoF device (the measured rotation of the
+    /// target frame in the device frame, a unit quaternion scalar first), `rows × 4`,
+    /// row-major; a row of four NaN is a point. `None`: points only.
+    pub quaternion: Option<Vec<f64>>,
+    /// The `sigma_rot` column (radians, standard deviation per axis of the rotation), with
+    /// `quaternion`; NaN in the rows of points.
+    pub sigma_rot: Option<Vec<f64>>,
 }
 
 /// The error for row `row` (0-based, as numpy and pandas count), column `column`.
@@ -113,7 +120,19 @@ impl SampleArrays {
             self.q.len(),
             n * self.joint_names.len(),
         )?;
+        shape(
+            "qw, qx, qy, qz (rows x 4)",
+            self.quaternion.as_ref().map_or(4 * n, Vec::len),
+            4 * n,
+        )?;
+        if self.quaternion.is_some() != self.sigma_rot.is_some() {
+            return Err(DataError::Content {
+                expected: "the orientation columns qw, qx, qy, qz and sigma_rot together".into(),
+                found: "one without the other".into(),
+            });
+        }
         for (what, len) in [
+            ("'sigma_rot'", self.sigma_rot.as_ref().map(Vec::len)),
             ("'target'", self.target.as_ref().map(Vec::len)),
             ("'sigma'", self.sigma.as_ref().map(Vec::len)),
             ("'config'", self.config.as_ref().map(Vec::len)),
@@ -175,6 +194,7 @@ impl Measurements {
             ..Measurements::default()
         };
         let mut zero_sigmas = Vec::new();
+        let mut zero_sigmas_rot = Vec::new();
         for i in 0..n {
             let row = i;
             let mut q = Vec::with_capacity(width);
@@ -281,7 +301,7 @@ impl Measurements {
                 line: i + 2,
                 socket: None,
                 session,
-                orientation: None,
+                orientation: orientation_row(arrays, i, &mut zero_sigmas_rot)?.map(Box::new),
             });
         }
         let mut notes = Vec::new();
@@ -291,8 +311,59 @@ impl Measurements {
                 zero_sigmas.len()
             ));
         }
+        if let Some(first) = zero_sigmas_rot.first() {
+            notes.push(format!(
+                "{} sample(s) give a sigma_rot of 0 (first at row {first}; a rounded export?): floored at {SIGMA_ROT_FLOOR:e} rad",
+                zero_sigmas_rot.len()
+            ));
+        }
         Ok((m, notes))
     }
+}
+
+/// The orientation of row `i` of `arrays` (see [`SampleArrays::quaternion`]), checked as the
+/// CSV reader checks the cells (all four or none, a unit quaternion, `sigma_rot` in
+/// `[0, 1]` rad, 0 floored at [`SIGMA_ROT_FLOOR`] and its row pushed on `zero`).
+fn orientation_row(
+    arrays: &SampleArrays,
+    i: usize,
+    zero: &mut Vec<usize>,
+) -> Result<Option<crate::data::Orientation>, DataError> {
+    let (Some(q), Some(sigmas)) = (&arrays.quaternion, &arrays.sigma_rot) else {
+        return Ok(None);
+    };
+    const NAMES: [&str; 4] = ["qw", "qx", "qy", "qz"];
+    let v = [q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]];
+    if v.iter().all(|x| x.is_nan()) {
+        return Ok(None);
+    }
+    for (value, name) in v.iter().zip(NAMES) {
+        if value.is_nan() {
+            return Err(array_error(i, name, "all of qw, qx, qy, qz or none", "NaN"));
+        }
+        finite(*value, i, name)?;
+    }
+    let rotation = unit_quaternion(v, i, "qw, qx, qy, qz").map_err(|e| match e {
+        DataError::Format {
+            expected, found, ..
+        } => array_error(i, "qw", expected, found),
+        e => e,
+    })?;
+    let s = sigmas[i];
+    let sigma = if s == 0.0 {
+        zero.push(i);
+        SIGMA_ROT_FLOOR
+    } else if s > 0.0 && s <= 1.0 {
+        s
+    } else {
+        return Err(array_error(
+            i,
+            "sigma_rot",
+            "a standard deviation >= 0 and <= 1 rad for an orientation",
+            format!("{s}"),
+        ));
+    };
+    Ok(Some(crate::data::Orientation { rotation, sigma }))
 }
 
 /// `value` if finite, else the error naming `row` and `column`.
@@ -371,6 +442,8 @@ mod tests {
             config: None,
             session: None,
             set: Some(vec!["train".into(), "test".into()]),
+            quaternion: None,
+            sigma_rot: None,
         }
     }
 
@@ -445,5 +518,72 @@ mod tests {
         a.sigma = Some(vec![-1.0, 0.1]);
         let e = Measurements::from_arrays(&a, &opts).unwrap_err();
         assert!(e.to_string().starts_with("row 0, column 'sigma': "), "{e}");
+    }
+
+    /// Orientation arrays read as the CSV reader reads the same cells: a 6-DoF row and a point
+    /// row (NaN), a `sigma_rot` of 0 floored with a note, and the refusals naming the row.
+    #[test]
+    fn orientations_read_as_the_csv_reader_reads_them() {
+        let opts = CsvOptions::default();
+        let mut a = si();
+        a.quaternion = Some(vec![
+            0.8,
+            0.6,
+            0.0,
+            0.0,
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+        ]);
+        a.sigma_rot = Some(vec![0.0, f64::NAN]);
+        let (m, notes) = Measurements::from_arrays(&a, &opts).unwrap();
+        let text = "j1,j2,x,y,z,target,sigma,set,qw,qx,qy,qz,sigma_rot\n\
+                    0.1,0.2,1,0,0.5,A,,train,0.8,0.6,0,0,0\n\
+                    1,-0.5,1,2,3,B,0,test,,,,,\n";
+        let (csv, csv_notes) = parse_measurements_noting(text, &m.joint_names, &opts).unwrap();
+        for (x, c) in m.samples.iter().zip(&csv.samples) {
+            assert_eq!(x.orientation, c.orientation);
+        }
+        assert!(m.samples[0].orientation.as_ref().unwrap().sigma == SIGMA_ROT_FLOOR);
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.contains("sigma_rot of 0 (first at row 0")),
+            "{notes:?}"
+        );
+        assert_eq!(notes.len(), csv_notes.len());
+        for (quaternion, sigma, expected) in [
+            (
+                [0.8, 0.6, f64::NAN, 0.0],
+                1e-4,
+                "row 0, column 'qy': expected all of qw, qx, qy, qz or none",
+            ),
+            (
+                [0.9, 0.6, 0.0, 0.0],
+                1e-4,
+                "row 0, column 'qw': expected a unit quaternion",
+            ),
+            ([0.8, 0.6, 0.0, 0.0], -1.0, "row 0, column 'sigma_rot': "),
+            (
+                [0.8, 0.6, 0.0, 0.0],
+                f64::NAN,
+                "row 0, column 'sigma_rot': ",
+            ),
+        ] {
+            let mut b = a.clone();
+            b.quaternion.as_mut().unwrap()[..4].copy_from_slice(&quaternion);
+            b.sigma_rot = Some(vec![sigma, f64::NAN]);
+            let e = Measurements::from_arrays(&b, &opts)
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(expected), "{e}");
+        }
+        let mut b = a.clone();
+        b.sigma_rot = None;
+        let e = Measurements::from_arrays(&b, &opts)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("together"), "{e}");
     }
 }

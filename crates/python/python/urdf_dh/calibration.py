@@ -5,7 +5,8 @@ Each calls the ``urdf-dh`` library's entry for the command of the same name in p
 extension), so the results, the checks on the input and the messages are the command line's own.
 Measurements may be a file path, a pandas ``DataFrame`` (columns named as in the measurement CSV:
 one per joint, ``x``, ``y``, ``z``, optional ``target``, ``config``, ``sigma``, ``set``,
-``session``) or a numpy array (one column per measured joint of the model in its order, then
+``session``, and a 6-DoF device's ``qw``, ``qx``, ``qy``, ``qz``, ``sigma_rot``, NaN in the rows of
+points) or a numpy array (one column per measured joint of the model in its order, then
 ``x``, ``y``, ``z``). A DataFrame or an array is handed over as arrays, no file is written: the
 library checks its values as it checks a file's cells, and an error names the row (0-based, as
 numpy and pandas count) and the column. Units are those of the options (``length_unit``,
@@ -28,10 +29,21 @@ PathLike = Union[str, "os.PathLike[str]"]
 # Text columns handed over by name; every other reserved column of the CSV layout needs a file.
 _LABELS = ("target", "config", "session", "set")
 _POINT_COLUMNS = ("x", "y", "z", "sigma")
+# A 6-DoF device's orientation: all five or none.
+_ORIENTATION = ("qw", "qx", "qy", "qz", "sigma_rot")
 
 # What the library is given for a DataFrame or array: joint names, joint values and points
-# (flattened row-major), the sigma column, the text columns.
-_Arrays = Tuple[List[str], List[float], List[float], Optional[List[float]], Dict[str, List[str]]]
+# (flattened row-major), the sigma column, the text columns, the orientation (qw, qx, qy, qz
+# flattened, NaN rows for points) and sigma_rot.
+_Arrays = Tuple[
+    List[str],
+    List[float],
+    List[float],
+    Optional[List[float]],
+    Dict[str, List[str]],
+    Optional[List[float]],
+    Optional[List[float]],
+]
 
 
 def _warn(stderr: str) -> None:
@@ -66,7 +78,7 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
     reserved = set(_native.RESERVED_COLUMNS)
     columns = [str(c) for c in frame.columns]
     if points:
-        other = [c for c in columns if c in reserved and c not in _LABELS + _POINT_COLUMNS]
+        other = [c for c in columns if c in reserved and c not in _LABELS + _POINT_COLUMNS + _ORIENTATION]
         if other:
             raise _native.UrdfDhError(
                 f"{what}: column(s) {', '.join(other)} can be read from a CSV file only; pass its path"
@@ -95,7 +107,17 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
     )
     sigma = np.asarray(frame["sigma"], dtype=float).tolist() if points and "sigma" in columns else None
     labels = {c: _text(frame[c]) for c in _LABELS if c in columns}
-    return names, q.ravel().tolist(), xyz, sigma, labels
+    quaternion, sigma_rot = None, None
+    present = [c for c in _ORIENTATION if c in columns]
+    if points and present:
+        if len(present) != len(_ORIENTATION):
+            missing = [c for c in _ORIENTATION if c not in columns]
+            raise _native.UrdfDhError(
+                f"{what}: orientation columns {', '.join(_ORIENTATION)} go together; missing {', '.join(missing)}"
+            )
+        quaternion = np.column_stack([np.asarray(frame[c], dtype=float) for c in _ORIENTATION[:4]]).ravel().tolist()
+        sigma_rot = np.asarray(frame["sigma_rot"], dtype=float).tolist()
+    return names, q.ravel().tolist(), xyz, sigma, labels, quaternion, sigma_rot
 
 
 def _arrays(
@@ -121,7 +143,7 @@ def _arrays(
         )
     j = len(columns)
     xyz = array[:, j:].ravel().tolist() if points else []
-    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}
+    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}, None, None
 
 
 def _source(
@@ -235,7 +257,8 @@ def calibrate(
 
     Args:
         data: measurements: a CSV path, a pandas DataFrame (columns by name: joints, x, y, z,
-            optional target, config, sigma, set, session), or a numpy array (the model's
+            optional target, config, sigma, set, session; a 6-DoF device's qw, qx, qy, qz,
+            sigma_rot, NaN for points), or a numpy array (the model's
             measured joints, then x, y, z). A DataFrame or array is handed to the library as
             arrays (no file); with model None a DataFrame's non-reserved columns are the joints.
         validate: validation measurements, same forms (a file only beside a file).
