@@ -350,19 +350,17 @@ fn orientation_row(
         e => e,
     })?;
     let s = sigmas[i];
-    let sigma = if s == 0.0 {
-        zero.push(i);
-        SIGMA_ROT_FLOOR
-    } else if s > 0.0 && s <= 1.0 {
-        s
-    } else {
-        return Err(array_error(
+    let (sigma, floored) = super::orientation::floored_sigma_rot(s).ok_or_else(|| {
+        array_error(
             i,
             "sigma_rot",
             "a standard deviation >= 0 and <= 1 rad for an orientation",
             format!("{s}"),
-        ));
-    };
+        )
+    })?;
+    if floored {
+        zero.push(i);
+    }
     Ok(Some(crate::data::Orientation { rotation, sigma }))
 }
 

@@ -123,21 +123,25 @@ pub(super) fn orientation_cells<'a>(
         });
     }
     let sigma = number(cell(s), line, name(s))?;
+    let (sigma, floored) = floored_sigma_rot(sigma).ok_or_else(|| DataError::Format {
+        line,
+        expected: format!(
+            "a standard deviation >= 0 and <= {MAX_SIGMA_ROT} rad in column 'sigma_rot'"
+        ),
+        found: format!("'{}'", cell(s)),
+    })?;
+    Ok(Some((Orientation { rotation, sigma }, floored)))
+}
+
+/// A `sigma_rot` (radians) as the fit takes it, and whether it was 0 and floored at
+/// [`SIGMA_ROT_FLOOR`]; `None` when it is not in `[0, 1]` rad (negative, NaN, above a radian).
+pub(crate) fn floored_sigma_rot(sigma: f64) -> Option<(f64, bool)> {
     if !(0.0..=MAX_SIGMA_ROT).contains(&sigma) {
-        return Err(DataError::Format {
-            line,
-            expected: format!(
-                "a standard deviation >= 0 and <= {MAX_SIGMA_ROT} rad in column 'sigma_rot'"
-            ),
-            found: format!("'{}'", cell(s)),
-        });
+        return None;
     }
-    let floored = sigma == 0.0;
-    Ok(Some((
-        Orientation {
-            rotation,
-            sigma: if floored { SIGMA_ROT_FLOOR } else { sigma },
-        },
-        floored,
-    )))
+    Some(if sigma == 0.0 {
+        (SIGMA_ROT_FLOOR, true)
+    } else {
+        (sigma, false)
+    })
 }
