@@ -12,7 +12,7 @@ use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK
 use crate::commands::convert::{convert, ConvertArgs};
 use crate::commands::extract::{extract, ExtractArgs};
 use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
-use crate::commands::{calibrate, calibrate_tree, compensate, cpa, import, predict, simulate};
+use crate::commands::{calibrate, compensate, cpa, import, predict, simulate};
 use crate::error::Outcome;
 use crate::guard;
 use crate::output::check_destinations;
@@ -462,9 +462,7 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
 }
 
 /// Runs `calibrate` with `args` as the command line does (the library entry of
-/// `urdf-dh calibrate`): outputs checked against inputs, a tree sheet model calibrated as a tree,
-/// else as a serial chain ([`calibrate::calibrate`]). The report goes to `out` (to `err` when an
-/// artefact is piped to `-`), warnings and progress to `err`.
+/// `urdf-dh calibrate`): [`calibrate::calibrate`], outputs checked against the inputs first.
 ///
 /// # Errors
 /// As [`calibrate::calibrate`].
@@ -473,24 +471,7 @@ pub fn run_calibrate(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> anyhow::Result<Outcome> {
-    let inputs: Vec<(&str, &str)> = [
-        ("--model", args.model.as_deref()),
-        ("--data", Some(args.data.as_str())),
-        ("--validate", args.validate.as_deref()),
-        ("--inertials", args.inertials.as_deref()),
-    ]
-    .into_iter()
-    .filter_map(|(o, p)| Some((o, p?)))
-    .collect();
-    let outputs: Vec<(&str, &str)> = [("--out", &args.out), ("--plot", &args.plot)]
-        .into_iter()
-        .filter_map(|(o, p)| Some((o, p.as_deref()?)))
-        .collect();
-    check_destinations(&inputs, &outputs)?;
-    match calibrate_tree::tree_model(args)? {
-        Some((tree, origin)) => calibrate_tree::calibrate_tree(args, &tree, &origin, out, err),
-        None => calibrate::calibrate(args, out, err),
-    }
+    calibrate::calibrate(args, out, err)
 }
 
 /// Runs `predict` with `args` as the command line does (the library entry of `urdf-dh predict`):

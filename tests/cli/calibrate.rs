@@ -72,7 +72,7 @@ fn planted_geometric_errors_come_back_and_the_fit_reaches_the_noise_floor() {
     assert_eq!(truth["truth"]["errors"].as_sequence().unwrap().len(), 6);
 
     let out = path(dir.path(), "calibrated.yaml");
-    let report: Value = serde_json::from_str(&ok(&[
+    let json = ok(&[
         "calibrate",
         "--model",
         UR5,
@@ -82,8 +82,9 @@ fn planted_geometric_errors_come_back_and_the_fit_reaches_the_noise_floor() {
         "json",
         "--out",
         &out,
-    ]))
-    .unwrap();
+    ]);
+    crate::common::assert_library_calibrates_as_the_cli(UR5, &data, None, Some(&out), &json);
+    let report: Value = serde_json::from_str(&json).unwrap();
     let steps: Vec<&str> = report["steps"]
         .as_array()
         .unwrap()

@@ -186,3 +186,29 @@ pub fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
         })
         .collect()
 }
+
+/// Asserts that the library's calibration ([`dh_sheet::calibration::run`]) of `model` against
+/// `data` (with `validate`) gives the JSON report the command line printed (`json`) and, when
+/// `out` names the file the command line wrote, the same calibrated model, byte for byte.
+pub fn assert_library_calibrates_as_the_cli(
+    model: &str,
+    data: &str,
+    validate: Option<&str>,
+    out: Option<&str>,
+    json: &str,
+) {
+    let mut request = dh_sheet::calibration::CalibrationRequest::new(Some(model.into()), data);
+    request.validate = validate.map(Into::into);
+    request.out = out.map(Into::into);
+    let mut warnings = Vec::new();
+    let mut calibrated = dh_sheet::calibration::run(&request, &mut warnings).unwrap();
+    if let Some(path) = out {
+        let written = calibrated
+            .model_file(path, Some(model), &mut warnings)
+            .unwrap()
+            .expect("the model passes its proof");
+        assert_eq!(written, std::fs::read_to_string(path).unwrap(), "{path}");
+    }
+    assert!(calibrated.proved());
+    assert_eq!(calibrated.json().unwrap(), json);
+}

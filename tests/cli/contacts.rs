@@ -220,7 +220,7 @@ fn the_calibrated_model_of_contacts_reads_back_with_the_calibrated_consistency()
         path(dir.path(), "cal.urdf"),
         path(dir.path(), "cal.svg"),
     );
-    let report: Value = serde_json::from_str(&ok(&[
+    let json = ok(&[
         "calibrate",
         "--model",
         PANDA,
@@ -232,8 +232,9 @@ fn the_calibrated_model_of_contacts_reads_back_with_the_calibrated_consistency()
         &sheet,
         "--plot",
         &svg,
-    ]))
-    .unwrap();
+    ]);
+    crate::common::assert_library_calibrates_as_the_cli(PANDA, &data, None, Some(&sheet), &json);
+    let report: Value = serde_json::from_str(&json).unwrap();
     ok(&[
         "calibrate",
         "--model",

@@ -148,6 +148,13 @@ fn a_simulated_tree_comes_back_through_the_cli() {
         "--out",
         &out,
     ]);
+    crate::common::assert_library_calibrates_as_the_cli(
+        &nominal,
+        &data,
+        Some(&validation),
+        Some(&out),
+        &json,
+    );
     let report: Value = serde_json::from_str(&json).unwrap();
     assert_eq!(report["validation"]["method"], "split");
     // The nominal model misses by millimetres; the geometric step reaches the noise (3-D RMS

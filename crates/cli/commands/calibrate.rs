@@ -8,11 +8,12 @@
 //! poses). Without `--model` the start is the circle-point analysis of the data.
 //!
 //! # Layout
-//! The arguments, inputs and documents it shares with `crate::commands::sockets` and
-//! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args`,
-//! `crate::commands::calibrate_inputs` and `crate::commands::calibrate_doc`, re-exported here;
-//! the run itself is in `run`, the text report in `text`, the residual chart (`--plot`) in
-//! `chart`; the calibrated model (`--out`) is written by [`dh_sheet::calibrated_writer`].
+//! The calibration itself (inputs, the serial, contact and tree paths, the calibrated model
+//! proved as written) is the library's [`dh_sheet::calibration`]; its inputs are re-exported
+//! here. The arguments and documents this command shares with `crate::commands::sockets` and
+//! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args` and
+//! `crate::commands::calibrate_doc`, re-exported here; the run (files and rendering) is in
+//! `run`, the text report in `text`, the residual chart (`--plot`) in `chart`.
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -20,27 +21,27 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use dh_calib::calibrate::Report;
 use dh_calib::data::{Measurements, Split};
 use dh_calib::effects::label_of;
 use dh_calib::model::{Effect, Model, ModelOptions};
-use dh_calib::pipeline::{self, Calibration, Names, PipelineError, PipelineOptions, Plan, Start};
+use dh_calib::pipeline::{self, Plan};
 use dh_core::pose::from_xyz_rpy;
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Vector3};
 
 use crate::error::Outcome;
 use crate::input::display_name;
-use crate::measured::{parse_effect, DataUnits, LoadedModel};
+use crate::measured::{DataUnits, LoadedModel};
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::progress::PipelineProgress;
 use crate::units::{AngleUnit, LengthUnit};
-use dh_sheet::calibrated_writer::{model_text, row_values};
+use dh_sheet::calibrated_writer::row_values;
 
 pub use super::calibrate_args::*;
 pub use super::calibrate_doc::*;
-pub(crate) use super::calibrate_inputs::*;
+pub use dh_sheet::calibration::{self as calibration, Calibrated, Inputs, Loaded};
 
 // The submodules import what they use through `use super::*`: the imports above and each
 // other's items, re-exported here.

@@ -1,43 +1,16 @@
 //! The arguments of `urdf-dh calibrate`: the command line as clap reads it ([`CalibrateCli`])
-//! and the settings [`crate::commands::calibrate::calibrate`] runs with ([`CalibrateArgs`]:
-//! files, units, which effects, output format).
+//! and the settings [`crate::commands::calibrate::calibrate`] runs with ([`CalibrateArgs`]: the
+//! library's [`CalibrationRequest`], the output format, the chart, the progress line).
 //!
-//! Shared by `calibrate`, its contact path (`crate::commands::sockets`) and its tree path
-//! (`crate::commands::calibrate_tree`), so that none of them imports another for them.
-
-use anyhow::Result;
-use dh_core::Convention;
+//! Shared by `calibrate`, its contact rendering (`crate::commands::sockets`) and its tree
+//! rendering (`crate::commands::calibrate_tree`), so that none of them imports another for them.
 
 use crate::measured::DataUnits;
 use crate::sheet::ConventionDoc;
 use crate::units::{AngleUnit, LengthUnit};
 
-/// Which non-geometric effects to estimate after the geometric step.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum EffectsChoice {
-    /// None: the report ends with `geometric`.
-    None,
-    /// Let the diagnosis of `dh_calib::diagnose` choose.
-    Auto,
-    /// These labels (`gear_ratio:<joint>`, ...).
-    List(Vec<String>),
-}
-
-impl std::str::FromStr for EffectsChoice {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s.trim() {
-            "none" | "" => Ok(EffectsChoice::None),
-            "auto" => Ok(EffectsChoice::Auto),
-            list => Ok(EffectsChoice::List(
-                list.split(',')
-                    .map(|l| l.trim().to_string())
-                    .filter(|l| !l.is_empty())
-                    .collect(),
-            )),
-        }
-    }
-}
+pub use dh_calib::pipeline::EffectsChoice;
+pub use dh_sheet::calibration::{CalibrationRequest, GivenData};
 
 /// Output format of `calibrate`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -49,66 +22,17 @@ pub enum CalibrateFormat {
     Json,
 }
 
-/// Everything `calibrate` needs.
+/// Everything `calibrate` needs: the library's request and how the command line renders it.
 #[derive(Clone, Debug)]
 pub struct CalibrateArgs {
-    /// The model (URDF or DH sheet); `None` starts from circle-point analysis of the data.
-    pub model: Option<String>,
-    /// Base link of a URDF chain.
-    pub base: Option<String>,
-    /// Tip link of a URDF chain.
-    pub tip: Option<String>,
-    /// DH convention for a URDF model or the CPA start.
-    pub convention: Convention,
-    /// The measurement file.
-    pub data: String,
-    /// A separate validation file.
-    pub validate: Option<String>,
-    /// Units of the measurement files (and of `sigma`); reports are in metres and radians.
-    pub units: DataUnits,
-    /// Effects to estimate.
-    pub effects: EffectsChoice,
-    /// Keep only these targets (all when empty).
-    pub targets: Vec<String>,
-    /// Known per-axis noise (metres).
-    pub sigma: Option<f64>,
-    /// Folds of cross-validation.
-    pub folds: usize,
+    /// The calibration itself ([`dh_sheet::calibration`]).
+    pub request: CalibrationRequest,
     /// Output format.
     pub format: CalibrateFormat,
-    /// Where to write the calibrated model (`.urdf` for a URDF, `.json` for a JSON sheet,
-    /// otherwise a YAML sheet).
-    pub out: Option<String>,
     /// Where to write the residual chart (SVG).
     pub plot: Option<String>,
-    /// Link masses for the gravity effects (YAML); `None` takes a URDF model's inertials.
-    pub inertials: Option<String>,
-    /// Gravity in the base link frame (m/s²), three values.
-    pub gravity: Option<Vec<f64>>,
-    /// A payload at the tip: mass (kg) and centre in the tip frame (m), four values.
-    pub payload: Option<Vec<f64>>,
-    /// Most effects `--effects auto` adds (`dh_calib::diagnose::DiagnoseOptions::max_effects`).
-    pub max_effects: usize,
-    /// Significance level of the diagnosis's tests (`PipelineOptions::alpha`).
-    pub alpha: f64,
-    /// Fit the outliers with the rest (they are still named).
-    pub keep_outliers: bool,
     /// No progress line on standard error.
     pub quiet: bool,
-    /// Measurements a library caller hands over as arrays instead of the files `data` and
-    /// `validate` (which then only name them in messages); `None` on the command line.
-    pub given: Option<GivenData>,
-}
-
-/// Measurements given as arrays (see [`dh_calib::csv::SampleArrays`]; units those of
-/// [`CalibrateArgs::units`]), read as `calibrate` reads its files: the model's measured joints
-/// are taken from the arrays' joint columns by name.
-#[derive(Clone, Debug)]
-pub struct GivenData {
-    /// The measurements (`--data`).
-    pub data: dh_calib::csv::SampleArrays,
-    /// The validation measurements (`--validate`), if any.
-    pub validate: Option<dh_calib::csv::SampleArrays>,
 }
 
 /// Command-line arguments of `calibrate`.
@@ -151,7 +75,7 @@ pub struct CalibrateCli {
     #[arg(long, value_name = "SIGMA", value_parser = crate::guard::sigma)]
     sigma: Option<f64>,
     /// Folds of the cross-validation.
-    #[arg(long, value_name = "K", default_value_t = 5, value_parser = crate::guard::folds)]
+    #[arg(long, value_name = "K", default_value_t = dh_sheet::calibration::DEFAULT_FOLDS, value_parser = crate::guard::folds)]
     folds: usize,
     /// Length unit of the measurement files and --sigma (reports are in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
@@ -196,7 +120,7 @@ pub struct CalibrateCli {
     payload: Option<Vec<f64>>,
     /// Most effects --effects auto adds before it stops (a guard; the run's notes say when it
     /// stopped the selection).
-    #[arg(long, value_name = "N", default_value_t = 12, value_parser = crate::guard::max_effects)]
+    #[arg(long, value_name = "N", default_value_t = dh_sheet::calibration::DEFAULT_MAX_EFFECTS, value_parser = crate::guard::max_effects)]
     max_effects: usize,
     /// Significance level of every test of the diagnosis: an effect enters when its F test
     /// passes at ALPHA divided by the number of candidates and its held-out gain is
@@ -217,31 +141,33 @@ impl CalibrateCli {
     /// The arguments of [`calibrate`](crate::commands::calibrate::calibrate).
     pub fn into_args(self) -> CalibrateArgs {
         CalibrateArgs {
-            model: self.model,
-            base: self.base,
-            tip: self.tip,
-            convention: self.convention.into(),
-            data: self.data,
-            validate: self.validate,
-            units: DataUnits {
-                length: self.length_unit,
-                angle: self.angle_unit,
+            request: CalibrationRequest {
+                model: self.model,
+                base: self.base,
+                tip: self.tip,
+                convention: self.convention.into(),
+                data: self.data,
+                validate: self.validate,
+                units: DataUnits {
+                    length: self.length_unit,
+                    angle: self.angle_unit,
+                },
+                effects: self.effects,
+                targets: self.targets,
+                sigma: self.sigma,
+                folds: self.folds,
+                out: self.out,
+                inertials: self.inertials,
+                gravity: self.gravity,
+                payload: self.payload,
+                max_effects: self.max_effects,
+                alpha: self.alpha,
+                keep_outliers: self.keep_outliers,
+                given: None,
             },
-            effects: self.effects,
-            targets: self.targets,
-            sigma: self.sigma,
-            folds: self.folds,
             format: self.format,
-            out: self.out,
             plot: self.plot,
-            inertials: self.inertials,
-            gravity: self.gravity,
-            payload: self.payload,
-            max_effects: self.max_effects,
-            alpha: self.alpha,
-            keep_outliers: self.keep_outliers,
             quiet: self.quiet,
-            given: None,
         }
     }
 }

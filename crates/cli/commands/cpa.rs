@@ -26,14 +26,7 @@ use crate::render::{render_sheet, Format};
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
-/// Default linear tolerance of the extraction from measured axes: 0.1 mm. Measured axes never
-/// intersect exactly; a laser tracker's axis lines scatter by tens of micrometres.
-pub const CPA_LINEAR: f64 = 1e-4;
-/// Default angular tolerance of the extraction from measured axes: 1 mrad (0.057 degrees).
-/// Measured axes are never exactly parallel; without snapping, a pair a fraction of a milliradian
-/// from parallel gives a common normal kilometres away. The snap's cost is in the warnings, and
-/// `calibrate` estimates the remaining tilt (Hayati-Mirmirani).
-pub const CPA_ANGULAR: f64 = 1e-3;
+pub use dh_calib::cpa::{CPA_ANGULAR, CPA_LINEAR};
 
 /// Output format of `cpa`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]

@@ -1,14 +1,14 @@
 //! One module per subcommand, plus what several share: `calibrate`'s arguments
-//! ([`calibrate_args`]), inputs ([`calibrate_inputs`]) and documents ([`calibrate_doc`]), which
-//! its contact path ([`sockets`]) and tree path ([`calibrate_tree`]) use too, and its findings
-//! ([`calibrate_findings`]) and sessions ([`calibrate_sessions`]).
+//! ([`calibrate_args`]) and documents ([`calibrate_doc`]), which its contact report
+//! ([`sockets`]) and tree report ([`calibrate_tree`]) use too, and its findings
+//! ([`calibrate_findings`]) and sessions ([`calibrate_sessions`]). What `calibrate` reads and
+//! runs is the library's `dh_sheet::calibration`.
 
 pub mod batch;
 pub mod calibrate;
 pub mod calibrate_args;
 pub mod calibrate_doc;
 pub mod calibrate_findings;
-pub mod calibrate_inputs;
 pub mod calibrate_sessions;
 pub mod calibrate_tree;
 pub mod check;

@@ -102,6 +102,23 @@ pub enum EffectsChoice {
     List(Vec<String>),
 }
 
+impl std::str::FromStr for EffectsChoice {
+    type Err = String;
+    /// `none` (or nothing), `auto`, or comma-separated labels.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "none" | "" => Ok(EffectsChoice::None),
+            "auto" => Ok(EffectsChoice::Auto),
+            list => Ok(EffectsChoice::List(
+                list.split(',')
+                    .map(|l| l.trim().to_string())
+                    .filter(|l| !l.is_empty())
+                    .collect(),
+            )),
+        }
+    }
+}
+
 /// The options of [`calibrate`], as plain values.
 #[derive(Clone, Debug)]
 pub struct PipelineOptions {

@@ -26,7 +26,9 @@
 //! | [`calibrated`] | a calibrated model as `calibrate --out` writes it (device frame, targets, sessions, covariance), read back to predict |
 //! | [`predict`] | a calibrated model's target positions or tool poses at joint values, with their uncertainty |
 //! | [`compensate`] | the joint values with which a calibrated robot reaches what the nominal model reaches at commanded values |
+//! | [`calibration`] | a whole calibration as `calibrate` runs it: a [`CalibrationRequest`](calibration::CalibrationRequest) (files or arrays) loaded, fitted (points, contacts or a tree), its report and its calibrated model proved as written |
 //! | [`calibrated_writer`] | writing a calibrated model (`calibrate --out`): a sheet with its `calibration` section or a URDF, proved as written |
+//! | [`output`] | writing files all or nothing (staged, synced, renamed), `-` for standard output, and refusing an output that is an input |
 //! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
 //! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
@@ -55,6 +57,7 @@
 
 pub mod calibrated;
 pub mod calibrated_writer;
+pub mod calibration;
 pub mod check;
 pub mod compensate;
 pub mod error;
@@ -62,6 +65,7 @@ pub mod extract;
 pub mod input;
 pub mod measured;
 pub mod model;
+pub mod output;
 pub mod predict;
 pub mod prove;
 pub mod ranges;

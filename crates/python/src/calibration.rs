@@ -1,6 +1,6 @@
-//! Calibration from measured points and using its result: `calibrate` (the `urdf-dh` library
-//! entry the command line runs, `cli::run_calibrate`), `predict` and `compensate` (the library's
-//! `dh_sheet::predict` and `dh_sheet::compensate`, returning numbers), in process and without
+//! Calibration from measured points and using its result: `calibrate` (the library's
+//! `dh_sheet::calibration`, which the command line runs too), `predict` and `compensate` (the
+//! library's `dh_sheet::predict` and `dh_sheet::compensate`, returning numbers), in process and without
 //! files: measurements and joint values cross as arrays ([`ArraysIn`], read by `dh_calib::csv::SampleArrays` with the
 //! CSV reader's checks), or as a file path. Also `measured_joints` and the generic `run`.
 //!
@@ -11,19 +11,22 @@ use std::collections::HashMap;
 
 use dh_calib::compensate::{CompensateOptions, DEFAULT_MAX_CHANGE};
 use dh_calib::csv::SampleArrays;
+use dh_calib::pipeline::EffectsChoice;
 use dh_calib::predict::Frame;
 use dh_core::Convention;
 use dh_sheet::calibrated::{load_calibrated, CalibratedModel};
+use dh_sheet::calibration::{
+    self as calibration, CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFECTS,
+};
 use dh_sheet::compensate::{failed_poses, same_joints};
 use dh_sheet::input::display_name;
 use dh_sheet::measured::DataUnits;
 use dh_sheet::model::load_model;
+use dh_sheet::output::{write_all, STDIO};
 use dh_sheet::predict::{frame_of, read_joints};
 use dh_sheet::ranges;
 use dh_sheet::units::{AngleUnit, LengthUnit};
 use pyo3::prelude::*;
-use urdf_dh_cli::cli::run_calibrate;
-use urdf_dh_cli::commands::calibrate::{CalibrateArgs, CalibrateFormat, EffectsChoice, GivenData};
 use urdf_dh_cli::error::Outcome;
 
 use crate::to_py;
@@ -147,7 +150,7 @@ fn calibrate(
             }),
             None => None,
         };
-        let args = CalibrateArgs {
+        let request = CalibrationRequest {
             model,
             base,
             tip,
@@ -161,21 +164,42 @@ fn calibrate(
                 .map_err(|e: String| anyhow::anyhow!("effects: {e}"))?,
             targets,
             sigma: guarded("sigma", sigma, guard::sigma)?,
-            folds: guarded("folds", folds, guard::folds)?.unwrap_or(5),
-            format: CalibrateFormat::Json,
+            folds: guarded("folds", folds, guard::folds)?.unwrap_or(DEFAULT_FOLDS),
             out,
-            plot: None,
             inertials,
             gravity: None,
             payload: None,
-            max_effects: guarded("max_effects", max_effects, guard::max_effects)?.unwrap_or(12),
+            max_effects: guarded("max_effects", max_effects, guard::max_effects)?
+                .unwrap_or(DEFAULT_MAX_EFFECTS),
             alpha: guarded("alpha", alpha, guard::alpha)?
                 .unwrap_or(dh_calib::findings::DEFAULT_ALPHA),
             keep_outliers,
-            quiet: true,
             given,
         };
-        captured(|o, e| run_calibrate(&args, o, e))
+        if request.out.as_deref() == Some(STDIO) {
+            anyhow::bail!("out: expected a file path, found '-' (the report is returned)");
+        }
+        request.check_destinations(&[])?;
+        let mut warnings = Vec::new();
+        let mut calibrated = calibration::run(&request, &mut warnings)?;
+        let mut files = Vec::new();
+        if let Some(path) = &request.out {
+            if let Some(text) =
+                calibrated.model_file(path, request.model.as_deref(), &mut warnings)?
+            {
+                files.push((std::path::Path::new(path), text));
+            }
+        }
+        let proved = calibrated.proved();
+        if proved {
+            let files: Vec<_> = files.iter().map(|(p, t)| (*p, t.as_bytes())).collect();
+            write_all(&files)?;
+        }
+        Ok((
+            calibrated.json()?,
+            String::from_utf8_lossy(&warnings).into_owned(),
+            !proved,
+        ))
     };
     py.detach(go).map_err(|e| to_py(py, e))
 }

@@ -2,9 +2,9 @@
 //!
 //! Every computation is the library's: extraction and its proof and `check`'s comparison
 //! (`table`: `dh_sheet::extract`, `dh_sheet::check`), prediction and compensation
-//! (`calibration`: `dh_sheet::predict`, `dh_sheet::compensate`), and calibration (the `urdf-dh`
-//! library entry `cli::run_calibrate`, which reads the files and dispatches serial, tree and
-//! contact data to `dh_calib::pipeline`), with measurements and joint values handed over as
+//! (`calibration`: `dh_sheet::predict`, `dh_sheet::compensate`), and calibration
+//! (`dh_sheet::calibration`, which reads the files or arrays and runs serial, tree and contact
+//! data through `dh_calib::pipeline`), with measurements and joint values handed over as
 //! arrays, no files; this crate only converts arguments and results. Poses cross as 4x4
 //! homogeneous matrices (nested lists, row-major; metres and radians), which the pure-Python
 //! package turns into numpy arrays. Errors carry the CLI's message (`{e:#}`, the whole context

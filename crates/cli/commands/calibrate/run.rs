@@ -1,72 +1,14 @@
-//! Running `calibrate`: [`calibrate`] itself (the serial path of `dh_calib::pipeline`; contacts
-//! go to `crate::commands::sockets`, trees to `crate::commands::calibrate_tree`), the pipeline's
-//! options from the command line ([`pipeline_options`]) and its errors as the command line
-//! words them ([`serial_error`]).
+//! Running `calibrate`: [`calibrate`] loads and fits through the library
+//! ([`dh_sheet::calibration`]: points, contacts or a tree), then writes the calibrated model and
+//! the chart (all or nothing) and renders the report (the contact and tree reports in
+//! `crate::commands::sockets` and `crate::commands::calibrate_tree`).
 
 use super::*;
 
-/// The library's effects choice of `args`.
-pub(crate) fn effects_choice(args: &CalibrateArgs) -> dh_calib::pipeline::EffectsChoice {
-    match &args.effects {
-        EffectsChoice::None => dh_calib::pipeline::EffectsChoice::None,
-        EffectsChoice::Auto => dh_calib::pipeline::EffectsChoice::Auto,
-        EffectsChoice::List(l) => dh_calib::pipeline::EffectsChoice::List(l.clone()),
-    }
-}
-
-/// The pipeline options of `args` with the link masses and gravity the CLI read, the report
-/// naming the model `model` and the files as given.
-pub(crate) fn pipeline_options(
-    args: &CalibrateArgs,
-    model: &str,
-    inertials: Option<dh_calib::gravity::Inertials>,
-    gravity: Vector3<f64>,
-) -> PipelineOptions {
-    PipelineOptions {
-        effects: effects_choice(args),
-        max_effects: args.max_effects,
-        alpha: args.alpha,
-        folds: args.folds,
-        sigma: args.sigma.map(|s| s * args.units.length.metres()),
-        keep_outliers: args.keep_outliers,
-        inertials,
-        gravity,
-        names: Names {
-            model: model.to_string(),
-            data: display_name(&args.data),
-            validate: args.validate.as_deref().map(display_name),
-        },
-    }
-}
-
-/// Refuses a `--sigma` that is not a positive length.
-///
-/// # Errors
-/// That `--sigma`.
-pub(crate) fn check_sigma(args: &CalibrateArgs) -> Result<()> {
-    if let Some(s) = args.sigma {
-        if !(s.is_finite() && s > 0.0) {
-            anyhow::bail!("--sigma: expected a positive length, found {s}");
-        }
-    }
-    Ok(())
-}
-
-/// The command line's message for a pipeline error of a serial model `table` (an effect label
-/// named after the model's joints, the data file named).
-pub(crate) fn serial_error(e: PipelineError, table: &DhTable, data_name: &str) -> anyhow::Error {
-    match e {
-        // The CLI's message names the kinds and joints.
-        PipelineError::Effect { ref label, .. } => match parse_effect(label, table) {
-            Err(message) => message,
-            Ok(_) => anyhow::anyhow!("{e}"),
-        },
-        PipelineError::Inertials(_) | PipelineError::Search(_) => anyhow::anyhow!("{e}"),
-        e => too_few(e, data_name),
-    }
-}
-
-/// Runs `calibrate`.
+/// Runs `calibrate`: outputs checked against the inputs, a tree sheet model calibrated as a
+/// tree, else as a serial chain (points, or contacts when the data has a socket column). The
+/// report goes to `out` (to `err` when an artefact is piped to `-`), warnings and progress to
+/// `err`.
 ///
 /// # Errors
 /// Bad model or data files (naming the file, line and column), unknown effects, a calibration
@@ -76,103 +18,102 @@ pub fn calibrate(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<Outcome> {
-    let inputs = load_inputs(args, err)?;
-    if inputs.data.samples.iter().any(|s| s.socket.is_some()) {
-        return crate::commands::sockets::calibrate_contacts(args, &inputs, out, err);
-    }
-    let data_name = display_name(&args.data);
-    enough_samples(&inputs.data, &data_name)?;
-    let (inertials, gravity) = gravity_inputs(args, &inputs.table)?;
-    check_sigma(args)?;
-    let options = pipeline_options(args, &inputs.model_name, inertials, gravity);
-    let start = if inputs.cpa {
-        Start::Cpa(inputs.table.clone())
+    let request = &args.request;
+    let plot: Vec<(&str, &str)> = args.plot.iter().map(|p| ("--plot", p.as_str())).collect();
+    request.check_destinations(&plot)?;
+    let loaded = match calibration::identify(request)? {
+        Some((sheet, origin)) => {
+            if args.plot.is_some() {
+                return Err(crate::error::hinted(
+                    format!(
+                        "--plot: the residual chart is drawn for serial models only; {origin} is a tree"
+                    ),
+                    "drop --plot; the JSON report (--format json) has every step's figures",
+                ));
+            }
+            Loaded::Tree(Box::new(calibration::load_tree(
+                request, sheet, origin, err,
+            )?))
+        }
+        None => Loaded::Serial(Box::new(calibration::load_inputs(request, err)?)),
+    };
+    let data_name = display_name(&request.data);
+    let mut calibrated = if loaded.is_contacts() {
+        loaded.calibrate(request, &mut pipeline::Silent)?
     } else {
-        Start::Serial(inputs.table.clone())
-    };
-    let notice = |p: &Plan| {
-        p.is_long().then(|| {
-            format!(
-                "urdf-dh: calibrating {} ({} samples, {} targets, {}-fold cross-validation unless there is a validation split); this may take a while",
-                inputs.model_name, p.samples, p.targets, p.folds
-            )
-        })
-    };
-    let label = |p: &Plan| {
-        format!(
-            "calibrating {} against {data_name} ({} samples{})",
-            inputs.model_name,
-            p.samples,
-            if p.searched { ", effects searched" } else { "" }
-        )
-    };
-    let mut progress = PipelineProgress::new(err, args.quiet, &notice, &label);
-    let run = pipeline::calibrate(&start, &inputs.data, &options, &mut progress);
-    progress.check()?;
-    drop(progress);
-    let (mut doc, report, effects) = match run {
-        Ok(Calibration::Points(c)) => (c.doc, c.report, c.effects),
-        Ok(_) => anyhow::bail!("{data_name}: calibration took another path than a serial model's"),
-        Err(e) => return Err(serial_error(e, &inputs.table, &data_name)),
+        let subject = loaded.subject();
+        let notice = |p: &Plan| subject.notice(p);
+        let label = |p: &Plan| subject.label(p, &data_name);
+        let mut progress = PipelineProgress::new(err, args.quiet, &notice, &label);
+        let run = loaded.calibrate(request, &mut progress);
+        progress.check()?;
+        drop(progress);
+        run?
     };
     // Every output file is built (and the model proved as written) before any is written, and
-    // all are written or none.
+    // all are written or none; a model that fails its proof is not written, and neither is
+    // anything else.
     let mut files = Vec::new();
-    if let Some(path) = &args.out {
-        let (text, proof) = model_text(
-            path,
-            args.model.as_deref(),
-            &inputs.nominal(),
-            &inputs.data,
-            &report,
-            &doc,
-        )?;
-        let passed = proof.passed;
-        doc.written = Some(proof);
-        if passed {
-            if path.to_ascii_lowercase().ends_with(".urdf") && !report.selected_effects.is_empty() {
-                writeln!(
-                    err,
-                    "urdf-dh: warning: {}: a URDF cannot express the estimated effects {}; it holds the geometric part (write a sheet to keep them)",
-                    display_name(path),
-                    report.selected_effects.iter().map(|e| format!("'{e}'")).collect::<Vec<_>>().join(", ")
-                )?;
-            }
+    if let Some(path) = &request.out {
+        if let Some(text) = calibrated.model_file(path, request.model.as_deref(), err)? {
             files.push((Path::new(path), text));
         }
     }
-    let proved = doc.written.as_ref().is_none_or(|w| w.passed);
+    let proved = calibrated.proved();
     if let Some(path) = &args.plot {
-        // Residuals are millimetres or less on any arm: the chart reads best in mm whatever
-        // the report's unit.
-        let chart = chart(
-            &display_name(&args.data),
-            &inputs,
-            &report,
-            &effects,
-            LengthUnit::Mm,
-        )?;
+        let chart = match &calibrated {
+            // Residuals are millimetres or less on any arm: the chart reads best in mm
+            // whatever the report's unit.
+            Calibrated::Points(p) => chart(
+                &data_name,
+                &p.inputs,
+                &p.calibration.report,
+                &p.calibration.effects,
+                LengthUnit::Mm,
+            )?,
+            Calibrated::Contacts(c) => crate::commands::sockets::chart(
+                &c.inputs.model_name,
+                &data_name,
+                &c.calibration.report,
+            ),
+            Calibrated::Tree(_) => unreachable_tree_plot()?,
+        };
         files.push((Path::new(path), residuals_svg(&chart)));
     }
-    // A model that fails its proof is not written, and neither is anything else.
     // `--out -` or `--plot -`: that artefact on standard output, the report on standard error.
-    let piped = crate::output::any_stdout([args.out.as_deref(), args.plot.as_deref()]);
+    let piped = crate::output::any_stdout([request.out.as_deref(), args.plot.as_deref()]);
     if proved {
         let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
-        crate::output::write_all_or_stdout(&files, out)?;
+        let written = crate::output::write_all_or_stdout(&files, out);
+        match (&calibrated, &request.out) {
+            (Calibrated::Tree(_), Some(path)) => written.with_context(|| {
+                format!("writing the calibrated tree to {}", display_name(path))
+            })?,
+            _ => written?,
+        }
     }
     let report_sink: &mut dyn Write = if piped { err } else { out };
     match args.format {
-        CalibrateFormat::Json => {
-            report_sink.write_all((serde_json::to_string_pretty(&doc)? + "\n").as_bytes())?;
+        CalibrateFormat::Json => report_sink.write_all(calibrated.json()?.as_bytes())?,
+        CalibrateFormat::Text => {
+            let report = match &calibrated {
+                Calibrated::Points(p) => text(&p.calibration.doc, &p.inputs),
+                Calibrated::Contacts(c) => crate::commands::sockets::text(&c.calibration.doc),
+                Calibrated::Tree(t) => crate::commands::calibrate_tree::text(t),
+            };
+            report_sink.write_all(report.as_bytes())?;
         }
-        CalibrateFormat::Text => report_sink.write_all(text(&doc, &inputs).as_bytes())?,
     }
     Ok(if proved {
         Outcome::Pass
     } else {
         Outcome::Differs
     })
+}
+
+/// A tree never reaches the chart: `--plot` is refused for trees before loading.
+fn unreachable_tree_plot() -> Result<ResidualChart> {
+    anyhow::bail!("--plot: the residual chart is drawn for serial models only")
 }
 
 // ---------------------------------------------------------------- hooks for trees

@@ -10,6 +10,16 @@ use super::*;
 /// about a common axis against micrometres).
 pub const RIGID_RATIO: f64 = 10.0;
 
+/// Default linear tolerance of the extraction from measured axes (what `urdf-dh cpa` and a
+/// calibration without a model use): 0.1 mm. Measured axes never intersect exactly; a laser
+/// tracker's axis lines scatter by tens of micrometres.
+pub const CPA_LINEAR: f64 = 1e-4;
+/// Default angular tolerance of the extraction from measured axes: 1 mrad (0.057 degrees).
+/// Measured axes are never exactly parallel; without snapping, a pair a fraction of a milliradian
+/// from parallel gives a common normal kilometres away. The snap's cost is in the warnings, and
+/// a calibration estimates the remaining tilt (Hayati-Mirmirani).
+pub const CPA_ANGULAR: f64 = 1e-3;
+
 /// Settings of [`analyse`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct CpaOptions {

@@ -1,8 +1,10 @@
-//! What `urdf-dh calibrate` reads: the nominal model, the measurements (the `--validate` file
-//! merged as validation samples, the model's coupled joints applied, `--targets` kept), and the
-//! masses the gravity effects need (`--inertials` in kg and metres, or a URDF's `<inertial>`).
+//! What a calibration reads: the nominal model, the measurements (the validation file merged
+//! as validation samples, the model's coupled joints applied, the requested targets kept), and
+//! the masses the gravity effects need (an inertials file in kg and metres, or a URDF's
+//! `<inertial>`). Warnings go to `err` as `urdf-dh: warning:` lines, as everywhere in this
+//! crate.
 //!
-//! Shared by `calibrate`, its contact path and its tree path.
+//! Shared by the serial, contact and tree paths.
 
 use std::io::Write;
 
@@ -16,20 +18,19 @@ use dh_calib::tree::DhTree;
 use dh_core::{DhTable, Tolerance};
 use nalgebra::Vector3;
 
-use crate::commands::calibrate_args::CalibrateArgs;
-use crate::commands::cpa::{CPA_ANGULAR, CPA_LINEAR};
+use dh_calib::cpa::{CPA_ANGULAR, CPA_LINEAR};
+
+use super::CalibrationRequest;
 use crate::error::hinted;
 use crate::input::display_name;
-use crate::measured::{header_joints, load_model, read_measurements, DataFile, LoadedModel};
+use crate::measured::{header_joints, read_measurements, DataFile};
+use crate::model::{load_model, LoadedModel};
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
 /// `com_frame: base_at_zero` (base link frame, every joint at zero; the default) or `dh` (the
 /// row's DH frame), optional `payloads: [{mass, com}]` (tip frame) and `gravity: [x, y, z]`.
-pub(crate) fn read_inertials(
-    path: &str,
-    table: &DhTable,
-) -> Result<(Inertials, Option<Vector3<f64>>)> {
+pub fn read_inertials(path: &str, table: &DhTable) -> Result<(Inertials, Option<Vector3<f64>>)> {
     let origin = display_name(path);
     let text = crate::input::read_text(path)?;
     crate::sheet::check_nesting(&text, &origin)?;
@@ -98,8 +99,8 @@ pub(crate) fn read_inertials(
 /// What the gravity effects need: `--inertials`, else a URDF model's `<inertial>` masses
 /// (rows named like its joints), with `--payload` and `--gravity`. `None` when there are no
 /// masses at all.
-pub(crate) fn gravity_inputs(
-    args: &CalibrateArgs,
+pub fn gravity_inputs(
+    args: &CalibrationRequest,
     table: &DhTable,
 ) -> Result<(Option<Inertials>, Vector3<f64>)> {
     let mut gravity = GravityModel::default_gravity();
@@ -163,23 +164,32 @@ pub(crate) fn gravity_inputs(
     Ok((inertials, gravity))
 }
 
-/// The model to start from, the data and the targets kept.
-pub(crate) struct Inputs {
-    pub(crate) table: DhTable,
-    pub(crate) model_name: String,
-    pub(crate) robot: Option<String>,
-    pub(crate) units: (LengthUnit, AngleUnit),
-    pub(crate) links: (String, String),
-    pub(crate) coupled: Vec<(String, Vec<(String, f64)>)>,
-    pub(crate) data: Measurements,
-    pub(crate) cpa: bool,
+/// The model to start from and the data it is fitted to (metres and radians).
+#[derive(Clone, Debug)]
+pub struct Inputs {
+    /// The nominal table (base and tool included); for a tree, its joint table.
+    pub table: DhTable,
+    /// What the report calls the model: its file name, or the circle-point analysis.
+    pub model_name: String,
+    /// The robot's name, when the model gives one.
+    pub robot: Option<String>,
+    /// The model's own units, in which the calibrated model is written.
+    pub units: (LengthUnit, AngleUnit),
+    /// The base and tip link names.
+    pub links: (String, String),
+    /// Joints that follow another (`mimic`): each with its drivers and multipliers.
+    pub coupled: Vec<(String, Vec<(String, f64)>)>,
+    /// The measurements, validation samples merged, coupled joints applied, targets kept.
+    pub data: Measurements,
+    /// Whether the model is the circle-point analysis of the data (no model given).
+    pub cpa: bool,
 }
 
 impl Inputs {
     /// The nominal model as the calibrated model is written from it
-    /// ([`dh_sheet::calibrated_writer`]).
-    pub(crate) fn nominal(&self) -> dh_sheet::calibrated_writer::Nominal<'_> {
-        dh_sheet::calibrated_writer::Nominal {
+    /// ([`crate::calibrated_writer`]).
+    pub fn nominal(&self) -> crate::calibrated_writer::Nominal<'_> {
+        crate::calibrated_writer::Nominal {
             table: &self.table,
             robot: self.robot.as_deref(),
             units: self.units,
@@ -191,7 +201,7 @@ impl Inputs {
 
 /// Keeps the samples of `keep` (by name) and renumbers the targets
 /// (`dh_calib::pipeline::keep_targets`), naming the data file `origin` in the error.
-pub(crate) fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Result<()> {
+pub fn keep_targets(data: &mut Measurements, keep: &[String], origin: &str) -> Result<()> {
     dh_calib::pipeline::keep_targets(data, keep).map_err(|e| match e {
         PipelineError::UnknownTarget { target, targets } => hinted(
             format!("{origin}: --targets names '{target}', which the data does not have"),
@@ -201,7 +211,13 @@ pub(crate) fn keep_targets(data: &mut Measurements, keep: &[String], origin: &st
     })
 }
 
-pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<Inputs> {
+/// Reads what `args` names for a serial model (or the circle-point start): the data file
+/// first (its faults are reported first), then the model (its warnings on `err`), then the
+/// measurements for it.
+///
+/// # Errors
+/// Unreadable or invalid files, naming the file and line; a circle-point analysis that fails.
+pub fn load_inputs(args: &CalibrationRequest, err: &mut dyn Write) -> Result<Inputs> {
     let data_name = display_name(&args.data);
     // The data file is read before the model, so that its faults are reported first.
     let file = match &args.given {
@@ -283,12 +299,12 @@ pub(crate) fn load_inputs(args: &CalibrateArgs, err: &mut dyn Write) -> Result<I
 /// The measurements of `args` for `model` (without a model: every joint column of the data),
 /// the validation set merged as validation samples: read from the files `--data` and
 /// `--validate` (`file`: the data file if already read), or from the arrays a library caller
-/// handed over ([`CalibrateArgs::given`]; a validation file beside given data is read).
+/// handed over ([`CalibrationRequest::given`]; a validation file beside given data is read).
 ///
 /// # Errors
 /// Unreadable files, bad cells (naming the file or array, the line or row, and the column).
-pub(crate) fn read_sets(
-    args: &CalibrateArgs,
+pub fn read_sets(
+    args: &CalibrationRequest,
     model: Option<&LoadedModel>,
     file: Option<DataFile>,
     err: &mut dyn Write,
@@ -344,13 +360,13 @@ pub(crate) fn read_sets(
 
 /// Refuses, before any fitting, point data that cannot determine its own unknowns
 /// (`dh_calib::pipeline::enough_samples`), naming the data file `data_name`.
-pub(crate) fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
+pub fn enough_samples(data: &Measurements, data_name: &str) -> Result<()> {
     dh_calib::pipeline::enough_samples(data).map_err(|e| too_few(e, data_name))
 }
 
-/// The command line's message for [`PipelineError::TooFewSamples`] (other errors as they are,
+/// The message for [`PipelineError::TooFewSamples`] (other errors as they are,
 /// after the file name).
-pub(crate) fn too_few(e: PipelineError, data_name: &str) -> anyhow::Error {
+pub fn too_few(e: PipelineError, data_name: &str) -> anyhow::Error {
     match e {
         PipelineError::TooFewSamples { .. } => hinted(
             format!("{data_name}: {e}"),
@@ -362,12 +378,12 @@ pub(crate) fn too_few(e: PipelineError, data_name: &str) -> anyhow::Error {
 
 /// The measurement files of `args` read for `model` as `calibrate` reads them for a serial
 /// model: the `--validate` file merged as validation samples, the coupled joints applied and
-/// `--targets` kept (`crate::commands::calibrate_tree` reads a tree's data through it).
+/// `--targets` kept (the tree path reads a tree's data through it).
 ///
 /// # Errors
-/// As the data of [`calibrate`].
-pub(crate) fn read_data_for(
-    args: &CalibrateArgs,
+/// As [`read_sets`]; coupled joints the data cannot drive; unknown targets.
+pub fn read_data_for(
+    args: &CalibrationRequest,
     model: &LoadedModel,
     err: &mut dyn Write,
 ) -> Result<Measurements> {
