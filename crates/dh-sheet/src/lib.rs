@@ -29,6 +29,7 @@
 //! | [`calibration`] | a whole calibration as `calibrate` runs it: a [`CalibrationRequest`](calibration::CalibrationRequest) (files or arrays) loaded, fitted (points, contacts or a tree), its report and its calibrated model proved as written |
 //! | [`calibrated_writer`] | writing a calibrated model (`calibrate --out`): a sheet with its `calibration` section or a URDF, proved as written |
 //! | [`output`] | writing files all or nothing (staged, synced, renamed), `-` for standard output, and refusing an output that is an input |
+//! | [`simulation`] | simulated measurements of a model with planted errors and effects, the CSV and the truth sheet `simulate` writes |
 //! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
 //! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
@@ -72,6 +73,7 @@ pub mod ranges;
 pub mod read_back;
 pub mod render;
 pub mod sheet;
+pub mod simulation;
 pub mod text;
 pub mod tree_sheet;
 pub mod units;

@@ -21,6 +21,7 @@ import numpy as np
 from . import _native
 from ._native import UrdfDhError
 from .calibration import Prediction, Report, calibrate, compensate, predict
+from .simulation import Simulation, simulate
 
 __all__ = [
     "CheckReport",
@@ -28,6 +29,7 @@ __all__ = [
     "Prediction",
     "Report",
     "Row",
+    "Simulation",
     "Table",
     "UrdfDhError",
     "calibrate",
@@ -35,6 +37,7 @@ __all__ = [
     "compensate",
     "extract",
     "predict",
+    "simulate",
 ]
 
 UrdfSource = Union[str, "os.PathLike[str]"]

@@ -125,3 +125,27 @@ def compensate(
     orientation_error, the poses not compensated as `config (line N): why`, warnings); in the
     units given."""
 def measured_joints(model: str, base: Optional[str] = None, tip: Optional[str] = None) -> List[str]: ...
+def simulate(
+    model: str,
+    base: Optional[str],
+    tip: Optional[str],
+    poses: str,
+    noise: str,
+    orientation_noise: Optional[str],
+    cpa: bool,
+    arc: Optional[str],
+    effects: List[str],
+    errors: List[str],
+    random_errors: Optional[str],
+    targets: str,
+    repeats: str,
+    validation: str,
+    sessions: str,
+    seed: int,
+    data_name: str,
+    truth_name: str,
+) -> Tuple[str, str, str, str]: ...
+def write_outputs(
+    inputs: List[Tuple[str, str]],
+    outputs: List[Tuple[str, str, str]],
+) -> None: ...
