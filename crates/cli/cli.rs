@@ -437,8 +437,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             let args = a.into_args()?;
             if let Some(plot) = &args.plot {
                 let inputs: Vec<(&str, &str)> = [
-                    ("DATA", Some(args.data.as_str())),
-                    ("--model", args.model.as_deref()),
+                    ("DATA", Some(args.request.data.as_str())),
+                    ("--model", args.request.model.as_deref()),
                 ]
                 .into_iter()
                 .filter_map(|(o, p)| Some((o, p?)))

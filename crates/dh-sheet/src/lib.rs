@@ -29,6 +29,7 @@
 //! | [`calibration`] | a whole calibration as `calibrate` runs it: a [`CalibrationRequest`](calibration::CalibrationRequest) (files or arrays) loaded, fitted (points, contacts or a tree), its report and its calibrated model proved as written |
 //! | [`calibrated_writer`] | writing a calibrated model (`calibrate --out`): a sheet with its `calibration` section or a URDF, proved as written |
 //! | [`output`] | writing files all or nothing (staged, synced, renamed), `-` for standard output, and refusing an output that is an input |
+//! | [`cpa_report`] | circle-point analysis as `cpa` runs it: the table the measured axes make, as a sheet, and the report's document (sweeps, circles, commanded against measured motion, the comparison with a nominal model) |
 //! | [`simulation`] | simulated measurements of a model with planted errors and effects, the CSV and the truth sheet `simulate` writes |
 //! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
@@ -61,6 +62,7 @@ pub mod calibrated_writer;
 pub mod calibration;
 pub mod check;
 pub mod compensate;
+pub mod cpa_report;
 pub mod error;
 pub mod extract;
 pub mod input;
