@@ -35,13 +35,15 @@ use crate::to_py;
 /// (`rows × names`, flattened row-major), the points (`rows × 3` flattened; empty for joint
 /// values), the `sigma` column or None, the text columns (`target`, `config`, `session`,
 /// `set`) by name, and a 6-DoF device's orientation: `qw, qx, qy, qz` (`rows × 4` flattened,
-/// NaN rows for points) and `sigma_rot`, or None.
+/// NaN rows for points) and `sigma_rot`, or None; the per-axis sigmas `sx, sy, sz` (`rows × 3`
+/// flattened) or None.
 type ArraysIn = (
     Vec<String>,
     Vec<f64>,
     Vec<f64>,
     Option<Vec<f64>>,
     HashMap<String, Vec<String>>,
+    Option<Vec<f64>>,
     Option<Vec<f64>>,
     Option<Vec<f64>>,
 );
@@ -51,7 +53,7 @@ type ArraysIn = (
 /// # Errors
 /// A text column that is not one of `target`, `config`, `session`, `set`.
 fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
-    let (joint_names, q, points, sigma, mut labels, quaternion, sigma_rot) = a;
+    let (joint_names, q, points, sigma, mut labels, quaternion, sigma_rot, sigma_axes) = a;
     let mut take = |k: &str| labels.remove(k);
     let out = SampleArrays {
         joint_names,
@@ -64,6 +66,7 @@ fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
         set: take("set"),
         quaternion,
         sigma_rot,
+        sigma_axes,
     };
     if let Some(k) = labels.keys().next() {
         anyhow::bail!("expected text columns target, config, session or set, found '{k}'");

@@ -148,3 +148,26 @@ def test_six_dof_dataframe_gives_the_file_report(tmp_path):
     assert "rpy" in from_frame["targets"][0]
     with pytest.raises(urdf_dh.UrdfDhError, match="missing sigma_rot"):
         urdf_dh.calibrate(UR5, frame.drop(columns=["sigma_rot"]))
+
+
+def test_per_axis_sigmas_in_a_dataframe_give_the_file_report(data, tmp_path):
+    """sx, sy, sz columns (a tracker's per-axis standard deviations) as a DataFrame: the same
+    report as the CSV file with those columns; the three go together, and not with sigma."""
+    _, path, _ = data
+    frame = read(path).drop(columns=["sigma"], errors="ignore")
+    rng = np.random.default_rng(3)
+    for c, scale in zip(("sx", "sy", "sz"), (1.0, 2.0, 0.5)):
+        frame[c] = NOISE * scale * (1.0 + 0.1 * rng.random(len(frame)))
+    csv = tmp_path / "axes.csv"
+    frame.to_csv(csv, index=False, float_format="%.17g")
+    from_file = urdf_dh.calibrate(UR5, csv).to_dict()
+    from_frame = urdf_dh.calibrate(UR5, frame).to_dict()
+    assert from_frame["rms_after"] == from_file["rms_after"]
+    assert from_frame["noise_floor"] == from_file["noise_floor"]
+    assert from_frame["parameters"] == from_file["parameters"]
+    with pytest.raises(urdf_dh.UrdfDhError, match="missing sz"):
+        urdf_dh.calibrate(UR5, frame.drop(columns=["sz"]))
+    both = frame.copy()
+    both["sigma"] = NOISE
+    with pytest.raises(urdf_dh.UrdfDhError, match="either the isotropic 'sigma'"):
+        urdf_dh.calibrate(UR5, both)

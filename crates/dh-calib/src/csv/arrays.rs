@@ -25,6 +25,10 @@ pub struct SampleArrays {
     /// The `sigma` column (isotropic standard deviation of each point, length unit; NaN for
     /// "not given", as an empty cell), or `None`.
     pub sigma: Option<Vec<f64>>,
+    /// The `sx, sy, sz` columns (a standard deviation per device axis, length unit),
+    /// `rows × 3`, row-major; a row of three NaN gives none (as three empty cells), or `None`.
+    /// Not with `sigma`.
+    pub sigma_axes: Option<Vec<f64>>,
     /// The `config` column (pose identifiers; empty for none), or `None`.
     pub config: Option<Vec<String>>,
     /// The `session` column (measurement sessions), or `None`.
@@ -125,6 +129,17 @@ impl SampleArrays {
             self.quaternion.as_ref().map_or(4 * n, Vec::len),
             4 * n,
         )?;
+        shape(
+            "sx, sy, sz (rows x 3)",
+            self.sigma_axes.as_ref().map_or(3 * n, Vec::len),
+            3 * n,
+        )?;
+        if self.sigma.is_some() && self.sigma_axes.is_some() {
+            return Err(DataError::Content {
+                expected: "either the isotropic 'sigma' or the per-axis 'sx, sy, sz'".into(),
+                found: "both".into(),
+            });
+        }
         if self.quaternion.is_some() != self.sigma_rot.is_some() {
             return Err(DataError::Content {
                 expected: "the orientation columns qw, qx, qy, qz and sigma_rot together".into(),
@@ -223,30 +238,50 @@ impl Measurements {
                     ));
                 }
             }
-            let sigma = match arrays.sigma.as_ref().map(|s| s[i]) {
-                None => None,
-                Some(v) if v.is_nan() => None,
-                Some(0.0) => {
-                    zero_sigmas.push(row);
-                    Some(Vector3::repeat(SIGMA_FLOOR))
-                }
-                Some(v) if !(v > 0.0 && v.is_finite()) => {
-                    return Err(array_error(
+            // One standard deviation as the CSV reader takes a cell: NaN for none, 0 floored.
+            let mut one_sigma = |v: f64, column: &str| -> Result<Option<f64>, DataError> {
+                match v {
+                    v if v.is_nan() => Ok(None),
+                    0.0 => {
+                        if zero_sigmas.last() != Some(&row) {
+                            zero_sigmas.push(row);
+                        }
+                        Ok(Some(SIGMA_FLOOR))
+                    }
+                    v if !(v > 0.0 && v.is_finite()) => Err(array_error(
                         row,
-                        "sigma",
+                        column,
                         "a standard deviation > 0",
                         format!("{v}"),
-                    ))
-                }
-                Some(v) if length(v) > MAX_PLAUSIBLE_METRES => {
-                    return Err(array_error(
+                    )),
+                    v if length(v) > MAX_PLAUSIBLE_METRES => Err(array_error(
                         row,
-                        "sigma",
+                        column,
                         format!("a standard deviation within {MAX_PLAUSIBLE_METRES} m"),
                         format!("{v}"),
-                    ))
+                    )),
+                    v => Ok(Some(length(v))),
                 }
-                Some(v) => Some(Vector3::repeat(length(v))),
+            };
+            let sigma = match (&arrays.sigma, &arrays.sigma_axes) {
+                (Some(s), _) => one_sigma(s[i], "sigma")?.map(Vector3::repeat),
+                (None, Some(s)) => match (
+                    one_sigma(s[3 * i], "sx")?,
+                    one_sigma(s[3 * i + 1], "sy")?,
+                    one_sigma(s[3 * i + 2], "sz")?,
+                ) {
+                    (Some(a), Some(b), Some(c)) => Some(Vector3::new(a, b, c)),
+                    (None, None, None) => None,
+                    _ => {
+                        return Err(array_error(
+                            row,
+                            "sx, sy, sz",
+                            "all of sx, sy, sz or none",
+                            "some of them NaN",
+                        ))
+                    }
+                },
+                (None, None) => None,
             };
             let text =
                 |col: &Option<Vec<String>>, name: &str| -> Result<Option<String>, DataError> {
@@ -442,6 +477,7 @@ mod tests {
             set: Some(vec!["train".into(), "test".into()]),
             quaternion: None,
             sigma_rot: None,
+            sigma_axes: None,
         }
     }
 
@@ -467,6 +503,56 @@ mod tests {
         assert_eq!(m.samples[1].line, csv.samples[1].line);
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(notes[0].contains("first at row 1"), "{notes:?}");
+    }
+
+    /// Per-axis sigmas (`sx, sy, sz`) read as the CSV reader reads the same cells: millimetres
+    /// converted, a row of NaN for none, 0 floored with a note; refused beside `sigma`, with
+    /// one axis missing, or negative, naming the row and column.
+    #[test]
+    fn per_axis_sigmas_like_the_csv_reader() {
+        let opts = CsvOptions {
+            length_unit: LengthUnit::Millimetre,
+            angle_unit: AngleUnit::Degree,
+            prismatic: vec!["j2".into()],
+        };
+        let mut a = arrays();
+        a.sigma = None;
+        a.sigma_axes = Some(vec![f64::NAN, f64::NAN, f64::NAN, 0.01, 0.0, 0.03]);
+        let (m, notes) = Measurements::from_arrays(&a, &opts).unwrap();
+        let text = "j1,j2,x,y,z,target,sx,sy,sz,set\n0.1,0.2,1000,0,500,A,,,,train\n\
+                    90,-45,1,2,3,B,0.01,0,0.03,test\n";
+        let (csv, csv_notes) = parse_measurements_noting(text, &m.joint_names, &opts).unwrap();
+        for (a, c) in m.samples.iter().zip(&csv.samples) {
+            assert_eq!(a.sigma, c.sigma);
+        }
+        let s = m.samples[1].sigma.unwrap();
+        assert!(
+            (s - Vector3::new(1e-5, SIGMA_FLOOR, 3e-5)).norm() < 1e-18,
+            "{s}"
+        );
+        assert_eq!((notes.len(), csv_notes.len()), (1, 1), "{notes:?}");
+
+        let mut both = a.clone();
+        both.sigma = Some(vec![0.1, 0.1]);
+        let e = Measurements::from_arrays(&both, &opts).unwrap_err();
+        assert!(
+            e.to_string().contains("either the isotropic 'sigma'"),
+            "{e}"
+        );
+        let mut partial = a.clone();
+        partial.sigma_axes = Some(vec![0.1, f64::NAN, 0.1, 0.1, 0.1, 0.1]);
+        let e = Measurements::from_arrays(&partial, &opts).unwrap_err();
+        assert!(
+            e.to_string().starts_with("row 0, column 'sx, sy, sz': "),
+            "{e}"
+        );
+        let mut negative = a.clone();
+        negative.sigma_axes = Some(vec![0.1, 0.1, 0.1, 0.1, -0.1, 0.1]);
+        let e = Measurements::from_arrays(&negative, &opts).unwrap_err();
+        assert!(e.to_string().starts_with("row 1, column 'sy': "), "{e}");
+        let mut short = a;
+        short.sigma_axes = Some(vec![0.1; 5]);
+        assert!(Measurements::from_arrays(&short, &opts).is_err());
     }
 
     /// [`arrays`] in metres and radians (plausible values in the default units).

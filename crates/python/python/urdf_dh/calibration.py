@@ -4,7 +4,8 @@
 Each calls the ``urdf-dh`` library's entry for the command of the same name in process (the Rust
 extension), so the results, the checks on the input and the messages are the command line's own.
 Measurements may be a file path, a pandas ``DataFrame`` (columns named as in the measurement CSV:
-one per joint, ``x``, ``y``, ``z``, optional ``target``, ``config``, ``sigma``, ``set``,
+one per joint, ``x``, ``y``, ``z``, optional ``target``, ``config``, ``sigma`` (or ``sx``, ``sy``,
+``sz`` per axis), ``set``,
 ``session``, and a 6-DoF device's ``qw``, ``qx``, ``qy``, ``qz``, ``sigma_rot``, NaN in the rows of
 points) or a numpy array (one column per measured joint of the model in its order, then
 ``x``, ``y``, ``z``). A DataFrame or an array is handed over as arrays, no file is written: the
@@ -29,18 +30,21 @@ PathLike = Union[str, "os.PathLike[str]"]
 # Text columns handed over by name; every other reserved column of the CSV layout needs a file.
 _LABELS = ("target", "config", "session", "set")
 _POINT_COLUMNS = ("x", "y", "z", "sigma")
+# Per-axis standard deviations: all three or none, not with sigma.
+_AXIS_SIGMAS = ("sx", "sy", "sz")
 # A 6-DoF device's orientation: all five or none.
 _ORIENTATION = ("qw", "qx", "qy", "qz", "sigma_rot")
 
 # What the library is given for a DataFrame or array: joint names, joint values and points
 # (flattened row-major), the sigma column, the text columns, the orientation (qw, qx, qy, qz
-# flattened, NaN rows for points) and sigma_rot.
+# flattened, NaN rows for points), sigma_rot, and the per-axis sigmas (sx, sy, sz flattened).
 _Arrays = Tuple[
     List[str],
     List[float],
     List[float],
     Optional[List[float]],
     Dict[str, List[str]],
+    Optional[List[float]],
     Optional[List[float]],
     Optional[List[float]],
 ]
@@ -78,7 +82,9 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
     reserved = set(_native.RESERVED_COLUMNS)
     columns = [str(c) for c in frame.columns]
     if points:
-        other = [c for c in columns if c in reserved and c not in _LABELS + _POINT_COLUMNS + _ORIENTATION]
+        other = [
+            c for c in columns if c in reserved and c not in _LABELS + _POINT_COLUMNS + _ORIENTATION + _AXIS_SIGMAS
+        ]
         if other:
             raise _native.UrdfDhError(
                 f"{what}: column(s) {', '.join(other)} can be read from a CSV file only; pass its path"
@@ -117,7 +123,16 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
             )
         quaternion = np.column_stack([np.asarray(frame[c], dtype=float) for c in _ORIENTATION[:4]]).ravel().tolist()
         sigma_rot = np.asarray(frame["sigma_rot"], dtype=float).tolist()
-    return names, q.ravel().tolist(), xyz, sigma, labels, quaternion, sigma_rot
+    sigma_axes = None
+    axes = [c for c in _AXIS_SIGMAS if c in columns]
+    if points and axes:
+        if len(axes) != len(_AXIS_SIGMAS):
+            missing = [c for c in _AXIS_SIGMAS if c not in columns]
+            raise _native.UrdfDhError(
+                f"{what}: per-axis sigma columns sx, sy, sz go together; missing {', '.join(missing)}"
+            )
+        sigma_axes = np.column_stack([np.asarray(frame[c], dtype=float) for c in _AXIS_SIGMAS]).ravel().tolist()
+    return names, q.ravel().tolist(), xyz, sigma, labels, quaternion, sigma_rot, sigma_axes
 
 
 def _arrays(
@@ -143,7 +158,7 @@ def _arrays(
         )
     j = len(columns)
     xyz = array[:, j:].ravel().tolist() if points else []
-    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}, None, None
+    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}, None, None, None
 
 
 def _source(
@@ -257,8 +272,8 @@ def calibrate(
 
     Args:
         data: measurements: a CSV path, a pandas DataFrame (columns by name: joints, x, y, z,
-            optional target, config, sigma, set, session; a 6-DoF device's qw, qx, qy, qz,
-            sigma_rot, NaN for points), or a numpy array (the model's
+            optional target, config, sigma (or sx, sy, sz per axis), set, session; a 6-DoF
+            device's qw, qx, qy, qz, sigma_rot, NaN for points), or a numpy array (the model's
             measured joints, then x, y, z). A DataFrame or array is handed to the library as
             arrays (no file); with model None a DataFrame's non-reserved columns are the joints.
         validate: validation measurements, same forms (a file only beside a file).
