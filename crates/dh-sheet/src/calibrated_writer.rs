@@ -152,20 +152,10 @@ pub fn model_text(
     doc: &CalibrationDoc,
 ) -> Result<(String, WrittenDoc)> {
     let calibration = CalibrationSection {
-        data: doc.data.clone(),
-        rms_before: doc.rms_before,
-        rms_after: doc.rms_after,
-        val_rms_before: doc.val_rms_before,
-        val_rms_after: doc.val_rms_after,
-        device: doc.device.clone(),
+        summary: SectionSummary::of(doc),
         sessions: SessionDoc::frames(&doc.sessions),
         targets: doc.targets.clone(),
-        effects: doc
-            .parameters
-            .iter()
-            .filter(|p| p.is_estimated_effect())
-            .map(|p| (p.name.clone(), p.estimate))
-            .collect(),
+        effects: doc.estimated_effects(),
         covariance: report.covariance.as_ref().map(CovarianceDoc::of),
     };
     let source = format!(
@@ -288,10 +278,10 @@ pub fn predict_proof(
     Ok(proof)
 }
 
-/// The `calibration` section of a calibrated sheet (metres, radians): what the table was
-/// fitted with, and the frames it needs to predict the measured points.
+/// The first keys of every calibrated model's `calibration` section (a serial sheet's and a
+/// tree sheet's): the data, the RMS before and after (metres) and the device frame.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct CalibrationSection {
+pub struct SectionSummary {
     /// The measurement file's name.
     pub data: String,
     /// Calibration RMS (m) of the first step ...
@@ -304,6 +294,29 @@ pub struct CalibrationSection {
     pub val_rms_after: Option<f64>,
     /// `T_device_base` (m, URDF rpy in rad).
     pub device: PoseSi,
+}
+
+impl SectionSummary {
+    /// The summary of the calibration `doc`.
+    pub fn of(doc: &CalibrationDoc) -> Self {
+        Self {
+            data: doc.data.clone(),
+            rms_before: doc.rms_before,
+            rms_after: doc.rms_after,
+            val_rms_before: doc.val_rms_before,
+            val_rms_after: doc.val_rms_after,
+            device: doc.device.clone(),
+        }
+    }
+}
+
+/// The `calibration` section of a calibrated sheet (metres, radians): what the table was
+/// fitted with, and the frames it needs to predict the measured points.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CalibrationSection {
+    /// What it was fitted to and how well (the keys `data` to `device`).
+    #[serde(flatten)]
+    pub summary: SectionSummary,
     /// Every session's device frame but the first's (`device`), with several sessions.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub sessions: Vec<SessionFrameDoc>,

@@ -246,6 +246,25 @@ pub fn sheet_model(text: &str, origin: &str) -> Result<SheetModel> {
     })
 }
 
+/// [`load_model`], its warnings written to `err` as `urdf-dh: warning:` lines (as every reader
+/// of this crate notes them).
+///
+/// # Errors
+/// As [`load_model`]; a failed write to `err`.
+pub fn load_model_noting(
+    path: &str,
+    base: Option<&str>,
+    tip: Option<&str>,
+    convention: Convention,
+    err: &mut dyn std::io::Write,
+) -> Result<LoadedModel> {
+    let model = load_model(path, base, tip, convention)?;
+    for w in &model.warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
+    Ok(model)
+}
+
 /// Loads `--model`: a URDF (chain from `base` to `tip`, extracted in `convention` and verified
 /// as `extract` does) or a DH sheet (YAML or JSON; `base`, `tip` and `convention` do not apply).
 ///

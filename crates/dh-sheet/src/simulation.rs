@@ -22,7 +22,7 @@ use serde::Serialize;
 
 use crate::error::hinted;
 use crate::measured::parse_effect;
-use crate::model::load_model;
+use crate::model::load_model_noting;
 use crate::ranges::MAX_SIM_SAMPLES;
 use crate::sheet::SheetDoc;
 use crate::units::{AngleUnit, LengthUnit};
@@ -207,15 +207,13 @@ pub fn simulate(
     err: &mut dyn Write,
 ) -> Result<Simulated> {
     let args = req;
-    let model = load_model(
+    let model = load_model_noting(
         &args.model,
         args.base.as_deref(),
         args.tip.as_deref(),
         args.convention,
+        err,
     )?;
-    for w in &model.warnings {
-        writeln!(err, "urdf-dh: warning: {w}")?;
-    }
     if !(args.noise.is_finite() && args.noise >= 0.0) {
         anyhow::bail!("--noise: expected a length >= 0, found {}", args.noise);
     }

@@ -106,6 +106,19 @@ impl ParameterDoc {
     }
 }
 
+impl CalibrationDoc {
+    /// The estimated effects' values by label (SI units, see
+    /// [`ParameterDoc::is_estimated_effect`]): what a calibrated model's `calibration.effects`
+    /// lists.
+    pub fn estimated_effects(&self) -> Vec<(String, f64)> {
+        self.parameters
+            .iter()
+            .filter(|p| p.is_estimated_effect())
+            .map(|p| (p.name.clone(), p.estimate))
+            .collect()
+    }
+}
+
 /// A parameter held at nominal.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FixedDoc {

@@ -24,7 +24,7 @@ use super::CalibrationRequest;
 use crate::error::hinted;
 use crate::input::display_name;
 use crate::measured::{header_joints, read_measurements, DataFile};
-use crate::model::{load_model, LoadedModel};
+use crate::model::{load_model_noting, LoadedModel};
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Reads an inertials file: `links: [{joint, mass, com: [x, y, z]}]` (kg, m) with
@@ -226,15 +226,13 @@ pub fn load_inputs(args: &CalibrationRequest, err: &mut dyn Write) -> Result<Inp
     };
     let model = match &args.model {
         Some(m) => {
-            let model = load_model(
+            let model = load_model_noting(
                 m,
                 args.base.as_deref(),
                 args.tip.as_deref(),
                 args.convention,
+                err,
             )?;
-            for w in &model.warnings {
-                writeln!(err, "urdf-dh: warning: {w}")?;
-            }
             Some(model)
         }
         None => None,

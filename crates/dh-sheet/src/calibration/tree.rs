@@ -10,7 +10,7 @@ use anyhow::Result;
 use dh_calib::data::Measurements;
 use dh_calib::gravity::{GravityModel, Inertials};
 use dh_calib::pipeline::{
-    self, target_branches, Calibration, CalibrationDoc, PipelineError, PoseSi, Progress, Start,
+    self, target_branches, Calibration, CalibrationDoc, PipelineError, Progress, Start,
     TreeCalibration,
 };
 use dh_calib::tree::DhTree;
@@ -20,6 +20,7 @@ use serde::Serialize;
 use super::inputs::{enough_samples, read_data_for};
 use super::serial::{check_sigma, pipeline_options};
 use super::CalibrationRequest;
+use crate::calibrated_writer::SectionSummary;
 use crate::error::hinted;
 use crate::input::{display_name, read_text};
 use crate::model::LoadedModel;
@@ -224,12 +225,8 @@ pub(super) fn tree_error(e: PipelineError, tree: &DhTree, data_name: &str) -> an
 /// The `calibration` section of a calibrated tree sheet (metres, radians).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 struct TreeCalibrationSection {
-    data: String,
-    rms_before: f64,
-    rms_after: f64,
-    val_rms_before: Option<f64>,
-    val_rms_after: Option<f64>,
-    device: PoseSi,
+    #[serde(flatten)]
+    summary: SectionSummary,
     targets: Vec<TreeTargetDoc>,
     effects: Vec<(String, f64)>,
 }
@@ -267,12 +264,7 @@ pub(super) fn tree_bytes(
         doc.model, doc.data, doc.rms_before, doc.rms_after
     ));
     let section = TreeCalibrationSection {
-        data: doc.data.clone(),
-        rms_before: doc.rms_before,
-        rms_after: doc.rms_after,
-        val_rms_before: doc.val_rms_before,
-        val_rms_after: doc.val_rms_after,
-        device: doc.device.clone(),
+        summary: SectionSummary::of(doc),
         targets: doc
             .targets
             .iter()
@@ -288,12 +280,7 @@ pub(super) fn tree_bytes(
                 xyz: t.xyz,
             })
             .collect(),
-        effects: doc
-            .parameters
-            .iter()
-            .filter(|p| p.is_estimated_effect())
-            .map(|p| (p.name.clone(), p.estimate))
-            .collect(),
+        effects: doc.estimated_effects(),
     };
     out.calibration = Some(serde_yaml::to_value(&section)?);
     Ok(if path.to_ascii_lowercase().ends_with(".json") {

@@ -24,7 +24,7 @@ use serde::Serialize;
 use crate::error::hinted;
 use crate::input::display_name;
 use crate::measured::{header_joints, read_measurements, DataFile, DataUnits};
-use crate::model::load_model;
+use crate::model::load_model_noting;
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -86,15 +86,13 @@ pub fn cpa(args: &CpaRequest, err: &mut dyn Write) -> Result<CpaReport> {
     let data_name = display_name(&args.data);
     let model = match &args.model {
         Some(m) => {
-            let model = load_model(
+            let model = load_model_noting(
                 m,
                 args.base.as_deref(),
                 args.tip.as_deref(),
                 args.convention,
+                err,
             )?;
-            for w in &model.warnings {
-                writeln!(err, "urdf-dh: warning: {w}")?;
-            }
             Some(model)
         }
         None => None,

@@ -113,26 +113,28 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
     )
     sigma = np.asarray(frame["sigma"], dtype=float).tolist() if points and "sigma" in columns else None
     labels = {c: _text(frame[c]) for c in _LABELS if c in columns}
-    quaternion, sigma_rot = None, None
-    present = [c for c in _ORIENTATION if c in columns]
-    if points and present:
-        if len(present) != len(_ORIENTATION):
-            missing = [c for c in _ORIENTATION if c not in columns]
-            raise _native.UrdfDhError(
-                f"{what}: orientation columns {', '.join(_ORIENTATION)} go together; missing {', '.join(missing)}"
-            )
-        quaternion = np.column_stack([np.asarray(frame[c], dtype=float) for c in _ORIENTATION[:4]]).ravel().tolist()
-        sigma_rot = np.asarray(frame["sigma_rot"], dtype=float).tolist()
-    sigma_axes = None
-    axes = [c for c in _AXIS_SIGMAS if c in columns]
-    if points and axes:
-        if len(axes) != len(_AXIS_SIGMAS):
-            missing = [c for c in _AXIS_SIGMAS if c not in columns]
-            raise _native.UrdfDhError(
-                f"{what}: per-axis sigma columns sx, sy, sz go together; missing {', '.join(missing)}"
-            )
-        sigma_axes = np.column_stack([np.asarray(frame[c], dtype=float) for c in _AXIS_SIGMAS]).ravel().tolist()
+    quaternion, sigma_rot, sigma_axes = None, None, None
+    if points:
+        orientation = _together(frame, columns, _ORIENTATION, what, "orientation columns")
+        if orientation is not None:
+            quaternion = orientation[:, :4].ravel().tolist()
+            sigma_rot = orientation[:, 4].tolist()
+        axes = _together(frame, columns, _AXIS_SIGMAS, what, "per-axis sigma columns")
+        if axes is not None:
+            sigma_axes = axes.ravel().tolist()
     return names, q.ravel().tolist(), xyz, sigma, labels, quaternion, sigma_rot, sigma_axes
+
+
+def _together(frame: Any, columns: List[str], group: Sequence[str], what: str, label: str) -> Any:
+    """The columns ``group`` of ``frame`` as a (rows x len(group)) float array when all are there,
+    None when none is; one without the others is an error naming the missing ones."""
+    present = [c for c in group if c in columns]
+    if not present:
+        return None
+    if len(present) != len(group):
+        missing = [c for c in group if c not in columns]
+        raise _native.UrdfDhError(f"{what}: {label} {', '.join(group)} go together; missing {', '.join(missing)}")
+    return np.column_stack([np.asarray(frame[c], dtype=float) for c in group])
 
 
 def _arrays(
