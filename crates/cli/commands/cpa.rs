@@ -138,6 +138,7 @@ impl CpaCli {
                     length: self.length_unit,
                     angle: self.angle_unit,
                 },
+                given: None,
             },
             format: self.format,
             plot: self.plot,

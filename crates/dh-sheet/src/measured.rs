@@ -102,6 +102,31 @@ pub fn read_measurements(
     Ok(data)
 }
 
+/// The measurements of `arrays` (a caller's arrays instead of a file, named `name` in messages)
+/// with the joint columns `joints`, read as [`read_measurements`] reads a file with the same
+/// columns; its notes (standard deviations of 0 floored) go to `err` as warnings.
+///
+/// # Errors
+/// Missing joint columns, columns of different lengths, a bad value (naming the row and the
+/// column).
+pub fn read_arrays(
+    arrays: &dh_calib::csv::SampleArrays,
+    name: &str,
+    joints: &[String],
+    prismatic: &[String],
+    units: DataUnits,
+    err: &mut dyn std::io::Write,
+) -> Result<Measurements> {
+    let (data, notes) = arrays
+        .with_joints(joints)
+        .and_then(|a| Measurements::from_arrays(&a, &units.csv_options(prismatic)))
+        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    for n in notes {
+        writeln!(err, "urdf-dh: warning: {name}: {n}")?;
+    }
+    Ok(data)
+}
+
 /// The joint columns of a measurement file without a model: every header column that is not
 /// one of [`RESERVED_COLUMNS`], in order.
 ///

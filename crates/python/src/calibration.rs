@@ -37,7 +37,7 @@ use crate::to_py;
 /// `set`) by name, and a 6-DoF device's orientation: `qw, qx, qy, qz` (`rows × 4` flattened,
 /// NaN rows for points) and `sigma_rot`, or None; the per-axis sigmas `sx, sy, sz` (`rows × 3`
 /// flattened) or None.
-type ArraysIn = (
+pub(crate) type ArraysIn = (
     Vec<String>,
     Vec<f64>,
     Vec<f64>,
@@ -52,7 +52,7 @@ type ArraysIn = (
 ///
 /// # Errors
 /// A text column that is not one of `target`, `config`, `session`, `set`.
-fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
+pub(crate) fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
     let (joint_names, q, points, sigma, mut labels, quaternion, sigma_rot, sigma_axes) = a;
     let mut take = |k: &str| labels.remove(k);
     let out = SampleArrays {
@@ -75,7 +75,7 @@ fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
 }
 
 /// The units of `length` (`m`, `mm`) and `angle` (`rad`, `deg`).
-fn units(length: &str, angle: &str) -> anyhow::Result<DataUnits> {
+pub(crate) fn units(length: &str, angle: &str) -> anyhow::Result<DataUnits> {
     Ok(DataUnits {
         length: match length {
             "m" => LengthUnit::M,

@@ -4,8 +4,8 @@
 //! (`table`: `dh_sheet::extract`, `dh_sheet::check`), prediction and compensation
 //! (`calibration`: `dh_sheet::predict`, `dh_sheet::compensate`), and calibration
 //! (`dh_sheet::calibration`, which reads the files or arrays and runs serial, tree and contact
-//! data through `dh_calib::pipeline`), and simulated measurements (`simulation`:
-//! `dh_sheet::simulation`), with measurements and joint values handed over as
+//! data through `dh_calib::pipeline`), simulated measurements (`simulation`:
+//! `dh_sheet::simulation`) and circle-point analysis (`cpa`: `dh_sheet::cpa_report`), with measurements and joint values handed over as
 //! arrays, no files; this crate only converts arguments and results. Poses cross as 4x4
 //! homogeneous matrices (nested lists, row-major; metres and radians), which the pure-Python
 //! package turns into numpy arrays. Errors carry the CLI's message (`{e:#}`, the whole context
@@ -16,6 +16,7 @@ use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 
 mod calibration;
+mod cpa;
 mod simulation;
 mod table;
 
@@ -51,6 +52,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     table::register(m)?;
     calibration::register(m)?;
     simulation::register(m)?;
+    cpa::register(m)?;
     m.add("UrdfDhError", m.py().get_type::<UrdfDhError>())?;
     Ok(())
 }

@@ -23,7 +23,7 @@ use dh_calib::cpa::{CPA_ANGULAR, CPA_LINEAR};
 use super::CalibrationRequest;
 use crate::error::hinted;
 use crate::input::display_name;
-use crate::measured::{header_joints, read_measurements, DataFile};
+use crate::measured::{header_joints, read_arrays, read_measurements, DataFile};
 use crate::model::{load_model_noting, LoadedModel};
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -329,16 +329,8 @@ pub fn read_sets(
         Some(m) => m.measured_joints(),
         None => given.data.joint_names.clone(),
     };
-    let opts = args.units.csv_options(&prismatic);
-    let read = |arrays: &SampleArrays, name: &str, err: &mut dyn Write| -> Result<Measurements> {
-        let (data, notes) = arrays
-            .with_joints(&joints)
-            .and_then(|a| Measurements::from_arrays(&a, &opts))
-            .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-        for n in notes {
-            writeln!(err, "urdf-dh: warning: {name}: {n}")?;
-        }
-        Ok(data)
+    let read = |arrays: &SampleArrays, name: &str, err: &mut dyn Write| {
+        read_arrays(arrays, name, &joints, &prismatic, args.units, err)
     };
     let mut data = read(&given.data, &display_name(&args.data), err)?;
     match (&given.validate, &args.validate) {

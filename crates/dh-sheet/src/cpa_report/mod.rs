@@ -23,7 +23,7 @@ use serde::Serialize;
 
 use crate::error::hinted;
 use crate::input::display_name;
-use crate::measured::{header_joints, read_measurements, DataFile, DataUnits};
+use crate::measured::{header_joints, read_arrays, read_measurements, DataFile, DataUnits};
 use crate::model::load_model_noting;
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -38,7 +38,7 @@ use compare::*;
 /// Everything a circle-point analysis needs.
 #[derive(Clone, Debug)]
 pub struct CpaRequest {
-    /// The measurement file (`-` for standard input).
+    /// The measurement file (`-` for standard input), or the name of [`CpaRequest::given`].
     pub data: String,
     /// A model giving the joint names, kinds and convention, and the nominal axes to compare.
     pub model: Option<String>,
@@ -52,6 +52,9 @@ pub struct CpaRequest {
     pub tolerance: Tolerance,
     /// Units of the measurement file; the output is in metres and radians.
     pub units: DataUnits,
+    /// Measurements handed over as arrays instead of the file `data` (which then only names
+    /// them in messages); `None` reads the file.
+    pub given: Option<dh_calib::csv::SampleArrays>,
 }
 
 /// A finished circle-point analysis.
@@ -97,12 +100,27 @@ pub fn cpa(args: &CpaRequest, err: &mut dyn Write) -> Result<CpaReport> {
         }
         None => None,
     };
-    let file = DataFile::read(&args.data)?;
-    let (joints, prismatic, convention) = match &model {
-        Some(m) => (m.measured_joints(), m.prismatic(), m.table.convention),
-        None => (header_joints(&file)?, Vec::new(), args.convention),
+    let (prismatic, convention) = match &model {
+        Some(m) => (m.prismatic(), m.table.convention),
+        None => (Vec::new(), args.convention),
     };
-    let data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
+    let data = match &args.given {
+        None => {
+            let file = DataFile::read(&args.data)?;
+            let joints = match &model {
+                Some(m) => m.measured_joints(),
+                None => header_joints(&file)?,
+            };
+            read_measurements(&file, &joints, &prismatic, args.units, err)?
+        }
+        Some(arrays) => {
+            let joints = match &model {
+                Some(m) => m.measured_joints(),
+                None => arrays.joint_names.clone(),
+            };
+            read_arrays(arrays, &data_name, &joints, &prismatic, args.units, err)?
+        }
+    };
     let options = CpaOptions {
         prismatic,
         convention,

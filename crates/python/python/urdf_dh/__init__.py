@@ -20,11 +20,13 @@ import numpy as np
 
 from . import _native
 from ._native import UrdfDhError
+from .analysis import CpaResult, cpa
 from .calibration import Prediction, Report, calibrate, compensate, predict
 from .simulation import Simulation, simulate
 
 __all__ = [
     "CheckReport",
+    "CpaResult",
     "Mimic",
     "Prediction",
     "Report",
@@ -35,6 +37,7 @@ __all__ = [
     "calibrate",
     "check",
     "compensate",
+    "cpa",
     "extract",
     "predict",
     "simulate",

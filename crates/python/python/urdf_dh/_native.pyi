@@ -151,3 +151,17 @@ def write_outputs(
     inputs: List[Tuple[str, str]],
     outputs: List[Tuple[str, str, str]],
 ) -> None: ...
+CPA_LINEAR: float
+CPA_ANGULAR: float
+def cpa(
+    data_name: str,
+    data: Optional[Arrays],
+    model: Optional[str],
+    base: Optional[str],
+    tip: Optional[str],
+    convention: str,
+    linear_tol: float,
+    angular_tol: float,
+    length_unit: str,
+    angle_unit: str,
+) -> Tuple[str, str, str]: ...
