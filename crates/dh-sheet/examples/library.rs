@@ -4,6 +4,8 @@
 //!
 //!     cargo run -p dh-sheet --example library     (from the repository root)
 
+#![allow(clippy::print_stdout)] // an example prints what it shows
+
 use dh_core::Convention;
 use dh_sheet::calibration::{self, CalibrationRequest};
 use dh_sheet::extract::{extract_bytes, prove_extracted, ExtractOptions};
