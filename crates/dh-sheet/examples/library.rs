@@ -25,7 +25,10 @@ fn main() -> anyhow::Result<()> {
         &ExtractOptions::default(),
     )?;
     let (_yaml, passed) = prove_extracted(&mut ex, Format::Yaml, 1000, 1)?;
-    println!("{panda}: {} joints, proof passed: {passed}", ex.extraction.table.rows.len());
+    println!(
+        "{panda}: {} joints, proof passed: {passed}",
+        ex.extraction.table.rows.len()
+    );
 
     // Simulation: the UR5 sheet with 0.5 mm on a link length, 50 um noise.
     let ur5 = "fixtures/robots/ur5/vendor.yaml";
@@ -60,7 +63,10 @@ fn main() -> anyhow::Result<()> {
     let sheet = calibrated.model_file(&out.to_string_lossy(), Some(ur5), &mut warnings)?;
     if let calibration::Calibrated::Points(p) = &calibrated {
         let doc = &p.calibration.doc;
-        let a = doc.parameters.iter().find(|p| p.name == "shoulder_lift_joint.a");
+        let a = doc
+            .parameters
+            .iter()
+            .find(|p| p.name == "shoulder_lift_joint.a");
         println!(
             "RMS {:.6} -> {:.6} m; shoulder_lift_joint.a {:+.6} m (planted +0.000500); model proved: {}",
             doc.rms_before,
