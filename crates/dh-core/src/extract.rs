@@ -28,9 +28,9 @@
 use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, PI};
 use std::fmt;
 
-use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Vector3};
 
-use crate::pose::from_axes;
+use crate::pose::{from_axes, rot_z};
 use crate::relation::{classify_from_z, PairGeometry, Relation};
 use crate::table::{standard_from_halves, Convention, DhRow, DhTable, JointKind, Limits, Mimic};
 use crate::tolerance::NOISE_RELATIVE;
@@ -319,8 +319,8 @@ pub fn extract(
     for i in 0..n {
         let ax = &axes[i];
         let step = match axes.get(i + 1) {
-            Some(next) => pair_step(&next.line.in_frame(&frame), tol),
-            None => last_step(&frame.inv_mul(tip), tol),
+            Some(next) => pair_step(&next.line.transformed(&frame.inverse()), tol),
+            None => last_step(&(frame.inverse() * tip), tol),
         };
         let mut row = DhRow {
             name: ax.name.clone(),
@@ -335,10 +335,8 @@ pub fn extract(
         };
         let (mut half_theta, half_alpha) = step.halves;
         if i == 0 {
-            // Absorb theta_1 into the base so that the table starts at theta_1 = 0: the base
-            // turns by Rz(theta_1), the quaternion (cos(theta_1/2), 0, 0, sin(theta_1/2)).
-            let (st, ct) = half_theta;
-            base = frame * UnitQuaternion::new_unchecked(Quaternion::new(ct, 0.0, 0.0, st));
+            // Absorb theta_1 into the base so that the table starts at theta_1 = 0.
+            base = frame * rot_z(row.theta);
             frame = base;
             row.theta = 0.0;
             half_theta = HALF_OF_ZERO;
@@ -482,10 +480,16 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             // `classify_from_z` returned non-parallel, so `sin` is not zero. The unit common
             // normal n = (z × u) / sin (eq. 14-15, ERRATA: normalised).
             let n = Vector3::new(-u.y / sin, u.x / sin, 0.0);
+            // eq. (14) with line 1 the z axis (e1 = z, k1 = 0): the foot of the common normal
+            // on the current axis is f1 = (0, 0, (k2 · n) / sin); eq. (21) makes its height d.
+            let k = next.moment();
+            let d = (k.x * n.x + k.y * n.y) / sin;
             let (x, theta, a, snap) = if geometry.relation == Relation::Skew {
-                // The signed length of the common normal: (f2 − f1) · n with f1 on the z axis
-                // (f1 · n = 0) and f2 = foot + t u (u · n = 0), so foot · n.
-                let (x, theta, a) = orient(n, foot.x * n.x + foot.y * n.y, tol);
+                // The signed length of the common normal, (f2 − f1) · n = f2 · n (f1 is on the z
+                // axis), with f2 = u (cos · (k2 · n) / sin) + foot by eq. (15).
+                let t = (u.z * (k.x * n.x + k.y * n.y)) / sin;
+                let a = (u.x * t + foot.x) * n.x + (u.y * t + foot.y) * n.y;
+                let (x, theta, a) = orient(n, a, tol);
                 (x, theta, a, None)
             } else {
                 let (x, theta, _) = orient(n, 0.0, tol);
@@ -497,10 +501,6 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             // product.
             let sign = -u.y * x.x + u.x * x.y;
             let alpha = geometry.angle.copysign(sign);
-            // eq. (14) with line 1 the z axis (e1 = z, k1 = 0): the foot of the common normal
-            // on the current axis is at height (k2 · n) / sin; eq. (21) makes it d.
-            let k = next.moment();
-            let d = (k.x * n.x + k.y * n.y) / sin;
             Step {
                 // cos(alpha) = z · u, sin(alpha) = ±|z × u| = ±sin.
                 halves: (half_angle(x.x, x.y), half_angle(u.z, sin.copysign(sign))),

@@ -88,19 +88,6 @@ impl Line {
         }
     }
 
-    /// The same line in the coordinates of `frame`, a pose given in this line's frame: what
-    /// [`Line::transformed`] gives for `frame.inverse()`, without building the inverse (the
-    /// direction and the point nearest the origin turned back by `frame`'s rotation, the point
-    /// first moved by its translation).
-    pub fn in_frame(&self, frame: &Isometry3<f64>) -> Self {
-        let e = frame.inverse_transform_vector(&self.e);
-        let c = frame.inverse_transform_point(&nalgebra::Point3::from(self.point()));
-        Self {
-            e,
-            k: c.coords.cross(&e),
-        }
-    }
-
     /// The dual line product `ŝ1 · ŝ2 = e1·e2 + ε (e1·k2 + k1·e2)` (eq. 3).
     pub fn dual_dot(&self, other: &Line) -> DualNumber {
         DualNumber {
@@ -294,17 +281,6 @@ mod tests {
         let c2 = (iso * nalgebra::Point3::from(c)).coords;
         assert!(l.distance_to_point(&c2) < 1e-14);
         assert_relative_eq!(l.direction(), iso.rotation * d.normalize(), epsilon = 1e-15);
-    }
-
-    #[test]
-    fn in_frame_is_transformed_by_the_inverse() {
-        let iso = Isometry3::new(Vector3::new(0.5, -1.0, 2.0), Vector3::new(0.3, -0.2, 1.1));
-        let l = Line::through(Vector3::new(0.3, 0.1, -0.7), Vector3::new(0.2, 1.0, 1.0)).unwrap();
-        assert_relative_eq!(
-            l.in_frame(&iso),
-            l.transformed(&iso.inverse()),
-            epsilon = 1e-15
-        );
     }
 
     #[test]
