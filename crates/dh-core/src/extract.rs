@@ -483,11 +483,12 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             // eq. (14) with line 1 the z axis (e1 = z, k1 = 0): the foot of the common normal
             // on the current axis is f1 = (0, 0, (k2 · n) / sin); eq. (21) makes its height d.
             let k = next.moment();
-            let d = (k.x * n.x + k.y * n.y) / sin;
+            let k2n = k.x * n.x + k.y * n.y;
+            let d = k2n / sin;
             let (x, theta, a, snap) = if geometry.relation == Relation::Skew {
                 // The signed length of the common normal, (f2 − f1) · n = f2 · n (f1 is on the z
                 // axis), with f2 = u (cos · (k2 · n) / sin) + foot by eq. (15).
-                let t = (u.z * (k.x * n.x + k.y * n.y)) / sin;
+                let t = (u.z * k2n) / sin;
                 let a = (u.x * t + foot.x) * n.x + (u.y * t + foot.y) * n.y;
                 let (x, theta, a) = orient(n, a, tol);
                 (x, theta, a, None)
