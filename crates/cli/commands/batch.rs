@@ -9,13 +9,15 @@
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{bail, Result};
 use dh_core::{Convention, Tolerance};
+use nalgebra::Isometry3;
 use serde::Serialize;
-use urdf_axes::UrdfModel;
+use urdf_axes::{Chain, UrdfModel};
 
-use crate::commands::extract::{extract_chain, prove_extracted, ExtractOptions};
+use crate::commands::extract::{extract_chain, prove_extracted_with, ExtractOptions};
 use crate::error::Outcome;
 use crate::input::chain_error;
 use crate::input::{display_name, read_robot, read_text};
@@ -74,6 +76,51 @@ enum Done {
     Refused(String),
 }
 
+/// The URDF's tip poses at the joint values of one chain's proof, kept for the proof of its next
+/// convention. The sampler draws the same values for both tables of a chain (it reads the rows'
+/// kinds, limits and mimics, which the conventions share, and the table's size only for
+/// unlimited prismatic joints); a kept pose is used only for the very same values, bit for bit,
+/// so every proof compares with exactly what `Chain::fk` gives.
+#[derive(Default)]
+struct KeptPoses {
+    /// The joint values of sample `k` at `q[k * n..(k + 1) * n]` (radians or metres).
+    q: Vec<f64>,
+    /// The tip link's pose in the base link frame at sample `k`.
+    poses: Vec<Isometry3<f64>>,
+}
+
+impl KeptPoses {
+    /// The oracle of one proof: the pose kept for the proof's `k`-th sample when its joint
+    /// values are the ones kept, else `chain.fk(q)`, then kept for the next proof.
+    fn oracle(&mut self) -> impl FnMut(&Chain, &[f64]) -> Isometry3<f64> + '_ {
+        let mut k = 0;
+        move |chain, q| {
+            let n = q.len();
+            let range = k * n..(k + 1) * n;
+            let same = self
+                .q
+                .get(range.clone())
+                .is_some_and(|kept| kept.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits()));
+            let pose = if same {
+                self.poses[k]
+            } else {
+                let pose = chain.fk(q);
+                if k < self.poses.len() {
+                    self.q[range].copy_from_slice(q);
+                    self.poses[k] = pose;
+                } else {
+                    // Samples come in order: `k` is the next one to keep.
+                    self.q.extend_from_slice(q);
+                    self.poses.push(pose);
+                }
+                pose
+            };
+            k += 1;
+            pose
+        }
+    }
+}
+
 fn parse_list(text: &str, origin: &str, folder: &Path) -> Result<Vec<Entry>> {
     let mut entries = Vec::new();
     for (k, raw) in text.lines().enumerate() {
@@ -129,10 +176,12 @@ fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
                 Ok(m) => m,
                 Err(e) => return vec![Done::Refused(format!("{e:#}")); args.conventions.len()],
             };
+            // The poses of the first convention's proof serve the second's.
+            let mut kept = KeptPoses::default();
             args.conventions
                 .iter()
                 .map(|&convention| {
-                    let one = || -> Result<Done> {
+                    let mut one = || -> Result<Done> {
                         let chain = model
                             .chain(entry.base.as_deref(), entry.tip.as_deref())
                             .map_err(|e| chain_error(&name, e))?;
@@ -143,8 +192,13 @@ fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
                             tolerance: args.tolerance,
                         };
                         let mut ex = extract_chain(model, chain, &name, &options)?;
-                        let (_, passed) =
-                            prove_extracted(&mut ex, Format::Json, args.samples, args.seed)?;
+                        let (_, passed) = prove_extracted_with(
+                            &mut ex,
+                            Format::Json,
+                            args.samples,
+                            args.seed,
+                            kept.oracle(),
+                        )?;
                         Ok(Done::Proved {
                             sheet: Box::new(ex.sheet),
                             passed,
@@ -185,14 +239,17 @@ pub fn batch(args: &BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resu
         .map_or(1, |n| n.get())
         .min(groups.len())
         .max(1);
+    // Each worker takes the next file not yet taken, so that a worker slowed by a large file
+    // or by another process on its core leaves the rest to the others.
+    let next = AtomicUsize::new(0);
     let mut results: Vec<Option<Vec<Done>>> = vec![None; entries.len()];
     std::thread::scope(|scope| {
         let handles: Vec<_> = (0..workers)
-            .map(|w| {
-                let (groups, entries) = (&groups, &entries);
+            .map(|_| {
+                let (groups, entries, next) = (&groups, &entries, &next);
                 scope.spawn(move || {
                     let mut done = Vec::new();
-                    for group in groups.iter().skip(w).step_by(workers) {
+                    while let Some(group) = groups.get(next.fetch_add(1, Ordering::Relaxed)) {
                         let members: Vec<&Entry> = group.iter().map(|&i| &entries[i]).collect();
                         for (i, r) in group.iter().zip(run_file(&members, args)) {
                             done.push((*i, r));

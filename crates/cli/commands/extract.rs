@@ -13,7 +13,8 @@ use crate::readback::failure_line;
 use crate::render::Format;
 use crate::units::{AngleUnit, LengthUnit};
 pub use dh_sheet::extract::{
-    default_samples, extract_bytes, extract_chain, prove_extracted, ExtractOptions, Extracted,
+    default_samples, extract_bytes, extract_chain, prove_extracted, prove_extracted_with,
+    ExtractOptions, Extracted,
 };
 
 /// Everything `extract` needs.

@@ -31,7 +31,7 @@ use std::fmt;
 use nalgebra::{Isometry3, Vector3};
 
 use crate::pose::{from_axes, rot_z};
-use crate::relation::{classify, PairGeometry, Relation};
+use crate::relation::{classify_from_z, PairGeometry, Relation};
 use crate::table::{standard_from_halves, Convention, DhRow, DhTable, JointKind, Limits, Mimic};
 use crate::tolerance::NOISE_RELATIVE;
 use crate::{CoreError, Line, Tolerance};
@@ -278,10 +278,14 @@ pub fn extract(
             value: f64::NAN,
         });
     }
+    // The largest distance of an input point from the base origin (metres, at least 1 mm): the
+    // square root of the largest squared norm, which is the largest norm (sqrt is monotonic
+    // and correctly rounded), with one square root instead of one per axis.
     let input_scale = axes
         .iter()
-        .map(|ax| ax.line.point().norm())
-        .fold(tip.translation.vector.norm(), f64::max)
+        .map(|ax| ax.line.point().norm_squared())
+        .fold(tip.translation.vector.norm_squared(), f64::max)
+        .sqrt()
         .max(1e-3);
 
     // Frame 0: z along joint 1, origin nearest the base origin, x from the base x (or y) for now.
@@ -299,7 +303,8 @@ pub fn extract(
     let n = axes.len();
     let mut rows = Vec::with_capacity(n);
     let mut pairs = Vec::with_capacity(n.saturating_sub(1));
-    let mut snaps = Vec::new();
+    // Snapped pairs `(first row, (tilt, shift))`, in row order; allocated at the first snap.
+    let mut snaps: Vec<(usize, (f64, f64))> = Vec::new();
     let mut warnings: Vec<Warning> = axes
         .iter()
         .filter_map(|ax| {
@@ -342,6 +347,9 @@ pub fn extract(
                 geometry: step.geometry,
             });
             if let Some(snap) = step.snap {
+                if snaps.capacity() == 0 {
+                    snaps.reserve_exact(n - 1 - i);
+                }
                 snaps.push((i, snap));
             }
             let from_parallel = step.geometry.angle.min(PI - step.geometry.angle);
@@ -375,7 +383,7 @@ pub fn extract(
         rows,
     };
     if convention == Convention::Modified {
-        table = table.to_convention(Convention::Modified);
+        table = table.into_convention(Convention::Modified);
         // Craig's rule for the last frame: d_n = 0, theta_n = 0, the tool carries the rest.
         let last = table.rows.len() - 1;
         table.rows[last].d = 0.0;
@@ -388,19 +396,18 @@ pub fn extract(
         position: (n as f64 + 1.0) * ROUNDING_ULPS * f64::EPSILON * size,
         orientation: (n as f64 + 1.0) * ROUNDING_ULPS * f64::EPSILON,
     };
-    let tilted: Vec<usize> = snaps
-        .iter()
-        .filter(|(_, (tilt, _))| *tilt > NOISE_RELATIVE)
-        .map(|(i, _)| *i)
-        .collect();
+    // The last pair seen whose snap tilted the later axis (snaps are in row order).
+    let mut last_tilted = None;
     for (i, (tilt, shift)) in snaps {
         let position_cost = 4.0 * tilt * size + 2.0 * shift;
         let orientation_cost = 2.0 * tilt;
         bound.position += position_cost;
         bound.orientation += orientation_cost;
-        let (first, second) = (axes[i].name.clone(), axes[i + 1].name.clone());
+        // The names are copied only for a warning, not for every snap.
+        let names = || (axes[i].name.clone(), axes[i + 1].name.clone());
         let geometry = pairs[i].geometry;
         if tilt > NOISE_RELATIVE {
+            let (first, second) = names();
             warnings.push(Warning::SnappedParallel {
                 first,
                 second,
@@ -409,9 +416,11 @@ pub fn extract(
                 tolerance: tol.angular,
                 position_cost,
                 orientation_cost,
-                after_snap: i > 0 && tilted.contains(&(i - 1)),
+                after_snap: i > 0 && last_tilted == Some(i - 1),
             });
+            last_tilted = Some(i);
         } else if shift > NOISE_RELATIVE * size {
+            let (first, second) = names();
             warnings.push(Warning::SnappedIntersecting {
                 first,
                 second,
@@ -437,9 +446,11 @@ pub fn extract(
 /// The standard row from the current frame (its z axis is the current joint axis) to the frame
 /// on the next axis `next`, given in the current frame's coordinates.
 fn pair_step(next: &Line, tol: Tolerance) -> Step {
-    let z = Line::z_axis();
-    let geometry = classify(&z, next, tol);
+    // `sin` = |z × u|, the sine of the pair's angle.
+    let (geometry, sin) = classify_from_z(next, tol);
     let u = next.direction();
+    // The point of the next axis nearest the current origin (metres).
+    let foot = next.point();
     match geometry.relation {
         Relation::Parallel | Relation::Antiparallel | Relation::Coincident { .. } => {
             let (alpha, half_alpha) = if u.z < 0.0 {
@@ -447,7 +458,6 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             } else {
                 (0.0, HALF_OF_ZERO)
             };
-            let foot = next.point();
             let (x, theta, a) = match geometry.relation {
                 Relation::Coincident { .. } => (Vector3::x(), 0.0, 0.0),
                 _ => {
@@ -467,14 +477,20 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             }
         }
         Relation::Intersecting | Relation::Skew => {
-            // `classify` returned non-parallel, so the cross product is not zero.
-            let (f1, f2) = z
-                .closest_points(next)
-                .unwrap_or((Vector3::zeros(), next.point()));
-            let s = (u.x * u.x + u.y * u.y).sqrt();
-            let n = Vector3::new(-u.y / s, u.x / s, 0.0);
+            // `classify_from_z` returned non-parallel, so `sin` is not zero. The unit common
+            // normal n = (z × u) / sin (eq. 14-15, ERRATA: normalised).
+            let n = Vector3::new(-u.y / sin, u.x / sin, 0.0);
+            // eq. (14) with line 1 the z axis (e1 = z, k1 = 0): the foot of the common normal
+            // on the current axis is f1 = (0, 0, (k2 · n) / sin); eq. (21) makes its height d.
+            let k = next.moment();
+            let k2n = k.x * n.x + k.y * n.y;
+            let d = k2n / sin;
             let (x, theta, a, snap) = if geometry.relation == Relation::Skew {
-                let (x, theta, a) = orient(n, (f2 - f1).dot(&n), tol);
+                // The signed length of the common normal, (f2 − f1) · n = f2 · n (f1 is on the z
+                // axis), with f2 = u (cos · (k2 · n) / sin) + foot by eq. (15).
+                let t = (u.z * k2n) / sin;
+                let a = (u.x * t + foot.x) * n.x + (u.y * t + foot.y) * n.y;
+                let (x, theta, a) = orient(n, a, tol);
                 (x, theta, a, None)
             } else {
                 let (x, theta, _) = orient(n, 0.0, tol);
@@ -482,16 +498,16 @@ fn pair_step(next: &Line, tol: Tolerance) -> Step {
             };
             // eq. (24): alpha = atan2((z_i × z_{i+1}) · x_{i+1}, z_i · z_{i+1}). With x_{i+1} the
             // unit common normal, |(z_i × z_{i+1}) · x_{i+1}| = sin(angle), so alpha is the
-            // pair's angle (from `classify`, in (0, π)) with the sign of that triple product.
+            // pair's angle (from `classify_from_z`, in (0, π)) with the sign of that triple
+            // product.
             let sign = -u.y * x.x + u.x * x.y;
             let alpha = geometry.angle.copysign(sign);
             Step {
-                // cos(alpha) = z · u, sin(alpha) = ±|z × u| = ±s.
-                halves: (half_angle(x.x, x.y), half_angle(u.z, s.copysign(sign))),
+                // cos(alpha) = z · u, sin(alpha) = ±|z × u| = ±sin.
+                halves: (half_angle(x.x, x.y), half_angle(u.z, sin.copysign(sign))),
                 // eq. (22) with x_i = (1, 0, 0) in the current frame.
                 theta,
-                // eq. (21): the foot on the current axis.
-                d: f1.z,
+                d,
                 a,
                 alpha,
                 geometry,

@@ -159,11 +159,12 @@ where
         .collect();
     let mut sampler = JointSampler::new(&source.rows, source.size(), seed);
     let prepared = written.prepare();
-    let (mut q, mut qw) = (Vec::with_capacity(n), vec![0.0; n]);
+    // Buffers reused by every sample: the source's values, the written rows' values, and
+    // which written values are known.
+    let (mut q, mut qw, mut done) = (Vec::with_capacity(n), vec![0.0; n], vec![true; n]);
     let mut dev = Deviation::new();
     for _ in 0..samples.max(1) {
         sampler.next_into(&mut q);
-        let mut done = vec![true; n];
         for (i, f) in follows.iter().enumerate() {
             qw[i] = q[i];
             done[i] = f.is_none();

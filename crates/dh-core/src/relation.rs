@@ -61,10 +61,48 @@ pub fn classify(l1: &Line, l2: &Line, tol: Tolerance) -> PairGeometry {
     // sin and cos of the angle between the directions, and the angle itself (one atan2).
     let sin = l1.direction().cross(&l2.direction()).norm();
     let angle = sin.atan2(l1.direction().dot(&l2.direction()));
+    decide(
+        angle,
+        sin,
+        tol,
+        || l1.parallel_offset(l2),
+        || l1.dual_dot(l2).dual,
+    )
+}
+
+/// [`classify`] with the first line the z axis of the current frame (`e1 = (0, 0, 1)`,
+/// `k1 = 0`), as the extraction meets every pair (§3.1): the same decisions from the same
+/// values, with the products against `e1` and `k1` written out. With `u` the second line's
+/// direction and `k` its moment: `|e1 × u| = sqrt(u.x² + u.y²)` (`s`, returned too),
+/// `e1 · u = u.z`, the dual part of eq. (3) is `e1 · k + k1 · u = k.z`, and the parallel offset
+/// is the distance of the second line's point nearest the origin from the z axis.
+pub(crate) fn classify_from_z(next: &Line, tol: Tolerance) -> (PairGeometry, f64) {
+    let u = next.direction();
+    let sin = (u.x * u.x + u.y * u.y).sqrt();
+    let angle = sin.atan2(u.z);
+    let geometry = decide(
+        angle,
+        sin,
+        tol,
+        || next.point().xy().norm(),
+        || next.moment().z,
+    );
+    (geometry, sin)
+}
+
+/// The class of a pair from its angle `angle` (radians, `[0, pi]`) and `sin = sin(angle)`; the
+/// parallel offset (metres) and the dual part of eq. (3) (metres) are computed only when needed.
+fn decide(
+    angle: f64,
+    sin: f64,
+    tol: Tolerance,
+    offset: impl FnOnce() -> f64,
+    dual: impl FnOnce() -> f64,
+) -> PairGeometry {
     let from_parallel = angle.min(std::f64::consts::PI - angle);
     let anti = angle > std::f64::consts::FRAC_PI_2;
     if from_parallel <= tol.angular {
-        let offset = l1.parallel_offset(l2);
+        let offset = offset();
         let coincident = offset <= tol.linear;
         return PairGeometry {
             relation: match (coincident, anti) {
@@ -78,8 +116,7 @@ pub fn classify(l1: &Line, l2: &Line, tol: Tolerance) -> PairGeometry {
             distance_deviation: if coincident { offset } else { 0.0 },
         };
     }
-    let dual = l1.dual_dot(l2);
-    let distance = (dual.dual / sin).abs();
+    let distance = (dual() / sin).abs();
     if distance <= tol.linear {
         PairGeometry {
             relation: Relation::Intersecting,
@@ -162,5 +199,44 @@ mod tests {
         assert_eq!(g.relation, Relation::Skew);
         assert!((g.distance - 0.3).abs() < 1e-15);
         assert!((g.angle - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
+    }
+
+    #[test]
+    fn from_z_is_classify_with_the_z_axis() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        let z = Line::z_axis();
+        let mut v = || -> Vector3<f64> {
+            Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            )
+        };
+        for k in 0..20_000 {
+            let (p, mut d) = (v(), v());
+            // Exactly and nearly parallel, and exactly and nearly intersecting, pairs too.
+            match k % 4 {
+                1 => d.x *= 1e-5,
+                2 => d = Vector3::new(0.0, 0.0, d.z.signum()),
+                _ => {}
+            }
+            let p = if k % 8 == 3 {
+                Vector3::new(0.0, 0.0, p.z) + d * 1e-7
+            } else {
+                p
+            };
+            let l = line(p.into(), d.into());
+            for tol in [
+                Tolerance::default(),
+                Tolerance::EXACT,
+                Tolerance::new(0.3, 0.2).unwrap(),
+            ] {
+                let want = classify(&z, &l, tol);
+                let (got, sin) = classify_from_z(&l, tol);
+                assert_eq!(got, want, "{l:?}");
+                assert_eq!(sin, z.direction().cross(&l.direction()).norm());
+            }
+        }
     }
 }

@@ -318,25 +318,29 @@ impl DhTable {
     /// tool takes the triple that falls off the end. `theta`, `d`, joint directions and zero
     /// pose stay as they are.
     pub fn to_convention(&self, convention: Convention) -> DhTable {
+        self.clone().into_convention(convention)
+    }
+
+    /// [`DhTable::to_convention`] on a table the caller no longer needs: the rows are shifted
+    /// in place, with no copy of their names.
+    pub fn into_convention(mut self, convention: Convention) -> DhTable {
         if convention == self.convention || self.rows.is_empty() {
-            return DhTable {
-                convention,
-                ..self.clone()
-            };
+            self.convention = convention;
+            return self;
         }
         let n = self.rows.len();
-        let mut rows = self.rows.clone();
-        let (mut base, mut tool) = (self.base, self.tool);
+        let rows = &mut self.rows;
         match convention {
             Convention::Modified => {
                 // Standard: ... Rz Tz Tx(a_i) Rx(alpha_i) Rz Tz ...; Tx and Rx commute.
-                let last = &self.rows[n - 1];
-                tool = tilted(trans_x(last.a) * rot_x(last.alpha), last.beta) * tool;
+                let last = &rows[n - 1];
+                self.tool = tilted(trans_x(last.a) * rot_x(last.alpha), last.beta) * self.tool;
+                // From the last row back, so that row i - 1 still holds its own values.
                 for i in (0..n).rev() {
                     let (a, alpha, beta) = if i == 0 {
                         (0.0, 0.0, 0.0)
                     } else {
-                        let r = &self.rows[i - 1];
+                        let r = &rows[i - 1];
                         (r.a, r.alpha, r.beta)
                     };
                     rows[i].a = a;
@@ -345,25 +349,24 @@ impl DhTable {
                 }
             }
             Convention::Standard => {
-                let first = &self.rows[0];
-                base = tilted(base * rot_x(first.alpha) * trans_x(first.a), first.beta);
-                for (i, row) in rows.iter_mut().enumerate() {
-                    let (a, alpha, beta) = self
-                        .rows
+                let first = &rows[0];
+                self.base = tilted(
+                    self.base * rot_x(first.alpha) * trans_x(first.a),
+                    first.beta,
+                );
+                // From the first row on, so that row i + 1 still holds its own values.
+                for i in 0..n {
+                    let (a, alpha, beta) = rows
                         .get(i + 1)
                         .map_or((0.0, 0.0, 0.0), |next| (next.a, next.alpha, next.beta));
-                    row.a = a;
-                    row.alpha = alpha;
-                    row.beta = beta;
+                    rows[i].a = a;
+                    rows[i].alpha = alpha;
+                    rows[i].beta = beta;
                 }
             }
         }
-        DhTable {
-            convention,
-            base,
-            tool,
-            rows,
-        }
+        self.convention = convention;
+        self
     }
 
     /// The joint axis lines at the zero pose, in the base link frame, with each row's name,

@@ -82,20 +82,45 @@ pub fn prove_extracted(
     samples: usize,
     seed: u64,
 ) -> Result<(String, bool)> {
-    let table = &ex.extraction.table;
-    let chain = &ex.chain;
+    prove_extracted_with(ex, format, samples, seed, |chain, q| chain.fk(q))
+}
+
+/// [`prove_extracted`] with the URDF's tip pose at joint values `q` given by
+/// `oracle(&ex.chain, q)`, which must be what `ex.chain.fk(q)` gives: a caller proving several
+/// tables of one chain may keep the poses it has computed (`urdf-dh batch` does for its
+/// second convention).
+///
+/// # Errors
+/// As [`prove_extracted`].
+pub fn prove_extracted_with<F>(
+    ex: &mut Extracted,
+    format: Format,
+    samples: usize,
+    seed: u64,
+    mut oracle: F,
+) -> Result<(String, bool)>
+where
+    F: FnMut(&Chain, &[f64]) -> nalgebra::Isometry3<f64>,
+{
+    let Extracted {
+        chain,
+        extraction,
+        sheet,
+        ..
+    } = ex;
+    let table = &extraction.table;
     let free = Isometry3Pair {
         base: table.base,
         tool: table.tool,
     };
     prove(
-        &mut ex.sheet,
+        sheet,
         format,
         &free,
         Source {
             table,
-            bound: ex.extraction.bound,
-            oracle: |q: &[f64]| chain.fk(q),
+            bound: extraction.bound,
+            oracle: |q: &[f64]| oracle(chain, q),
             against: None,
             samples,
             seed,
