@@ -224,19 +224,19 @@ pub fn load_inputs(args: &CalibrationRequest, err: &mut dyn Write) -> Result<Inp
         None => Some(DataFile::read(&args.data)?),
         Some(_) => None,
     };
-    let model = match &args.model {
-        Some(m) => {
-            let model = load_model_noting(
+    let model = args
+        .model
+        .as_deref()
+        .map(|m| {
+            load_model_noting(
                 m,
                 args.base.as_deref(),
                 args.tip.as_deref(),
                 args.convention,
                 err,
-            )?;
-            Some(model)
-        }
-        None => None,
-    };
+            )
+        })
+        .transpose()?;
     let mut data = read_sets(args, model.as_ref(), file, err)?;
     if let Some(m) = &model {
         m.couple(&mut data)

@@ -87,19 +87,19 @@ impl CpaReport {
 /// fit no circle.
 pub fn cpa(args: &CpaRequest, err: &mut dyn Write) -> Result<CpaReport> {
     let data_name = display_name(&args.data);
-    let model = match &args.model {
-        Some(m) => {
-            let model = load_model_noting(
+    let model = args
+        .model
+        .as_deref()
+        .map(|m| {
+            load_model_noting(
                 m,
                 args.base.as_deref(),
                 args.tip.as_deref(),
                 args.convention,
                 err,
-            )?;
-            Some(model)
-        }
-        None => None,
-    };
+            )
+        })
+        .transpose()?;
     let (prismatic, convention) = match &model {
         Some(m) => (m.prismatic(), m.table.convention),
         None => (Vec::new(), args.convention),
