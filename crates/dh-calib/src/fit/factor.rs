@@ -25,6 +25,9 @@ pub struct Factor {
     pub rows: usize,
 }
 
+/// Size of [`Tsqr`]'s chunk of rows: 192 KiB, well within the L2 cache of one core.
+const CHUNK_BYTES: usize = 192 * 1024;
+
 /// Incremental QR of a tall matrix given a row at a time: the triangular factor `R` of the
 /// rows so far, and a chunk of new rows `B` that is folded into it by Householder reflections
 /// when full (the QR of `[R; B]`).
@@ -45,7 +48,10 @@ pub(super) struct Tsqr {
 
 impl Tsqr {
     pub(super) fn new(cols: usize) -> Self {
-        let chunk = (8 * cols).max(256);
+        // Each reflection sweeps the chunk's later columns: a chunk of CHUNK_BYTES stays in a
+        // core's L2 cache across the sweeps (at least 64 rows, so that R's share of the work,
+        // p² per chunk, stays small against 2 m p²).
+        let chunk = (CHUNK_BYTES / (8 * cols.max(1))).max(64);
         Self {
             cols,
             chunk,
