@@ -102,6 +102,47 @@ pub fn read_measurements(
     Ok(data)
 }
 
+/// Where measurements come from: a file, or a caller's arrays (named in messages).
+pub enum DataSource<'a> {
+    /// A measurement file, read.
+    File(DataFile),
+    /// Arrays handed over instead of a file, and their name.
+    Arrays(&'a dh_calib::csv::SampleArrays, String),
+}
+
+impl DataSource<'_> {
+    /// The joint columns to read for `model`: its measured joints, or without a model every
+    /// joint column of the data (the file's header, the arrays' names).
+    ///
+    /// # Errors
+    /// A file header without joint columns.
+    pub fn joints(&self, model: Option<&crate::model::LoadedModel>) -> Result<Vec<String>> {
+        match (model, self) {
+            (Some(m), _) => Ok(m.measured_joints()),
+            (None, DataSource::File(file)) => header_joints(file),
+            (None, DataSource::Arrays(a, _)) => Ok(a.joint_names.clone()),
+        }
+    }
+
+    /// The measurements with the joint columns `joints` (`prismatic` naming the prismatic
+    /// ones), in `units`; warnings on `err`.
+    ///
+    /// # Errors
+    /// As [`read_measurements`] and [`read_arrays`].
+    pub fn read(
+        &self,
+        joints: &[String],
+        prismatic: &[String],
+        units: DataUnits,
+        err: &mut dyn std::io::Write,
+    ) -> Result<Measurements> {
+        match self {
+            DataSource::File(file) => read_measurements(file, joints, prismatic, units, err),
+            DataSource::Arrays(a, name) => read_arrays(a, name, joints, prismatic, units, err),
+        }
+    }
+}
+
 /// The measurements of `arrays` (a caller's arrays instead of a file, named `name` in messages)
 /// with the joint columns `joints`, read as [`read_measurements`] reads a file with the same
 /// columns; its notes (standard deviations of 0 floored) go to `err` as warnings.

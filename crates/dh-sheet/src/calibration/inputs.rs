@@ -10,7 +10,6 @@ use std::io::Write;
 
 use anyhow::{Context, Result};
 use dh_calib::cpa::{analyse, CpaOptions};
-use dh_calib::csv::SampleArrays;
 use dh_calib::data::Measurements;
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
 use dh_calib::pipeline::{merge_validation, PipelineError};
@@ -23,7 +22,7 @@ use dh_calib::cpa::{CPA_ANGULAR, CPA_LINEAR};
 use super::CalibrationRequest;
 use crate::error::hinted;
 use crate::input::display_name;
-use crate::measured::{header_joints, read_arrays, read_measurements, DataFile};
+use crate::measured::{DataFile, DataSource};
 use crate::model::{load_model_noting, LoadedModel};
 use crate::units::{AngleUnit, LengthUnit};
 
@@ -308,42 +307,27 @@ pub fn read_sets(
     err: &mut dyn Write,
 ) -> Result<Measurements> {
     let prismatic = model.map(LoadedModel::prismatic).unwrap_or_default();
-    let Some(given) = &args.given else {
-        let file = match file {
-            Some(f) => f,
-            None => DataFile::read(&args.data)?,
-        };
-        let joints = match model {
-            Some(m) => m.measured_joints(),
-            None => header_joints(&file)?,
-        };
-        let mut data = read_measurements(&file, &joints, &prismatic, args.units, err)?;
-        if let Some(v) = &args.validate {
-            let extra =
-                read_measurements(&DataFile::read(v)?, &joints, &prismatic, args.units, err)?;
-            merge_validation(&mut data, extra);
-        }
-        return Ok(data);
+    let source = match (&args.given, file) {
+        (Some(given), _) => DataSource::Arrays(&given.data, display_name(&args.data)),
+        (None, Some(file)) => DataSource::File(file),
+        (None, None) => DataSource::File(DataFile::read(&args.data)?),
     };
-    let joints = match model {
-        Some(m) => m.measured_joints(),
-        None => given.data.joint_names.clone(),
+    let joints = source.joints(model)?;
+    let mut data = source.read(&joints, &prismatic, args.units, err)?;
+    // The validation set: given arrays, else the validation file; with the data's joints.
+    let validation = match (
+        args.given.as_ref().and_then(|g| g.validate.as_ref()),
+        &args.validate,
+    ) {
+        (Some(v), name) => Some(DataSource::Arrays(
+            v,
+            display_name(name.as_deref().unwrap_or("<validate>")),
+        )),
+        (None, Some(path)) => Some(DataSource::File(DataFile::read(path)?)),
+        (None, None) => None,
     };
-    let read = |arrays: &SampleArrays, name: &str, err: &mut dyn Write| {
-        read_arrays(arrays, name, &joints, &prismatic, args.units, err)
-    };
-    let mut data = read(&given.data, &display_name(&args.data), err)?;
-    match (&given.validate, &args.validate) {
-        (Some(v), name) => {
-            let name = display_name(name.as_deref().unwrap_or("<validate>"));
-            merge_validation(&mut data, read(v, &name, err)?);
-        }
-        (None, Some(path)) => {
-            let file = DataFile::read(path)?;
-            let extra = read_measurements(&file, &joints, &prismatic, args.units, err)?;
-            merge_validation(&mut data, extra);
-        }
-        (None, None) => {}
+    if let Some(v) = validation {
+        merge_validation(&mut data, v.read(&joints, &prismatic, args.units, err)?);
     }
     Ok(data)
 }

@@ -23,7 +23,7 @@ use serde::Serialize;
 
 use crate::error::hinted;
 use crate::input::display_name;
-use crate::measured::{header_joints, read_arrays, read_measurements, DataFile, DataUnits};
+use crate::measured::{DataFile, DataSource, DataUnits};
 use crate::model::load_model_noting;
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
 use crate::units::{AngleUnit, LengthUnit};
@@ -104,23 +104,12 @@ pub fn cpa(args: &CpaRequest, err: &mut dyn Write) -> Result<CpaReport> {
         Some(m) => (m.prismatic(), m.table.convention),
         None => (Vec::new(), args.convention),
     };
-    let data = match &args.given {
-        None => {
-            let file = DataFile::read(&args.data)?;
-            let joints = match &model {
-                Some(m) => m.measured_joints(),
-                None => header_joints(&file)?,
-            };
-            read_measurements(&file, &joints, &prismatic, args.units, err)?
-        }
-        Some(arrays) => {
-            let joints = match &model {
-                Some(m) => m.measured_joints(),
-                None => arrays.joint_names.clone(),
-            };
-            read_arrays(arrays, &data_name, &joints, &prismatic, args.units, err)?
-        }
+    let source = match &args.given {
+        None => DataSource::File(DataFile::read(&args.data)?),
+        Some(arrays) => DataSource::Arrays(arrays, data_name.clone()),
     };
+    let joints = source.joints(model.as_ref())?;
+    let data = source.read(&joints, &prismatic, args.units, err)?;
     let options = CpaOptions {
         prismatic,
         convention,
