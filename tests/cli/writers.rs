@@ -170,3 +170,32 @@ proptest! {
         }
     }
 }
+
+/// A base 1e27 m out and a first `a` of -1e27 m cancel in the written URDF's origins (each
+/// within the reader's 1e9 m), but not in the sheet's own forward kinematics, which round by
+/// about 1e11 m there: no 1 mm proof can hold, so `to-urdf` refuses the sheet (exit 2) instead
+/// of writing a URDF and failing its proof (exit 1). Found by the property test above.
+#[test]
+fn to_urdf_refuses_a_reach_no_proof_can_verify() {
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = dir.path().join("far.yaml");
+    std::fs::write(
+        &sheet,
+        "convention: modified\nlength_unit: m\nangle_unit: rad\nbase: {xyz: [1e27, 0, 0], rpy: [0, 0, 0]}\njoints:\n  - {name: a, type: prismatic, a: -1e27, alpha: -1.4825564909893991, d: 0, theta: 0, lower: 0, upper: 0}\n",
+    )
+    .unwrap();
+    let (code, out, err) = cli(&[
+        "to-urdf",
+        &sheet.to_string_lossy(),
+        "--base-link",
+        "a",
+        "--tip-link",
+        "a_",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(refused_cleanly(&out, &err), "{err}");
+    assert!(
+        err.contains("expected a reach") && err.contains("found 2e27 m"),
+        "{err}"
+    );
+}

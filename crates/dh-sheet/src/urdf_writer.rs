@@ -66,12 +66,24 @@ const URDF_MAX_MAGNITUDE: f64 = 1e9;
 /// a robot, base or tip link name that is empty or holds a control or bidi character (a TAB
 /// too); two links or two joints of one name (the links are `base_link`, `<row>_link` per row
 /// and `tip_link`; the joints are the rows and `<tip_link>_joint`); an origin coordinate, limit
-/// or mimic number beyond the reader's 1e9 (metres or radians).
+/// or mimic number beyond the reader's 1e9 (metres or radians); a table whose reach
+/// ([`DhTable::size`]) passes that 1e9 m, whose own forward kinematics then round by more than
+/// the proof's 1 mm (a base 1e27 m out and a first `a` of -1e27 m cancel in the URDF's origins,
+/// not in the sheet's double-precision arithmetic).
 ///
 /// # Errors
 /// The first clash, bad name or value, naming the option or row that brings it.
 pub fn check_urdf(table: &DhTable, robot: &str, base_link: &str, tip_link: &str) -> Result<()> {
     use crate::text::{escape, name_problem};
+    let reach = table.size();
+    if reach > URDF_MAX_MAGNITUDE || !reach.is_finite() {
+        return Err(crate::error::hinted(
+            format!(
+                "expected a reach (the sum of |a|, |d|, prismatic travel and the base and tool offsets) within {URDF_MAX_MAGNITUDE:e} m, found {reach:e} m"
+            ),
+            "at that scale the sheet's own forward kinematics round by more than the 1 mm a written URDF is proved to; check the sheet's length_unit and its base and tool",
+        ));
+    }
     let mut before = table.base;
     for row in &table.rows {
         if row.kind == JointKind::Prismatic && row.limits.is_none() {
