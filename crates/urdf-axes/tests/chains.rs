@@ -4,7 +4,6 @@
 mod common;
 
 use std::f64::consts::{FRAC_PI_2, PI};
-use std::time::Instant;
 
 use approx::assert_relative_eq;
 use common::lines;
@@ -477,19 +476,8 @@ fn long_chain(n: usize) -> String {
     lines(&l.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
-fn build_seconds(text: &str) -> f64 {
-    (0..2)
-        .map(|_| {
-            let start = Instant::now();
-            let chain = UrdfModel::parse(text).unwrap().chain(None, None).unwrap();
-            assert!(!chain.axes().is_empty());
-            start.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
 #[test]
-fn ten_thousand_joints_build_in_linear_time() {
+fn ten_thousand_joints_build_and_agree() {
     let text = long_chain(10_000);
     let model = UrdfModel::parse(&text).unwrap();
     assert_eq!(model.joint_line("j9999"), Some(10_003 + 9_999));
@@ -497,14 +485,8 @@ fn ten_thousand_joints_build_in_linear_time() {
     assert_eq!(chain.axes().len(), 10_000);
     let q = vec![0.0; 10_000];
     assert_relative_eq!(chain.fk(&q), chain.tip_pose(), epsilon = 1e-9);
-    // Quadratic name lookups would make four times the joints cost sixteen times the time.
-    // (Sizes large enough that the times, a few milliseconds, stand above scheduling noise.)
-    let small = build_seconds(&long_chain(5_000));
-    let large = build_seconds(&long_chain(20_000));
-    assert!(
-        large < 10.0 * small.max(1e-3),
-        "5,000 joints: {small:.3} s, 20,000 joints: {large:.3} s"
-    );
+    // Its growth with the chain's length is measured by `cargo bench -p urdf-axes --bench parse`
+    // (chain_1k to chain_10k), not timed here.
 }
 
 #[test]
