@@ -40,7 +40,7 @@ pub fn render_sheet(doc: &SheetDoc, format: Format) -> Result<String> {
 /// Serialisation failures (not expected for finite numbers).
 pub fn render_sheet_at(doc: &SheetDoc, format: Format, extra: usize) -> Result<String> {
     Ok(match format {
-        Format::Yaml => serde_yaml::to_string(doc)?,
+        Format::Yaml => crate::sheet::write_in_parts(doc)?,
         Format::Json => serde_json::to_string_pretty(doc)? + "\n",
         Format::Text => text(doc, extra),
         Format::Csv => csv(doc),

@@ -32,6 +32,7 @@ use crate::units::{AngleUnit, LengthUnit};
 
 mod parse;
 mod parts;
+pub(crate) use parts::write_in_parts;
 mod rows;
 #[cfg(test)]
 mod tests;

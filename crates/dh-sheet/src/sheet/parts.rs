@@ -64,18 +64,73 @@ pub(crate) fn read_in_parts(text: &str) -> Option<SheetDoc> {
     Some(doc)
 }
 
-/// The items of `ranges` read [`ITEMS_PER_PART`] at a time.
-fn items<T: DeserializeOwned>(text: &str, ranges: &[Range<usize>]) -> Option<Vec<T>> {
-    let mut out = Vec::with_capacity(ranges.len());
-    for part in ranges.chunks(ITEMS_PER_PART) {
+/// The items of `ranges` read [`ITEMS_PER_PART`] at a time, the parts on the machine's cores
+/// ([`dh_core::parallel`]).
+fn items<T: DeserializeOwned + Send>(text: &str, ranges: &[Range<usize>]) -> Option<Vec<T>> {
+    let parts: Vec<&[Range<usize>]> = ranges.chunks(ITEMS_PER_PART).collect();
+    let read = dh_core::parallel::map(parts.len(), |k| {
+        let part = parts[k];
         let (first, last) = (part.first()?, part.last()?);
         let read: Vec<T> = serde_yaml::from_str(text.get(first.start..last.end)?).ok()?;
-        if read.len() != part.len() {
-            return None;
-        }
-        out.extend(read);
+        (read.len() == part.len()).then_some(read)
+    })?;
+    let mut out = Vec::with_capacity(ranges.len());
+    for part in read {
+        out.extend(part?);
     }
     Some(out)
+}
+
+/// The YAML of `doc` as [`serde_yaml::to_string`] writes it, its `joints` and `pairs` written
+/// [`ITEMS_PER_PART`] at a time on the machine's cores when they are longer. The writer puts
+/// a top-level list's key alone on its line and each item at column 0 (`- name: j0`), as it
+/// writes a list of its own, so the parts joined are the whole document's text.
+///
+/// # Errors
+/// What the YAML writer refuses.
+pub(crate) fn write_in_parts(doc: &SheetDoc) -> Result<String, serde_yaml::Error> {
+    let long = |n: usize| n > ITEMS_PER_PART;
+    let pairs = doc.pairs.as_deref().unwrap_or_default();
+    if !long(doc.joints.len()) && !long(pairs.len()) {
+        return serde_yaml::to_string(doc);
+    }
+    let mut head = doc.clone();
+    head.joints.clear();
+    if let Some(p) = head.pairs.as_mut() {
+        p.clear();
+    }
+    let mut text = serde_yaml::to_string(&head)?;
+    if !doc.joints.is_empty() {
+        text = splice(&text, "joints", &list_in_parts(&doc.joints)?);
+    }
+    if !pairs.is_empty() {
+        text = splice(&text, "pairs", &list_in_parts(pairs)?);
+    }
+    Ok(text)
+}
+
+/// `items` as the YAML writer writes a list, [`ITEMS_PER_PART`] at a time in parallel.
+fn list_in_parts<T: serde::Serialize + Sync>(items: &[T]) -> Result<String, serde_yaml::Error> {
+    let parts: Vec<&[T]> = items.chunks(ITEMS_PER_PART).collect();
+    let written = dh_core::parallel::try_map(
+        parts.len(),
+        |k| serde_yaml::to_string(parts[k]),
+        || serde::ser::Error::custom("a writer thread lost its part"),
+    )?;
+    Ok(written.concat())
+}
+
+/// `text` with the line `<key>: []` at column 0 replaced by `<key>:` and `list`.
+fn splice(text: &str, key: &str, list: &str) -> String {
+    let empty = format!("{key}: []\n");
+    let at = text
+        .match_indices(&empty)
+        .find(|(i, _)| *i == 0 || text.as_bytes()[i - 1] == b'\n')
+        .map(|(i, _)| i);
+    match at {
+        Some(i) => format!("{}{key}:\n{list}{}", &text[..i], &text[i + empty.len()..]),
+        None => text.to_owned(),
+    }
 }
 
 /// The block sequence of the top-level `key`, when the document holds it once, in the layout
@@ -145,6 +200,41 @@ mod tests {
             serde_yaml::to_string(&parts).unwrap(),
             serde_yaml::to_string(&whole).unwrap()
         );
+    }
+
+    #[test]
+    fn a_long_list_is_written_as_the_whole_document_is() {
+        let names = [
+            "j",
+            "yes",
+            "'q'",
+            "a: b",
+            "1e3",
+            "x\"y",
+            "gelenk_ä",
+            "- z",
+            "#c",
+            "",
+        ];
+        let rows: String = (0..2500)
+            .map(|i| {
+                let n = serde_json::to_string(&format!("{}{i}", names[i % names.len()])).unwrap();
+                format!("- {{name: {n}, type: revolute, a: {i}.25, alpha: 0.5, d: -0.0, theta: 1e-300}}\n")
+            })
+            .collect();
+        let pairs: String = (0..1500)
+            .map(|i| {
+                format!("- {{joints: [a{i}, b{i}], relation: skew, distance: {i}.5, angle: 0.1}}\n")
+            })
+            .collect();
+        for pairs in ["", &format!("pairs:\n{pairs}")] {
+            let text = format!("{HEAD}joints:\n{rows}{pairs}warnings: [w]\n");
+            let doc: SheetDoc = serde_yaml::from_str(&text).unwrap();
+            assert_eq!(
+                write_in_parts(&doc).unwrap(),
+                serde_yaml::to_string(&doc).unwrap()
+            );
+        }
     }
 
     #[test]

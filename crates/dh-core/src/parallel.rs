@@ -1,0 +1,72 @@
+//! Independent pieces of work on the machine's cores, results in order.
+//!
+//! The one way the workspace runs a loop on several threads (scoped standard threads, no
+//! thread pool): the results are the same whatever the number of threads, as long as each
+//! piece depends on its index alone.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// `work(0..count)` on up to `available_parallelism` threads (one thread when `count` is 1 or
+/// the machine has one core), each thread taking the next index as it finishes one; the results
+/// in index order, or the first error in that order. A panic in `work` reaches the caller, as
+/// from any scoped thread; `panicked()` stands for a result lost some other way (a poisoned
+/// lock), never silently skipped.
+///
+/// # Errors
+/// The first error of `work` in index order; `panicked()` for a lost result.
+pub fn try_map<T: Send, E: Send>(
+    count: usize,
+    work: impl Fn(usize) -> Result<T, E> + Sync,
+    panicked: impl Fn() -> E,
+) -> Result<Vec<T>, E> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(count);
+    if threads <= 1 {
+        return (0..count).map(work).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let slots: Mutex<Vec<Option<Result<T, E>>>> = Mutex::new((0..count).map(|_| None).collect());
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                if k >= count {
+                    break;
+                }
+                let out = work(k);
+                if let Ok(mut s) = slots.lock() {
+                    s[k] = Some(out);
+                }
+            });
+        }
+    });
+    let Ok(slots) = slots.into_inner() else {
+        return Err(panicked());
+    };
+    slots
+        .into_iter()
+        .map(|s| s.unwrap_or_else(|| Err(panicked())))
+        .collect()
+}
+
+/// [`try_map`] for work that cannot fail: `None` when a result was lost.
+pub fn map<T: Send>(count: usize, work: impl Fn(usize) -> T + Sync) -> Option<Vec<T>> {
+    try_map(count, |k| Ok(work(k)), || ()).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn results_come_in_index_order_with_the_first_error() {
+        let squares = map(1000, |k| k * k).unwrap();
+        assert_eq!(squares, (0..1000).map(|k| k * k).collect::<Vec<_>>());
+        let r: Result<Vec<usize>, usize> =
+            try_map(100, |k| if k % 30 == 29 { Err(k) } else { Ok(k) }, || 0);
+        assert_eq!(r, Err(29));
+        assert_eq!(map(0, |k| k), Some(vec![]));
+    }
+}
