@@ -208,50 +208,14 @@ fn segments<T: Send>(
 }
 
 /// `work(0..count)` on up to `available_parallelism` threads, results in index order (the
-/// first error in that order, if any): the same results whatever the number of threads, as
-/// long as `work(k)` depends on `k` alone.
+/// first error in that order, if any): [`dh_core::parallel::try_map`].
 pub(crate) fn parallel_map<T: Send>(
     count: usize,
     work: impl Fn(usize) -> Result<T, CalibError> + Sync,
 ) -> Result<Vec<T>, CalibError> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::Mutex;
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(count);
-    if threads <= 1 {
-        return (0..count).map(work).collect();
-    }
-    let next = AtomicUsize::new(0);
-    let slots: Mutex<Vec<Option<Result<T, CalibError>>>> =
-        Mutex::new((0..count).map(|_| None).collect());
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                if k >= count {
-                    break;
-                }
-                let out = work(k);
-                if let Ok(mut s) = slots.lock() {
-                    s[k] = Some(out);
-                }
-            });
-        }
-    });
-    let slots = slots.into_inner().map_err(|_| CalibError::NonFinite {
-        what: "a worker thread panicked".into(),
-    })?;
-    slots
-        .into_iter()
-        .map(|s| {
-            s.unwrap_or_else(|| {
-                Err(CalibError::NonFinite {
-                    what: "a worker thread panicked".into(),
-                })
-            })
-        })
-        .collect()
+    dh_core::parallel::try_map(count, work, || CalibError::NonFinite {
+        what: "a worker thread lost its result".into(),
+    })
 }
 
 /// `(r_factor, qtr)` out of the `(p + 1) × (p + 1)` factor of `[J | r]`.
