@@ -175,10 +175,11 @@ fn rejudge(
 
 /// One diagnosis whose outlier screen judges the points against the geometry and the effects
 /// of `judged`, flagging only its samples (`None`: the geometric model, or the declared
-/// labels, flagging any); `judged` carries that screen's findings, made by the run before. With `may_rejudge`, the points it left out are then judged again
-/// against the effects it selected ([`rejudge`]) before the report is finished, so that a run
-/// whose selection runs again spends nothing on its report (the exact cross-validation of the
-/// steps it accepted, the structure checks).
+/// labels, flagging any); `judged` carries that screen's findings, made by the run before.
+/// With `may_rejudge`, the points it left out are then judged again against the effects it
+/// selected ([`rejudge`]) before the report is finished, so that a run whose selection runs
+/// again spends nothing on its report (the exact cross-validation of the steps it accepted,
+/// the structure checks).
 fn diagnose_judged(
     tree: &DhTree,
     data: &Measurements,
