@@ -161,9 +161,15 @@ mod tests {
             folds: 10,
             ..CalibrationOptions::default()
         };
-        let fitted =
-            super::super::fitted_session(&DhTree::serial(&table), &data, &options, &[], &[], None)
-                .expect("a fit");
+        let fitted = super::super::fitted_session(
+            &DhTree::serial(&table),
+            &data,
+            &options,
+            &[],
+            (&[], None),
+            None,
+        )
+        .expect("a fit");
         let (session, geo) = (fitted.session, fitted.geo);
         assert!(matches!(
             session.validation,

@@ -49,7 +49,7 @@ pub fn calibrate_tree(
         data,
         options,
         &options.effects,
-        &options.effects,
+        (&options.effects, None),
         None,
     )?;
     let mut last = last.outcome;
@@ -87,14 +87,19 @@ pub(crate) struct Fitted<'a> {
 /// geometric parameters fitted without effects), so data without outliers are fitted once. When the screen leaves samples out
 /// (and they are not kept), the session is built anew from the samples kept, placed in the
 /// whole file's sequence: a dropped pose was still visited, so the direction of the next
-/// one's motion and the time are the file's.
+/// one's motion and the time are the file's. `screened`: the findings of that screen, made
+/// before (by [`screen_from`] with no first round, the same `judged_with` and `within`), used
+/// instead of screening again.
 pub(crate) fn fitted_session<'a>(
     tree: &DhTree,
     data: &Measurements,
     options: &'a CalibrationOptions,
     effects: &[Arc<dyn Effect>],
-    judged_with: &[Arc<dyn Effect>],
-    within: Option<&std::collections::BTreeSet<usize>>,
+    (judged_with, within): (
+        &[Arc<dyn Effect>],
+        Option<&std::collections::BTreeSet<usize>>,
+    ),
+    screened: Option<crate::outliers::OutlierReport>,
 ) -> Result<Fitted<'a>, CalibError> {
     if options.outliers.screen {
         check_level(options)?;
@@ -108,14 +113,17 @@ pub(crate) fn fitted_session<'a>(
             scan: None,
         });
     }
-    let scan = screen_from(
-        tree,
-        data,
-        options,
-        Some((&session, &geo)),
-        judged_with,
-        within,
-    )?;
+    let scan = match screened {
+        Some(scan) => scan,
+        None => screen_from(
+            tree,
+            data,
+            options,
+            Some((&session, &geo)),
+            judged_with,
+            within,
+        )?,
+    };
     if scan.kept || scan.outliers.is_empty() {
         return Ok(Fitted {
             session,

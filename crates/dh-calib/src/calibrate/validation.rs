@@ -211,16 +211,12 @@ pub(crate) enum Folds {
     OneStep,
 }
 
-impl StepResult {
-    /// Puts the held-out distances `held` (as [`StepResult::held_out`]) into the step and its
-    /// report's validation figures.
-    pub(crate) fn set_held_out(&mut self, held: Vec<f64>) {
-        let val = Stats::of(&held);
-        self.report.val_rms = val.map(|v| v.rms);
-        self.report.val_mean = val.map(|v| v.mean);
-        self.report.val_max = val.map(|v| v.max);
-        self.held_out = held;
-    }
+/// Puts the validation figures of the held-out distances `held` into `report`.
+pub(crate) fn set_val(report: &mut StepReport, held: &[f64]) {
+    let val = Stats::of(held);
+    report.val_rms = val.map(|v| v.rms);
+    report.val_mean = val.map(|v| v.mean);
+    report.val_max = val.map(|v| v.max);
 }
 
 pub(crate) struct StepResult {

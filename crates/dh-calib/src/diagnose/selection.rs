@@ -5,6 +5,8 @@
 
 use std::collections::BTreeSet;
 
+use crate::outliers::OutlierReport;
+
 use super::*;
 
 /// [`diagnose_tree`] for a serial robot.
@@ -70,75 +72,122 @@ pub fn diagnose_tree(
     options: &CalibrationOptions,
     diag: &DiagnoseOptions,
 ) -> Result<Report, CalibError> {
-    let (mut report, mut effects) = diagnose_judged(tree, data, options, diag, None)?;
-    let labels = |e: &[Arc<dyn Effect>]| -> Vec<String> {
-        e.iter()
-            .map(|e| crate::effects::label_of(e.as_ref()))
-            .collect()
-    };
-    let left_out = |r: &Report| -> Option<BTreeSet<usize>> {
-        r.outliers
-            .as_ref()
-            .filter(|s| !s.kept)
-            .map(|s| s.flagged_calibration())
-    };
-    let first_count = left_out(&report).map_or(0, |b| b.len());
+    let mut judged: Option<Rejudged> = None;
+    let mut first_count = 0;
     let mut passes = 0;
-    let mut confirmed = None;
-    for _ in 0..MAX_REJUDGE {
-        let Some(before) = left_out(&report).filter(|b| !b.is_empty()) else {
-            break;
-        };
-        let judged = report.outliers.as_ref().map(|s| s.effects.clone());
-        if effects.is_empty() || judged.as_ref() == Some(&labels(&effects)) {
-            break;
+    loop {
+        match diagnose_judged(
+            tree,
+            data,
+            options,
+            diag,
+            judged.take(),
+            passes < MAX_REJUDGE,
+        )? {
+            Judgement::Again(again) => {
+                if passes == 0 {
+                    first_count = again.1.len();
+                }
+                judged = Some(*again);
+                passes += 1;
+            }
+            Judgement::Final(mut report, confirmed) => {
+                let count = left_out(report.outliers.as_ref()).map_or(0, |b| b.len());
+                if passes > 0 {
+                    let judged = report
+                        .outliers
+                        .as_ref()
+                        .map(|s| s.effects.join(", "))
+                        .unwrap_or_default();
+                    report.notes.push(format!(
+                        "outliers judged again against the geometry and {judged}: {count} \
+                         point(s) left out instead of the {first_count} of the geometric fit; \
+                         the selection ran again with the points given back ({passes} time(s))"
+                    ));
+                } else if let Some(with) = confirmed {
+                    report.notes.push(format!(
+                        "the {count} point(s) left out are outliers of the final model too \
+                         (judged again against the geometry and {with})"
+                    ));
+                }
+                return Ok(*report);
+            }
         }
-        let again =
-            crate::calibrate::screen_from(tree, data, options, None, &effects, Some(&before))?;
-        if again.flagged_calibration() == before {
-            confirmed = Some(labels(&effects).join(", "));
-            break;
-        }
-        (report, effects) = diagnose_judged(tree, data, options, diag, Some((&effects, &before)))?;
-        passes += 1;
     }
-    let count = left_out(&report).map_or(0, |b| b.len());
-    if passes > 0 {
-        let judged = report
-            .outliers
-            .as_ref()
-            .map(|s| s.effects.join(", "))
-            .unwrap_or_default();
-        report.notes.push(format!(
-            "outliers judged again against the geometry and {judged}: {count} point(s) left \
-             out instead of the {first_count} of the geometric fit; the selection ran again \
-             with the points given back ({passes} time(s))"
-        ));
-    } else if let Some(with) = confirmed {
-        report.notes.push(format!(
-            "the {count} point(s) left out are outliers of the final model too (judged again \
-             against the geometry and {with})"
-        ));
-    }
-    Ok(report)
 }
 
 /// Most times [`diagnose_tree`] judges the outliers again and reruns the selection.
 pub const MAX_REJUDGE: usize = 3;
 
-/// The effects a second outlier judgement uses, and the samples it may flag.
-type Judged<'a> = (&'a [Arc<dyn Effect>], &'a BTreeSet<usize>);
+/// The effects a second outlier judgement used, the samples it could flag, and its findings
+/// (the screen of the next run: the same judgement, made once).
+type Rejudged = (Vec<Arc<dyn Effect>>, BTreeSet<usize>, OutlierReport);
+
+/// What one selection run leads to: its report (with the effects the points left out were
+/// judged against again and confirmed as outliers, if so), or another run with the effects
+/// it selected, giving back the points left out that are not outliers of them.
+enum Judgement {
+    Final(Box<Report>, Option<String>),
+    Again(Box<Rejudged>),
+}
+
+/// What [`rejudge`] found.
+enum Rejudgement {
+    /// Nothing to judge again.
+    Nothing,
+    /// The points left out are outliers of the effects (their labels) too.
+    Confirmed(String),
+    /// Not all: the points left out, and the new judgement.
+    Changed(BTreeSet<usize>, OutlierReport),
+}
+
+/// The calibration samples a screen left out (none when it kept them).
+fn left_out(scan: Option<&OutlierReport>) -> Option<BTreeSet<usize>> {
+    scan.filter(|s| !s.kept).map(|s| s.flagged_calibration())
+}
+
+/// Whether the selection must run again (see [`diagnose_tree`]): the points `scan` left out,
+/// judged against the geometry and the `effects` selected, unless none were left out, no
+/// effect was selected or the screen already judged with them.
+fn rejudge(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    scan: Option<&OutlierReport>,
+    effects: &[Arc<dyn Effect>],
+) -> Result<Rejudgement, CalibError> {
+    let labels: Vec<String> = effects
+        .iter()
+        .map(|e| crate::effects::label_of(e.as_ref()))
+        .collect();
+    let Some(before) = left_out(scan).filter(|b| !b.is_empty()) else {
+        return Ok(Rejudgement::Nothing);
+    };
+    if effects.is_empty() || scan.map(|s| &s.effects) == Some(&labels) {
+        return Ok(Rejudgement::Nothing);
+    }
+    let again = crate::calibrate::screen_from(tree, data, options, None, effects, Some(&before))?;
+    if again.flagged_calibration() == before {
+        return Ok(Rejudgement::Confirmed(labels.join(", ")));
+    }
+    Ok(Rejudgement::Changed(before, again))
+}
 
 /// One diagnosis whose outlier screen judges the points against the geometry and the effects
 /// of `judged`, flagging only its samples (`None`: the geometric model, or the declared
-/// labels, flagging any); returns the report and the effects it selected.
+/// labels, flagging any); `judged` carries that screen's findings, made by the run before.
+/// With `may_rejudge`, the points it left out are then judged again against the effects it
+/// selected ([`rejudge`]) before the report is finished, so that a run whose selection runs
+/// again spends nothing on its report (the exact cross-validation of the steps it accepted,
+/// the structure checks).
 fn diagnose_judged(
     tree: &DhTree,
     data: &Measurements,
     options: &CalibrationOptions,
     diag: &DiagnoseOptions,
-    judged: Option<Judged<'_>>,
-) -> Result<(Report, Vec<Arc<dyn Effect>>), CalibError> {
+    judged: Option<Rejudged>,
+    may_rejudge: bool,
+) -> Result<Judgement, CalibError> {
     let ctx = effect_context(tree, diag)?;
     let mut notes = Vec::new();
     // Which candidates the model can carry.
@@ -160,12 +209,18 @@ fn diagnose_judged(
             (v, true)
         }
     };
-    let (judged_with, within) = match judged {
-        Some((e, w)) => (e, Some(w)),
-        None => (if forced { &pool[..] } else { &[][..] }, None),
+    let (judged_with, within, screened) = match &judged {
+        Some((e, w, scan)) => (&e[..], Some(w), Some(scan.clone())),
+        None => (if forced { &pool[..] } else { &[][..] }, None, None),
     };
-    let crate::calibrate::Fitted { session, geo, scan } =
-        crate::calibrate::fitted_session(tree, data, options, &pool, judged_with, within)?;
+    let crate::calibrate::Fitted { session, geo, scan } = crate::calibrate::fitted_session(
+        tree,
+        data,
+        options,
+        &pool,
+        (judged_with, within),
+        screened,
+    )?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
     // The trials' held-out figures step each fold once from the fit (`Folds::OneStep`), and
@@ -186,6 +241,9 @@ fn diagnose_judged(
     let mut first_table: Vec<CandidateReport> = Vec::new();
     let mut rejected: Vec<usize> = Vec::new();
     let mut aliased: Vec<usize> = Vec::new();
+    // The accepted steps whose held-out figures are refitted per fold once the report is
+    // known to be final: (index in `steps`, fit, free columns).
+    let mut pending: Vec<(usize, Vec<f64>, Vec<usize>)> = Vec::new();
     if !pool.is_empty() {
         if !forced && !residual_test.significant {
             notes.push(format!(
@@ -359,11 +417,10 @@ fn diagnose_judged(
                         .collect();
                     fixed2.sort_by_key(|f| f.index);
                     step.report.fixed = session.named_geometric(&fixed2);
-                    let one_step = std::mem::take(&mut step.held_out);
-                    step.set_held_out(session.held_out_with(&step.outcome.x, &f2, Folds::Refit)?);
+                    pending.push((steps.len(), step.outcome.x.clone(), f2.clone()));
                     steps.push(step.report);
                     last = step.outcome;
-                    held = one_step;
+                    held = step.held_out;
                     free = f2;
                     fixed = fixed2;
                     // A rejection in one round may pass once another effect is in.
@@ -416,6 +473,27 @@ fn diagnose_judged(
             }
         }
     }
+    let effects: Vec<Arc<dyn Effect>> = selected.iter().map(|&e| pool[e].clone()).collect();
+    let mut confirmed = None;
+    if may_rejudge {
+        match rejudge(tree, data, options, scan.as_ref(), &effects)? {
+            Rejudgement::Changed(before, again) => {
+                return Ok(Judgement::Again(Box::new((effects, before, again))))
+            }
+            Rejudgement::Nothing => {}
+            Rejudgement::Confirmed(labels) => confirmed = Some(labels),
+        }
+    }
+    // The steps listed are refitted per fold (the trials stepped each fold once); the step
+    // after each one compares with its figure.
+    for (i, x, f) in pending {
+        let held = session.held_out_with(&x, &f, Folds::Refit)?;
+        crate::calibrate::set_val(&mut steps[i], &held);
+        let val_rms = steps[i].val_rms;
+        if let Some(next) = steps.get_mut(i + 1) {
+            next.val_rms_before = val_rms;
+        }
+    }
     let structure = structure_checks(&session, &last, diag.alpha);
     for s in structure.iter().filter(|s| s.significant) {
         notes.push(format!(
@@ -461,6 +539,5 @@ fn diagnose_judged(
         structure,
         notes,
     });
-    let effects = selected.iter().map(|&e| pool[e].clone()).collect();
-    Ok((report, effects))
+    Ok(Judgement::Final(Box::new(report), confirmed))
 }
