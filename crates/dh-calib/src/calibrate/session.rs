@@ -488,14 +488,22 @@ impl<'a> Session<'a> {
             final_.rms,
             final_.val_rms,
         ));
-        let verdict = verdict(
+        // The residuals at `x`, computed once for the sessions' figures and both tests of the
+        // verdict (three passes over millions of samples before).
+        let res = position_residuals(self, &x);
+        let cal_d: Vec<f64> = res.iter().map(|r| r.norm()).collect();
+        let sessions = self.session_reports_with(&x, &cal_d);
+        drop(cal_d);
+        let verdict = verdict_with(
             self,
             last,
             crate::findings::DEFAULT_ALPHA,
             noise_floor.as_ref(),
             final_.rms,
             &selected_effects,
+            &res,
         );
+        drop(res);
         Report {
             rms_before: first.rms,
             rms_after: final_.rms,
@@ -514,7 +522,7 @@ impl<'a> Session<'a> {
             parametrisation: model.pairs().to_vec(),
             calibrated: tree.trunk().clone(),
             device: model.device_at(&x),
-            sessions: self.session_reports(&x),
+            sessions,
             targets: (0..model.targets().len())
                 .map(|k| (model.targets()[k].0.clone(), model.target_at(&x, k)))
                 .collect(),
@@ -538,9 +546,13 @@ impl<'a> Session<'a> {
 }
 
 impl Session<'_> {
-    /// Each session's frame and RMS at `x` (see [`crate::sessions::reports`]).
-    pub(super) fn session_reports(&self, x: &[f64]) -> Vec<crate::sessions::SessionReport> {
-        let cal_d = distances(&self.model, x, &self.prep.cal);
+    /// Each session's frame and RMS at `x` (see [`crate::sessions::reports`]), given the
+    /// distance of every calibration sample at `x` (`cal_d`, [`distances`]).
+    pub(super) fn session_reports_with(
+        &self,
+        x: &[f64],
+        cal_d: &[f64],
+    ) -> Vec<crate::sessions::SessionReport> {
         let val_d = match self.validation {
             Validation::Split { .. } => split_distances(&self.model, x, &self.prep),
             _ => Vec::new(),
@@ -550,7 +562,7 @@ impl Session<'_> {
             x,
             &self.session_names,
             &self.prep,
-            &cal_d,
+            cal_d,
             &val_d,
         )
     }

@@ -53,6 +53,28 @@ pub(super) fn distances_at(model: &Model, x: &[f64], obs: &[Observed], at: &[usi
     }
 }
 
+/// The position residuals (model minus measured, device frame, metres) of every observation
+/// in `obs` at `x`, in parallel segments for long lists (each the same value as on one thread).
+/// Their norms are [`distances`].
+pub(crate) fn residual_vectors(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<Vector3<f64>> {
+    let one = |o: &Observed| {
+        let mut r = [0.0; 6];
+        model.residuals(x, o, &mut r);
+        Vector3::new(r[0], r[1], r[2])
+    };
+    let parts: Vec<&[Observed]> = obs.chunks(fit::SEGMENT_BLOCKS).collect();
+    if parts.len() <= 1 {
+        return obs.iter().map(one).collect();
+    }
+    match fit::parallel_map(parts.len(), |k| {
+        Ok(parts[k].iter().map(one).collect::<Vec<_>>())
+    }) {
+        Ok(r) => r.concat(),
+        // Only a worker's panic gets here: compute on this thread instead.
+        Err(_) => obs.iter().map(one).collect(),
+    }
+}
+
 /// Distances of the validation samples at `x`. A target that no calibration sample measured
 /// (a test point: another reflector, mounted only for validation) has no estimated position on
 /// the tip, so its validation samples first locate it: the point `p` in the tip frame that

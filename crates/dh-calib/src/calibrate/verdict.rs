@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use dh_core::JointKind;
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
 use super::{NoiseFloor, Prepared, Session};
 use crate::findings::{NoiseTest, ResidualTest, StructureCheck, Verdict};
@@ -26,8 +26,23 @@ pub(crate) fn verdict(
     rms: f64,
     selected: &[String],
 ) -> Verdict {
-    let test = residual_test(session, fit, alpha);
-    let structure = structure_checks(session, fit, alpha);
+    let res = position_residuals(session, &fit.x);
+    verdict_with(session, fit, alpha, floor, rms, selected, &res)
+}
+
+/// [`verdict`] given the position residuals `res` of every calibration sample at `fit.x`
+/// ([`position_residuals`]): both tests read them, computed once.
+pub(crate) fn verdict_with(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    alpha: f64,
+    floor: Option<&NoiseFloor>,
+    rms: f64,
+    selected: &[String],
+    res: &[Vector3<f64>],
+) -> Verdict {
+    let test = residual_test_in(session, fit, alpha, Some(res));
+    let structure = structure_checks_with(session, fit, alpha, res);
     let ratio = floor.filter(|f| f.rms > 0.0).map(|f| rms / f.rms);
     let complete = (test.kind != NoiseTest::None).then_some(!test.significant);
     let summary = match (complete, ratio) {
@@ -98,25 +113,63 @@ fn pure_error(prep: &Prepared) -> Option<(f64, usize)> {
     (dof > 0).then_some((ss, dof))
 }
 
-/// Known per-axis noise of every calibration sample, when there is one.
-fn known_sigmas(session: &Session<'_>) -> Option<Vec<Vector3<f64>>> {
-    if let Some(s) = session.options.sigma {
-        return Some(vec![Vector3::repeat(s); session.prep.cal.len()]);
+/// Known per-axis noise (metres) of every calibration sample, when there is one: the
+/// option's for all, or each sample's own.
+#[derive(Clone, Copy)]
+enum Known<'a> {
+    Given(f64),
+    Samples(&'a [Option<Vector3<f64>>]),
+}
+
+impl Known<'_> {
+    /// The noise of calibration sample `i`.
+    fn at(&self, i: usize) -> Vector3<f64> {
+        match self {
+            Known::Given(s) => Vector3::repeat(*s),
+            Known::Samples(v) => v[i].unwrap_or_default(),
+        }
     }
-    let v: Option<Vec<Vector3<f64>>> = session.prep.sigmas.iter().copied().collect();
-    v.filter(|v| v.iter().all(|s| s.iter().all(|x| *x > 0.0)))
+}
+
+/// Known per-axis noise of every calibration sample, when there is one (no copy of the
+/// samples' own: millions of them on a large set).
+fn known_sigmas<'a>(session: &'a Session<'_>) -> Option<Known<'a>> {
+    if let Some(s) = session.options.sigma {
+        return Some(Known::Given(s));
+    }
+    let v = &session.prep.sigmas;
+    v.iter()
+        .all(|s| s.is_some_and(|s| s.iter().all(|x| *x > 0.0)))
+        .then_some(Known::Samples(v))
 }
 
 pub(crate) fn residual_test(session: &Session<'_>, fit: &FitOutcome, alpha: f64) -> ResidualTest {
+    residual_test_in(session, fit, alpha, None)
+}
+
+/// [`residual_test`], reading the position residuals at `fit.x` from `res` when given
+/// ([`position_residuals`]; a 6-DoF pose's angle residuals are computed again).
+fn residual_test_in(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    alpha: f64,
+    res: Option<&[Vector3<f64>]>,
+) -> ResidualTest {
     let m = fit.residual_count as f64;
     let p = fit.free.len() as f64;
     let dof = (m - p).max(1.0);
     let model = &session.model;
-    if let Some(sig) = known_sigmas(session) {
+    if let Some(known) = known_sigmas(session) {
         let mut chi2 = 0.0;
         let mut r = [0.0; 6];
-        for (o, s) in session.prep.cal.iter().zip(&sig) {
-            model.residuals(&fit.x, o, &mut r);
+        for (i, o) in session.prep.cal.iter().enumerate() {
+            let s = known.at(i);
+            match res {
+                Some(res) if !matches!(o.observation, Observation::TargetPose { .. }) => {
+                    r[..3].copy_from_slice(res[i].as_slice());
+                }
+                _ => model.residuals(&fit.x, o, &mut r),
+            }
             for a in 0..3 {
                 chi2 += (r[a] / s[a]).powi(2);
             }
@@ -130,7 +183,8 @@ pub(crate) fn residual_test(session: &Session<'_>, fit: &FitOutcome, alpha: f64)
             }
         }
         let pv = stats::chi2_sf(chi2, dof);
-        let noise = (sig.iter().map(|s| s.norm_squared()).sum::<f64>() / sig.len() as f64).sqrt();
+        let n = session.prep.cal.len();
+        let noise = ((0..n).map(|i| known.at(i).norm_squared()).sum::<f64>() / n as f64).sqrt();
         return ResidualTest {
             kind: NoiseTest::KnownSigma,
             statistic: Some(chi2),
@@ -181,17 +235,28 @@ pub(crate) fn structure_checks(
     fit: &FitOutcome,
     alpha: f64,
 ) -> Vec<StructureCheck> {
+    let res = position_residuals(session, &fit.x);
+    structure_checks_with(session, fit, alpha, &res)
+}
+
+/// [`structure_checks`] given the position residuals `res` of every calibration sample at
+/// `fit.x` ([`position_residuals`]).
+fn structure_checks_with(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    alpha: f64,
+    res: &[Vector3<f64>],
+) -> Vec<StructureCheck> {
     let model = &session.model;
     let prep = &session.prep;
     let rows = model.tree().rows();
-    let res = position_residuals(session, &fit.x);
     // One unit per pose and target: repeats are averaged, so that the test asks whether the
     // joint explains the lack of fit, not whether there is one (that is the residual test).
     // The unit of each group's first target in a slot per group (groups are numbered from 0),
     // other targets of a group in a map: a map entry per unit cost 100 MB on 2 000 000 poses.
     let mut first_unit: Vec<Option<(usize, usize)>> = vec![None; prep.group_count];
     let mut unit_of: IndexMap<(usize, usize), usize> = IndexMap::default();
-    let mut units: Vec<(Vector3<f64>, usize, usize)> = Vec::new();
+    let mut units: Vec<(Vector3<f64>, usize, usize)> = Vec::with_capacity(prep.group_count);
     for (i, o) in prep.cal.iter().enumerate() {
         let t = match o.observation {
             Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
@@ -214,86 +279,41 @@ pub(crate) fn structure_checks(
     let means: Vec<Vector3<f64>> = units.iter().map(|(s, n, _)| s / *n as f64).collect();
     // Each unit's first sample, the sums freed before the tests' matrices.
     let firsts: Vec<usize> = units.into_iter().map(|(_, _, i)| i).collect();
-    let ssr0: f64 = means.iter().map(|v| v.norm_squared()).sum();
     let joints: Vec<usize> = (0..rows.len())
         .filter(|&j| rows[j].mimic.is_none())
         .collect();
     let k_tests = (joints.len() + 1) as f64;
     let level = alpha / k_tests;
-    let mut out = Vec::new();
-    for &j in &joints {
-        let prismatic = rows[j].kind == JointKind::Prismatic;
-        let q: Vec<f64> = firsts
-            .iter()
-            .map(|i| prep.cal[*i].q.get(j).copied().unwrap_or(0.0))
-            .collect();
-        // The basis of each unit, written in place (a vector per unit was millions of
-        // allocations on a large set).
-        let nb = if prismatic { 3 } else { 5 };
-        let mut x = DMatrix::zeros(q.len(), nb);
-        for (i, &v) in q.iter().enumerate() {
-            x[(i, 0)] = 1.0;
-            if prismatic {
-                x[(i, 1)] = v;
-                x[(i, 2)] = v * v;
-            } else {
-                x[(i, 1)] = v.sin();
-                x[(i, 2)] = v.cos();
-                x[(i, 3)] = (2.0 * v).sin();
-                x[(i, 4)] = (2.0 * v).cos();
-            }
-        }
-        drop(q);
-        let svd = x.svd(true, false);
-        let Some(u) = &svd.u else { continue };
-        let smax = svd.singular_values.max();
-        let rank: Vec<usize> = (0..svd.singular_values.len())
-            .filter(|&i| svd.singular_values[i] > 1e-9 * smax)
-            .collect();
-        let mut explained = 0.0;
-        for a in 0..3 {
-            let y = DVector::from_iterator(means.len(), means.iter().map(|v| v[a]));
-            for &i in &rank {
-                explained += u.column(i).dot(&y).powi(2);
-            }
-        }
-        // The factors (two matrices the size of the basis) freed before the bins.
-        drop(svd);
-        let d1 = (3 * rank.len()) as f64;
-        let d2 = (3.0 * means.len() as f64 - fit.free.len() as f64 - d1).max(1.0);
-        let f = (explained / d1) / ((ssr0 - explained).max(1e-300) / d2);
-        let p = stats::f_sf(f, d1, d2);
-        let res_q: Vec<f64> = prep
-            .cal
-            .iter()
-            .map(|o| o.q.get(j).copied().unwrap_or(0.0))
-            .collect();
-        out.push(StructureCheck {
-            variable: rows[j].name.clone(),
-            statistic: f,
-            p_value: p,
-            significant: p < level,
-            bins: bins(&res_q, &res, 8),
-        });
-    }
+    // The joints' tests are independent: run on every core, gathered in joint order.
+    let check = |j: usize| joint_check(session, fit, j, &means, &firsts, res, level);
+    let mut out: Vec<StructureCheck> =
+        match fit::parallel_map(joints.len(), |k| Ok(check(joints[k]))) {
+            Ok(c) => c.into_iter().flatten().collect(),
+            // Only a worker's panic gets here: compute on this thread instead.
+            Err(_) => joints.iter().filter_map(|&j| check(j)).collect(),
+        };
+    drop((means, firsts));
     // Pose order: pose-mean residuals in order of first appearance.
+    // A slot per group number (a hash map of millions of groups held 170 MB).
     let mut order: Vec<usize> = Vec::new();
-    let mut sums: IndexMap<usize, (Vector3<f64>, usize)> = IndexMap::default();
-    for (i, g) in prep.groups.iter().enumerate() {
-        let e = sums.entry(*g).or_insert_with(|| {
-            order.push(*g);
-            (Vector3::zeros(), 0)
-        });
+    let slots = prep.groups.iter().max().map_or(0, |g| g + 1);
+    let mut sums: Vec<(Vector3<f64>, usize)> = vec![(Vector3::zeros(), 0); slots];
+    for (i, &g) in prep.groups.iter().enumerate() {
+        let e = &mut sums[g];
+        if e.1 == 0 {
+            order.push(g);
+        }
         e.0 += res[i];
         e.1 += 1;
     }
     let means: Vec<Vector3<f64>> = order
         .iter()
-        .map(|g| {
+        .map(|&g| {
             let (s, n) = sums[g];
             s / n.max(1) as f64
         })
         .collect();
+    drop(sums);
     if means.len() >= 4 {
         let a: Vec<f64> = means.windows(2).map(|w| w[0].dot(&w[1])).collect();
         let num: f64 = a.iter().sum();
@@ -312,26 +332,86 @@ pub(crate) fn structure_checks(
     out
 }
 
+/// The test of joint `j` of [`structure_checks`]: whether the pose-mean residuals `means` (of
+/// the units whose first samples are `firsts`) depend on the joint's value, through the
+/// basis `1, sin q, cos q, sin 2q, cos 2q` (`1, q, q²` for a prismatic joint), by an F test
+/// at `level`; the bins of every sample's residual `res` against the joint.
+///
+/// The basis and the means are folded a chunk of units at a time into the triangular factor
+/// `R = [[R₁₁, R₁₂], [0, R₂₂]]` of `[X | Y]` (`X` the basis, `Y` the means; [`fit::Tsqr`]):
+/// `X = Q₁R₁₁` and `Q₁ᵀY = R₁₂`, so the singular values of `X` are those of `R₁₁`, its left
+/// singular vectors `Q₁U` (`R₁₁ = U S Vᵀ`), and the part of `Y` they explain
+/// `Σ‖uᵢᵀR₁₂‖²` over the resolved ones: the same figures as the singular value decomposition
+/// of the whole basis, to rounding, in memory of the factor instead of two matrices the size
+/// of the basis.
+fn joint_check(
+    session: &Session<'_>,
+    fit: &FitOutcome,
+    j: usize,
+    means: &[Vector3<f64>],
+    firsts: &[usize],
+    res: &[Vector3<f64>],
+    level: f64,
+) -> Option<StructureCheck> {
+    let prep = &session.prep;
+    let row = &session.model.tree().rows()[j];
+    let prismatic = row.kind == JointKind::Prismatic;
+    let nb = if prismatic { 3 } else { 5 };
+    let mut qr = fit::Tsqr::new(nb + 3);
+    let mut x = [0.0; 8];
+    for (mean, &i) in means.iter().zip(firsts) {
+        let v = prep.cal[i].q.get(j).copied().unwrap_or(0.0);
+        x[0] = 1.0;
+        if prismatic {
+            x[1] = v;
+            x[2] = v * v;
+        } else {
+            x[1] = v.sin();
+            x[2] = v.cos();
+            x[3] = (2.0 * v).sin();
+            x[4] = (2.0 * v).cos();
+        }
+        x[nb..nb + 3].copy_from_slice(mean.as_slice());
+        qr.push(&x[..nb + 3]);
+    }
+    let r = qr.finish();
+    let r11: DMatrix<f64> = r.view((0, 0), (nb, nb)).into_owned();
+    let svd = r11.svd(true, false);
+    let u = svd.u.as_ref()?;
+    let smax = svd.singular_values.max();
+    let rank: Vec<usize> = (0..svd.singular_values.len())
+        .filter(|&i| svd.singular_values[i] > 1e-9 * smax)
+        .collect();
+    let mut explained = 0.0;
+    for a in 0..3 {
+        let y = r.view((0, nb + a), (nb, 1));
+        for &i in &rank {
+            explained += u.column(i).dot(&y).powi(2);
+        }
+    }
+    let ssr0: f64 = means.iter().map(|v| v.norm_squared()).sum();
+    let d1 = (3 * rank.len()) as f64;
+    let d2 = (3.0 * means.len() as f64 - fit.free.len() as f64 - d1).max(1.0);
+    let f = (explained / d1) / ((ssr0 - explained).max(1e-300) / d2);
+    let p = stats::f_sf(f, d1, d2);
+    let res_q: Vec<f64> = prep
+        .cal
+        .iter()
+        .map(|o| o.q.get(j).copied().unwrap_or(0.0))
+        .collect();
+    Some(StructureCheck {
+        variable: row.name.clone(),
+        statistic: f,
+        p_value: p,
+        significant: p < level,
+        bins: bins(&res_q, res, 8),
+    })
+}
+
 /// The position residuals (model minus measured, metres) of every calibration sample of
 /// `session` at `x`, in parallel segments on a large set (each the same as on one thread).
-fn position_residuals(session: &Session<'_>, x: &[f64]) -> Vec<Vector3<f64>> {
-    let (model, cal) = (&session.model, &session.prep.cal);
-    let one = |o: &crate::model::Observed| {
-        let mut r = [0.0; 6];
-        model.residuals(x, o, &mut r);
-        Vector3::new(r[0], r[1], r[2])
-    };
-    let parts: Vec<&[crate::model::Observed]> = cal.chunks(fit::SEGMENT_BLOCKS).collect();
-    if parts.len() <= 1 {
-        return cal.iter().map(one).collect();
-    }
-    match fit::parallel_map(parts.len(), |k| {
-        Ok(parts[k].iter().map(one).collect::<Vec<_>>())
-    }) {
-        Ok(r) => r.concat(),
-        // Only a worker's panic gets here: compute on this thread instead.
-        Err(_) => cal.iter().map(one).collect(),
-    }
+pub(crate) fn position_residuals(session: &Session<'_>, x: &[f64]) -> Vec<Vector3<f64>> {
+    super::residual_vectors(&session.model, x, &session.prep.cal)
 }
 
 /// A hasher for the integer keys of the pose maps above (rustc's Fx: a rotate, xor and

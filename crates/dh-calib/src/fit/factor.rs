@@ -36,7 +36,7 @@ const CHUNK_BYTES: usize = 192 * 1024;
 /// of `R` and the chunk only (the rows of `R` below `j` are zero in that column), so a chunk
 /// of `m` rows costs `2 m p²` operations, with no copy of the stack. Both are stored by
 /// column, so every reflection runs over contiguous memory.
-pub(super) struct Tsqr {
+pub(crate) struct Tsqr {
     cols: usize,
     pub(super) chunk: usize,
     /// `R`, `cols × cols`, by column: element `(i, k)` at `k · cols + i`.
@@ -47,7 +47,7 @@ pub(super) struct Tsqr {
 }
 
 impl Tsqr {
-    pub(super) fn new(cols: usize) -> Self {
+    pub(crate) fn new(cols: usize) -> Self {
         // Each reflection sweeps the chunk's later columns: a chunk of CHUNK_BYTES stays in a
         // core's L2 cache across the sweeps (at least 64 rows, so that R's share of the work,
         // p² per chunk, stays small against 2 m p²).
@@ -61,7 +61,7 @@ impl Tsqr {
         }
     }
 
-    pub(super) fn push(&mut self, row: &[f64]) {
+    pub(crate) fn push(&mut self, row: &[f64]) {
         if self.filled == self.chunk {
             self.flush();
         }
@@ -104,7 +104,7 @@ impl Tsqr {
         self.filled = 0;
     }
 
-    pub(super) fn finish(mut self) -> DMatrix<f64> {
+    pub(crate) fn finish(mut self) -> DMatrix<f64> {
         self.flush();
         DMatrix::from_column_slice(self.cols, self.cols, &self.r)
     }

@@ -36,8 +36,8 @@ mod solve;
 mod tests;
 
 pub use error::CalibError;
-pub(crate) use factor::parallel_map;
 pub use factor::{factor, sum_of_squares, Factor, SEGMENT_BLOCKS};
+pub(crate) use factor::{parallel_map, Tsqr};
 pub use identify::{
     identifiability, identifiability_above, numeric_jacobian, Fixed, Identifiability,
     ALIAS_THRESHOLD,
