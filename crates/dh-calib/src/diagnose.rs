@@ -62,8 +62,7 @@ use dh_core::DhTable;
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::calibrate::{
-    residual_test, structure_checks, verdict, CalibrationOptions, Folds, Report, Session,
-    StepReport, Validation,
+    residual_test, verdict, CalibrationOptions, Folds, Report, Session, StepReport, Validation,
 };
 use crate::data::Measurements;
 use crate::effects::{self, EffectContext};

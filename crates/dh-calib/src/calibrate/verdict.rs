@@ -42,7 +42,7 @@ pub(crate) fn verdict_with(
     res: &[Vector3<f64>],
 ) -> Verdict {
     let test = residual_test_in(session, fit, alpha, Some(res));
-    let structure = structure_checks_with(session, fit, alpha, res);
+    let structure = structure_checks(session, fit, alpha, res);
     let ratio = floor.filter(|f| f.rms > 0.0).map(|f| rms / f.rms);
     let complete = (test.kind != NoiseTest::None).then_some(!test.significant);
     let summary = match (complete, ratio) {
@@ -230,18 +230,9 @@ fn residual_test_in(
     }
 }
 
-pub(crate) fn structure_checks(
-    session: &Session<'_>,
-    fit: &FitOutcome,
-    alpha: f64,
-) -> Vec<StructureCheck> {
-    let res = position_residuals(session, &fit.x);
-    structure_checks_with(session, fit, alpha, &res)
-}
-
-/// [`structure_checks`] given the position residuals `res` of every calibration sample at
-/// `fit.x` ([`position_residuals`]).
-fn structure_checks_with(
+/// The residual's structure at `fit` (step 5 of the verdict), given the position residuals
+/// `res` of every calibration sample at `fit.x` ([`position_residuals`]).
+fn structure_checks(
     session: &Session<'_>,
     fit: &FitOutcome,
     alpha: f64,

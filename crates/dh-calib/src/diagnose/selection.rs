@@ -494,14 +494,6 @@ fn diagnose_judged(
             next.val_rms_before = val_rms;
         }
     }
-    let structure = structure_checks(&session, &last, diag.alpha);
-    for s in structure.iter().filter(|s| s.significant) {
-        notes.push(format!(
-            "structure remains that no candidate explains: the residual depends on {} \
-             (statistic {:.3}, p = {:.2e}); see its bins",
-            s.variable, s.statistic, s.p_value
-        ));
-    }
     let effect_parameters = effect_estimates(&session.model, &last, &selected);
     let hidden: Vec<usize> = all_effects
         .iter()
@@ -519,6 +511,16 @@ fn diagnose_judged(
             report.rms_after,
             &report.selected_effects,
         );
+    }
+    // The verdict's structure checks are those of the final fit at `diag.alpha`: the
+    // diagnosis reads them rather than running them again.
+    let structure = report.verdict.structure.clone();
+    for s in structure.iter().filter(|s| s.significant) {
+        notes.push(format!(
+            "structure remains that no candidate explains: the residual depends on {} \
+             (statistic {:.3}, p = {:.2e}); see its bins",
+            s.variable, s.statistic, s.p_value
+        ));
     }
     crate::calibrate::attach_outliers(&mut report, scan);
     report.candidates = first_table;
