@@ -280,7 +280,8 @@ fn structure_checks(
     let mut out: Vec<StructureCheck> =
         match fit::parallel_map(joints.len(), |k| Ok(check(joints[k]))) {
             Ok(c) => c.into_iter().flatten().collect(),
-            // Only a worker's panic gets here: compute on this thread instead.
+            // Only a lost result gets here (a worker's panic reaches the caller): compute on
+            // this thread instead.
             Err(_) => joints.iter().filter_map(|&j| check(j)).collect(),
         };
     drop((means, firsts));
