@@ -56,6 +56,29 @@ pub fn map<T: Send>(count: usize, work: impl Fn(usize) -> T + Sync) -> Option<Ve
     try_map(count, |k| Ok(work(k)), || ()).ok()
 }
 
+/// `consume` on the calling thread, reading in order what `produce` makes at the same time on
+/// a second thread: `produce` hands each item to `send`, which returns `false` once `consume`
+/// has stopped reading (then `produce` should return). At most `capacity` items wait between
+/// the two, so memory stays bounded whatever the number of items.
+///
+/// For a producer that must run in order (a stateful oracle, a random sequence) beside work
+/// that can overlap it. `consume` sees the items `produce` sent before it returned; a panic in
+/// either reaches the caller, as from any scoped thread.
+pub fn pipeline<T: Send, R>(
+    capacity: usize,
+    produce: impl FnOnce(&mut dyn FnMut(T) -> bool) + Send,
+    consume: impl FnOnce(&mut dyn Iterator<Item = T>) -> R,
+) -> R {
+    let (tx, rx) = std::sync::mpsc::sync_channel(capacity.max(1));
+    std::thread::scope(|scope| {
+        scope.spawn(move || produce(&mut |item| tx.send(item).is_ok()));
+        let out = consume(&mut rx.iter());
+        // Dropping the receiver before the scope joins ends a producer blocked on a full channel.
+        drop(rx);
+        out
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -68,5 +91,37 @@ mod tests {
             try_map(100, |k| if k % 30 == 29 { Err(k) } else { Ok(k) }, || 0);
         assert_eq!(r, Err(29));
         assert_eq!(map(0, |k| k), Some(vec![]));
+    }
+
+    #[test]
+    fn a_pipeline_reads_in_order_and_stops_its_producer() {
+        let all: Vec<usize> = pipeline(
+            2,
+            |send| {
+                for k in 0..1000 {
+                    if !send(k) {
+                        return;
+                    }
+                }
+            },
+            |items| items.collect(),
+        );
+        assert_eq!(all, (0..1000).collect::<Vec<_>>());
+        // A consumer that stops early: the producer sees `false` and the call returns.
+        let sent = AtomicUsize::new(0);
+        let first: Vec<usize> = pipeline(
+            1,
+            |send| {
+                for k in 0.. {
+                    if !send(k) {
+                        return;
+                    }
+                    sent.fetch_add(1, Ordering::Relaxed);
+                }
+            },
+            |items| items.take(3).collect(),
+        );
+        assert_eq!(first, vec![0, 1, 2]);
+        assert!(sent.load(Ordering::Relaxed) >= 3);
     }
 }

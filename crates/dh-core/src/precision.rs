@@ -117,6 +117,14 @@ pub fn written_bound(table: &DhTable, precision: Precision) -> Bound {
     }
 }
 
+/// Joint evaluations (rows times samples) from which [`compare_written`] runs its oracle on a
+/// second thread; below, one thread does both sides (a thread costs more than the work).
+pub const PIPELINE_MIN_JOINTS: usize = 100_000;
+/// Joint evaluations of the oracle sent to the written side at a time.
+const PIPELINE_BLOCK_JOINTS: usize = 20_000;
+/// Blocks of oracle poses that may wait for the written side.
+const PIPELINE_BLOCKS: usize = 4;
+
 /// Compares a `written` table (read back from what was written) with `oracle` at `samples`
 /// joint values drawn from the `source` table it was written from ([`JointSampler`] with
 /// `seed`, the same draws as [`crate::compare`] on `source`).
@@ -131,12 +139,28 @@ pub fn written_bound(table: &DhTable, precision: Precision) -> Bound {
 pub fn compare_written<F>(
     written: &DhTable,
     source: &DhTable,
-    mut oracle: F,
+    oracle: F,
     samples: usize,
     seed: u64,
 ) -> Result<Deviation, CoreError>
 where
-    F: FnMut(&[f64]) -> Isometry3<f64>,
+    F: FnMut(&[f64]) -> Isometry3<f64> + Send,
+{
+    compare_written_from(written, source, oracle, samples, seed, PIPELINE_MIN_JOINTS)
+}
+
+/// [`compare_written`] with the oracle on a second thread from `pipeline_from` joint
+/// evaluations (the tests compare both ways on one chain).
+fn compare_written_from<F>(
+    written: &DhTable,
+    source: &DhTable,
+    mut oracle: F,
+    samples: usize,
+    seed: u64,
+    pipeline_from: usize,
+) -> Result<Deviation, CoreError>
+where
+    F: FnMut(&[f64]) -> Isometry3<f64> + Send,
 {
     let n = source.rows.len();
     if written.rows.len() != n {
@@ -157,14 +181,14 @@ where
             (driver != i).then_some((driver, m.multiplier, m.offset))
         })
         .collect();
-    let mut sampler = JointSampler::new(&source.rows, source.size(), seed);
+    let sampler = JointSampler::new(&source.rows, source.size(), seed);
     let prepared = written.prepare();
-    // Buffers reused by every sample: the source's values, the written rows' values, and
-    // which written values are known.
-    let (mut q, mut qw, mut done) = (Vec::with_capacity(n), vec![0.0; n], vec![true; n]);
-    let mut dev = Deviation::new();
-    for _ in 0..samples.max(1) {
-        sampler.next_into(&mut q);
+    let count = samples.max(1);
+    // The written side of sample `k`: the source's values in `q`, the written rows' values and
+    // which of them are known in the buffers.
+    let mut qw = vec![0.0; n];
+    let mut done = vec![true; n];
+    let mut written_pose = |q: &[f64]| -> Result<Isometry3<f64>, CoreError> {
         for (i, f) in follows.iter().enumerate() {
             qw[i] = q[i];
             done[i] = f.is_none();
@@ -185,8 +209,49 @@ where
                 break;
             }
         }
-        dev.record(pose_error(&prepared.fk(&qw)?, &oracle(&q)));
+        prepared.fk(&qw)
+    };
+    let mut dev = Deviation::new();
+    let mut q = Vec::with_capacity(n);
+    if n.saturating_mul(count) < pipeline_from {
+        let mut sampler = sampler;
+        for _ in 0..count {
+            sampler.next_into(&mut q);
+            dev.record(pose_error(&written_pose(&q)?, &oracle(&q)));
+        }
+        return Ok(dev);
     }
+    // A long proof: the oracle runs through the same draws on a second thread while this one
+    // evaluates the written table, their poses paired in sample order (the same figures).
+    let mut theirs = sampler.clone();
+    crate::parallel::pipeline(
+        PIPELINE_BLOCKS,
+        move |send| {
+            let block = (PIPELINE_BLOCK_JOINTS / n).max(1);
+            let (mut q, mut poses) = (Vec::with_capacity(n), Vec::with_capacity(block));
+            for k in 0..count {
+                theirs.next_into(&mut q);
+                poses.push(oracle(&q));
+                if (poses.len() == block || k + 1 == count)
+                    && !send(std::mem::replace(&mut poses, Vec::with_capacity(block)))
+                {
+                    return;
+                }
+            }
+        },
+        |blocks| -> Result<(), CoreError> {
+            let mut sampler = sampler;
+            let mut poses = blocks.flatten();
+            for _ in 0..count {
+                sampler.next_into(&mut q);
+                let mine = written_pose(&q)?;
+                // No pose means the oracle's thread panicked: the scope re-raises that panic.
+                let Some(theirs) = poses.next() else { break };
+                dev.record(pose_error(&mine, &theirs));
+            }
+            Ok(())
+        },
+    )?;
     Ok(dev)
 }
 
@@ -272,6 +337,58 @@ mod tests {
             if p.length > 0.0 {
                 assert!(worst.0 > bound.position / 20.0, "{worst:?} vs {bound:?}");
             }
+        }
+    }
+
+    #[test]
+    fn the_oracle_on_its_own_thread_gives_the_same_figures_in_order() {
+        // 60 rows (the arm's four, its mimic row included, fifteen times), 700 samples: 42 000
+        // joint evaluations, several blocks of oracle poses.
+        let arm = arm();
+        let mut t = arm.clone();
+        t.rows = (0..15)
+            .flat_map(|k| {
+                arm.rows.iter().map(move |r| {
+                    let mut r = r.clone();
+                    r.name = format!("{}_{k}", r.name);
+                    if let Some(m) = &mut r.mimic {
+                        m.joint = format!("{}_{k}", m.joint);
+                    }
+                    r
+                })
+            })
+            .collect();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let w = perturbed(&t, Precision::rounded(0.5e-6, 0.5e-6), &mut rng);
+        let source = t.prepare();
+        let run = |pipeline_from: usize| {
+            let mut seen = Vec::new();
+            let dev = compare_written_from(
+                &w,
+                &t,
+                |q: &[f64]| {
+                    seen.push(q.to_vec());
+                    source.fk(q).unwrap_or_default()
+                },
+                700,
+                9,
+                pipeline_from,
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+            (dev, seen)
+        };
+        let (one, seen_one) = run(usize::MAX);
+        let (two, seen_two) = run(0);
+        assert_eq!(one, two);
+        assert_eq!(one.samples, 700);
+        assert!(one.max_position_error > 0.0);
+        // The oracle saw every sample once, in the sampler's order, on either path.
+        assert_eq!(seen_one, seen_two);
+        let mut sampler = JointSampler::new(&t.rows, t.size(), 9);
+        let mut q = Vec::new();
+        for seen in &seen_one {
+            sampler.next_into(&mut q);
+            assert_eq!(seen, &q);
         }
     }
 

@@ -100,7 +100,7 @@ pub fn prove_extracted_with<F>(
     mut oracle: F,
 ) -> Result<(String, bool)>
 where
-    F: FnMut(&Chain, &[f64]) -> nalgebra::Isometry3<f64>,
+    F: FnMut(&Chain, &[f64]) -> nalgebra::Isometry3<f64> + Send,
 {
     let Extracted {
         chain,

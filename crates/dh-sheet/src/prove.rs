@@ -77,7 +77,7 @@ pub fn prove<F>(
     source: Source<'_, F>,
 ) -> Result<(String, bool)>
 where
-    F: FnMut(&[f64]) -> Isometry3<f64>,
+    F: FnMut(&[f64]) -> Isometry3<f64> + Send,
 {
     let size = source.table.size();
     if size > MAX_PROVABLE_SIZE {
@@ -131,7 +131,11 @@ where
         passed,
         against: source.against,
     });
-    let last = render_sheet_at(doc, format, extra)?;
+    let last = match (format, &doc.verification) {
+        // The text table ends with the verification line: the table proved, then that line.
+        (Format::Text, Some(v)) => first + &crate::render::verification_line(v),
+        _ => render_sheet_at(doc, format, extra)?,
+    };
     // What was proved must be what is written: the verification is attached after the table.
     ensure!(
         table_of(&last, format, free)? == written,

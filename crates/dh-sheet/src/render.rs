@@ -132,31 +132,31 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
         let _ = write!(s, "  {h:>13}");
     }
     let _ = writeln!(s, "  coupling");
-    for (i, j) in doc.joints.iter().enumerate() {
-        let lu = limit_unit(doc, j);
-        let kind = match j.kind {
-            JointType::Revolute => "revolute",
-            JointType::Prismatic => "prismatic",
-        };
-        let lim =
-            |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{} {lu}", num(v, lu)));
-        let cells = [
-            num_at(j.theta, a, extra),
-            num_at(j.d, l, extra),
-            num_at(j.a, l, extra),
-            num_at(j.alpha, a, extra),
-            lim(j.lower),
-            lim(j.upper),
-        ];
-        let name = crate::text::escape(&j.name);
-        let _ = write!(s, "{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
-        for c in &cells {
-            let _ = write!(s, "  {c:>13}");
-        }
-        let _ = writeln!(s, "  {}", coupling(doc, j, extra)).map(|_| ());
-    }
     // Trailing spaces from an empty coupling column would make diffs noisy.
     s = s.lines().map(str::trim_end).collect::<Vec<_>>().join("\n") + "\n";
+    let rows = |range: std::ops::Range<usize>| {
+        let mut s = String::new();
+        for (i, j) in doc.joints[range.clone()].iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "{}",
+                row_line(doc, range.start + i, j, name_w, extra).trim_end()
+            );
+        }
+        s
+    };
+    let n = doc.joints.len();
+    if n <= ROWS_PER_PART {
+        s += &rows(0..n);
+    } else {
+        // A long table's rows in parts on the machine's cores, joined in order.
+        let parts = n.div_ceil(ROWS_PER_PART);
+        let part = |k: usize| rows(k * ROWS_PER_PART..((k + 1) * ROWS_PER_PART).min(n));
+        match dh_core::parallel::map(parts, part) {
+            Some(parts) => parts.iter().for_each(|p| s += p),
+            None => s += &rows(0..n),
+        }
+    }
     let pose = |name: &str, what: &str, p: &Option<crate::sheet::PoseDoc>| match p {
         Some(p) => format!(
             "{name:<5} {what}: xyz [{l}] {} {} {}   rpy [{a}] {} {} {}\n",
@@ -170,7 +170,6 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
         None => format!("{name:<5} {what}: not given\n"),
     };
     s += &tilts_and_effects(doc, "", Some(extra));
-    let n = doc.joints.len();
     let base_link = doc.base_link.as_deref().unwrap_or("base link");
     let tip_link = doc.tip_link.as_deref().unwrap_or("tip link");
     s += &pose("base", &format!("DH frame 0 in {base_link}"), &doc.base);
@@ -213,20 +212,55 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
         );
     }
     if let Some(v) = &doc.verification {
-        let _ = writeln!(
-            s,
-            "verification of this table as written: {} joint samples (seed {}) against {}: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {}",
-            v.samples,
-            v.seed,
-            v.against.as_deref().unwrap_or("the URDF"),
-            v.max_position_error,
-            v.position_bound,
-            v.max_orientation_error,
-            v.orientation_bound,
-            if v.passed { "PASS" } else { "FAIL" }
-        );
+        s += &verification_line(v);
     }
     s
+}
+
+/// Rows of the text table rendered in one part (of a long table's parts on the cores).
+const ROWS_PER_PART: usize = 2000;
+
+/// Row `i` (0-based) of the text table, its name column `name_w` wide (trailing spaces kept).
+fn row_line(doc: &SheetDoc, i: usize, j: &JointDoc, name_w: usize, extra: usize) -> String {
+    let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
+    let lu = limit_unit(doc, j);
+    let kind = match j.kind {
+        JointType::Revolute => "revolute",
+        JointType::Prismatic => "prismatic",
+    };
+    let lim =
+        |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{} {lu}", num(v, lu)));
+    let cells = [
+        num_at(j.theta, a, extra),
+        num_at(j.d, l, extra),
+        num_at(j.a, l, extra),
+        num_at(j.alpha, a, extra),
+        lim(j.lower),
+        lim(j.upper),
+    ];
+    let name = crate::text::escape(&j.name);
+    let mut s = format!("{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
+    for c in &cells {
+        let _ = write!(s, "  {c:>13}");
+    }
+    let _ = write!(s, "  {}", coupling(doc, j, extra));
+    s
+}
+
+/// The text table's last line: the verification of the table as written. [`text`] ends with
+/// it, so that a proof appends it to the text it proved instead of writing the table again.
+pub(crate) fn verification_line(v: &crate::sheet::VerificationDoc) -> String {
+    format!(
+        "verification of this table as written: {} joint samples (seed {}) against {}: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {}\n",
+        v.samples,
+        v.seed,
+        v.against.as_deref().unwrap_or("the URDF"),
+        v.max_position_error,
+        v.position_bound,
+        v.max_orientation_error,
+        v.orientation_bound,
+        if v.passed { "PASS" } else { "FAIL" }
+    )
 }
 
 /// How the line of the rows' tilts starts (after the CSV's `# `); [`crate::read_back`] reads it.
