@@ -149,18 +149,77 @@ pub fn bound_for_print(x: f64) -> f64 {
     }
 }
 
-/// `x` rounded to `decimals` decimal places (through decimal text, so the result is the double
-/// nearest the rounded decimal and prints in its shortest form).
+/// `x` rounded to `decimals` decimal places: the double nearest the rounded decimal (what
+/// printing `x` with that many decimals and reading the text back gives), which prints in its
+/// shortest form.
+///
+/// Fast path: with `p = 10^decimals` exact, `k = round(x p)` is the rounded decimal's integer
+/// when `x p` is far (more than two of its ulps) from a half, and `k / p`, one correctly
+/// rounded division of exact operands, is the double nearest `k 10^-decimals`. Otherwise (a
+/// value at a half, more than 2^51 in units of the last decimal, more than 22 decimals) it
+/// goes through the decimal text.
 pub fn round_decimals(x: f64, decimals: usize) -> f64 {
     if !x.is_finite() {
         return x;
     }
+    if decimals <= 22 {
+        let p = 10f64.powi(decimals as i32);
+        let y = x * p;
+        if y.abs() < FAST_ROUNDING_LIMIT {
+            let ulp = f64::from_bits(y.abs().to_bits() + 1) - y.abs();
+            let from_half = ((y - y.trunc()).abs() - 0.5).abs();
+            if from_half > 2.0 * ulp {
+                return y.round() / p;
+            }
+        }
+    }
     format!("{x:.decimals$}").parse().unwrap_or(x)
 }
+
+/// Largest value, in units of the last decimal kept, that [`round_decimals`] rounds without
+/// text: 2^51, so that the rounded integer and its distance from a half are exact.
+const FAST_ROUNDING_LIMIT: f64 = 2_251_799_813_685_248.0;
 
 #[cfg(test)]
 mod tests {
     use super::bound_for_print;
+
+    /// The text route, as it was before the fast path.
+    fn through_text(x: f64, decimals: usize) -> f64 {
+        format!("{x:.decimals$}").parse().unwrap_or(x)
+    }
+
+    #[test]
+    fn rounding_without_text_gives_the_texts_bits() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.6000000000000001,
+            -1e-15,
+            1e-300,
+            2.5e-12,
+            0.5e-12,
+        ];
+        for _ in 0..200_000 {
+            let scale = 10f64.powi(rng.random_range(-16..16));
+            values.push(rng.random_range(-1.0..1.0) * scale);
+        }
+        // Values at a half of the last decimal (as near as doubles get) and next to it.
+        for k in 0..2000 {
+            let x = (k as f64 + 0.5) * 1e-12 * if k % 2 == 0 { 1.0 } else { -1.0 };
+            values.extend([x, x.next_up(), x.next_down()]);
+            let y = (k as f64 * 1.37 + 0.5) * 1e-9;
+            values.extend([y, y.next_up(), y.next_down()]);
+        }
+        for x in values {
+            for d in [0, 3, 6, 9, 10, 12, 15, 17, 22, 25] {
+                let (fast, text) = (super::round_decimals(x, d), through_text(x, d));
+                assert_eq!(fast.to_bits(), text.to_bits(), "{x:e} to {d} decimals");
+            }
+        }
+    }
 
     #[test]
     fn bounds_round_up_to_two_digits() {
