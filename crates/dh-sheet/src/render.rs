@@ -65,7 +65,7 @@ fn num(v: f64, unit: &str) -> String {
 
 /// Formats `v` with `extra` decimals more than its unit deserves, `-0` printed as `0`.
 fn num_at(v: f64, unit: &str, extra: usize) -> String {
-    let s = format!("{:.*}", decimals(unit) + extra, v);
+    let s = crate::units::format_fixed(v, decimals(unit) + extra);
     if s.trim_start_matches('-')
         .chars()
         .all(|c| c == '0' || c == '.')

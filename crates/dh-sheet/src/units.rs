@@ -162,18 +162,43 @@ pub fn round_decimals(x: f64, decimals: usize) -> f64 {
     if !x.is_finite() {
         return x;
     }
-    if decimals <= 22 {
-        let p = 10f64.powi(decimals as i32);
-        let y = x * p;
-        if y.abs() < FAST_ROUNDING_LIMIT {
-            let ulp = f64::from_bits(y.abs().to_bits() + 1) - y.abs();
-            let from_half = ((y - y.trunc()).abs() - 0.5).abs();
-            if from_half > 2.0 * ulp {
-                return y.round() / p;
-            }
-        }
+    match in_last_decimals(x, decimals) {
+        Some(k) => k / 10f64.powi(decimals as i32),
+        None => format!("{x:.decimals$}").parse().unwrap_or(x),
     }
-    format!("{x:.decimals$}").parse().unwrap_or(x)
+}
+
+/// `x` printed with `decimals` decimal places, the text of `format!("{x:.decimals$}")` (the
+/// exact value rounded half to even, the sign of a negative value kept when it rounds to
+/// zero), made from the integer of [`in_last_decimals`] when there is one.
+pub fn format_fixed(x: f64, decimals: usize) -> String {
+    let k = match in_last_decimals(x, decimals) {
+        Some(k) if decimals <= 18 => k.abs() as u64,
+        _ => return format!("{x:.decimals$}"),
+    };
+    let unit = 10u64.pow(decimals as u32);
+    let sign = if x.is_sign_negative() { "-" } else { "" };
+    if decimals == 0 {
+        format!("{sign}{k}")
+    } else {
+        format!("{sign}{}.{:0decimals$}", k / unit, k % unit)
+    }
+}
+
+/// `x 10^decimals` rounded to an integer, when that integer is the one decimal rounding of
+/// `x`'s exact value gives for certain: `10^decimals` is exact (at most 22 decimals), the
+/// product is below [`FAST_ROUNDING_LIMIT`] and more than two of its ulps from a half.
+fn in_last_decimals(x: f64, decimals: usize) -> Option<f64> {
+    if !x.is_finite() || decimals > 22 {
+        return None;
+    }
+    let y = x * 10f64.powi(decimals as i32);
+    if y.abs() >= FAST_ROUNDING_LIMIT {
+        return None;
+    }
+    let ulp = f64::from_bits(y.abs().to_bits() + 1) - y.abs();
+    let from_half = ((y - y.trunc()).abs() - 0.5).abs();
+    (from_half > 2.0 * ulp).then(|| y.round())
 }
 
 /// Largest value, in units of the last decimal kept, that [`round_decimals`] rounds without
@@ -217,6 +242,7 @@ mod tests {
             for d in [0, 3, 6, 9, 10, 12, 15, 17, 22, 25] {
                 let (fast, text) = (super::round_decimals(x, d), through_text(x, d));
                 assert_eq!(fast.to_bits(), text.to_bits(), "{x:e} to {d} decimals");
+                assert_eq!(super::format_fixed(x, d), format!("{x:.d$}"), "{x:e}");
             }
         }
     }
