@@ -125,6 +125,23 @@ const PIPELINE_BLOCK_JOINTS: usize = 20_000;
 /// Blocks of oracle poses that may wait for the written side.
 const PIPELINE_BLOCKS: usize = 4;
 
+/// Samples drawn and evaluated by [`compare_written`]'s oracle, sent to the written side.
+struct SampleBlock {
+    /// Joint values of sample `k` at `q[k * n..(k + 1) * n]`.
+    q: Vec<f64>,
+    /// The oracle's pose at each sample.
+    poses: Vec<Isometry3<f64>>,
+}
+
+impl SampleBlock {
+    fn with_capacity(samples: usize, n: usize) -> SampleBlock {
+        SampleBlock {
+            q: Vec::with_capacity(samples * n),
+            poses: Vec::with_capacity(samples),
+        }
+    }
+}
+
 /// Compares a `written` table (read back from what was written) with `oracle` at `samples`
 /// joint values drawn from the `source` table it was written from ([`JointSampler`] with
 /// `seed`, the same draws as [`crate::compare`] on `source`).
@@ -212,42 +229,43 @@ where
         prepared.fk(&qw)
     };
     let mut dev = Deviation::new();
-    let mut q = Vec::with_capacity(n);
-    if n.saturating_mul(count) < pipeline_from {
-        let mut sampler = sampler;
+    if n == 0 || n.saturating_mul(count) < pipeline_from {
+        let (mut sampler, mut q) = (sampler, Vec::with_capacity(n));
         for _ in 0..count {
             sampler.next_into(&mut q);
             dev.record(pose_error(&written_pose(&q)?, &oracle(&q)));
         }
         return Ok(dev);
     }
-    // A long proof: the oracle runs through the same draws on a second thread while this one
-    // evaluates the written table, their poses paired in sample order (the same figures).
-    let mut theirs = sampler.clone();
+    // A long proof: the oracle draws the samples and evaluates them on a second thread while
+    // this one evaluates the written table at the same draws (sent with the oracle's poses, a
+    // block at a time), their poses paired in sample order (the same figures).
+    let mut sampler = sampler;
     crate::parallel::pipeline(
         PIPELINE_BLOCKS,
         move |send| {
             let block = (PIPELINE_BLOCK_JOINTS / n).max(1);
-            let (mut q, mut poses) = (Vec::with_capacity(n), Vec::with_capacity(block));
+            let mut q = Vec::with_capacity(n);
+            let mut drawn = SampleBlock::with_capacity(block, n);
             for k in 0..count {
-                theirs.next_into(&mut q);
-                poses.push(oracle(&q));
-                if (poses.len() == block || k + 1 == count)
-                    && !send(std::mem::replace(&mut poses, Vec::with_capacity(block)))
+                sampler.next_into(&mut q);
+                drawn.poses.push(oracle(&q));
+                drawn.q.extend_from_slice(&q);
+                if (drawn.poses.len() == block || k + 1 == count)
+                    && !send(std::mem::replace(
+                        &mut drawn,
+                        SampleBlock::with_capacity(block, n),
+                    ))
                 {
                     return;
                 }
             }
         },
         |blocks| -> Result<(), CoreError> {
-            let mut sampler = sampler;
-            let mut poses = blocks.flatten();
-            for _ in 0..count {
-                sampler.next_into(&mut q);
-                let mine = written_pose(&q)?;
-                // No pose means the oracle's thread panicked: the scope re-raises that panic.
-                let Some(theirs) = poses.next() else { break };
-                dev.record(pose_error(&mine, &theirs));
+            for drawn in blocks {
+                for (q, theirs) in drawn.q.chunks_exact(n).zip(&drawn.poses) {
+                    dev.record(pose_error(&written_pose(q)?, theirs));
+                }
             }
             Ok(())
         },
