@@ -64,7 +64,9 @@ pub struct Source<'a, F> {
 }
 
 /// Renders `doc` in `format`, reads the text back, compares that table with the source and
-/// renders again with the verification attached; returns the final text and whether it passed.
+/// attaches the verification: appended to the proved text when it comes last (text, YAML;
+/// [`verification_after`]), else by rendering again and checking that the new text reads back
+/// as the same table. Returns the final text and whether it passed.
 /// A base or tool the document leaves out (free) is taken from `free` when comparing.
 ///
 /// # Errors
@@ -131,17 +133,41 @@ where
         passed,
         against: source.against,
     });
-    let last = match (format, &doc.verification) {
-        // The text table ends with the verification line: the table proved, then that line.
-        (Format::Text, Some(v)) => first + &crate::render::verification_line(v),
-        _ => render_sheet_at(doc, format, extra)?,
+    let last = match verification_after(doc, format)? {
+        // The text proved, then its verification: the bytes read back above, and a last line
+        // (text) or top-level key (YAML) that adds nothing to the table.
+        Some(tail) => first + &tail,
+        None => {
+            let last = render_sheet_at(doc, format, extra)?;
+            // What was proved must be what is written.
+            ensure!(
+                table_of(&last, format, free)? == written,
+                "internal error: the {format:?} output reads back differently once verified"
+            );
+            last
+        }
     };
-    // What was proved must be what is written: the verification is attached after the table.
-    ensure!(
-        table_of(&last, format, free)? == written,
-        "internal error: the {format:?} output reads back differently once verified"
-    );
     Ok((last, passed))
+}
+
+/// What the rendering of `doc` (with its verification) adds to the rendering without it, when
+/// that is all it adds at the end: the text table's verification line, or the YAML sheet's
+/// `verification` key when no key follows it. `None` for the other formats.
+fn verification_after(doc: &SheetDoc, format: Format) -> Result<Option<String>> {
+    #[derive(serde::Serialize)]
+    struct Tail<'a> {
+        verification: &'a VerificationDoc,
+    }
+    let Some(v) = &doc.verification else {
+        return Ok(None);
+    };
+    Ok(match format {
+        Format::Text => Some(crate::render::verification_line(v)),
+        Format::Yaml if doc.cpa.is_none() && doc.calibration.is_none() && doc.truth.is_none() => {
+            Some(serde_yaml::to_string(&Tail { verification: v })?)
+        }
+        _ => None,
+    })
 }
 
 /// The largest chain (metres, [`DhTable::size`]) whose written table can be proved: float
@@ -282,6 +308,36 @@ mod tests {
                 )
                 .unwrap_or_else(|e| panic!("{format:?} {l:?} {a:?}: {e:#}"));
                 assert!(passed, "{format:?} {l:?} {a:?}:\n{text}");
+                // A verification appended to the proved text is what the writer writes.
+                let extra = extra_decimals(&t, format, l, a);
+                let whole =
+                    render_sheet_at(&doc, format, extra).unwrap_or_else(|e| panic!("{e:#}"));
+                assert_eq!(text, whole, "{format:?} {l:?} {a:?}");
+                let appended = verification_after(&doc, format).unwrap_or_else(|e| panic!("{e:#}"));
+                assert_eq!(
+                    appended.is_some(),
+                    matches!(format, Format::Text | Format::Yaml),
+                    "{format:?}"
+                );
+                assert_eq!(
+                    table_of(&text, format, &free(&t)).unwrap_or_else(|e| panic!("{e:#}")),
+                    table_of(
+                        &render_sheet_at(
+                            &{
+                                let mut d = doc.clone();
+                                d.verification = None;
+                                d
+                            },
+                            format,
+                            extra
+                        )
+                        .unwrap_or_else(|e| panic!("{e:#}")),
+                        format,
+                        &free(&t)
+                    )
+                    .unwrap_or_else(|e| panic!("{e:#}")),
+                    "{format:?}: the verification changes what is read"
+                );
                 let back = read_back(&text, format).unwrap_or_else(|e| panic!("{e:#}"));
                 assert_eq!(back.joints.len(), 4);
                 assert_eq!(back.joints[0].name, "j 1|a", "{format:?}");
