@@ -133,10 +133,10 @@ where
         passed,
         against: source.against,
     });
-    let last = match verification_after(doc, format)? {
+    let last = match verification_after(doc, format, &first)? {
         // The text proved, then its verification: the bytes read back above, and a last line
-        // (text) or top-level key (YAML) that adds nothing to the table.
-        Some(tail) => first + &tail,
+        // (text) or top-level key (YAML, JSON) that adds nothing to the table.
+        Some(tail) => tail,
         None => {
             let last = render_sheet_at(doc, format, extra)?;
             // What was proved must be what is written.
@@ -150,10 +150,11 @@ where
     Ok((last, passed))
 }
 
-/// What the rendering of `doc` (with its verification) adds to the rendering without it, when
-/// that is all it adds at the end: the text table's verification line, or the YAML sheet's
-/// `verification` key when no key follows it. `None` for the other formats.
-fn verification_after(doc: &SheetDoc, format: Format) -> Result<Option<String>> {
+/// The rendering of `doc` (with its verification) made from `first`, its rendering without
+/// the verification, when the verification is all it adds at the end: the text table's last
+/// line, or the YAML or JSON sheet's last top-level key (no key follows it). `None` for the
+/// other formats and documents.
+fn verification_after(doc: &SheetDoc, format: Format, first: &str) -> Result<Option<String>> {
     #[derive(serde::Serialize)]
     struct Tail<'a> {
         verification: &'a VerificationDoc,
@@ -161,10 +162,20 @@ fn verification_after(doc: &SheetDoc, format: Format) -> Result<Option<String>> 
     let Some(v) = &doc.verification else {
         return Ok(None);
     };
+    let last_key = doc.cpa.is_none() && doc.calibration.is_none() && doc.truth.is_none();
     Ok(match format {
-        Format::Text => Some(crate::render::verification_line(v)),
-        Format::Yaml if doc.cpa.is_none() && doc.calibration.is_none() && doc.truth.is_none() => {
-            Some(serde_yaml::to_string(&Tail { verification: v })?)
+        Format::Text => Some(first.to_owned() + &crate::render::verification_line(v)),
+        Format::Yaml if last_key => {
+            Some(first.to_owned() + &serde_yaml::to_string(&Tail { verification: v })?)
+        }
+        Format::Json if last_key => {
+            // `{ ... "warnings": [] }` and `{ "verification": { ... } }`, pretty-printed alike:
+            // the key's lines go before the closing brace.
+            let tail = serde_json::to_string_pretty(&Tail { verification: v })?;
+            match (first.strip_suffix("\n}\n"), tail.strip_prefix("{\n")) {
+                (Some(head), Some(key)) => Some(format!("{head},\n{key}\n")),
+                _ => None,
+            }
         }
         _ => None,
     })
@@ -313,30 +324,27 @@ mod tests {
                 let whole =
                     render_sheet_at(&doc, format, extra).unwrap_or_else(|e| panic!("{e:#}"));
                 assert_eq!(text, whole, "{format:?} {l:?} {a:?}");
-                let appended = verification_after(&doc, format).unwrap_or_else(|e| panic!("{e:#}"));
+                let mut bare = doc.clone();
+                bare.verification = None;
+                let first =
+                    render_sheet_at(&bare, format, extra).unwrap_or_else(|e| panic!("{e:#}"));
+                let appended =
+                    verification_after(&doc, format, &first).unwrap_or_else(|e| panic!("{e:#}"));
                 assert_eq!(
                     appended.is_some(),
-                    matches!(format, Format::Text | Format::Yaml),
+                    matches!(format, Format::Text | Format::Yaml | Format::Json),
                     "{format:?}"
                 );
+                if let Some(appended) = appended {
+                    assert_eq!(appended, text, "{format:?}");
+                }
+                let read = |text: &str| {
+                    table_of(text, format, &free(&t)).unwrap_or_else(|e| panic!("{e:#}"))
+                };
                 assert_eq!(
-                    table_of(&text, format, &free(&t)).unwrap_or_else(|e| panic!("{e:#}")),
-                    table_of(
-                        &render_sheet_at(
-                            &{
-                                let mut d = doc.clone();
-                                d.verification = None;
-                                d
-                            },
-                            format,
-                            extra
-                        )
-                        .unwrap_or_else(|e| panic!("{e:#}")),
-                        format,
-                        &free(&t)
-                    )
-                    .unwrap_or_else(|e| panic!("{e:#}")),
-                    "{format:?}: the verification changes what is read"
+                    read(&text),
+                    read(&first),
+                    "{format:?}: the verification is read"
                 );
                 let back = read_back(&text, format).unwrap_or_else(|e| panic!("{e:#}"));
                 assert_eq!(back.joints.len(), 4);
