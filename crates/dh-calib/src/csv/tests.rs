@@ -312,7 +312,8 @@ fn bad_orientations_name_line_and_column() {
 /// quoted cell over a line break.
 #[test]
 fn records_read_into_one_record_are_the_iterators() {
-    let text = "# c\r\na, b ,c\r\n\r\n1,2,3,4,5\n  # indented comment\nx\n\"q,\nr\", s ,\"t\"\n,,\n";
+    let text =
+        "# c\r\na, b ,c\r\n\r\n1,2,3,4,5\n  # indented comment\nx\n\"q,\nr\", s ,\"t\"\n,,\n";
     let expected: Vec<Record> = Records::lines_of(text, ',', true)
         .collect::<Result<_, _>>()
         .expect("records");
