@@ -108,8 +108,10 @@ fn same_pose(a: (&[f64], Option<&str>), b: (&[f64], Option<&str>)) -> bool {
 }
 
 /// [`sequence_contexts`] without the directions of motion: each context's `order` as there,
-/// its `direction` empty (for fits whose effects read none; no vector per sample).
-pub(crate) fn sequence_orders<'a, I>(samples: I) -> Vec<SampleContext>
+/// its `direction` empty (for fits whose effects read none; no vector per sample), as the
+/// pose number of each sample and the number of poses ([`order_context`] makes each context
+/// when it is needed: millions of them are not held beside the samples).
+pub(crate) fn sequence_orders<'a, I>(samples: I) -> (Vec<usize>, usize)
 where
     I: IntoIterator<Item = (&'a [f64], Option<&'a str>)>,
 {
@@ -123,16 +125,20 @@ where
         pose.push(count - 1);
         previous = Some(sample);
     }
-    pose.into_iter()
-        .map(|k| SampleContext {
-            direction: Vec::new(),
-            order: if count > 1 {
-                k as f64 / (count - 1) as f64
-            } else {
-                0.0
-            },
-        })
-        .collect()
+    (pose, count)
+}
+
+/// The context of pose `k` of `count` in the sequence ([`sequence_orders`]): its order, no
+/// directions.
+pub(crate) fn order_context(k: usize, count: usize) -> SampleContext {
+    SampleContext {
+        direction: Vec::new(),
+        order: if count > 1 {
+            k as f64 / (count - 1) as f64
+        } else {
+            0.0
+        },
+    }
 }
 
 /// [`sequence_contexts`] of the samples of `data`, with each sample's values in row order

@@ -16,13 +16,36 @@ pub(crate) struct Prepared {
     pub(crate) val: Vec<Observed>,
     pub(crate) groups: Vec<usize>,
     pub(crate) group_count: usize,
-    pub(crate) repeat_keys: Vec<Option<(usize, usize)>>,
+    /// Whether each calibration sample names its pose (`config`): its repeat key is then its
+    /// pose group and target ([`Prepared::repeat_keys`]).
+    pub(crate) named: Vec<bool>,
     pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
     /// `sigma_rot` of the calibration samples that measure an orientation, in order (radians;
     /// none for point samples, which are most of a large set).
     pub(crate) sigmas_rot: Vec<f64>,
     /// Pose group of each validation sample (numbered apart from the calibration groups).
     pub(crate) val_groups: Vec<usize>,
+}
+
+impl Prepared {
+    /// The repeat key of each calibration sample, in order: `(pose group, target)` for a
+    /// sample that names its pose, `None` for one that does not (its repeats are not known).
+    pub(crate) fn repeat_keys(&self) -> impl Iterator<Item = Option<(usize, usize)>> + '_ {
+        self.cal
+            .iter()
+            .zip(&self.groups)
+            .zip(&self.named)
+            .map(|((o, &g), &named)| {
+                let target = match o.observation {
+                    Observation::Point { target, .. } | Observation::TargetPose { target, .. } => {
+                        target
+                    }
+                    // `prepare` makes none; the tip has no target.
+                    Observation::Pose(_) => usize::MAX,
+                };
+                named.then_some((g, target))
+            })
+    }
 }
 
 /// Each sample's joint values per row of `tree` (mimic rows from their driver's column).
@@ -88,14 +111,17 @@ pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<Sampl
     crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
 }
 
-/// [`sequence_of`] without the directions of motion (each context's `direction` empty).
-fn orders_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
-    crate::effects_order::sequence_orders(
+/// [`sequence_of`] without the directions of motion (each context's `direction` empty), one
+/// at a time.
+fn orders_of(rows_q: &[Vec<f64>], data: &Measurements) -> impl Iterator<Item = SampleContext> {
+    let (pose, count) = crate::effects_order::sequence_orders(
         rows_q
             .iter()
             .map(Vec::as_slice)
             .zip(data.samples.iter().map(|s| s.config.as_deref())),
-    )
+    );
+    pose.into_iter()
+        .map(move |k| crate::effects_order::order_context(k, count))
 }
 
 /// The places in `data`'s whole sequence `full` ([`sequence_of`]) of the samples `keep`
@@ -157,20 +183,30 @@ pub(crate) fn prepare(
     let rows_q = rows_of(tree, data)?;
     // The place of every sample in the sequence, calibration and validation alike (the robot
     // visited both, in file order).
-    let contexts = match sequence {
-        Some(c) if c.len() == data.samples.len() => c.to_vec(),
-        _ if directions => sequence_of(&rows_q, data),
-        _ => orders_of(&rows_q, data),
+    // Read one at a time: a list of them would be held beside the samples (64 MB on
+    // 2 000 000 samples).
+    let contexts: Box<dyn Iterator<Item = SampleContext>> = match sequence {
+        Some(c) if c.len() == data.samples.len() => Box::new(c.iter().cloned()),
+        _ if directions => Box::new(sequence_of(&rows_q, data).into_iter()),
+        _ => Box::new(orders_of(&rows_q, data)),
     };
+    // Each list reserved at its final length: grown by doubling, the list of 2 000 000
+    // prepared samples would be held twice while it moves (0.45 GB at once).
+    let n_val = data
+        .samples
+        .iter()
+        .filter(|s| s.split == Split::Validation)
+        .count();
+    let n_cal = data.samples.len() - n_val;
     let mut out = Prepared {
-        cal: vec![],
-        val: vec![],
-        groups: vec![],
+        cal: Vec::with_capacity(n_cal),
+        val: Vec::with_capacity(n_val),
+        groups: Vec::with_capacity(n_cal),
         group_count: 0,
-        repeat_keys: vec![],
-        sigmas: vec![],
+        named: Vec::with_capacity(n_cal),
+        sigmas: Vec::with_capacity(n_cal),
         sigmas_rot: vec![],
-        val_groups: vec![],
+        val_groups: Vec::with_capacity(n_val),
     };
     let mut val_ids: HashMap<String, usize> = HashMap::new();
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
@@ -215,8 +251,7 @@ pub(crate) fn prepare(
                         .or_insert(next),
                 };
                 out.groups.push(g);
-                out.repeat_keys
-                    .push(s.config.as_ref().map(|_| (g, s.target)));
+                out.named.push(s.config.is_some());
                 out.sigmas.push(s.sigma);
                 if let Some(o) = &s.orientation {
                     out.sigmas_rot.push(o.sigma);

@@ -254,17 +254,32 @@ pub const LIMIT_SLACK: f64 = 1e-3;
 /// below the reader's four-turn guard.
 pub fn beyond_limits(table: &DhTable, data: &Measurements, data_name: &str) -> Vec<String> {
     let mut warnings = Vec::new();
-    for (i, joint) in data.joint_names.iter().enumerate() {
-        let Some(row) = table.rows.iter().find(|r| &r.name == joint) else {
-            continue;
-        };
-        let Some(l) = row.limits else { continue };
-        let outside = |s: &&dh_calib::data::Sample| {
-            s.q.get(i)
+    // Per column with limits: its row, (how many samples are outside, the first of them).
+    let limited: Vec<(usize, &dh_core::DhRow, dh_core::Limits)> = data
+        .joint_names
+        .iter()
+        .enumerate()
+        .filter_map(|(i, joint)| {
+            let row = table.rows.iter().find(|r| &r.name == joint)?;
+            Some((i, row, row.limits?))
+        })
+        .collect();
+    let mut found: Vec<(usize, Option<&dh_calib::data::Sample>)> = vec![(0, None); limited.len()];
+    // One pass over the samples for every joint (millions of samples).
+    for s in &data.samples {
+        for (&(i, _, l), (count, first)) in limited.iter().zip(found.iter_mut()) {
+            if s.q
+                .get(i)
                 .is_some_and(|&v| v < l.lower - LIMIT_SLACK || v > l.upper + LIMIT_SLACK)
-        };
-        let count = data.samples.iter().filter(outside).count();
-        let Some(first) = data.samples.iter().find(outside) else {
+            {
+                *count += 1;
+                first.get_or_insert(s);
+            }
+        }
+    }
+    for (&(i, row, l), &(count, first)) in limited.iter().zip(&found) {
+        let joint = &data.joint_names[i];
+        let Some(first) = first else {
             continue;
         };
         // Past a full turn (or a metre beyond the stroke) the unit is the likely fault; else

@@ -313,8 +313,8 @@ pub(super) fn noise_floor(
         (sum / n as f64, NoiseSource::Samples)
     } else {
         // Pooled pure error of repeated points.
-        let mut groups: HashMap<&(usize, usize), Vec<Vector3<f64>>> = HashMap::new();
-        for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
+        let mut groups: HashMap<(usize, usize), Vec<Vector3<f64>>> = HashMap::new();
+        for (o, key) in prep.cal.iter().zip(prep.repeat_keys()) {
             if let Some(k) = key {
                 groups.entry(k).or_default().push(observed_position(o));
             }

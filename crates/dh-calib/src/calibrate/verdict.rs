@@ -97,9 +97,9 @@ pub(crate) fn verdict_with(
 /// Pure error of repeated points: `(sum of squares, degrees of freedom)`.
 fn pure_error(prep: &Prepared) -> Option<(f64, usize)> {
     // Ordered by key: the sum is the same in every process (a hash map's order is not).
-    let mut groups: std::collections::BTreeMap<&(usize, usize), Vec<Vector3<f64>>> =
+    let mut groups: std::collections::BTreeMap<(usize, usize), Vec<Vector3<f64>>> =
         std::collections::BTreeMap::new();
-    for (o, key) in prep.cal.iter().zip(&prep.repeat_keys) {
+    for (o, key) in prep.cal.iter().zip(prep.repeat_keys()) {
         if let (Some(k), Observation::Point { point, .. }) = (key, &o.observation) {
             groups.entry(k).or_default().push(*point);
         }

@@ -89,8 +89,14 @@ fn split_lines(text: &str, size: usize) -> Vec<&str> {
 fn read_chunk(text: &str, reader: &RowReader<'_>, columns: usize) -> Option<Chunk> {
     let mut seen = RowState::new(columns);
     let mut samples = Vec::new();
-    for row in Records::lines_of(text, ',', true) {
-        samples.push(reader.sample(&row.ok()?, &mut seen).ok()?);
+    let mut rows = Records::lines_of(text, ',', true);
+    let mut row = Record {
+        line: 0,
+        fields: Vec::new(),
+    };
+    while let Some(read) = rows.next_into(&mut row) {
+        read.ok()?;
+        samples.push(reader.sample(&row, &mut seen).ok()?);
     }
     // Lines in the chunk: its line breaks (the last piece may end without one).
     let lines = text.bytes().filter(|&b| b == b'\n').count();

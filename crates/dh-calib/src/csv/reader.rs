@@ -251,8 +251,8 @@ impl RowReader<'_> {
             }
         };
         let mut point = Vector3::zeros();
-        let xyz_cols = match (cols.xyz, &socket) {
-            (Some(c), None) => c.to_vec(),
+        let xyz_cols: &[usize] = match (&cols.xyz, &socket) {
+            (Some(c), None) => c,
             (Some(c), Some(_)) => {
                 if let Some(&col) = c.iter().find(|&&col| !cell(col).is_empty()) {
                     return Err(DataError::Format {
@@ -264,7 +264,7 @@ impl RowReader<'_> {
                         found: format!("'{}'", cell(col)),
                     });
                 }
-                Vec::new()
+                &[]
             }
             (None, None) => {
                 return Err(DataError::Format {
@@ -273,7 +273,7 @@ impl RowReader<'_> {
                     found: "an empty 'socket' cell".into(),
                 })
             }
-            (None, Some(_)) => Vec::new(),
+            (None, Some(_)) => &[],
         };
         for (k, &col) in xyz_cols.iter().enumerate() {
             let value = number(cell(col), line, name(col))?;

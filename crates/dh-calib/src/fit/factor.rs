@@ -71,6 +71,25 @@ impl Tsqr {
         self.filled += 1;
     }
 
+    /// [`Tsqr::push`] of the row `[a₀·s₀, …, a_{p−1}·s_{p−1}, last]` (`p = cols − 1`: a
+    /// scaled Jacobian row and its residual), written straight into the chunk; whether every
+    /// value is finite.
+    pub(crate) fn push_scaled(&mut self, a: &[f64], s: &[f64], last: f64) -> bool {
+        if self.filled == self.chunk {
+            self.flush();
+        }
+        let p = self.cols - 1;
+        let mut finite = last.is_finite();
+        for (k, (a, s)) in a.iter().zip(s).take(p).enumerate() {
+            let v = a * s;
+            finite &= v.is_finite();
+            self.b[k * self.chunk + self.filled] = v;
+        }
+        self.b[p * self.chunk + self.filled] = last;
+        self.filled += 1;
+        finite
+    }
+
     /// Folds the chunk into `R` (Golub & Van Loan, Matrix Computations, 4th ed., §5.1.2,
     /// Householder vectors with `v₀ = x₀ − α`, `α = −sign(x₀)‖x‖`).
     fn flush(&mut self) {
@@ -241,24 +260,21 @@ fn factor_blocks<P: Problem + ?Sized>(
     let mut tsqr = Tsqr::new(p + 1);
     let mut res = [0.0; MAX_BLOCK];
     let mut jac = vec![0.0; MAX_BLOCK * p];
-    let mut row = vec![0.0; p + 1];
+    let column_scales: Vec<f64> = columns.iter().map(|&c| scales[c]).collect();
     let mut ssr = 0.0;
     let mut rows = 0;
     for b in range {
         let m = problem.block_size(b).min(MAX_BLOCK);
         problem.jacobian(x, b, columns, &mut res[..m], &mut jac[..m * p]);
         for i in 0..m {
-            for (k, &c) in columns.iter().enumerate() {
-                row[k] = jac[i * p + k] * scales[c];
-            }
-            row[p] = res[i];
-            if row.iter().any(|v| !v.is_finite()) {
+            // The scaled Jacobian row, then the residual; the factor is thrown away on a
+            // value that is not finite.
+            if !tsqr.push_scaled(&jac[i * p..(i + 1) * p], &column_scales, res[i]) {
                 return Err(CalibError::NonFinite {
                     what: format!("residual block {b}"),
                 });
             }
             ssr += res[i] * res[i];
-            tsqr.push(&row);
         }
         rows += m;
     }
