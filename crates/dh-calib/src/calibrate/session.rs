@@ -201,6 +201,7 @@ impl<'a> Session<'a> {
         folds: Folds,
     ) -> Result<Vec<f64>, CalibError> {
         match (&self.validation, folds) {
+            (_, Folds::Later) => Ok(vec![]),
             (Validation::CrossValidation { folds: k, .. }, Folds::OneStep) => {
                 super::one_step::one_step_cross_validation(
                     &self.model,
@@ -330,6 +331,13 @@ impl<'a> Session<'a> {
     /// the closed-form start), then the `geometric` one (every identifiable geometric
     /// parameter). Returns the steps, the geometric fit and its free and fixed parameters.
     pub(crate) fn geometric(&mut self) -> Result<Geometric, CalibError> {
+        self.geometric_with(Folds::Refit)
+    }
+
+    /// [`Session::geometric`] whose `geometric` step's held-out figures are those of `folds`
+    /// ([`Folds::Later`]: none yet, for a fit an outlier screen may discard; see
+    /// [`Session::finish_geometric`]).
+    pub(crate) fn geometric_with(&mut self, folds: Folds) -> Result<Geometric, CalibError> {
         let mut x = vec![0.0; self.model.parameter_count()];
         let measured = self.measured.clone();
         let nominal_columns = self.model.indices(|b| match b {
@@ -350,7 +358,7 @@ impl<'a> Session<'a> {
         let geometric: Vec<usize> = self.model.indices(|b| !matches!(b, Block::Effect(_)));
         let (free, fixed) = self.identify(&x, &geometric)?;
         self.enough_for(&x, &geometric, free.len())?;
-        let mut step = self.step("geometric", &x, &free, steps.last())?;
+        let mut step = self.step_with("geometric", &x, &free, steps.last(), folds)?;
         step.report.fixed = self.named_geometric(&fixed);
         steps.push(step.report.clone());
         Ok(Geometric {
@@ -359,6 +367,19 @@ impl<'a> Session<'a> {
             free,
             fixed,
         })
+    }
+
+    /// Gives the `geometric` step of `geo` (from [`Session::geometric_with`] with
+    /// [`Folds::Later`]) the held-out figures [`Session::geometric`] gives it: the folds
+    /// refitted from its fit.
+    pub(crate) fn finish_geometric(&self, geo: &mut Geometric) -> Result<(), CalibError> {
+        let held = self.held_out_with(&geo.last.outcome.x, &geo.free, Folds::Refit)?;
+        set_val(&mut geo.last.report, &held);
+        if let Some(step) = geo.steps.last_mut() {
+            set_val(step, &held);
+        }
+        geo.last.held_out = held;
+        Ok(())
     }
 
     /// Refuses data that leaves no residual degree of freedom for `columns`: as many free
