@@ -234,6 +234,20 @@ impl<'a> Session<'a> {
         previous: Option<&StepReport>,
         folds: Folds,
     ) -> Result<StepResult, CalibError> {
+        self.step_from(label, x0, free, previous, folds, None)
+    }
+
+    /// [`Session::step_with`] given the factor of `free` at `x0` over all calibration samples
+    /// when the caller has it (from [`Session::identify_factored`]).
+    pub(crate) fn step_from(
+        &self,
+        label: &str,
+        x0: &[f64],
+        free: &[usize],
+        previous: Option<&StepReport>,
+        folds: Folds,
+        first: Option<fit::Factor>,
+    ) -> Result<StepResult, CalibError> {
         let problem = ModelProblem {
             model: &self.model,
             observations: &self.prep.cal,
@@ -248,7 +262,16 @@ impl<'a> Session<'a> {
             };
             fit::solve(&sample, x0, free, &self.scales, &self.options.fit)?.x
         };
-        let outcome = fit::solve(&problem, &start, free, &self.scales, &self.options.fit)?;
+        // A coarse start moves away from `x0`, where the given factor is.
+        let first = first.filter(|_| self.coarse.is_empty());
+        let outcome = fit::solve_from(
+            &problem,
+            &start,
+            free,
+            &self.scales,
+            &self.options.fit,
+            first,
+        )?;
         let cal = Stats::of(&distances(&self.model, &outcome.x, &self.prep.cal));
         let held = self.held_out_with(&outcome.x, free, folds)?;
         let val = Stats::of(&held);
@@ -303,6 +326,32 @@ impl<'a> Session<'a> {
             subset: &self.coarse,
         };
         identify_in(&sample, &self.model, x, columns, &self.scales, self.options)
+    }
+
+    /// [`Session::identify`], with the factor it decided on when that is of all calibration
+    /// samples (no coarse subset): a step of the same columns from `x` starts from it.
+    pub(crate) fn identify_factored(
+        &self,
+        x: &[f64],
+        columns: &[usize],
+    ) -> Result<(Vec<usize>, Vec<fit::Fixed>, Option<fit::Factor>), CalibError> {
+        if !self.coarse.is_empty() {
+            let (free, fixed) = self.identify(x, columns)?;
+            return Ok((free, fixed, None));
+        }
+        let problem = ModelProblem {
+            model: &self.model,
+            observations: &self.prep.cal,
+        };
+        let (free, fixed, f) = identify_factored_in(
+            &problem,
+            &self.model,
+            x,
+            columns,
+            &self.scales,
+            self.options,
+        )?;
+        Ok((free, fixed, Some(f)))
     }
 
     /// Names of `fixed` parameters and their aliases, for a report.
