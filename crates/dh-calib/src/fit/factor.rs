@@ -95,9 +95,12 @@ impl Tsqr {
             let mut columns = rest.chunks_exact_mut(n).map(|c| &mut c[..m]);
             let mut k = j + 1;
             while k + 4 <= p {
-                let (Some(c0), Some(c1), Some(c2), Some(c3)) =
-                    (columns.next(), columns.next(), columns.next(), columns.next())
-                else {
+                let (Some(c0), Some(c1), Some(c2), Some(c3)) = (
+                    columns.next(),
+                    columns.next(),
+                    columns.next(),
+                    columns.next(),
+                ) else {
                     break;
                 };
                 let d = dot4(bj, [&*c0, &*c1, &*c2, &*c3]);
