@@ -26,6 +26,10 @@ pub(crate) struct Session<'a> {
     pub(super) coarse: Vec<usize>,
 }
 
+/// What [`Session::identify_factored`] finds: the free and held columns, and the factor it
+/// decided on (of all calibration samples) when there is no coarse subset.
+pub(crate) type Identified = (Vec<usize>, Vec<fit::Fixed>, Option<fit::Factor>);
+
 /// The chain of each target of `data` in `tree` (see [`CalibrationOptions::target_branches`]).
 pub(super) fn target_chains(
     tree: &DhTree,
@@ -334,7 +338,7 @@ impl<'a> Session<'a> {
         &self,
         x: &[f64],
         columns: &[usize],
-    ) -> Result<(Vec<usize>, Vec<fit::Fixed>, Option<fit::Factor>), CalibError> {
+    ) -> Result<Identified, CalibError> {
         if !self.coarse.is_empty() {
             let (free, fixed) = self.identify(x, columns)?;
             return Ok((free, fixed, None));
