@@ -26,6 +26,8 @@
 //! that carries the row's `alpha` (the frame after the row in the standard convention, the
 //! frame before it in the modified one), which bends the link about its twist axis.
 
+use std::collections::HashMap;
+
 use dh_core::{DhTable, JointKind, JointSampler};
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -140,15 +142,28 @@ struct AtJoints {
     torques: std::cell::RefCell<Vec<[f64; 2]>>,
 }
 
-/// A model's id, the joint values and what is known there.
-type CachedFrames = (u64, Vec<f64>, std::rc::Rc<AtJoints>);
+/// The frames and torques known on one thread: the last joint values asked for (compared
+/// first: every gravity effect of a calibration asks for the same sample's torques in turn,
+/// for its change and again for its gradient), and those of up to [`FRAMES_KEPT`] joint values
+/// by model id and the bits of the values (a fit asks for every sample's at each iteration, and
+/// the frames are most of the work).
+#[derive(Default)]
+struct FrameCache {
+    /// The model's id, the bits of the joint values, what is known there.
+    last: Option<(u64, Vec<u64>, std::rc::Rc<AtJoints>)>,
+    /// By the model's id followed by the bits of the joint values.
+    kept: HashMap<Vec<u64>, std::rc::Rc<AtJoints>>,
+    /// The key of the values asked for (reused).
+    key: Vec<u64>,
+}
+
+/// Most joint values whose frames one thread keeps (about 3 KB each for a chain of 18 rows);
+/// the cache is emptied when it is full.
+const FRAMES_KEPT: usize = 2048;
 
 thread_local! {
-    /// The frames and torques of the last joint values a model's torques were asked for on
-    /// this thread: every gravity effect of a calibration asks for the same sample's torques in
-    /// turn (for its change and again for its gradient), and the frames are most of the work.
-    static FRAMES: std::cell::RefCell<Option<CachedFrames>> =
-        const { std::cell::RefCell::new(None) };
+    /// This thread's [`FrameCache`].
+    static FRAMES: std::cell::RefCell<FrameCache> = std::cell::RefCell::new(FrameCache::default());
 }
 
 fn bad(reason: String) -> CalibError {
@@ -251,21 +266,31 @@ impl GravityModel {
     fn frames_at(&self, q: &[f64]) -> Option<std::rc::Rc<AtJoints>> {
         FRAMES.with(|cache| {
             let mut cache = cache.borrow_mut();
-            if let Some((id, last, frames)) = cache.as_ref() {
-                if *id == self.id.0
-                    && last
-                        .iter()
-                        .map(|v| v.to_bits())
-                        .eq(q.iter().map(|v| v.to_bits()))
-                {
+            let cache = &mut *cache;
+            let same = |bits: &[u64]| bits.iter().copied().eq(q.iter().map(|v| v.to_bits()));
+            if let Some((id, last, frames)) = &cache.last {
+                if *id == self.id.0 && same(last) {
                     return Some(frames.clone());
                 }
             }
-            let frames = std::rc::Rc::new(AtJoints {
-                frames: self.tree.frames(q).ok()?,
-                torques: std::cell::RefCell::new(vec![[f64::NAN; 2]; self.links.len()]),
-            });
-            *cache = Some((self.id.0, q.to_vec(), frames.clone()));
+            cache.key.clear();
+            cache.key.push(self.id.0);
+            cache.key.extend(q.iter().map(|v| v.to_bits()));
+            let frames = match cache.kept.get(&cache.key[..]) {
+                Some(frames) => frames.clone(),
+                None => {
+                    let frames = std::rc::Rc::new(AtJoints {
+                        frames: self.tree.frames(q).ok()?,
+                        torques: std::cell::RefCell::new(vec![[f64::NAN; 2]; self.links.len()]),
+                    });
+                    if cache.kept.len() >= FRAMES_KEPT {
+                        cache.kept.clear();
+                    }
+                    cache.kept.insert(cache.key.clone(), frames.clone());
+                    frames
+                }
+            };
+            cache.last = Some((self.id.0, cache.key[1..].to_vec(), frames.clone()));
             Some(frames)
         })
     }

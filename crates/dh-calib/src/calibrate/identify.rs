@@ -32,6 +32,20 @@ pub(super) fn identify_in<P: fit::Problem>(
     scales: &[f64],
     options: &CalibrationOptions,
 ) -> Result<(Vec<usize>, Vec<fit::Fixed>), CalibError> {
+    let (free, fixed, _) = identify_factored_in(problem, model, x, columns, scales, options)?;
+    Ok((free, fixed))
+}
+
+/// [`identify_in`], with the factor of `columns` at `x` it decided on ([`fit::factor`] of
+/// `problem`): a fit of the same columns from `x` starts from it ([`fit::solve_from`]).
+pub(super) fn identify_factored_in<P: fit::Problem>(
+    problem: &P,
+    model: &Model,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+    options: &CalibrationOptions,
+) -> Result<(Vec<usize>, Vec<fit::Fixed>, fit::Factor), CalibError> {
     let f = fit::factor(problem, x, columns, scales)?;
     let prio_all = model.priorities();
     let prio: Vec<u32> = columns.iter().map(|&c| prio_all[c]).collect();
@@ -62,7 +76,7 @@ pub(super) fn identify_in<P: fit::Problem>(
             }
         })
         .collect();
-    Ok((free, fixed))
+    Ok((free, fixed, f))
 }
 
 /// Parameter estimates in the report's layout.

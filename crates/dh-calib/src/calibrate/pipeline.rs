@@ -104,15 +104,30 @@ pub(crate) fn fitted_session<'a>(
     if options.outliers.screen {
         check_level(options)?;
     }
+    // A screen made before that leaves points out needs no fit of all of `data`.
+    if let Some(scan) = screened
+        .as_ref()
+        .filter(|s| options.outliers.screen && !s.kept && !s.outliers.is_empty())
+    {
+        let (session, geo) = without_outliers(tree, data, options, effects, scan)?;
+        return Ok(Fitted {
+            session,
+            geo,
+            scan: screened,
+        });
+    }
     let mut session = Session::new(tree, data, options, effects, None)?;
-    let geo = session.geometric()?;
     if !options.outliers.screen {
+        let geo = session.geometric()?;
         return Ok(Fitted {
             session,
             geo,
             scan: None,
         });
     }
+    // The fit of all of `data` is the screen's first round; its geometric step's folds are
+    // refitted only when the screen keeps the points.
+    let mut geo = session.geometric_with(Folds::Later)?;
     let scan = match screened {
         Some(scan) => scan,
         None => screen_from(
@@ -125,6 +140,7 @@ pub(crate) fn fitted_session<'a>(
         )?,
     };
     if scan.kept || scan.outliers.is_empty() {
+        session.finish_geometric(&mut geo)?;
         return Ok(Fitted {
             session,
             geo,
@@ -133,6 +149,23 @@ pub(crate) fn fitted_session<'a>(
     }
     // The first session's samples are not needed any more: free them before the second.
     drop(session);
+    let (session, geo) = without_outliers(tree, data, options, effects, &scan)?;
+    Ok(Fitted {
+        session,
+        geo,
+        scan: Some(scan),
+    })
+}
+
+/// The session of the samples of `data` that `scan` keeps, placed in the whole file's
+/// sequence, with `effects`, and its geometric step.
+fn without_outliers<'a>(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &'a CalibrationOptions,
+    effects: &[Arc<dyn Effect>],
+    scan: &crate::outliers::OutlierReport,
+) -> Result<(Session<'a>, Geometric), CalibError> {
     let dropped: std::collections::BTreeSet<usize> =
         scan.outliers.iter().map(|o| o.sample).collect();
     let sequence =
@@ -142,11 +175,7 @@ pub(crate) fn fitted_session<'a>(
     let cleaned = scan.without(data);
     let mut session = Session::new(tree, &cleaned, options, effects, Some(&sequence))?;
     let geo = session.geometric()?;
-    Ok(Fitted {
-        session,
-        geo,
-        scan: Some(scan),
-    })
+    Ok((session, geo))
 }
 
 /// Stores the screen's findings in `report`.

@@ -26,6 +26,10 @@ pub(crate) struct Session<'a> {
     pub(super) coarse: Vec<usize>,
 }
 
+/// What [`Session::identify_factored`] finds: the free and held columns, and the factor it
+/// decided on (of all calibration samples) when there is no coarse subset.
+pub(crate) type Identified = (Vec<usize>, Vec<fit::Fixed>, Option<fit::Factor>);
+
 /// The chain of each target of `data` in `tree` (see [`CalibrationOptions::target_branches`]).
 pub(super) fn target_chains(
     tree: &DhTree,
@@ -201,6 +205,7 @@ impl<'a> Session<'a> {
         folds: Folds,
     ) -> Result<Vec<f64>, CalibError> {
         match (&self.validation, folds) {
+            (_, Folds::Later) => Ok(vec![]),
             (Validation::CrossValidation { folds: k, .. }, Folds::OneStep) => {
                 super::one_step::one_step_cross_validation(
                     &self.model,
@@ -233,6 +238,20 @@ impl<'a> Session<'a> {
         previous: Option<&StepReport>,
         folds: Folds,
     ) -> Result<StepResult, CalibError> {
+        self.step_from(label, x0, free, previous, folds, None)
+    }
+
+    /// [`Session::step_with`] given the factor of `free` at `x0` over all calibration samples
+    /// when the caller has it (from [`Session::identify_factored`]).
+    pub(crate) fn step_from(
+        &self,
+        label: &str,
+        x0: &[f64],
+        free: &[usize],
+        previous: Option<&StepReport>,
+        folds: Folds,
+        first: Option<fit::Factor>,
+    ) -> Result<StepResult, CalibError> {
         let problem = ModelProblem {
             model: &self.model,
             observations: &self.prep.cal,
@@ -247,7 +266,16 @@ impl<'a> Session<'a> {
             };
             fit::solve(&sample, x0, free, &self.scales, &self.options.fit)?.x
         };
-        let outcome = fit::solve(&problem, &start, free, &self.scales, &self.options.fit)?;
+        // A coarse start moves away from `x0`, where the given factor is.
+        let first = first.filter(|_| self.coarse.is_empty());
+        let outcome = fit::solve_from(
+            &problem,
+            &start,
+            free,
+            &self.scales,
+            &self.options.fit,
+            first,
+        )?;
         let cal = Stats::of(&distances(&self.model, &outcome.x, &self.prep.cal));
         let held = self.held_out_with(&outcome.x, free, folds)?;
         let val = Stats::of(&held);
@@ -304,6 +332,32 @@ impl<'a> Session<'a> {
         identify_in(&sample, &self.model, x, columns, &self.scales, self.options)
     }
 
+    /// [`Session::identify`], with the factor it decided on when that is of all calibration
+    /// samples (no coarse subset): a step of the same columns from `x` starts from it.
+    pub(crate) fn identify_factored(
+        &self,
+        x: &[f64],
+        columns: &[usize],
+    ) -> Result<Identified, CalibError> {
+        if !self.coarse.is_empty() {
+            let (free, fixed) = self.identify(x, columns)?;
+            return Ok((free, fixed, None));
+        }
+        let problem = ModelProblem {
+            model: &self.model,
+            observations: &self.prep.cal,
+        };
+        let (free, fixed, f) = identify_factored_in(
+            &problem,
+            &self.model,
+            x,
+            columns,
+            &self.scales,
+            self.options,
+        )?;
+        Ok((free, fixed, Some(f)))
+    }
+
     /// Names of `fixed` parameters and their aliases, for a report.
     pub(crate) fn named(&self, fixed: &[fit::Fixed]) -> Vec<FixedParameter> {
         let params = self.model.parameters();
@@ -330,6 +384,13 @@ impl<'a> Session<'a> {
     /// the closed-form start), then the `geometric` one (every identifiable geometric
     /// parameter). Returns the steps, the geometric fit and its free and fixed parameters.
     pub(crate) fn geometric(&mut self) -> Result<Geometric, CalibError> {
+        self.geometric_with(Folds::Refit)
+    }
+
+    /// [`Session::geometric`] whose `geometric` step's held-out figures are those of `folds`
+    /// ([`Folds::Later`]: none yet, for a fit an outlier screen may discard; see
+    /// [`Session::finish_geometric`]).
+    pub(crate) fn geometric_with(&mut self, folds: Folds) -> Result<Geometric, CalibError> {
         let mut x = vec![0.0; self.model.parameter_count()];
         let measured = self.measured.clone();
         let nominal_columns = self.model.indices(|b| match b {
@@ -350,7 +411,7 @@ impl<'a> Session<'a> {
         let geometric: Vec<usize> = self.model.indices(|b| !matches!(b, Block::Effect(_)));
         let (free, fixed) = self.identify(&x, &geometric)?;
         self.enough_for(&x, &geometric, free.len())?;
-        let mut step = self.step("geometric", &x, &free, steps.last())?;
+        let mut step = self.step_with("geometric", &x, &free, steps.last(), folds)?;
         step.report.fixed = self.named_geometric(&fixed);
         steps.push(step.report.clone());
         Ok(Geometric {
@@ -359,6 +420,19 @@ impl<'a> Session<'a> {
             free,
             fixed,
         })
+    }
+
+    /// Gives the `geometric` step of `geo` (from [`Session::geometric_with`] with
+    /// [`Folds::Later`]) the held-out figures [`Session::geometric`] gives it: the folds
+    /// refitted from its fit.
+    pub(crate) fn finish_geometric(&self, geo: &mut Geometric) -> Result<(), CalibError> {
+        let held = self.held_out_with(&geo.last.outcome.x, &geo.free, Folds::Refit)?;
+        set_val(&mut geo.last.report, &held);
+        if let Some(step) = geo.steps.last_mut() {
+            set_val(step, &held);
+        }
+        geo.last.held_out = held;
+        Ok(())
     }
 
     /// Refuses data that leaves no residual degree of freedom for `columns`: as many free

@@ -226,6 +226,8 @@ pub(crate) enum Folds {
     /// Each fold one Gauss-Newton step from the full fit (`one_step`): the diagnosis's
     /// candidate trials, compared with each other and with the fit they extend.
     OneStep,
+    /// None yet: the step's held-out figures are left empty for the caller to fill in.
+    Later,
 }
 
 /// Puts the validation figures of the held-out distances `held` into `report`.

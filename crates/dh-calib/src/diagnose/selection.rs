@@ -316,7 +316,8 @@ fn diagnose_judged(
                     .unwrap_or_default();
                 let mut columns = free.clone();
                 columns.extend(&cols);
-                let (trial_free, trial_fixed) = session.identify(&last.x, &columns)?;
+                let (trial_free, trial_fixed, factor) =
+                    session.identify_factored(&last.x, &columns)?;
                 if cols.iter().any(|c| !trial_free.contains(c)) {
                     let trial = Trial {
                         label,
@@ -332,12 +333,14 @@ fn diagnose_judged(
                     };
                     return Ok((trial, None));
                 }
-                let step = session.step_with(
+                // The identifiability's factor is the fit's first when every column is free.
+                let step = session.step_from(
                     &format!("+{label}"),
                     &last.x,
                     &trial_free,
                     steps.last(),
                     Folds::OneStep,
+                    factor.filter(|_| trial_free == columns),
                 )?;
                 let trial = judge(
                     &session,

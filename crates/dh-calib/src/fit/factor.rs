@@ -109,8 +109,36 @@ impl Tsqr {
             let alpha = if x0 >= 0.0 { -norm } else { norm };
             let v0 = x0 - alpha;
             let beta = 2.0 / (v0 * v0 + sigma);
-            for k in j + 1..p {
-                let bk = &mut rest[(k - j - 1) * n..(k - j - 1) * n + m];
+            // The later columns four at a time (one pass over `bj` for four dot products and
+            // one for four updates), each with the same operations in the same order as alone.
+            let mut columns = rest.chunks_exact_mut(n).map(|c| &mut c[..m]);
+            let mut k = j + 1;
+            while k + 4 <= p {
+                let (Some(c0), Some(c1), Some(c2), Some(c3)) = (
+                    columns.next(),
+                    columns.next(),
+                    columns.next(),
+                    columns.next(),
+                ) else {
+                    break;
+                };
+                let d = dot4(bj, [&*c0, &*c1, &*c2, &*c3]);
+                let mut w = [0.0; 4];
+                for (l, wl) in w.iter_mut().enumerate() {
+                    let rjk = self.r[(k + l) * p + j];
+                    *wl = beta * (v0 * rjk + d[l]);
+                    self.r[(k + l) * p + j] = rjk - *wl * v0;
+                }
+                let rows = bj.iter().zip(c0).zip(c1).zip(c2).zip(c3);
+                for ((((x, y0), y1), y2), y3) in rows {
+                    *y0 -= w[0] * x;
+                    *y1 -= w[1] * x;
+                    *y2 -= w[2] * x;
+                    *y3 -= w[3] * x;
+                }
+                k += 4;
+            }
+            for (bk, k) in columns.zip(k..p) {
                 let rjk = self.r[k * p + j];
                 let w = beta * (v0 * rjk + dot(bj, bk));
                 self.r[k * p + j] = rjk - w * v0;
@@ -141,6 +169,32 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     }
     let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// [`dot`] of `a` with each of four columns in one pass over `a`: each sum the same as
+/// [`dot`]'s, bit for bit (the same products added in the same order).
+fn dot4(a: &[f64], b: [&[f64]; 4]) -> [f64; 4] {
+    let mut acc = [[0.0; 4]; 4];
+    let [b0, b1, b2, b3] = b.map(|c| c.chunks_exact(4));
+    let quads = a.chunks_exact(4).zip(b0).zip(b1).zip(b2).zip(b3);
+    for ((((x, y0), y1), y2), y3) in quads {
+        for l in 0..4 {
+            acc[0][l] += x[l] * y0[l];
+            acc[1][l] += x[l] * y1[l];
+            acc[2][l] += x[l] * y2[l];
+            acc[3][l] += x[l] * y3[l];
+        }
+    }
+    let body = a.len() - a.len() % 4;
+    std::array::from_fn(|c| {
+        let tail: f64 = a[body..]
+            .iter()
+            .zip(&b[c][body..])
+            .map(|(x, y)| x * y)
+            .sum();
+        let acc = &acc[c];
+        (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+    })
 }
 
 pub(super) fn check_columns(n: usize, columns: &[usize], scales: &[f64]) -> Result<(), CalibError> {

@@ -45,3 +45,4 @@ pub use identify::{
 pub use problem::{FitOptions, FitOutcome, Problem, Termination, MAX_BLOCK, MIN_SENSITIVITY};
 pub(crate) use psd::pseudo_inverse;
 pub use solve::solve;
+pub(crate) use solve::solve_from;

@@ -43,6 +43,22 @@ pub fn solve<P: Problem + ?Sized>(
     scales: &[f64],
     options: &FitOptions,
 ) -> Result<FitOutcome, CalibError> {
+    solve_from(problem, x0, free, scales, options, None)
+}
+
+/// [`solve`], given the factor of `free` at `x0` when the caller has it (`first`: what
+/// [`factor`] of `problem`, `x0`, `free` and `scales` returns), which is then not computed again.
+///
+/// # Errors
+/// As [`solve`].
+pub(crate) fn solve_from<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    free: &[usize],
+    scales: &[f64],
+    options: &FitOptions,
+    first: Option<Factor>,
+) -> Result<FitOutcome, CalibError> {
     let n = problem.parameter_count();
     if x0.len() != n {
         return Err(CalibError::Length {
@@ -54,7 +70,10 @@ pub fn solve<P: Problem + ?Sized>(
     check_columns(n, free, scales)?;
     let p = free.len();
     let mut x = x0.to_vec();
-    let mut f = factor(problem, &x, free, scales)?;
+    let mut f = match first {
+        Some(f) => f,
+        None => factor(problem, &x, free, scales)?,
+    };
     let mut iterations = 0;
     let mut termination = Termination::MaxIterations;
     let mut lambda = f64::NAN;
