@@ -64,8 +64,8 @@ pub struct Source<'a, F> {
 }
 
 /// Renders `doc` in `format`, reads the text back, compares that table with the source and
-/// attaches the verification: appended to the proved text when it comes last (text, YAML;
-/// [`verification_after`]), else by rendering again and checking that the new text reads back
+/// attaches the verification: appended to the proved text when it comes last (text, YAML, JSON;
+/// see `verification_after`), else by rendering again and checking that the new text reads back
 /// as the same table. Returns the final text and whether it passed.
 /// A base or tool the document leaves out (free) is taken from `free` when comparing.
 ///

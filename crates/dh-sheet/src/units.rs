@@ -170,7 +170,7 @@ pub fn round_decimals(x: f64, decimals: usize) -> f64 {
 
 /// `x` printed with `decimals` decimal places, the text of `format!("{x:.decimals$}")` (the
 /// exact value rounded half to even, the sign of a negative value kept when it rounds to
-/// zero), made from the integer of [`in_last_decimals`] when there is one.
+/// zero), made from the rounded integer when its value is certain (as in [`round_decimals`]).
 pub fn format_fixed(x: f64, decimals: usize) -> String {
     let k = match in_last_decimals(x, decimals) {
         Some(k) if decimals <= 18 => k.abs() as u64,
