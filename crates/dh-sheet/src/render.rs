@@ -222,6 +222,19 @@ const ROWS_PER_PART: usize = 2000;
 
 /// Row `i` (0-based) of the text table, its name column `name_w` wide (trailing spaces kept).
 fn row_line(doc: &SheetDoc, i: usize, j: &JointDoc, name_w: usize, extra: usize) -> String {
+    let (kind, cells) = row_cells(doc, j, extra);
+    let name = crate::text::escape(&j.name);
+    let mut s = format!("{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
+    for c in &cells {
+        let _ = write!(s, "  {c:>13}");
+    }
+    let _ = write!(s, "  {}", coupling(doc, j, extra));
+    s
+}
+
+/// A row's type and its theta, d, a, alpha, lower and upper cells, as the text and Markdown
+/// tables print them.
+fn row_cells(doc: &SheetDoc, j: &JointDoc, extra: usize) -> (&'static str, [String; 6]) {
     let (l, a) = (doc.length_unit.symbol(), doc.angle_unit.symbol());
     let lu = limit_unit(doc, j);
     let kind = match j.kind {
@@ -238,13 +251,7 @@ fn row_line(doc: &SheetDoc, i: usize, j: &JointDoc, name_w: usize, extra: usize)
         lim(j.lower),
         lim(j.upper),
     ];
-    let name = crate::text::escape(&j.name);
-    let mut s = format!("{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
-    for c in &cells {
-        let _ = write!(s, "  {c:>13}");
-    }
-    let _ = write!(s, "  {}", coupling(doc, j, extra));
-    s
+    (kind, cells)
 }
 
 /// The text table's last line: the verification of the table as written. [`text`] ends with
@@ -375,24 +382,12 @@ fn markdown(doc: &SheetDoc, extra: usize) -> String {
     );
     let _ = writeln!(s, "|---|---|---|---:|---:|---:|---:|---:|---:|---|");
     for (i, j) in doc.joints.iter().enumerate() {
-        let lu = limit_unit(doc, j);
-        let lim =
-            |v: Option<f64>| v.map_or_else(|| "-".to_string(), |v| format!("{} {lu}", num(v, lu)));
-        let kind = match j.kind {
-            JointType::Revolute => "revolute",
-            JointType::Prismatic => "prismatic",
-        };
+        let (kind, [theta, d, a, alpha, lower, upper]) = row_cells(doc, j, extra);
         let _ = writeln!(
             s,
-            "| {} | {} | {kind} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {kind} | {theta} | {d} | {a} | {alpha} | {lower} | {upper} | {} |",
             i + 1,
             md_cell(&j.name),
-            num_at(j.theta, a, extra),
-            num_at(j.d, l, extra),
-            num_at(j.a, l, extra),
-            num_at(j.alpha, a, extra),
-            lim(j.lower),
-            lim(j.upper),
             md_cell(&coupling(doc, j, extra))
         );
     }
