@@ -134,28 +134,20 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
     let _ = writeln!(s, "  coupling");
     // Trailing spaces from an empty coupling column would make diffs noisy.
     s = s.lines().map(str::trim_end).collect::<Vec<_>>().join("\n") + "\n";
-    let rows = |range: std::ops::Range<usize>| {
-        let mut s = String::new();
-        for (i, j) in doc.joints[range.clone()].iter().enumerate() {
-            let _ = writeln!(
-                s,
-                "{}",
-                row_line(doc, range.start + i, j, name_w, extra).trim_end()
-            );
+    // The rows in parts on the machine's cores (one part, on this thread, for a usual table),
+    // joined in order.
+    let parts: Vec<&[JointDoc]> = doc.joints.chunks(ROWS_PER_PART).collect();
+    let part = |k: usize| {
+        let mut rows = String::new();
+        for (i, j) in parts[k].iter().enumerate() {
+            let line = row_line(doc, k * ROWS_PER_PART + i, j, name_w, extra);
+            let _ = writeln!(rows, "{}", line.trim_end());
         }
-        s
+        rows
     };
-    let n = doc.joints.len();
-    if n <= ROWS_PER_PART {
-        s += &rows(0..n);
-    } else {
-        // A long table's rows in parts on the machine's cores, joined in order.
-        let parts = n.div_ceil(ROWS_PER_PART);
-        let part = |k: usize| rows(k * ROWS_PER_PART..((k + 1) * ROWS_PER_PART).min(n));
-        match dh_core::parallel::map(parts, part) {
-            Some(parts) => parts.iter().for_each(|p| s += p),
-            None => s += &rows(0..n),
-        }
+    match dh_core::parallel::map(parts.len(), part) {
+        Some(rows) => rows.iter().for_each(|r| s += r),
+        None => (0..parts.len()).for_each(|k| s += &part(k)),
     }
     let pose = |name: &str, what: &str, p: &Option<crate::sheet::PoseDoc>| match p {
         Some(p) => format!(
@@ -173,7 +165,11 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
     let base_link = doc.base_link.as_deref().unwrap_or("base link");
     let tip_link = doc.tip_link.as_deref().unwrap_or("tip link");
     s += &pose("base", &format!("DH frame 0 in {base_link}"), &doc.base);
-    s += &pose("tool", &format!("{tip_link} in DH frame {n}"), &doc.tool);
+    s += &pose(
+        "tool",
+        &format!("{tip_link} in DH frame {}", doc.joints.len()),
+        &doc.tool,
+    );
     if let Some(pairs) = &doc.pairs {
         let _ = writeln!(s, "axis pairs:");
         let names: Vec<String> = pairs
