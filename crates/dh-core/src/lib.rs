@@ -36,7 +36,7 @@ pub use error::CoreError;
 pub use extract::{extract, Bound, Extraction, JointAxis, PairReport, Warning};
 pub use line::{DualNumber, Line};
 pub use literal::{fit_literal, LiteralFit, LITERAL_SAMPLES};
-pub use precision::{compare_written, written_bound, Precision};
+pub use precision::{compare_while_writing, compare_written, written_bound, Precision};
 pub use registration::{axis_lines, register_axes, AxisLine};
 pub use relation::{classify, PairGeometry, Relation};
 pub use table::{Convention, DhRow, DhTable, JointKind, Limits, Mimic, PreparedFk};

@@ -56,25 +56,71 @@ pub fn map<T: Send>(count: usize, work: impl Fn(usize) -> T + Sync) -> Option<Ve
     try_map(count, |k| Ok(work(k)), || ()).ok()
 }
 
-/// `consume` on the calling thread, reading in order what `produce` makes at the same time on
-/// a second thread: `produce` hands each item to `send`, which returns `false` once `consume`
-/// has stopped reading (then `produce` should return). At most `capacity` items wait between
-/// the two, so memory stays bounded whatever the number of items.
+/// The items a [`pipeline`]'s producer sends, read by the consumer: in the order sent, by
+/// any number of threads at once (each item reaches one of them).
+pub struct Items<T> {
+    rx: Mutex<std::sync::mpsc::Receiver<T>>,
+}
+
+impl<T> Items<T> {
+    /// The next item, waiting for the producer; `None` once it has returned and everything it
+    /// sent has been read.
+    pub fn next(&self) -> Option<T> {
+        self.rx.lock().ok()?.recv().ok()
+    }
+}
+
+impl<T> Iterator for &Items<T> {
+    type Item = T;
+    fn next(&mut self) -> Option<T> {
+        Items::next(self)
+    }
+}
+
+/// `consume` on the calling thread while `produce` runs on a second thread from the start:
+/// `produce` hands each item to `send`, which returns `false` once `consume` has returned
+/// (then `produce` should return). At most `capacity` items wait between the two, so memory
+/// stays bounded whatever the number of items.
 ///
 /// For a producer that must run in order (a stateful oracle, a random sequence) beside work
-/// that can overlap it. `consume` sees the items `produce` sent before it returned; a panic in
-/// either reaches the caller, as from any scoped thread.
+/// that can overlap it: `consume` may first do work of its own while the producer runs ahead,
+/// then read the items in order ([`Items::next`], or `for item in items`), on several threads
+/// if it likes ([`on_each_core`]). A panic in either reaches the caller, as from any scoped
+/// thread.
 pub fn pipeline<T: Send, R>(
     capacity: usize,
     produce: impl FnOnce(&mut dyn FnMut(T) -> bool) + Send,
-    consume: impl FnOnce(&mut dyn Iterator<Item = T>) -> R,
+    consume: impl FnOnce(&Items<T>) -> R,
 ) -> R {
     let (tx, rx) = std::sync::mpsc::sync_channel(capacity.max(1));
+    let items = Items { rx: Mutex::new(rx) };
     std::thread::scope(|scope| {
         scope.spawn(move || produce(&mut |item| tx.send(item).is_ok()));
-        let out = consume(&mut rx.iter());
+        let out = consume(&items);
         // Dropping the receiver before the scope joins ends a producer blocked on a full channel.
-        drop(rx);
+        drop(items);
+        out
+    })
+}
+
+/// `work()` once on each of up to `available_parallelism` threads (the calling one among
+/// them; only it on a one-core machine), every result in a list: for workers that share
+/// their input through a queue ([`Items`]) and keep their own state. A panic in `work` reaches
+/// the caller.
+pub fn on_each_core<V: Send>(work: impl Fn() -> V + Sync) -> Vec<V> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if threads <= 1 {
+        return vec![work()];
+    }
+    std::thread::scope(|scope| {
+        let others: Vec<_> = (1..threads).map(|_| scope.spawn(&work)).collect();
+        let mut out = vec![work()];
+        for h in others {
+            match h.join() {
+                Ok(v) => out.push(v),
+                Err(panic) => std::panic::resume_unwind(panic),
+            }
+        }
         out
     })
 }
@@ -107,6 +153,25 @@ mod tests {
             |items| items.collect(),
         );
         assert_eq!(all, (0..1000).collect::<Vec<_>>());
+        // Read on every core: each item reaches one reader.
+        let mut read: Vec<usize> = pipeline(
+            3,
+            |send| {
+                for k in 0..1000 {
+                    if !send(k) {
+                        return;
+                    }
+                }
+            },
+            |items| {
+                on_each_core(|| items.collect::<Vec<_>>())
+                    .into_iter()
+                    .flatten()
+                    .collect()
+            },
+        );
+        read.sort_unstable();
+        assert_eq!(read, (0..1000).collect::<Vec<_>>());
         // A consumer that stops early: the producer sees `false` and the call returns.
         let sent = AtomicUsize::new(0);
         let first: Vec<usize> = pipeline(

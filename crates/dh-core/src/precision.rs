@@ -8,11 +8,13 @@
 //! own bound (snapping, float arithmetic) plus what the written precision allows:
 //! [`written_bound`].
 
+use std::borrow::Borrow;
+
 use nalgebra::Isometry3;
 
 use crate::extract::Bound;
 use crate::pose::pose_error;
-use crate::table::{DhTable, JointKind};
+use crate::table::{DhTable, JointKind, PreparedFk};
 use crate::verify::{Deviation, JointSampler};
 use crate::CoreError;
 
@@ -122,8 +124,9 @@ pub fn written_bound(table: &DhTable, precision: Precision) -> Bound {
 pub const PIPELINE_MIN_JOINTS: usize = 100_000;
 /// Joint evaluations of the oracle sent to the written side at a time.
 const PIPELINE_BLOCK_JOINTS: usize = 20_000;
-/// Blocks of oracle poses that may wait for the written side.
-const PIPELINE_BLOCKS: usize = 4;
+/// Joint values the oracle may draw and evaluate ahead of the written side (32 MB of them):
+/// room for the oracle to run while [`compare_while_writing`]'s table is still being written.
+const PIPELINE_AHEAD_JOINTS: usize = 4_000_000;
 
 /// Samples drawn and evaluated by [`compare_written`]'s oracle, sent to the written side.
 struct SampleBlock {
@@ -163,60 +166,85 @@ pub fn compare_written<F>(
 where
     F: FnMut(&[f64]) -> Isometry3<f64> + Send,
 {
-    compare_written_from(written, source, oracle, samples, seed, PIPELINE_MIN_JOINTS)
+    compare_while_writing(source, oracle, samples, seed, || Ok(written)).map(|(_, dev)| dev)
 }
 
-/// [`compare_written`] with the oracle on a second thread from `pipeline_from` joint
-/// evaluations (the tests compare both ways on one chain).
-fn compare_written_from<F>(
-    written: &DhTable,
+/// [`compare_written`] of the table that `write` makes (renders and reads back) on the calling
+/// thread while the oracle already runs: on a second thread, from [`PIPELINE_MIN_JOINTS`] joint
+/// evaluations, drawing and evaluating up to some 4 million joint values ahead; once `write`
+/// returns, the written side's evaluations run on every core. For a long chain, whose oracle
+/// costs about as much as writing and reading back its table. Returns the written table with
+/// the figures, the same as [`compare_written`]'s.
+///
+/// # Errors
+/// `write`'s error (the oracle then stops); [`CoreError::JointCount`] when the tables differ in
+/// length.
+pub fn compare_while_writing<F, W, E>(
     source: &DhTable,
-    mut oracle: F,
+    oracle: F,
     samples: usize,
     seed: u64,
-    pipeline_from: usize,
-) -> Result<Deviation, CoreError>
+    write: impl FnOnce() -> Result<W, E>,
+) -> Result<(W, Deviation), E>
 where
     F: FnMut(&[f64]) -> Isometry3<f64> + Send,
+    W: Borrow<DhTable>,
+    E: From<CoreError>,
 {
-    let n = source.rows.len();
-    if written.rows.len() != n {
-        return Err(CoreError::JointCount {
-            expected: n,
-            found: written.rows.len(),
-        });
+    compare_from(source, oracle, samples, seed, PIPELINE_MIN_JOINTS, write)
+}
+
+/// The written side of the comparison on one thread: the written table's FK at the source's
+/// joint values, its mimic rows following their written driver.
+struct WrittenSide<'a> {
+    prepared: &'a PreparedFk<'a>,
+    /// Per written row: `(driver, multiplier, offset)` of a mimic row.
+    follows: &'a [Option<(usize, f64, f64)>],
+    /// The written rows' values and which of them are known.
+    qw: Vec<f64>,
+    done: Vec<bool>,
+}
+
+impl<'a> WrittenSide<'a> {
+    fn new(prepared: &'a PreparedFk<'a>, follows: &'a [Option<(usize, f64, f64)>]) -> Self {
+        let n = follows.len();
+        WrittenSide {
+            prepared,
+            follows,
+            qw: vec![0.0; n],
+            done: vec![true; n],
+        }
     }
-    // Written mimic rows follow their written driver (by name, among the written rows); resolved
-    // in dependency order, at most n passes, as the sampler does.
-    let follows: Vec<Option<(usize, f64, f64)>> = written
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let m = r.mimic.as_ref()?;
-            let driver = written.rows.iter().position(|d| d.name == m.joint)?;
-            (driver != i).then_some((driver, m.multiplier, m.offset))
-        })
-        .collect();
-    let sampler = JointSampler::new(&source.rows, source.size(), seed);
-    let prepared = written.prepare();
-    let count = samples.max(1);
-    // The written side of sample `k`: the source's values in `q`, the written rows' values and
-    // which of them are known in the buffers.
-    let mut qw = vec![0.0; n];
-    let mut done = vec![true; n];
-    let mut written_pose = |q: &[f64]| -> Result<Isometry3<f64>, CoreError> {
-        for (i, f) in follows.iter().enumerate() {
-            qw[i] = q[i];
-            done[i] = f.is_none();
+
+    /// Written mimic rows follow their written driver (by name, among the written rows);
+    /// resolved in dependency order, at most n passes, as the sampler does.
+    fn follows_of(written: &DhTable) -> Vec<Option<(usize, f64, f64)>> {
+        written
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let m = r.mimic.as_ref()?;
+                let driver = written.rows.iter().position(|d| d.name == m.joint)?;
+                (driver != i).then_some((driver, m.multiplier, m.offset))
+            })
+            .collect()
+    }
+
+    /// The written table's tip pose at the source's joint values `q`.
+    fn pose(&mut self, q: &[f64]) -> Result<Isometry3<f64>, CoreError> {
+        let n = self.follows.len();
+        for (i, f) in self.follows.iter().enumerate() {
+            self.qw[i] = q[i];
+            self.done[i] = f.is_none();
         }
         for _ in 0..n {
             let mut open = false;
-            for (i, f) in follows.iter().enumerate() {
-                if let (Some((driver, m, o)), false) = (f, done[i]) {
-                    if done[*driver] {
-                        qw[i] = m * qw[*driver] + o;
-                        done[i] = true;
+            for (i, f) in self.follows.iter().enumerate() {
+                if let (Some((driver, m, o)), false) = (f, self.done[i]) {
+                    if self.done[*driver] {
+                        self.qw[i] = m * self.qw[*driver] + o;
+                        self.done[i] = true;
                     } else {
                         open = true;
                     }
@@ -226,25 +254,55 @@ where
                 break;
             }
         }
-        prepared.fk(&qw)
+        self.prepared.fk(&self.qw)
+    }
+}
+
+/// [`compare_while_writing`] with the oracle on a second thread from `pipeline_from` joint
+/// evaluations (the tests compare both ways on one chain).
+fn compare_from<F, W, E>(
+    source: &DhTable,
+    mut oracle: F,
+    samples: usize,
+    seed: u64,
+    pipeline_from: usize,
+    write: impl FnOnce() -> Result<W, E>,
+) -> Result<(W, Deviation), E>
+where
+    F: FnMut(&[f64]) -> Isometry3<f64> + Send,
+    W: Borrow<DhTable>,
+    E: From<CoreError>,
+{
+    let n = source.rows.len();
+    let check = |written: &DhTable| match written.rows.len() {
+        found if found != n => Err(CoreError::JointCount { expected: n, found }),
+        _ => Ok(()),
     };
-    let mut dev = Deviation::new();
+    let mut sampler = JointSampler::new(&source.rows, source.size(), seed);
+    let count = samples.max(1);
     if n == 0 || n.saturating_mul(count) < pipeline_from {
-        let (mut sampler, mut q) = (sampler, Vec::with_capacity(n));
+        let written = write()?;
+        let w = written.borrow();
+        check(w)?;
+        let follows = WrittenSide::follows_of(w);
+        let prepared = w.prepare();
+        let mut side = WrittenSide::new(&prepared, &follows);
+        let (mut dev, mut q) = (Deviation::new(), Vec::with_capacity(n));
         for _ in 0..count {
             sampler.next_into(&mut q);
-            dev.record(pose_error(&written_pose(&q)?, &oracle(&q)));
+            dev.record(pose_error(&side.pose(&q)?, &oracle(&q)));
         }
-        return Ok(dev);
+        return Ok((written, dev));
     }
     // A long proof: the oracle draws the samples and evaluates them on a second thread while
-    // this one evaluates the written table at the same draws (sent with the oracle's poses, a
-    // block at a time), their poses paired in sample order (the same figures).
-    let mut sampler = sampler;
+    // this one writes the table, then evaluates the written table at the same draws (sent with
+    // the oracle's poses, a block at a time) on every core. The figures are maxima over the
+    // samples: the same whichever thread takes which block.
+    let block = (PIPELINE_BLOCK_JOINTS / n).max(1);
+    let ahead = (PIPELINE_AHEAD_JOINTS / (block * n)).max(1);
     crate::parallel::pipeline(
-        PIPELINE_BLOCKS,
+        ahead,
         move |send| {
-            let block = (PIPELINE_BLOCK_JOINTS / n).max(1);
             let mut q = Vec::with_capacity(n);
             let mut drawn = SampleBlock::with_capacity(block, n);
             for k in 0..count {
@@ -261,16 +319,29 @@ where
                 }
             }
         },
-        |blocks| -> Result<(), CoreError> {
-            for drawn in blocks {
-                for (q, theirs) in drawn.q.chunks_exact(n).zip(&drawn.poses) {
-                    dev.record(pose_error(&written_pose(q)?, theirs));
+        |blocks| -> Result<(W, Deviation), E> {
+            let written = write()?;
+            let w = written.borrow();
+            check(w)?;
+            let follows = WrittenSide::follows_of(w);
+            let prepared = w.prepare();
+            let parts = crate::parallel::on_each_core(|| -> Result<Deviation, CoreError> {
+                let mut side = WrittenSide::new(&prepared, &follows);
+                let mut dev = Deviation::new();
+                for drawn in blocks {
+                    for (q, theirs) in drawn.q.chunks_exact(n).zip(&drawn.poses) {
+                        dev.record(pose_error(&side.pose(q)?, theirs));
+                    }
                 }
+                Ok(dev)
+            });
+            let mut dev = Deviation::new();
+            for part in parts {
+                dev.merge(&part?);
             }
-            Ok(())
+            Ok((written, dev))
         },
-    )?;
-    Ok(dev)
+    )
 }
 
 #[cfg(test)]
@@ -358,10 +429,8 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_oracle_on_its_own_thread_gives_the_same_figures_in_order() {
-        // 60 rows (the arm's four, its mimic row included, fifteen times), 700 samples: 42 000
-        // joint evaluations, several blocks of oracle poses.
+    /// 60 rows: the arm's four, its mimic row included, fifteen times.
+    fn long_arm() -> DhTable {
         let arm = arm();
         let mut t = arm.clone();
         t.rows = (0..15)
@@ -376,13 +445,57 @@ mod tests {
                 })
             })
             .collect();
+        t
+    }
+
+    #[test]
+    fn while_writing_the_writers_error_or_a_wrong_length_is_the_answer() {
+        let t = long_arm();
+        let source = t.prepare();
+        let oracle = |q: &[f64]| source.fk(q).unwrap_or_default();
+        for pipeline_from in [0, usize::MAX] {
+            // The writer's own error (one the comparison cannot give: 1 row expected).
+            let theirs = || CoreError::JointCount {
+                expected: 1,
+                found: 2,
+            };
+            let failed: Result<(&DhTable, Deviation), CoreError> =
+                compare_from(&t, oracle, 700, 9, pipeline_from, || Err(theirs()));
+            assert_eq!(failed.err(), Some(theirs()));
+            let mut short = t.clone();
+            short.rows.pop();
+            let r = compare_from(&t, oracle, 700, 9, pipeline_from, || {
+                Ok::<_, CoreError>(&short)
+            });
+            assert!(
+                matches!(
+                    r,
+                    Err(CoreError::JointCount {
+                        expected: 60,
+                        found: 59
+                    })
+                ),
+                "{r:?}"
+            );
+        }
+        // Written while the oracle runs: the table comes back with the figures of
+        // compare_written.
+        let (w, dev) = compare_while_writing(&t, oracle, 700, 9, || Ok::<_, CoreError>(t.clone()))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(w, t);
+        assert_eq!(Some(dev), compare_written(&t, &t, oracle, 700, 9).ok());
+    }
+
+    #[test]
+    fn the_oracle_on_its_own_thread_gives_the_same_figures_in_order() {
+        // 60 rows, 700 samples: 42 000 joint evaluations, several blocks of oracle poses.
+        let t = long_arm();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let w = perturbed(&t, Precision::rounded(0.5e-6, 0.5e-6), &mut rng);
         let source = t.prepare();
         let run = |pipeline_from: usize| {
             let mut seen = Vec::new();
-            let dev = compare_written_from(
-                &w,
+            let (_, dev) = compare_from(
                 &t,
                 |q: &[f64]| {
                     seen.push(q.to_vec());
@@ -391,6 +504,7 @@ mod tests {
                 700,
                 9,
                 pipeline_from,
+                || Ok::<_, CoreError>(&w),
             )
             .unwrap_or_else(|e| panic!("{e}"));
             (dev, seen)

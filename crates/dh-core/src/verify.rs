@@ -44,6 +44,14 @@ impl Deviation {
         self.max_orientation_error = worse(self.max_orientation_error, dr);
         self.samples += 1;
     }
+
+    /// Counts the samples of `other` too: the figures of both sets of samples together, the
+    /// same whatever the order in which sets are merged.
+    pub fn merge(&mut self, other: &Deviation) {
+        self.max_position_error = self.max_position_error.max(other.max_position_error);
+        self.max_orientation_error = self.max_orientation_error.max(other.max_orientation_error);
+        self.samples += other.samples;
+    }
 }
 
 impl Default for Deviation {

@@ -91,8 +91,24 @@ where
     }
     doc.verification = None;
     let extra = extra_decimals(source.table, format, doc.length_unit, doc.angle_unit);
-    let first = render_sheet_at(doc, format, extra)?;
-    let written = table_of(&first, format, free)?;
+    // The oracle runs on a second thread while this one renders and reads back (a long chain).
+    let mut first = String::new();
+    let (written, dev) = dh_core::compare_while_writing(
+        source.table,
+        source.oracle,
+        source.samples,
+        source.seed,
+        || -> Result<DhTable, Unproved> {
+            first = render_sheet_at(doc, format, extra).map_err(|e| Unproved::Written(e.into()))?;
+            table_of(&first, format, free).map_err(Unproved::Written)
+        },
+    )
+    .map_err(|e| match e {
+        Unproved::Written(e) => e,
+        Unproved::Rows(e) => {
+            anyhow!("the written table does not read back with the source's rows: {e}")
+        }
+    })?;
     let mut problems = Vec::new();
     for (w, s) in written.rows.iter().zip(&source.table.rows) {
         if w.kind != s.kind {
@@ -102,14 +118,6 @@ where
             ));
         }
     }
-    let dev = dh_core::compare_written(
-        &written,
-        source.table,
-        source.oracle,
-        source.samples,
-        source.seed,
-    )
-    .map_err(|e| anyhow!("the written table does not read back with the source's rows: {e}"))?;
     let rounding = dh_core::written_bound(
         &written,
         precision_of(format, doc.length_unit, doc.angle_unit),
@@ -179,6 +187,19 @@ fn verification_after(doc: &SheetDoc, format: Format, first: &str) -> Result<Opt
         }
         _ => None,
     })
+}
+
+/// Why [`prove`] found no figures: the writing or reading back failed, or the table read back
+/// has other rows than the source.
+enum Unproved {
+    Written(anyhow::Error),
+    Rows(dh_core::CoreError),
+}
+
+impl From<dh_core::CoreError> for Unproved {
+    fn from(e: dh_core::CoreError) -> Self {
+        Unproved::Rows(e)
+    }
 }
 
 /// The largest chain (metres, [`DhTable::size`]) whose written table can be proved: float
