@@ -39,6 +39,14 @@ pub(crate) fn read(doc: &Doc) -> Result<Robot, UrdfError> {
     };
     let infinite_by_default = version_at_least_1_2(root.and_then(|r| r.attr("version")));
     let children = root.map(|r| r.children.as_slice()).unwrap_or(&[]);
+    let count = |name: &str| {
+        children
+            .iter()
+            .filter(|&&k| doc.get(k).is_some_and(|e| e.name == name))
+            .count()
+    };
+    robot.links.reserve_exact(count("link"));
+    robot.joints.reserve_exact(count("joint"));
     for &k in children {
         let Some(e) = doc.get(k) else { continue };
         match e.name {

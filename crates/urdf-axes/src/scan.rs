@@ -167,6 +167,8 @@ pub(crate) fn scan(text: &str) -> Result<Doc<'_>, ScanError> {
 
     let mut elements: Vec<Element> = Vec::new();
     let mut stack: Vec<Open> = Vec::new();
+    // The attributes of the tag being read (one list for every tag).
+    let mut attrs: Vec<(&str, &str)> = Vec::new();
     let mut root_closed = false;
     let mut i = 0;
     while i < b.len() {
@@ -275,7 +277,7 @@ pub(crate) fn scan(text: &str) -> Result<Doc<'_>, ScanError> {
         } else {
             // Kept: the root, its link/joint/material children, and everything inside those.
             let parent = stack.last();
-            let (name, attrs, end, self_closing) = start_tag(text, lt, line)?;
+            let (name, end, self_closing) = start_tag(text, lt, line, &mut attrs)?;
             let kept = match parent {
                 Some(p) => {
                     let keep = p.kept.is_some_and(|k| k != 0 || KEPT.contains(&name));
@@ -307,7 +309,7 @@ pub(crate) fn scan(text: &str) -> Result<Doc<'_>, ScanError> {
             if kept.is_some() {
                 elements.push(Element {
                     name,
-                    attrs: attrs.into_iter().map(|(k, v)| (k, decode(v))).collect(),
+                    attrs: attrs.iter().map(|&(k, v)| (k, decode(v))).collect(),
                     line,
                     children: Vec::new(),
                 });
@@ -398,10 +400,16 @@ fn declaration(text: &str, lt: usize, lines: &mut LineCounter) -> Result<usize, 
 }
 
 /// A start tag's name and raw attributes, the offset after it and whether it closes itself.
-type StartTag<'a> = (&'a str, Vec<(&'a str, &'a str)>, usize, bool);
+/// A start tag's name, the offset after it and whether it closes itself.
+type StartTag<'a> = (&'a str, usize, bool);
 
-/// Parses the start tag at `lt`.
-fn start_tag(text: &str, lt: usize, line: usize) -> Result<StartTag<'_>, ScanError> {
+/// Parses the start tag at `lt`, its attributes (raw values) into `attrs`.
+fn start_tag<'a>(
+    text: &'a str,
+    lt: usize,
+    line: usize,
+    attrs: &mut Vec<(&'a str, &'a str)>,
+) -> Result<StartTag<'a>, ScanError> {
     let b = text.as_bytes();
     let mut j = lt + 1;
     j = skip(b, j, |c| !is_name_end(c));
@@ -415,7 +423,7 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<StartTag<'_>, ScanErr
             line,
         ));
     }
-    let mut attrs: Vec<(&str, &str)> = Vec::new();
+    attrs.clear();
     loop {
         j = skip(b, j, |c| c.is_ascii_whitespace());
         match b.get(j) {
@@ -425,10 +433,10 @@ fn start_tag(text: &str, lt: usize, line: usize) -> Result<StartTag<'_>, ScanErr
                     line,
                 ))
             }
-            Some(b'>') => return Ok((name, attrs, j + 1, false)),
+            Some(b'>') => return Ok((name, j + 1, false)),
             Some(b'/') => {
                 if b.get(j + 1) == Some(&b'>') {
-                    return Ok((name, attrs, j + 2, true));
+                    return Ok((name, j + 2, true));
                 }
                 return Err(malformed(
                     format!(
