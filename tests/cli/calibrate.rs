@@ -2,7 +2,7 @@
 //! within their standard errors and the final RMS sits on the noise floor; the report, the
 //! calibrated model and the residual chart as files.
 
-use crate::common::ok;
+use crate::common::{ok, simulate};
 use std::path::Path;
 
 use serde_json::Value;
@@ -144,23 +144,21 @@ fn a_planted_gear_ratio_is_found_by_the_effect_step() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "gear.csv");
     let out = path(dir.path(), "gear.yaml");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--poses",
         "200",
-        "--noise",
-        "3e-5",
-        "--targets",
-        "2",
-        "--effect",
-        "gear_ratio:elbow_joint=0.002",
-        "--seed",
-        "3",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "3e-5",
+            "--targets",
+            "2",
+            "--effect",
+            "gear_ratio:elbow_joint=0.002",
+            "--seed",
+            "3",
+        ],
+    );
     let report: Value = serde_json::from_str(&ok(&[
         "calibrate",
         "--model",
@@ -214,23 +212,21 @@ fn the_text_report_shows_every_step() {
     let _snap = settings().bind_to_scope();
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "small.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--poses",
         "40",
-        "--noise",
-        "1e-4",
-        "--seed",
-        "5",
-        "--error",
-        "elbow_joint.a=0.001",
-        "--validation",
-        "0.25",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "1e-4",
+            "--seed",
+            "5",
+            "--error",
+            "elbow_joint.a=0.001",
+            "--validation",
+            "0.25",
+        ],
+    );
     let mut s = settings();
     s.add_filter(
         regex_escape(&dir.path().to_string_lossy()).as_str(),
@@ -257,21 +253,12 @@ fn regex_escape(s: &str) -> String {
 fn the_calibrated_model_is_written_as_a_sheet_or_a_urdf_and_the_chart_is_xml() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "d.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/franka_panda/robot.urdf",
-        "--poses",
         "60",
-        "--noise",
-        "2e-5",
-        "--targets",
-        "2",
-        "--seed",
-        "2",
-        "--out",
         &data,
-    ]);
+        &["--noise", "2e-5", "--targets", "2", "--seed", "2"],
+    );
     let (urdf, json, svg) = (
         path(dir.path(), "cal.urdf"),
         path(dir.path(), "cal.json"),
@@ -339,23 +326,21 @@ fn a_separate_validation_file_is_used_for_validation() {
         path(dir.path(), "cal.csv"),
         path(dir.path(), "val.csv"),
     );
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--poses",
         "80",
-        "--noise",
-        "2e-5",
-        "--seed",
-        "7",
-        "--error",
-        "elbow_joint.a=0.001",
-        "--validation",
-        "0.25",
-        "--out",
         &all,
-    ]);
+        &[
+            "--noise",
+            "2e-5",
+            "--seed",
+            "7",
+            "--error",
+            "elbow_joint.a=0.001",
+            "--validation",
+            "0.25",
+        ],
+    );
     // Split the file by its `set` column into two files of the same layout.
     let text = std::fs::read_to_string(&all).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
@@ -407,22 +392,12 @@ fn a_separate_validation_file_is_used_for_validation() {
 fn without_a_model_the_start_is_the_circle_point_analysis() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "cpa.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--cpa",
-        "--poses",
         "8",
-        "--noise",
-        "2e-5",
-        "--targets",
-        "3",
-        "--seed",
-        "4",
-        "--out",
         &data,
-    ]);
+        &["--cpa", "--noise", "2e-5", "--targets", "3", "--seed", "4"],
+    );
     let report: Value =
         serde_json::from_str(&ok(&["calibrate", "--data", &data, "--format", "json"])).unwrap();
     assert_eq!(report["model"], "circle-point analysis of cpa.csv");
@@ -457,7 +432,7 @@ fn bad_input_exits_2_naming_the_line_and_column() {
             run(&["calibrate", "--model", UR5, "--data", &bad], None)
         );
         let good = path(dir.path(), "good.csv");
-        ok(&["simulate", "--model", UR5, "--poses", "10", "--out", &good]);
+        simulate(UR5, "10", &good, &[]);
         insta::assert_snapshot!(
             "unknown_effect",
             run(

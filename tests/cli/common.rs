@@ -212,3 +212,12 @@ pub fn assert_library_calibrates_as_the_cli(
     assert!(calibrated.proved());
     assert_eq!(calibrated.json().unwrap(), json);
 }
+
+/// Runs `urdf-dh simulate --model MODEL --poses POSES --out OUT` with `options` (noise,
+/// targets, planted errors and effects, seed, truth file), asserting exit 0: the simulated sets
+/// the calibration tests start from. Returns stdout.
+pub fn simulate(model: &str, poses: &str, out: &str, options: &[&str]) -> String {
+    let mut args = vec!["simulate", "--model", model, "--poses", poses, "--out", out];
+    args.extend_from_slice(options);
+    ok(&args)
+}

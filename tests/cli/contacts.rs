@@ -2,7 +2,7 @@
 //! small simulated set, the calibrated model written and read back, effects declared and
 //! selected, the chart; and the MUKCa `panda_6` set when `../shared` is there.
 
-use crate::common::ok;
+use crate::common::{ok, simulate};
 use std::path::Path;
 
 use dh_calib::csv::write_measurements;
@@ -375,25 +375,23 @@ fn a_planted_gear_harmonic_in_contacts_is_selected_and_a_declared_one_estimated(
 fn effects_auto_on_simulated_points_shows_the_candidates_and_the_planted_effect() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "gear.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/ur5/vendor.yaml",
-        "--poses",
         "80",
-        "--noise",
-        "3e-5",
-        "--targets",
-        "2",
-        "--effect",
-        "gear_ratio:elbow_joint=0.002",
-        "--validation",
-        "0.3",
-        "--seed",
-        "3",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "3e-5",
+            "--targets",
+            "2",
+            "--effect",
+            "gear_ratio:elbow_joint=0.002",
+            "--validation",
+            "0.3",
+            "--seed",
+            "3",
+        ],
+    );
     let mut s = settings();
     s.add_filter(
         regex_escape(&dir.path().to_string_lossy()).as_str(),
@@ -419,23 +417,21 @@ fn effects_auto_on_simulated_points_shows_the_candidates_and_the_planted_effect(
 fn alpha_sets_the_level_of_every_test_of_the_selection_and_is_echoed() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "gear.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/ur5/vendor.yaml",
-        "--poses",
         "60",
-        "--noise",
-        "3e-5",
-        "--targets",
-        "2",
-        "--effect",
-        "gear_ratio:elbow_joint=0.002",
-        "--seed",
-        "5",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "3e-5",
+            "--targets",
+            "2",
+            "--effect",
+            "gear_ratio:elbow_joint=0.002",
+            "--seed",
+            "5",
+        ],
+    );
     let base = [
         "calibrate",
         "--model",

@@ -1,6 +1,6 @@
 //! `urdf-dh cpa` on simulated sweeps: the measured axes reproduce the true robot's geometry.
 
-use crate::common::ok;
+use crate::common::{ok, simulate};
 use std::process::Command;
 
 use serde_json::Value;
@@ -16,26 +16,24 @@ fn sweeps_of_a_simulated_arm_give_its_axes_back() {
         .join("sweeps.truth.yaml")
         .to_string_lossy()
         .into_owned();
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/ur5/vendor.yaml",
-        "--cpa",
-        "--poses",
         "7",
-        "--noise",
-        "1e-5",
-        "--targets",
-        "3",
-        "--error",
-        "elbow_joint.a=0.002",
-        "--error",
-        "wrist_1_joint.alpha=0.003",
-        "--seed",
-        "9",
-        "--out",
         &data,
-    ]);
+        &[
+            "--cpa",
+            "--noise",
+            "1e-5",
+            "--targets",
+            "3",
+            "--error",
+            "elbow_joint.a=0.002",
+            "--error",
+            "wrist_1_joint.alpha=0.003",
+            "--seed",
+            "9",
+        ],
+    );
     // Compared with the truth (the simulated robot, errors included).
     let doc: Value =
         serde_json::from_str(&ok(&["cpa", &data, "--model", &truth, "--format", "json"])).unwrap();
@@ -82,22 +80,12 @@ fn sweeps_of_a_simulated_arm_give_its_axes_back() {
 fn text_output_names_sweeps_and_joints() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("s.csv").to_string_lossy().into_owned();
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/puma560/vendor.yaml",
-        "--cpa",
-        "--poses",
         "6",
-        "--noise",
-        "1e-5",
-        "--targets",
-        "2",
-        "--seed",
-        "1",
-        "--out",
         &data,
-    ]);
+        &["--cpa", "--noise", "1e-5", "--targets", "2", "--seed", "1"],
+    );
     let text = ok(&["cpa", &data]);
     assert!(
         text.starts_with("circle-point analysis of s.csv: 72 samples of 2 target(s)"),
@@ -111,15 +99,7 @@ fn text_output_names_sweeps_and_joints() {
 fn data_without_sweeps_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("random.csv").to_string_lossy().into_owned();
-    ok(&[
-        "simulate",
-        "--model",
-        "fixtures/robots/ur5/vendor.yaml",
-        "--poses",
-        "30",
-        "--out",
-        &data,
-    ]);
+    simulate("fixtures/robots/ur5/vendor.yaml", "30", &data, &[]);
     let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
         .args(["cpa", &data])
         .current_dir(root())
@@ -142,24 +122,22 @@ fn the_plot_draws_each_joints_motion_and_its_trend() {
     let dir = tempfile::tempdir().unwrap();
     let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
     let (data, truth, svg) = (path("g.csv"), path("g.truth.yaml"), path("g.svg"));
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/ur5/vendor.yaml",
-        "--cpa",
-        "--poses",
         "9",
-        "--noise",
-        "1e-5",
-        "--targets",
-        "3",
-        "--effect",
-        "gear_ratio:elbow_joint=0.001",
-        "--seed",
-        "9",
-        "--out",
         &data,
-    ]);
+        &[
+            "--cpa",
+            "--noise",
+            "1e-5",
+            "--targets",
+            "3",
+            "--effect",
+            "gear_ratio:elbow_joint=0.001",
+            "--seed",
+            "9",
+        ],
+    );
     let report = ok(&["cpa", &data, "--model", &truth, "--plot", &svg]);
     assert!(report.contains("elbow_joint"), "{report}");
     let chart = std::fs::read_to_string(&svg).unwrap();

@@ -5,7 +5,7 @@
 use serde_json::Value;
 
 use crate::calibrate::{path, recovered, UR5};
-use crate::common::ok;
+use crate::common::{ok, simulate};
 
 /// A point planted a metre off in the CSV is named by its file line, left out (the fit and the
 /// validation sit on the noise), kept with `--keep-outliers`, and the verdict is in the JSON.
@@ -13,10 +13,7 @@ use crate::common::ok;
 fn a_far_point_is_named_by_its_line_and_the_verdict_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "far.csv");
-    ok(&[
-        "simulate", "--model", UR5, "--poses", "150", "--noise", "1e-4", "--seed", "5", "--out",
-        &data,
-    ]);
+    simulate(UR5, "150", &data, &["--noise", "1e-4", "--seed", "5"]);
     // Move the x of the 40th data row by 1 m; its 1-based file line is remembered.
     let text = std::fs::read_to_string(&data).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
@@ -76,23 +73,21 @@ fn auto_on_planted(planted: &str, seed: &str) -> (Value, String) {
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "order.csv");
     let out = path(dir.path(), "order.yaml");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--poses",
         "200",
-        "--noise",
-        "2e-5",
-        "--targets",
-        "2",
-        "--effect",
-        planted,
-        "--seed",
-        seed,
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "2e-5",
+            "--targets",
+            "2",
+            "--effect",
+            planted,
+            "--seed",
+            seed,
+        ],
+    );
     let args = [
         "calibrate",
         "--model",

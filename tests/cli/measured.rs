@@ -1,7 +1,7 @@
 //! Measured data: `urdf-dh import` of every published set in `../shared/measured`, the `nominal`
 //! and `geometric` steps of `calibrate` on each, and bad measurement files.
 
-use crate::common::{exec, ok};
+use crate::common::{exec, ok, simulate};
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
@@ -261,21 +261,19 @@ fn measurement_units_convert_on_reading() {
     // The same points in metres/radians and in millimetres/degrees give the same calibration.
     let dir = tempfile::tempdir().unwrap();
     let si = dir.path().join("si.csv").to_string_lossy().into_owned();
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         "fixtures/robots/ur5/vendor.yaml",
-        "--poses",
         "40",
-        "--noise",
-        "1e-5",
-        "--seed",
-        "3",
-        "--error",
-        "elbow_joint.a=0.001",
-        "--out",
         &si,
-    ]);
+        &[
+            "--noise",
+            "1e-5",
+            "--seed",
+            "3",
+            "--error",
+            "elbow_joint.a=0.001",
+        ],
+    );
     let text = std::fs::read_to_string(&si).unwrap();
     let mut mm = String::new();
     for (i, line) in text.lines().filter(|l| !l.starts_with('#')).enumerate() {

@@ -5,7 +5,7 @@
 
 use serde_json::Value;
 
-use crate::common::{csv_rows, exec, ok};
+use crate::common::{csv_rows, exec, ok, simulate};
 
 const MODEL: &str = "fixtures/robots/ur5/vendor.yaml";
 const HEADER: &str = "shoulder_pan_joint,shoulder_lift_joint,elbow_joint,wrist_1_joint,wrist_2_joint,wrist_3_joint,x,y,z,sigma,qw,qx,qy,qz,sigma_rot\n";
@@ -14,23 +14,21 @@ const HEADER: &str = "shoulder_pan_joint,shoulder_lift_joint,elbow_joint,wrist_1
 fn simulated_six_dof_poses_calibrate_to_both_noise_floors() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("p.csv").to_string_lossy().into_owned();
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         MODEL,
-        "--poses",
         "120",
-        "--noise",
-        "20e-6",
-        "--orientation-noise",
-        "50e-6",
-        "--random-errors",
-        "0.0005,0.0003",
-        "--seed",
-        "3",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "20e-6",
+            "--orientation-noise",
+            "50e-6",
+            "--random-errors",
+            "0.0005, 0.0003",
+            "--seed",
+            "3",
+        ],
+    );
     let text = std::fs::read_to_string(&data).unwrap();
     assert!(text.contains(",qw,qx,qy,qz,sigma_rot\n"), "{text}");
     let report: Value = serde_json::from_str(&ok(&[
@@ -132,23 +130,21 @@ fn target_rotations_are_in_the_truth_and_the_report() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("r.csv").to_string_lossy().into_owned();
     let truth_path = dir.path().join("r.truth.yaml");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         MODEL,
-        "--poses",
         "120",
-        "--noise",
-        "20e-6",
-        "--orientation-noise",
-        "50e-6",
-        "--targets",
-        "2",
-        "--seed",
-        "3",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "20e-6",
+            "--orientation-noise",
+            "50e-6",
+            "--targets",
+            "2",
+            "--seed",
+            "3",
+        ],
+    );
     let truth: serde_yaml::Value =
         serde_yaml::from_str(&std::fs::read_to_string(&truth_path).unwrap()).unwrap();
     let report: Value = serde_json::from_str(&ok(&[
@@ -191,9 +187,7 @@ fn target_rotations_are_in_the_truth_and_the_report() {
     }
     // A point set has no rotations, in the truth or the report.
     let points = dir.path().join("p.csv").to_string_lossy().into_owned();
-    ok(&[
-        "simulate", "--model", MODEL, "--poses", "30", "--out", &points,
-    ]);
+    simulate(MODEL, "30", &points, &[]);
     let report: Value = serde_json::from_str(&ok(&[
         "calibrate",
         "--model",
@@ -224,23 +218,21 @@ fn a_planted_effect_turns_the_orientations_and_is_found() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("e.csv").to_string_lossy().into_owned();
     let truth_path = dir.path().join("e.truth.yaml");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         MODEL,
-        "--poses",
         "120",
-        "--noise",
-        "20e-6",
-        "--orientation-noise",
-        "50e-6",
-        "--effect",
-        "gear_ratio:elbow_joint=1e-3",
-        "--seed",
-        "3",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "20e-6",
+            "--orientation-noise",
+            "50e-6",
+            "--effect",
+            "gear_ratio:elbow_joint=1e-3",
+            "--seed",
+            "3",
+        ],
+    );
     let truth: serde_yaml::Value =
         serde_yaml::from_str(&std::fs::read_to_string(&truth_path).unwrap()).unwrap();
     assert_eq!(
@@ -311,23 +303,21 @@ fn a_six_dof_calibration_predicts_positions_and_attitudes() {
     let dir = tempfile::tempdir().unwrap();
     let path = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
     let (data, cal, truth) = (path("d.csv"), path("cal.yaml"), path("d.truth.yaml"));
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         MODEL,
-        "--poses",
         "120",
-        "--noise",
-        "20e-6",
-        "--orientation-noise",
-        "50e-6",
-        "--random-errors",
-        "0.0005,0.0003",
-        "--seed",
-        "5",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "20e-6",
+            "--orientation-noise",
+            "50e-6",
+            "--random-errors",
+            "0.0005, 0.0003",
+            "--seed",
+            "5",
+        ],
+    );
     ok(&[
         "calibrate",
         "--model",

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::common::{csv_rows, exec, ok};
+use crate::common::{csv_rows, exec, ok, simulate};
 
 const UR5: &str = "fixtures/robots/ur5/vendor.yaml";
 
@@ -40,41 +40,32 @@ fn calibrated(dir: &Path) -> (String, String, String, String) {
         p("cal.yaml"),
         p("program.csv"),
     );
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--poses",
         "200",
-        "--noise",
-        "5e-5",
-        "--targets",
-        "3",
-        "--error",
-        "shoulder_lift_joint.a=0.0005",
-        "--error",
-        "elbow_joint.theta=0.001",
-        "--seed",
-        "7",
-        "--out",
         &data,
-        "--truth",
-        &truth,
-    ]);
+        &[
+            "--noise",
+            "5e-5",
+            "--targets",
+            "3",
+            "--error",
+            "shoulder_lift_joint.a=0.0005",
+            "--error",
+            "elbow_joint.theta=0.001",
+            "--seed",
+            "7",
+            "--truth",
+            &truth,
+        ],
+    );
     ok(&["calibrate", "--model", UR5, "--data", &data, "--out", &cal]);
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         UR5,
-        "--poses",
         "100",
-        "--seed",
-        "99",
-        "--out",
         &program,
-        "--truth",
-        &p("program.truth.yaml"),
-    ]);
+        &["--seed", "99", "--truth", &p("program.truth.yaml")],
+    );
     (data, truth, cal, program)
 }
 

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::common::{exec, ok};
+use crate::common::{exec, ok, simulate};
 
 /// A 6R in the standard convention whose J2 and J3 axes are parallel (a Motoman-like arm).
 const ARM: &str = "convention: standard
@@ -58,31 +58,29 @@ fn a_parallel_pair_is_written_with_beta_and_the_artefact_reproduces_the_fit() {
     let model = path(dir.path(), "arm.yaml");
     std::fs::write(&model, ARM).unwrap();
     let data = path(dir.path(), "d.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         &model,
-        "--poses",
         "80",
-        "--noise",
-        "1e-5",
-        "--targets",
-        "3",
-        "--error",
-        "joint_2.beta=4e-4",
-        "--error",
-        "joint_3.a=1.5e-3",
-        "--error",
-        "joint_2.theta=-1e-3",
-        "--error",
-        "joint_5.alpha=5e-4",
-        "--effect",
-        "gear_ratio:joint_3=2e-3",
-        "--seed",
-        "11",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "1e-5",
+            "--targets",
+            "3",
+            "--error",
+            "joint_2.beta=4e-4",
+            "--error",
+            "joint_3.a=1.5e-3",
+            "--error",
+            "joint_2.theta=-1e-3",
+            "--error",
+            "joint_5.alpha=5e-4",
+            "--effect",
+            "gear_ratio:joint_3=2e-3",
+            "--seed",
+            "11",
+        ],
+    );
     let (yaml, json, urdf) = (
         path(dir.path(), "cal.yaml"),
         path(dir.path(), "cal.json"),
@@ -250,23 +248,21 @@ fn a_urdf_model_is_written_as_a_minimal_edit_of_itself() {
     let model = "fixtures/robots/franka_panda/robot.urdf";
     let dir = tempfile::tempdir().unwrap();
     let data = path(dir.path(), "p.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         model,
-        "--poses",
         "60",
-        "--noise",
-        "1e-5",
-        "--targets",
-        "2",
-        "--random-errors",
-        "0.001,0.001",
-        "--seed",
-        "3",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "1e-5",
+            "--targets",
+            "2",
+            "--random-errors",
+            "0.001, 0.001",
+            "--seed",
+            "3",
+        ],
+    );
     let (urdf, sheet) = (path(dir.path(), "p.urdf"), path(dir.path(), "p.yaml"));
     for out in [&urdf, &sheet] {
         ok(&["calibrate", "--model", model, "--data", &data, "--out", out]);
@@ -317,23 +313,21 @@ fn a_urdf_whose_extraction_puts_a_common_normal_kilometres_away_is_written_bound
         "{extracted}"
     );
     let data = path(dir.path(), "d.csv");
-    ok(&[
-        "simulate",
-        "--model",
+    simulate(
         &tilted,
-        "--poses",
         "60",
-        "--noise",
-        "1e-5",
-        "--targets",
-        "3",
-        "--error",
-        "joint_3.a=1e-3",
-        "--seed",
-        "5",
-        "--out",
         &data,
-    ]);
+        &[
+            "--noise",
+            "1e-5",
+            "--targets",
+            "3",
+            "--error",
+            "joint_3.a=1e-3",
+            "--seed",
+            "5",
+        ],
+    );
     let out = path(dir.path(), "cal.json");
     let r: Value = serde_json::from_str(&ok(&[
         "calibrate",
