@@ -265,8 +265,9 @@ pub(super) fn score(
             .and_then(|k| travel.get(k))
             .is_some_and(|(lo, hi)| hi - lo < MIN_JOINT_MOTION)
     };
-    let mut out = Vec::with_capacity(remaining.len());
-    for (&e, span) in remaining.iter().zip(&spans) {
+    // Each candidate's projection and held-out figure on its own: on every core, in order.
+    let out = crate::fit::parallel_map(remaining.len(), |k| {
+        let (e, span) = (remaining[k], &spans[k]);
         let c = j.columns(span.start, span.len()).into_owned();
         let fit = full.solve(&c);
         let (reduction, independence) = (fit.2, fit.3);
@@ -299,7 +300,7 @@ pub(super) fn score(
             .get(e)
             .map(|(eff, _)| eff.label())
             .unwrap_or_default();
-        out.push((
+        Ok((
             e,
             CandidateReport {
                 label,
@@ -316,8 +317,8 @@ pub(super) fn score(
                     CandidateStatus::NotSelected
                 },
             },
-        ));
-    }
+        ))
+    })?;
     Ok(Scored {
         candidates: out,
         baseline_val,
