@@ -118,7 +118,7 @@ fn pure_error(prep: &Prepared) -> Option<(f64, usize)> {
 #[derive(Clone, Copy)]
 enum Known<'a> {
     Given(f64),
-    Samples(&'a [Option<Vector3<f64>>]),
+    Samples(&'a crate::prepare::Sigmas),
 }
 
 impl Known<'_> {
@@ -126,7 +126,7 @@ impl Known<'_> {
     fn at(&self, i: usize) -> Vector3<f64> {
         match self {
             Known::Given(s) => Vector3::repeat(*s),
-            Known::Samples(v) => v[i].unwrap_or_default(),
+            Known::Samples(v) => v.get(i).unwrap_or_default(),
         }
     }
 }
@@ -245,31 +245,42 @@ fn structure_checks(
     // joint explains the lack of fit, not whether there is one (that is the residual test).
     // The unit of each group's first target in a slot per group (groups are numbered from 0),
     // other targets of a group in a map: a map entry per unit cost 100 MB on 2 000 000 poses.
-    let mut first_unit: Vec<Option<(usize, usize)>> = vec![None; prep.group_count];
+    // Each unit's sum, count and first sample in lists of their own (40 bytes a unit in one
+    // list of tuples); the sums become the means in place.
+    let target_of = |o: &crate::model::Observed| match o.observation {
+        Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
+        Observation::Pose(_) => usize::MAX,
+    };
+    let mut first_unit: Vec<usize> = vec![usize::MAX; prep.group_count];
     let mut unit_of: IndexMap<(usize, usize), usize> = IndexMap::default();
-    let mut units: Vec<(Vector3<f64>, usize, usize)> = Vec::with_capacity(prep.group_count);
+    let mut means: Vec<Vector3<f64>> = Vec::with_capacity(prep.group_count);
+    let mut counts: Vec<usize> = Vec::with_capacity(prep.group_count);
+    let mut firsts: Vec<usize> = Vec::with_capacity(prep.group_count);
     for (i, o) in prep.cal.iter().enumerate() {
-        let t = match o.observation {
-            Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
-            Observation::Pose(_) => usize::MAX,
-        };
-        let next = units.len();
+        let t = target_of(o);
+        let next = means.len();
         let g = prep.groups[i];
         let u = match first_unit.get_mut(g) {
-            Some(slot @ None) => slot.insert((t, next)).1,
-            Some(Some((t0, u))) if *t0 == t => *u,
+            Some(slot) if *slot == usize::MAX => {
+                *slot = next;
+                next
+            }
+            Some(u) if target_of(&prep.cal[firsts[*u]]) == t => *u,
             _ => *unit_of.entry((g, t)).or_insert(next),
         };
         if u == next {
-            units.push((Vector3::zeros(), 0, i));
+            means.push(Vector3::zeros());
+            counts.push(0);
+            firsts.push(i);
         }
-        units[u].0 += res[i];
-        units[u].1 += 1;
+        means[u] += res[i];
+        counts[u] += 1;
     }
     drop((first_unit, unit_of));
-    let means: Vec<Vector3<f64>> = units.iter().map(|(s, n, _)| s / *n as f64).collect();
-    // Each unit's first sample, the sums freed before the tests' matrices.
-    let firsts: Vec<usize> = units.into_iter().map(|(_, _, i)| i).collect();
+    for (m, &n) in means.iter_mut().zip(&counts) {
+        *m /= n as f64;
+    }
+    drop(counts);
     let joints: Vec<usize> = (0..rows.len())
         .filter(|&j| rows[j].mimic.is_none())
         .collect();
@@ -285,40 +296,32 @@ fn structure_checks(
             Err(_) => joints.iter().filter_map(|&j| check(j)).collect(),
         };
     drop((means, firsts));
-    // Pose order: pose-mean residuals in order of first appearance.
-    // A slot per group number (a hash map of millions of groups held 170 MB).
-    let mut order: Vec<usize> = Vec::new();
+    // Pose order: pose-mean residuals in order of first appearance, which is the order of
+    // the group numbers (`Prepared::groups`). A slot per group number (a hash map of millions
+    // of groups held 170 MB), the sums becoming the means in place.
     let slots = prep.groups.iter().max().map_or(0, |g| g + 1);
-    let mut sums: Vec<(Vector3<f64>, usize)> = vec![(Vector3::zeros(), 0); slots];
+    let mut means: Vec<Vector3<f64>> = vec![Vector3::zeros(); slots];
+    let mut counts: Vec<usize> = vec![0; slots];
     for (i, &g) in prep.groups.iter().enumerate() {
-        let e = &mut sums[g];
-        if e.1 == 0 {
-            order.push(g);
-        }
-        e.0 += res[i];
-        e.1 += 1;
+        means[g] += res[i];
+        counts[g] += 1;
     }
-    let means: Vec<Vector3<f64>> = order
-        .iter()
-        .map(|&g| {
-            let (s, n) = sums[g];
-            s / n.max(1) as f64
-        })
-        .collect();
-    drop(sums);
+    for (m, &n) in means.iter_mut().zip(&counts) {
+        *m /= n.max(1) as f64;
+    }
+    drop(counts);
     if means.len() >= 4 {
         let a: Vec<f64> = means.windows(2).map(|w| w[0].dot(&w[1])).collect();
         let num: f64 = a.iter().sum();
         let den = a.iter().map(|v| v * v).sum::<f64>().sqrt();
         let z = if den > 0.0 { num / den } else { 0.0 };
         let p = 2.0 * stats::normal_sf(z.abs());
-        let idx: Vec<f64> = (0..means.len()).map(|i| i as f64).collect();
         out.push(StructureCheck {
             variable: "pose order".into(),
             statistic: z,
             p_value: p,
             significant: p < level,
-            bins: bins(&idx, &means, 8),
+            bins: bins(|| (0..means.len()).map(|i| i as f64), &means, 8),
         });
     }
     out
@@ -386,17 +389,16 @@ fn joint_check(
     let d2 = (3.0 * means.len() as f64 - fit.free.len() as f64 - d1).max(1.0);
     let f = (explained / d1) / ((ssr0 - explained).max(1e-300) / d2);
     let p = stats::f_sf(f, d1, d2);
-    let res_q: Vec<f64> = prep
-        .cal
-        .iter()
-        .map(|o| o.q.get(j).copied().unwrap_or(0.0))
-        .collect();
     Some(StructureCheck {
         variable: row.name.clone(),
         statistic: f,
         p_value: p,
         significant: p < level,
-        bins: bins(&res_q, res, 8),
+        bins: bins(
+            || prep.cal.iter().map(|o| o.q.get(j).copied().unwrap_or(0.0)),
+            res,
+            8,
+        ),
     })
 }
 
@@ -434,16 +436,21 @@ impl IndexHasher {
 
 type IndexMap<K, V> = HashMap<K, V, BuildHasherDefault<IndexHasher>>;
 
-/// `(centre, RMS, |mean|)` of `res` in `n` equal bins of `v`.
-fn bins(v: &[f64], res: &[Vector3<f64>], n: usize) -> Vec<(f64, f64, f64)> {
-    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+/// `(centre, RMS, |mean|)` of `res` in `n` equal bins of the values `v()` lists (one per
+/// residual, in order; listed twice, not held: millions of them on a large set).
+fn bins<I: Iterator<Item = f64>>(
+    v: impl Fn() -> I,
+    res: &[Vector3<f64>],
+    n: usize,
+) -> Vec<(f64, f64, f64)> {
+    let lo = v().fold(f64::INFINITY, f64::min);
+    let hi = v().fold(f64::NEG_INFINITY, f64::max);
     if !(lo.is_finite() && hi.is_finite()) {
         return vec![];
     }
     let w = ((hi - lo) / n as f64).max(1e-12);
     let mut acc = vec![(Vector3::zeros(), 0.0, 0usize); n];
-    for (x, r) in v.iter().zip(res) {
+    for (x, r) in v().zip(res) {
         let b = (((x - lo) / w) as usize).min(n - 1);
         acc[b].0 += r;
         acc[b].1 += r.norm_squared();
