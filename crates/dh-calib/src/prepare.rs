@@ -2,6 +2,7 @@
 //! sample contexts (sequence, config) and the calibration/validation split ([`Prepared`]).
 
 use std::collections::HashMap;
+use std::hash::{BuildHasher, BuildHasherDefault, Hash, Hasher};
 
 use nalgebra::{Isometry3, Translation3};
 
@@ -177,6 +178,51 @@ fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
     }
 }
 
+/// A prepared sample (or why it cannot be) and the hash of its config name (0 without one).
+type Batched = (Result<Observed, CalibError>, u64);
+
+/// A config name and its hash (by a [`RandomState`](std::collections::hash_map::RandomState)),
+/// as a key of a map whose hasher passes the hash on ([`Prehashed`]): the hash is made on
+/// another thread than the map's look-ups.
+#[derive(Clone, Copy, Debug)]
+struct Named<'a> {
+    hash: u64,
+    name: &'a str,
+}
+
+impl Hash for Named<'_> {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.hash);
+    }
+}
+
+impl PartialEq for Named<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.hash == other.hash && self.name == other.name
+    }
+}
+
+impl Eq for Named<'_> {}
+
+/// The hasher of [`Named`] keys: their hash as it is.
+#[derive(Clone, Copy, Debug, Default)]
+struct Prehashed(u64);
+
+impl Hasher for Prehashed {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        // Only `write_u64` is called by `Named`; anything else is folded in, never ignored.
+        for &b in bytes {
+            self.0 = self.0.rotate_left(8) ^ u64::from(b);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = v;
+    }
+}
+
 /// Samples per batch handed from the thread that prepares them to the one that files them.
 const PREPARE_BATCH: usize = 4096;
 
@@ -224,7 +270,11 @@ pub(crate) fn prepare(
     };
     let mut val_ids: HashMap<String, usize> = HashMap::new();
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
-    let mut config_ids: HashMap<&str, usize> = HashMap::new();
+    // The config names' hashes are made beside the samples, on the second thread below
+    // (SipHash with random keys, as a map's own); the map only compares names.
+    let config_hasher = std::collections::hash_map::RandomState::new();
+    let mut config_ids: HashMap<Named<'_>, usize, BuildHasherDefault<Prehashed>> =
+        HashMap::default();
     for s in &data.samples {
         if s.target >= data.targets.len() {
             return Err(CalibError::BadTarget {
@@ -242,15 +292,20 @@ pub(crate) fn prepare(
     // The prepared samples are made in order on a second thread (their joint values, what
     // they measure, their contexts), a batch at a time, while this one numbers the pose groups
     // (a map of the config names, in order of first appearance) and files them.
-    let produce = |send: &mut dyn FnMut(Vec<Result<Observed, CalibError>>) -> bool| {
+    let produce = |send: &mut dyn FnMut(Vec<Batched>) -> bool| {
         let mut batch = Vec::with_capacity(PREPARE_BATCH);
         for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
-            batch.push(observation_of(s).map(|observation| Observed {
+            let hash = match (&s.config, s.split) {
+                (Some(c), Split::Calibration) => config_hasher.hash_one(c.as_str()),
+                _ => 0,
+            };
+            let obs = observation_of(s).map(|observation| Observed {
                 session: s.session,
                 q,
                 observation,
                 context,
-            }));
+            });
+            batch.push((obs, hash));
             if batch.len() == PREPARE_BATCH
                 && !send(std::mem::replace(
                     &mut batch,
@@ -264,8 +319,8 @@ pub(crate) fn prepare(
             send(batch);
         }
     };
-    let mut consume = |batches: &mut dyn Iterator<Item = Vec<Result<Observed, CalibError>>>| {
-        for (s, obs) in data.samples.iter().zip(batches.flatten()) {
+    let mut consume = |batches: &mut dyn Iterator<Item = Vec<Batched>>| {
+        for (s, (obs, hash)) in data.samples.iter().zip(batches.flatten()) {
             let obs = obs?;
             match s.split {
                 Split::Validation => {
@@ -280,7 +335,12 @@ pub(crate) fn prepare(
                 Split::Calibration => {
                     let next = group_ids.len() + config_ids.len();
                     let g = match &s.config {
-                        Some(c) => *config_ids.entry(c.as_str()).or_insert(next),
+                        Some(c) => *config_ids
+                            .entry(Named {
+                                hash,
+                                name: c.as_str(),
+                            })
+                            .or_insert(next),
                         None => *group_ids
                             .entry(obs.q.iter().map(|v| v.to_bits()).collect())
                             .or_insert(next),
@@ -366,5 +426,65 @@ mod tests {
             .map(|s| s.sigma)
             .collect();
         assert_eq!(prep.sigmas.iter().collect::<Vec<_>>(), sigmas);
+    }
+
+    /// A set large enough for the second thread gives the same groups, contexts and joint
+    /// values as numbered here one sample at a time.
+    #[test]
+    fn a_large_set_is_prepared_as_a_small_one_would_be() {
+        let tree = DhTree::serial(&crate::test_robots::ur5());
+        let n = PREPARE_PARALLEL_MIN + PREPARE_BATCH + 17;
+        let samples: Vec<Sample> = (0..n)
+            .map(|i| Sample {
+                q: vec![i as f64 * 1e-5, 0.1, 0.2, 0.3, 0.4, 0.5],
+                target: 0,
+                point: Vector3::new(0.1, 0.2, 0.3),
+                sigma: None,
+                // Names repeat out of order; every 7th sample is unnamed.
+                config: (i % 7 != 3).then(|| format!("c{}", (i * 7919) % 1000)),
+                split: if i % 11 == 5 {
+                    Split::Validation
+                } else {
+                    Split::Calibration
+                },
+                line: i + 2,
+                socket: None,
+                session: 0,
+                orientation: None,
+            })
+            .collect();
+        let data = Measurements {
+            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
+            targets: vec!["t".into()],
+            samples,
+            sessions: vec![],
+        };
+        let prep = prepare(&tree, &data, None, false).unwrap();
+        let mut ids: HashMap<String, usize> = HashMap::new();
+        let mut expected = vec![];
+        for s in data
+            .samples
+            .iter()
+            .filter(|s| s.split == Split::Calibration)
+        {
+            let key = match &s.config {
+                Some(c) => c.clone(),
+                None => format!("{:?}", s.q),
+            };
+            let next = ids.len();
+            expected.push(*ids.entry(key).or_insert(next));
+        }
+        assert_eq!(prep.groups, expected);
+        assert_eq!(prep.group_count, ids.len());
+        let cal: Vec<&Sample> = data
+            .samples
+            .iter()
+            .filter(|s| s.split == Split::Calibration)
+            .collect();
+        assert_eq!(prep.cal.len(), cal.len());
+        assert!(prep.cal.iter().zip(&cal).all(|(o, s)| o.q == s.q));
+        assert_eq!(prep.val.len(), n - cal.len());
+        let orders: Vec<f64> = prep.cal.iter().map(|o| o.context.order).collect();
+        assert!(orders.windows(2).all(|w| w[0] < w[1]));
     }
 }
