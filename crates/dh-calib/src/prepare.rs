@@ -2,24 +2,33 @@
 //! sample contexts (sequence, config) and the calibration/validation split ([`Prepared`]).
 
 use std::collections::HashMap;
+use std::hash::{BuildHasher, BuildHasherDefault, Hash, Hasher};
 
-use nalgebra::{Isometry3, Translation3, Vector3};
+use nalgebra::{Isometry3, Translation3};
 
 use crate::data::{Measurements, Sample, Split};
 use crate::fit::CalibError;
 use crate::model::{Observation, Observed, SampleContext};
 use crate::tree::DhTree;
 
+mod sigmas;
+
+pub(crate) use sigmas::Sigmas;
+
 /// Calibration samples, validation samples and the pose group of each calibration sample.
 pub(crate) struct Prepared {
     pub(crate) cal: Vec<Observed>,
     pub(crate) val: Vec<Observed>,
+    /// The pose group of each calibration sample, numbered from 0 in order of first
+    /// appearance (so group `g + 1` first appears after group `g`).
     pub(crate) groups: Vec<usize>,
     pub(crate) group_count: usize,
     /// Whether each calibration sample names its pose (`config`): its repeat key is then its
     /// pose group and target ([`Prepared::repeat_keys`]).
     pub(crate) named: Vec<bool>,
-    pub(crate) sigmas: Vec<Option<Vector3<f64>>>,
+    /// The known per-axis noise of each calibration sample (metres), held once when all are
+    /// the same.
+    pub(crate) sigmas: Sigmas,
     /// `sigma_rot` of the calibration samples that measure an orientation, in order (radians;
     /// none for point samples, which are most of a large set).
     pub(crate) sigmas_rot: Vec<f64>,
@@ -169,6 +178,58 @@ fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
     }
 }
 
+/// A prepared sample (or why it cannot be) and the hash of its config name (0 without one).
+type Batched = (Result<Observed, CalibError>, u64);
+
+/// A config name and its hash (by a [`RandomState`](std::collections::hash_map::RandomState)),
+/// as a key of a map whose hasher passes the hash on ([`Prehashed`]): the hash is made on
+/// another thread than the map's look-ups.
+#[derive(Clone, Copy, Debug)]
+struct Named<'a> {
+    hash: u64,
+    /// A thin reference (8 bytes, not a `&str`'s 16): a map entry per name of millions.
+    name: &'a String,
+}
+
+impl Hash for Named<'_> {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.hash);
+    }
+}
+
+impl PartialEq for Named<'_> {
+    fn eq(&self, other: &Self) -> bool {
+        self.hash == other.hash && self.name == other.name
+    }
+}
+
+impl Eq for Named<'_> {}
+
+/// The hasher of [`Named`] keys: their hash as it is.
+#[derive(Clone, Copy, Debug, Default)]
+struct Prehashed(u64);
+
+impl Hasher for Prehashed {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        // Only `write_u64` is called by `Named`; anything else is folded in, never ignored.
+        for &b in bytes {
+            self.0 = self.0.rotate_left(8) ^ u64::from(b);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = v;
+    }
+}
+
+/// Samples per batch handed from the thread that prepares them to the one that files them.
+const PREPARE_BATCH: usize = 4096;
+
+/// From this many samples on, [`prepare`] makes the prepared samples on a second thread.
+const PREPARE_PARALLEL_MIN: usize = 65_536;
+
 /// Prepares `data` for `tree`; `sequence` is each sample's place in the measurement sequence
 /// when `data` is part of a longer one (the samples an outlier screen kept, placed in the
 /// whole file: [`fitted_session`]), `None` to take `data`'s own order; without `directions`
@@ -185,7 +246,7 @@ pub(crate) fn prepare(
     // visited both, in file order).
     // Read one at a time: a list of them would be held beside the samples (64 MB on
     // 2 000 000 samples).
-    let contexts: Box<dyn Iterator<Item = SampleContext>> = match sequence {
+    let contexts: Box<dyn Iterator<Item = SampleContext> + Send + '_> = match sequence {
         Some(c) if c.len() == data.samples.len() => Box::new(c.iter().cloned()),
         _ if directions => Box::new(sequence_of(&rows_q, data).into_iter()),
         _ => Box::new(orders_of(&rows_q, data)),
@@ -204,13 +265,17 @@ pub(crate) fn prepare(
         groups: Vec::with_capacity(n_cal),
         group_count: 0,
         named: Vec::with_capacity(n_cal),
-        sigmas: Vec::with_capacity(n_cal),
+        sigmas: Sigmas::default(),
         sigmas_rot: vec![],
         val_groups: Vec::with_capacity(n_val),
     };
     let mut val_ids: HashMap<String, usize> = HashMap::new();
     let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
-    let mut config_ids: HashMap<&str, usize> = HashMap::new();
+    // The config names' hashes are made beside the samples, on the second thread below
+    // (SipHash with random keys, as a map's own); the map only compares names.
+    let config_hasher = std::collections::hash_map::RandomState::new();
+    let mut config_ids: HashMap<Named<'_>, usize, BuildHasherDefault<Prehashed>> =
+        HashMap::default();
     for s in &data.samples {
         if s.target >= data.targets.len() {
             return Err(CalibError::BadTarget {
@@ -225,41 +290,197 @@ pub(crate) fn prepare(
             });
         }
     }
-    for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
-        let obs = Observed {
-            session: s.session,
-            q,
-            observation: observation_of(s)?,
-            context,
-        };
-        match s.split {
-            Split::Validation => {
-                let key = match &s.config {
-                    Some(c) => c.clone(),
-                    None => format!("{:?}", obs.q),
-                };
-                let next = val_ids.len();
-                out.val_groups.push(*val_ids.entry(key).or_insert(next));
-                out.val.push(obs);
-            }
-            Split::Calibration => {
-                let next = group_ids.len() + config_ids.len();
-                let g = match &s.config {
-                    Some(c) => *config_ids.entry(c.as_str()).or_insert(next),
-                    None => *group_ids
-                        .entry(obs.q.iter().map(|v| v.to_bits()).collect())
-                        .or_insert(next),
-                };
-                out.groups.push(g);
-                out.named.push(s.config.is_some());
-                out.sigmas.push(s.sigma);
-                if let Some(o) = &s.orientation {
-                    out.sigmas_rot.push(o.sigma);
-                }
-                out.cal.push(obs);
+    // The prepared samples are made in order on a second thread (their joint values, what
+    // they measure, their contexts), a batch at a time, while this one numbers the pose groups
+    // (a map of the config names, in order of first appearance) and files them.
+    let produce = |send: &mut dyn FnMut(Vec<Batched>) -> bool| {
+        let mut batch = Vec::with_capacity(PREPARE_BATCH);
+        for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
+            let hash = match (&s.config, s.split) {
+                (Some(c), Split::Calibration) => config_hasher.hash_one(c.as_str()),
+                _ => 0,
+            };
+            let obs = observation_of(s).map(|observation| Observed {
+                session: s.session,
+                q,
+                observation,
+                context,
+            });
+            batch.push((obs, hash));
+            if batch.len() == PREPARE_BATCH
+                && !send(std::mem::replace(
+                    &mut batch,
+                    Vec::with_capacity(PREPARE_BATCH),
+                ))
+            {
+                return;
             }
         }
+        if !batch.is_empty() {
+            send(batch);
+        }
+    };
+    let mut consume = |batches: &mut dyn Iterator<Item = Vec<Batched>>| {
+        for (s, (obs, hash)) in data.samples.iter().zip(batches.flatten()) {
+            let obs = obs?;
+            match s.split {
+                Split::Validation => {
+                    let key = match &s.config {
+                        Some(c) => c.clone(),
+                        None => format!("{:?}", obs.q),
+                    };
+                    let next = val_ids.len();
+                    out.val_groups.push(*val_ids.entry(key).or_insert(next));
+                    out.val.push(obs);
+                }
+                Split::Calibration => {
+                    let next = group_ids.len() + config_ids.len();
+                    let g = match &s.config {
+                        Some(c) => *config_ids.entry(Named { hash, name: c }).or_insert(next),
+                        None => *group_ids
+                            .entry(obs.q.iter().map(|v| v.to_bits()).collect())
+                            .or_insert(next),
+                    };
+                    out.groups.push(g);
+                    out.named.push(s.config.is_some());
+                    out.sigmas.push(s.sigma);
+                    if let Some(o) = &s.orientation {
+                        out.sigmas_rot.push(o.sigma);
+                    }
+                    out.cal.push(obs);
+                }
+            }
+        }
+        Ok::<(), CalibError>(())
+    };
+    if data.samples.len() >= PREPARE_PARALLEL_MIN {
+        dh_core::parallel::pipeline(4, produce, consume)?;
+    } else {
+        let mut batches = Vec::new();
+        produce(&mut |b| {
+            batches.push(b);
+            true
+        });
+        consume(&mut batches.into_iter())?;
     }
     out.group_count = group_ids.len() + config_ids.len();
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// Pose groups are numbered in order of first appearance, named or not, and the sigmas
+    /// come back as given.
+    #[test]
+    fn groups_are_numbered_in_order_of_first_appearance() {
+        let tree = DhTree::serial(&crate::test_robots::ur5());
+        let joint_names: Vec<String> = (1..=6).map(|j| format!("j{j}")).collect();
+        let sample = |q0: f64, config: Option<&str>, split: Split, line: usize| Sample {
+            q: vec![q0, 0.1, 0.2, 0.3, 0.4, 0.5],
+            target: 0,
+            point: Vector3::new(0.1 * line as f64, 0.2, 0.3),
+            sigma: (!line.is_multiple_of(3)).then(|| Vector3::repeat(1e-5 * line as f64)),
+            config: config.map(str::to_string),
+            split,
+            line,
+            socket: None,
+            session: 0,
+            orientation: None,
+        };
+        let cal = Split::Calibration;
+        let data = Measurements {
+            joint_names,
+            targets: vec!["t".into()],
+            samples: vec![
+                sample(0.0, Some("b"), cal, 1),
+                sample(0.0, Some("a"), cal, 2),
+                sample(0.5, None, Split::Validation, 3),
+                sample(0.0, Some("b"), cal, 4),
+                sample(0.7, None, cal, 5),
+                sample(0.0, Some("c"), cal, 6),
+                sample(0.7, None, cal, 7),
+                sample(0.0, Some("a"), cal, 8),
+                sample(0.9, None, cal, 9),
+            ],
+            sessions: vec![],
+        };
+        let prep = prepare(&tree, &data, None, false).unwrap();
+        assert_eq!(prep.groups, vec![0, 1, 0, 2, 3, 2, 1, 4]);
+        assert_eq!(prep.group_count, 5);
+        let mut seen = 0;
+        for &g in &prep.groups {
+            assert!(g <= seen);
+            seen = seen.max(g + 1);
+        }
+        let sigmas: Vec<_> = data
+            .samples
+            .iter()
+            .filter(|s| s.split == cal)
+            .map(|s| s.sigma)
+            .collect();
+        assert_eq!(prep.sigmas.iter().collect::<Vec<_>>(), sigmas);
+    }
+
+    /// A set large enough for the second thread gives the same groups, contexts and joint
+    /// values as numbered here one sample at a time.
+    #[test]
+    fn a_large_set_is_prepared_as_a_small_one_would_be() {
+        let tree = DhTree::serial(&crate::test_robots::ur5());
+        let n = PREPARE_PARALLEL_MIN + PREPARE_BATCH + 17;
+        let samples: Vec<Sample> = (0..n)
+            .map(|i| Sample {
+                q: vec![i as f64 * 1e-5, 0.1, 0.2, 0.3, 0.4, 0.5],
+                target: 0,
+                point: Vector3::new(0.1, 0.2, 0.3),
+                sigma: None,
+                // Names repeat out of order; every 7th sample is unnamed.
+                config: (i % 7 != 3).then(|| format!("c{}", (i * 7919) % 1000)),
+                split: if i % 11 == 5 {
+                    Split::Validation
+                } else {
+                    Split::Calibration
+                },
+                line: i + 2,
+                socket: None,
+                session: 0,
+                orientation: None,
+            })
+            .collect();
+        let data = Measurements {
+            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
+            targets: vec!["t".into()],
+            samples,
+            sessions: vec![],
+        };
+        let prep = prepare(&tree, &data, None, false).unwrap();
+        let mut ids: HashMap<String, usize> = HashMap::new();
+        let mut expected = vec![];
+        for s in data
+            .samples
+            .iter()
+            .filter(|s| s.split == Split::Calibration)
+        {
+            let key = match &s.config {
+                Some(c) => c.clone(),
+                None => format!("{:?}", s.q),
+            };
+            let next = ids.len();
+            expected.push(*ids.entry(key).or_insert(next));
+        }
+        assert_eq!(prep.groups, expected);
+        assert_eq!(prep.group_count, ids.len());
+        let cal: Vec<&Sample> = data
+            .samples
+            .iter()
+            .filter(|s| s.split == Split::Calibration)
+            .collect();
+        assert_eq!(prep.cal.len(), cal.len());
+        assert!(prep.cal.iter().zip(&cal).all(|(o, s)| o.q == s.q));
+        assert_eq!(prep.val.len(), n - cal.len());
+        let orders: Vec<f64> = prep.cal.iter().map(|o| o.context.order).collect();
+        assert!(orders.windows(2).all(|w| w[0] < w[1]));
+    }
 }

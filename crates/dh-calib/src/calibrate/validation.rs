@@ -310,7 +310,7 @@ pub(super) fn noise_floor(
     }
     let (e2, source) = if let Some(s) = options.sigma {
         (3.0 * s * s, NoiseSource::Given)
-    } else if prep.sigmas.iter().all(Option::is_some) {
+    } else if prep.sigmas.iter().all(|s| s.is_some()) {
         let sum: f64 = prep.sigmas.iter().flatten().map(|s| s.norm_squared()).sum();
         (sum / n as f64, NoiseSource::Samples)
     } else {
