@@ -354,7 +354,7 @@ pub(crate) fn prepare(
         Ok::<(), CalibError>(())
     };
     if data.samples.len() >= PREPARE_PARALLEL_MIN {
-        dh_core::parallel::pipeline(4, produce, consume)?;
+        dh_core::parallel::pipeline(4, produce, |mut items| consume(&mut items))?;
     } else {
         let mut batches = Vec::new();
         produce(&mut |b| {
