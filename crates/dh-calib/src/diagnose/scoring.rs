@@ -13,27 +13,19 @@ pub(super) fn dense(
     x: &[f64],
     columns: &[usize],
     scales: &[f64],
-) -> Result<Dense, CalibError> {
+) -> (DMatrix<f64>, DVector<f64>, Vec<usize>) {
     let sizes: Vec<usize> = obs.iter().map(|o| o.observation.residual_count()).collect();
     let m: usize = sizes.iter().sum();
     let n = columns.len();
-    // Each sample's rows on its own (every core), then copied in order.
-    let pieces = crate::fit::parallel_map(obs.len().div_ceil(DENSE_PIECE), |p| {
-        let range = p * DENSE_PIECE..((p + 1) * DENSE_PIECE).min(obs.len());
-        let mut out = Vec::with_capacity(range.len());
-        for (o, &s) in obs[range.clone()].iter().zip(&sizes[range]) {
-            let (mut res, mut jac) = ([0.0; 6], vec![0.0; s * n]);
-            model.jacobian(x, o, columns, &mut res[..s], &mut jac);
-            out.push((res, jac));
-        }
-        Ok(out)
-    })?;
     let mut j = DMatrix::zeros(m, n);
     let mut r = DVector::zeros(m);
     let mut starts = Vec::with_capacity(obs.len());
     let mut row = 0;
-    for ((res, jac), &s) in pieces.iter().flatten().zip(&sizes) {
+    let mut res = [0.0; 6];
+    let mut jac = vec![0.0; 6 * n];
+    for (o, &s) in obs.iter().zip(&sizes) {
         starts.push(row);
+        model.jacobian(x, o, columns, &mut res[..s], &mut jac[..s * n]);
         for i in 0..s {
             r[row + i] = res[i];
             for (k, &c) in columns.iter().enumerate() {
@@ -42,15 +34,8 @@ pub(super) fn dense(
         }
         row += s;
     }
-    Ok((j, r, starts))
+    (j, r, starts)
 }
-
-/// The scaled Jacobian (one row per residual), the residuals (metres) and the first row of
-/// each observation.
-type Dense = (DMatrix<f64>, DVector<f64>, Vec<usize>);
-
-/// Samples per parallel piece of [`dense`].
-const DENSE_PIECE: usize = 128;
 
 /// Least squares of `r + J_F δ_F + C δ_C` on a subset of rows, through the QR of `J_F`.
 pub(super) struct Projector {
@@ -182,7 +167,7 @@ pub(super) fn score(
     }
     let p = free.len();
     let prep = &session.prep;
-    let (j, r, starts) = dense(model, &prep.cal, x, &columns, &session.scales)?;
+    let (j, r, starts) = dense(model, &prep.cal, x, &columns, &session.scales);
     if j.iter().chain(r.iter()).any(|v| !v.is_finite()) {
         return Err(CalibError::NonFinite {
             what: "candidate scoring".into(),
@@ -211,7 +196,7 @@ pub(super) fn score(
     let held = match &session.validation {
         Validation::Split { .. } => {
             let val = crate::sessions::val_for_linearisation(model, x, prep);
-            let (jv, rv, sv) = dense(model, &val, x, &columns, &session.scales)?;
+            let (jv, rv, sv) = dense(model, &val, x, &columns, &session.scales);
             let locate = crate::calibrate::validation_locations(model, x, prep);
             Held::Split {
                 jv,
