@@ -24,11 +24,8 @@ use super::validation::distances_at;
 use super::*;
 use crate::fit;
 
-/// Samples per segment of the first pass: the sums of a fold are made per segment, then added
-/// in segment order (the figures depend on this size, not on the number of threads).
+/// Samples per parallel segment of a pass.
 const SEGMENT: usize = 4096;
-/// Samples per parallel piece of the second pass.
-const PIECE: usize = 256;
 
 /// One-step held-out distances of every calibration sample under `folds`-fold
 /// cross-validation over `prep.groups` (fold of a sample: its group modulo `folds`), in
@@ -54,19 +51,15 @@ pub(crate) fn one_step_cross_validation(
     }
     let fold_of = |i: usize| prep.groups.get(i).map_or(0, |g| g % folds);
     let segments = cal.len().div_ceil(SEGMENT);
-    // Pass 1: per segment and fold, Σ JᵀJ and Σ Jᵀr over the fold's samples of the segment
-    // (scaled columns), each pair on its own: a set of one segment still uses every core.
-    let pairs = fit::parallel_map(segments * folds, |k| {
-        let (s, f) = (k / folds, k % folds);
-        let mut normal = DMatrix::<f64>::zeros(n, n);
-        let mut gradient = DVector::<f64>::zeros(n);
+    // Pass 1: per fold, Σ JᵀJ and Σ Jᵀr over its samples (scaled columns).
+    let parts = fit::parallel_map(segments, |s| {
+        let mut normal = vec![DMatrix::<f64>::zeros(n, n); folds];
+        let mut gradient = vec![DVector::<f64>::zeros(n); folds];
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
         for (i, o) in cal.iter().enumerate().skip(s * SEGMENT).take(SEGMENT) {
-            if fold_of(i) != f {
-                continue;
-            }
             let rows = block_rows(o);
             model.jacobian(x, o, free, &mut res[..rows], &mut jac[..rows * n]);
+            let f = fold_of(i);
             for r in 0..rows {
                 let row = &jac[r * n..(r + 1) * n];
                 for a in 0..n {
@@ -74,38 +67,39 @@ pub(crate) fn one_step_cross_validation(
                     if ja == 0.0 {
                         continue;
                     }
-                    gradient[a] += ja * res[r];
+                    gradient[f][a] += ja * res[r];
                     for b in 0..=a {
-                        normal[(a, b)] += ja * row[b] * scales[free[b]];
+                        normal[f][(a, b)] += ja * row[b] * scales[free[b]];
                     }
                 }
             }
         }
         Ok((normal, gradient))
     })?;
-    // Summed over the segments in order.
     let mut normal = vec![DMatrix::<f64>::zeros(n, n); folds];
     let mut gradient = vec![DVector::<f64>::zeros(n); folds];
-    for (k, (nf, gf)) in pairs.iter().enumerate() {
-        normal[k % folds] += nf;
-        gradient[k % folds] += gf;
+    for (nf, gf) in parts {
+        for f in 0..folds {
+            normal[f] += &nf[f];
+            gradient[f] += &gf[f];
+        }
     }
     let total_n: DMatrix<f64> = normal.iter().fold(DMatrix::zeros(n, n), |a, b| a + b);
     let total_g: DVector<f64> = gradient.iter().fold(DVector::zeros(n), |a, b| a + b);
     // Each fold's step, in scaled parameters.
-    let steps = fit::parallel_map(folds, |f| {
-        let mut m = &total_n - &normal[f];
-        symmetrise_lower(&mut m);
-        let g = &total_g - &gradient[f];
-        Ok(fit::pseudo_inverse(&m, rank_tolerance) * -g)
-    })?;
-    // Pass 2: each sample's residual after its fold's step, in pieces of any size (each
-    // sample's figure is its own).
-    let pieces = cal.len().div_ceil(PIECE);
-    let distances = fit::parallel_map(pieces, |s| {
+    let steps: Vec<DVector<f64>> = (0..folds)
+        .map(|f| {
+            let mut m = &total_n - &normal[f];
+            symmetrise_lower(&mut m);
+            let g = &total_g - &gradient[f];
+            fit::pseudo_inverse(&m, rank_tolerance) * -g
+        })
+        .collect();
+    // Pass 2: each sample's residual after its fold's step.
+    let distances = fit::parallel_map(segments, |s| {
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
-        let mut out = Vec::with_capacity(PIECE);
-        for (i, o) in cal.iter().enumerate().skip(s * PIECE).take(PIECE) {
+        let mut out = Vec::with_capacity(SEGMENT);
+        for (i, o) in cal.iter().enumerate().skip(s * SEGMENT).take(SEGMENT) {
             let rows = block_rows(o);
             model.jacobian(x, o, free, &mut res[..rows], &mut jac[..rows * n]);
             let step = &steps[fold_of(i)];

@@ -265,9 +265,8 @@ pub(super) fn score(
             .and_then(|k| travel.get(k))
             .is_some_and(|(lo, hi)| hi - lo < MIN_JOINT_MOTION)
     };
-    // Each candidate's projection and held-out figure on its own: on every core, in order.
-    let out = crate::fit::parallel_map(remaining.len(), |k| {
-        let (e, span) = (remaining[k], &spans[k]);
+    let mut out = Vec::with_capacity(remaining.len());
+    for (&e, span) in remaining.iter().zip(&spans) {
         let c = j.columns(span.start, span.len()).into_owned();
         let fit = full.solve(&c);
         let (reduction, independence) = (fit.2, fit.3);
@@ -300,7 +299,7 @@ pub(super) fn score(
             .get(e)
             .map(|(eff, _)| eff.label())
             .unwrap_or_default();
-        Ok((
+        out.push((
             e,
             CandidateReport {
                 label,
@@ -317,8 +316,8 @@ pub(super) fn score(
                     CandidateStatus::NotSelected
                 },
             },
-        ))
-    })?;
+        ));
+    }
     Ok(Scored {
         candidates: out,
         baseline_val,
