@@ -4,8 +4,9 @@
 //! The self-check of `extract` and `convert` is on the artefact: the text the command writes
 //! (YAML, JSON, CSV, the aligned text table, Markdown) is read back here at the precision it
 //! was written, and that table, not the one in memory, is compared with the source by forward
-//! kinematics ([`dh_core::compare_written`]), within the source's bound plus what the written
-//! precision allows ([`dh_core::written_bound`]).
+//! kinematics ([`dh_core::compare_while_writing`]: the source's side already runs while the
+//! text is written and read back), within the source's bound plus what the written precision
+//! allows ([`dh_core::written_bound`]).
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
 use dh_core::{Bound, DhTable, Precision};
