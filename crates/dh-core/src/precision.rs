@@ -194,32 +194,28 @@ where
     compare_from(source, oracle, samples, seed, PIPELINE_MIN_JOINTS, write)
 }
 
-/// The written side of the comparison on one thread: the written table's FK at the source's
-/// joint values, its mimic rows following their written driver.
-struct WrittenSide<'a> {
-    prepared: &'a PreparedFk<'a>,
+/// The written table as the comparison reads it: its prepared FK and how its mimic rows
+/// follow their written driver. Made once, read by every thread ([`Written::side`]).
+struct Written<'a> {
+    prepared: PreparedFk<'a>,
     /// Per written row: `(driver, multiplier, offset)` of a mimic row.
-    follows: &'a [Option<(usize, f64, f64)>],
-    /// The written rows' values and which of them are known.
-    qw: Vec<f64>,
-    done: Vec<bool>,
+    follows: Vec<Option<(usize, f64, f64)>>,
 }
 
-impl<'a> WrittenSide<'a> {
-    fn new(prepared: &'a PreparedFk<'a>, follows: &'a [Option<(usize, f64, f64)>]) -> Self {
-        let n = follows.len();
-        WrittenSide {
-            prepared,
-            follows,
-            qw: vec![0.0; n],
-            done: vec![true; n],
+impl<'a> Written<'a> {
+    /// The written table compared with a source of `n` rows.
+    ///
+    /// # Errors
+    /// [`CoreError::JointCount`] when it has another number of rows.
+    fn new(written: &'a DhTable, n: usize) -> Result<Self, CoreError> {
+        if written.rows.len() != n {
+            return Err(CoreError::JointCount {
+                expected: n,
+                found: written.rows.len(),
+            });
         }
-    }
-
-    /// Written mimic rows follow their written driver (by name, among the written rows);
-    /// resolved in dependency order, at most n passes, as the sampler does.
-    fn follows_of(written: &DhTable) -> Vec<Option<(usize, f64, f64)>> {
-        written
+        // Written mimic rows follow their written driver (by name, among the written rows).
+        let follows = written
             .rows
             .iter()
             .enumerate()
@@ -228,10 +224,38 @@ impl<'a> WrittenSide<'a> {
                 let driver = written.rows.iter().position(|d| d.name == m.joint)?;
                 (driver != i).then_some((driver, m.multiplier, m.offset))
             })
-            .collect()
+            .collect();
+        Ok(Written {
+            prepared: written.prepare(),
+            follows,
+        })
     }
 
-    /// The written table's tip pose at the source's joint values `q`.
+    /// A thread's evaluator of the written table, with its own buffers.
+    fn side(&self) -> WrittenSide<'_> {
+        let n = self.follows.len();
+        WrittenSide {
+            prepared: &self.prepared,
+            follows: &self.follows,
+            qw: vec![0.0; n],
+            done: vec![true; n],
+        }
+    }
+}
+
+/// The written side of the comparison on one thread: the written table's FK at the source's
+/// joint values, its mimic rows following their written driver.
+struct WrittenSide<'a> {
+    prepared: &'a PreparedFk<'a>,
+    follows: &'a [Option<(usize, f64, f64)>],
+    /// The written rows' values and which of them are known.
+    qw: Vec<f64>,
+    done: Vec<bool>,
+}
+
+impl WrittenSide<'_> {
+    /// The written table's tip pose at the source's joint values `q`, its mimic rows resolved
+    /// in dependency order (at most n passes, as the sampler does).
     fn pose(&mut self, q: &[f64]) -> Result<Isometry3<f64>, CoreError> {
         let n = self.follows.len();
         for (i, f) in self.follows.iter().enumerate() {
@@ -274,19 +298,12 @@ where
     E: From<CoreError>,
 {
     let n = source.rows.len();
-    let check = |written: &DhTable| match written.rows.len() {
-        found if found != n => Err(CoreError::JointCount { expected: n, found }),
-        _ => Ok(()),
-    };
     let mut sampler = JointSampler::new(&source.rows, source.size(), seed);
     let count = samples.max(1);
     if n == 0 || n.saturating_mul(count) < pipeline_from {
         let written = write()?;
-        let w = written.borrow();
-        check(w)?;
-        let follows = WrittenSide::follows_of(w);
-        let prepared = w.prepare();
-        let mut side = WrittenSide::new(&prepared, &follows);
+        let w = Written::new(written.borrow(), n)?;
+        let mut side = w.side();
         let (mut dev, mut q) = (Deviation::new(), Vec::with_capacity(n));
         for _ in 0..count {
             sampler.next_into(&mut q);
@@ -321,12 +338,9 @@ where
         },
         |blocks| -> Result<(W, Deviation), E> {
             let written = write()?;
-            let w = written.borrow();
-            check(w)?;
-            let follows = WrittenSide::follows_of(w);
-            let prepared = w.prepare();
+            let w = Written::new(written.borrow(), n)?;
             let parts = crate::parallel::on_each_core(|| -> Result<Deviation, CoreError> {
-                let mut side = WrittenSide::new(&prepared, &follows);
+                let mut side = w.side();
                 let mut dev = Deviation::new();
                 for drawn in blocks {
                     for (q, theirs) in drawn.q.chunks_exact(n).zip(&drawn.poses) {
@@ -478,12 +492,15 @@ mod tests {
                 "{r:?}"
             );
         }
-        // Written while the oracle runs: the table comes back with the figures of
-        // compare_written.
-        let (w, dev) = compare_while_writing(&t, oracle, 700, 9, || Ok::<_, CoreError>(t.clone()))
+        // A table written off its source, owned by the writer, on the pipeline: it comes back
+        // with the figures compare_written gives on one thread, and they are not zero.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
+        let off = perturbed(&t, Precision::rounded(0.5e-6, 0.5e-6), &mut rng);
+        let (w, dev) = compare_from(&t, oracle, 700, 9, 0, || Ok::<_, CoreError>(off.clone()))
             .unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(w, t);
-        assert_eq!(Some(dev), compare_written(&t, &t, oracle, 700, 9).ok());
+        assert_eq!(w, off);
+        assert!(dev.max_position_error > 0.0 && dev.max_orientation_error > 0.0);
+        assert_eq!(Some(dev), compare_written(&off, &t, oracle, 700, 9).ok());
     }
 
     #[test]
