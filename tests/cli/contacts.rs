@@ -137,7 +137,7 @@ fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u6
                 samples.push(Sample {
                     orientation: None,
                     session: 0,
-                    q,
+                    q: q.into(),
                     target: 0,
                     point: Vector3::zeros(),
                     sigma: None,

@@ -4,6 +4,8 @@
 //! the measuring device's own frame, metres; a measured orientation (6-DoF devices) is the
 //! target frame's rotation in the device frame, its standard deviation in radians.
 
+use std::sync::Arc;
+
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Which part of the data a sample belongs to.
@@ -18,8 +20,10 @@ pub enum Split {
 /// One measured point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {
-    /// One value per entry of [`Measurements::joint_names`] (radians or metres).
-    pub q: Vec<f64>,
+    /// One value per entry of [`Measurements::joint_names`] (radians or metres). Shared, not
+    /// copied, by the prepared sample ([`crate::model::Observed::q`]) when the model's rows
+    /// are the set's columns in order (build it with `vec.into()`).
+    pub q: Arc<[f64]>,
     /// Index into [`Measurements::targets`]: which reflector or marker was measured.
     pub target: usize,
     /// Measured position in the device frame (metres).

@@ -158,7 +158,7 @@ pub fn contexts_of<'a>(
 /// [`sequence_contexts`] of a measurement set whose columns are the rows effects index (a
 /// serial robot without mimic joints, as the simulators write it).
 pub fn measurement_contexts(data: &Measurements) -> Vec<SampleContext> {
-    contexts_of(data.samples.iter().map(|s| s.q.as_slice()), data)
+    contexts_of(data.samples.iter().map(|s| &*s.q), data)
 }
 
 /// A joint whose direction of motion changes fewer times than this over the sequence takes

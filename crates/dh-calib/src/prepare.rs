@@ -3,6 +3,7 @@
 
 use std::collections::HashMap;
 use std::hash::{BuildHasher, BuildHasherDefault, Hash, Hasher};
+use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3};
 
@@ -62,7 +63,10 @@ impl Prepared {
 /// # Errors
 /// [`CalibError::MissingJoint`] for a row without a column; [`CalibError::Length`] for a
 /// sample with the wrong number of values; [`CalibError::NonFinite`] for a non-finite value.
-pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Vec<f64>>, CalibError> {
+///
+/// When the rows are the set's columns in order (no mimic row, no column left out), each
+/// sample's values are shared ([`Arc`]), not copied.
+pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Arc<[f64]>>, CalibError> {
     enum Source {
         Column(usize),
         Mimic(usize, f64, f64),
@@ -88,7 +92,12 @@ pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Vec<f64>
         };
         sources.push(s);
     }
-    let mut rows_q: Vec<Vec<f64>> = Vec::with_capacity(data.samples.len());
+    let same_columns = sources.len() == data.joint_names.len()
+        && sources
+            .iter()
+            .enumerate()
+            .all(|(k, s)| matches!(s, Source::Column(c) if *c == k));
+    let mut rows_q: Vec<Arc<[f64]>> = Vec::with_capacity(data.samples.len());
     for s in &data.samples {
         if s.q.len() != data.joint_names.len() {
             return Err(CalibError::Length {
@@ -102,31 +111,33 @@ pub(crate) fn rows_of(tree: &DhTree, data: &Measurements) -> Result<Vec<Vec<f64>
                 what: format!("sample at line {}", s.line),
             });
         }
-        rows_q.push(
+        rows_q.push(if same_columns {
+            Arc::clone(&s.q)
+        } else {
             sources
                 .iter()
                 .map(|src| match *src {
                     Source::Column(c) => s.q[c],
                     Source::Mimic(c, m, o) => m * s.q[c] + o,
                 })
-                .collect(),
-        );
+                .collect()
+        });
     }
     Ok(rows_q)
 }
 
 /// The place of each sample of `data` in its sequence, from its row values `rows_q`.
-pub(super) fn sequence_of(rows_q: &[Vec<f64>], data: &Measurements) -> Vec<SampleContext> {
-    crate::effects_order::contexts_of(rows_q.iter().map(Vec::as_slice), data)
+pub(super) fn sequence_of(rows_q: &[Arc<[f64]>], data: &Measurements) -> Vec<SampleContext> {
+    crate::effects_order::contexts_of(rows_q.iter().map(|q| &**q), data)
 }
 
 /// [`sequence_of`] without the directions of motion (each context's `direction` empty), one
 /// at a time.
-fn orders_of(rows_q: &[Vec<f64>], data: &Measurements) -> impl Iterator<Item = SampleContext> {
+fn orders_of(rows_q: &[Arc<[f64]>], data: &Measurements) -> impl Iterator<Item = SampleContext> {
     let (pose, count) = crate::effects_order::sequence_orders(
         rows_q
             .iter()
-            .map(Vec::as_slice)
+            .map(|q| &**q)
             .zip(data.samples.iter().map(|s| s.config.as_deref())),
     );
     pose.into_iter()
@@ -166,7 +177,10 @@ fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
     match sigma {
         Some(sp) if sp > 0.0 && o.sigma > 0.0 => Ok(Observation::TargetPose {
             target: s.target,
-            pose: Isometry3::from_parts(Translation3::from(s.point), o.rotation),
+            pose: Box::new(Isometry3::from_parts(
+                Translation3::from(s.point),
+                o.rotation,
+            )),
             weight: sp / o.sigma,
         }),
         _ => Err(CalibError::BadOption {
@@ -379,7 +393,7 @@ mod tests {
         let tree = DhTree::serial(&crate::test_robots::ur5());
         let joint_names: Vec<String> = (1..=6).map(|j| format!("j{j}")).collect();
         let sample = |q0: f64, config: Option<&str>, split: Split, line: usize| Sample {
-            q: vec![q0, 0.1, 0.2, 0.3, 0.4, 0.5],
+            q: vec![q0, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
             target: 0,
             point: Vector3::new(0.1 * line as f64, 0.2, 0.3),
             sigma: (!line.is_multiple_of(3)).then(|| Vector3::repeat(1e-5 * line as f64)),
@@ -432,7 +446,7 @@ mod tests {
         let n = PREPARE_PARALLEL_MIN + PREPARE_BATCH + 17;
         let samples: Vec<Sample> = (0..n)
             .map(|i| Sample {
-                q: vec![i as f64 * 1e-5, 0.1, 0.2, 0.3, 0.4, 0.5],
+                q: vec![i as f64 * 1e-5, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
                 target: 0,
                 point: Vector3::new(0.1, 0.2, 0.3),
                 sigma: None,
@@ -478,9 +492,47 @@ mod tests {
             .filter(|s| s.split == Split::Calibration)
             .collect();
         assert_eq!(prep.cal.len(), cal.len());
-        assert!(prep.cal.iter().zip(&cal).all(|(o, s)| o.q == s.q));
+        // The rows are the set's columns in order: the values are shared, not copied.
+        assert!(prep.cal.iter().zip(&cal).all(|(o, s)| Arc::ptr_eq(&o.q, &s.q)));
         assert_eq!(prep.val.len(), n - cal.len());
         let orders: Vec<f64> = prep.cal.iter().map(|o| o.context.order).collect();
         assert!(orders.windows(2).all(|w| w[0] < w[1]));
+    }
+
+    /// Columns in another order than the rows (or fewer rows than columns) give each
+    /// prepared sample its own values in row order.
+    #[test]
+    fn columns_out_of_row_order_are_copied_into_row_order() {
+        let tree = DhTree::serial(&crate::test_robots::ur5());
+        let q = [0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 9.0];
+        let sample = Sample {
+            q: q.as_slice().into(),
+            target: 0,
+            point: Vector3::new(0.1, 0.2, 0.3),
+            sigma: None,
+            config: None,
+            split: Split::Calibration,
+            line: 2,
+            socket: None,
+            session: 0,
+            orientation: None,
+        };
+        let mut data = Measurements {
+            joint_names: ["j6", "j5", "j4", "j3", "j2", "j1", "extra"]
+                .map(String::from)
+                .to_vec(),
+            targets: vec!["t".into()],
+            samples: vec![sample],
+            sessions: vec![],
+        };
+        let prep = prepare(&tree, &data, None, false).unwrap();
+        assert_eq!(prep.cal[0].q[..], [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]);
+        // The same values in row order, but one column more than rows: still a copy.
+        data.joint_names = ["j1", "j2", "j3", "j4", "j5", "j6", "extra"]
+            .map(String::from)
+            .to_vec();
+        let prep = prepare(&tree, &data, None, false).unwrap();
+        assert_eq!(prep.cal[0].q[..], q[..6]);
+        assert!(!Arc::ptr_eq(&prep.cal[0].q, &data.samples[0].q));
     }
 }

@@ -308,7 +308,7 @@ pub(crate) fn val_for_linearisation(model: &Model, x: &[f64], prep: &Prepared) -
                         *point = (to_device * Point3::from(*point)).coords;
                     }
                     Observation::Pose(p) | Observation::TargetPose { pose: p, .. } => {
-                        *p = to_device * *p;
+                        **p = to_device * **p;
                     }
                 }
             }

@@ -361,7 +361,7 @@ pub fn simulate(
                 samples.push(Sample {
                     orientation: orientation.map(Box::new),
                     session,
-                    q: q.clone(),
+                    q: q.as_slice().into(),
                     target: k,
                     point: p + noise,
                     // Noise-free data has no standard deviation to state (a sigma of 0 is

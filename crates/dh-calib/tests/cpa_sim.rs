@@ -71,7 +71,7 @@ impl Rig {
                 samples.push(Sample {
                     orientation: None,
                     session: 0,
-                    q: q.clone(),
+                    q: q.as_slice().into(),
                     target: t,
                     point: self.point(q, t) + e,
                     sigma: None,
@@ -404,7 +404,9 @@ fn once_per_turn_error_shows_as_sinusoid_on_a_full_turn() {
             let true_q = q[3];
             let reported = true_q - 5e-4 * (true_q + 0.5).sin();
             for s in &mut m.samples[3 * i..3 * i + 3] {
-                s.q[3] = reported;
+                let mut q = s.q.to_vec();
+                q[3] = reported;
+                s.q = q.into();
             }
         }
     }

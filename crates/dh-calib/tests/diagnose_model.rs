@@ -152,7 +152,7 @@ fn tree_and_effect_jacobians_match_central_differences() {
         let target = i % 2;
         obs.push(Observed {
             session: 0,
-            q: q.clone(),
+            q: q.as_slice().into(),
             observation: Observation::Point {
                 target,
                 point: m.point(&x, &q, target) + Vector3::new(1e-3, 0.0, -2e-3),
@@ -286,7 +286,7 @@ fn simulate_tree(
             samples.push(Sample {
                 orientation: None,
                 session: 0,
-                q: q.clone(),
+                q: q.as_slice().into(),
                 target: k,
                 point: m.point(&x, &q, k) + noise,
                 sigma: Some(Vector3::repeat(sigma)),

@@ -49,7 +49,7 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
         let point = m.point(x, &q, i % 2) + Vector3::new(1e-3, -2e-3, 5e-4);
         out.push(Observed {
             session: 0,
-            q: q.clone(),
+            q: q.as_slice().into(),
             observation: Observation::Point {
                 target: i % 2,
                 point,
@@ -63,8 +63,8 @@ fn observations(m: &Model, x: &[f64], table: &dh_core::DhTable) -> Vec<Observed>
             );
         out.push(Observed {
             session: 0,
-            q: q.clone(),
-            observation: Observation::Pose(pose),
+            q: q.as_slice().into(),
+            observation: Observation::Pose(Box::new(pose)),
             context: Default::default(),
         });
     }

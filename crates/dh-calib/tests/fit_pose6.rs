@@ -97,7 +97,13 @@ fn simulate(model: &Model) -> Set {
                 q.clone(),
                 Observation::TargetPose {
                     target: 0,
-                    pose: model.target_pose_in(&vec![0.0; n], q, &Default::default(), 0, 0),
+                    pose: Box::new(model.target_pose_in(
+                        &vec![0.0; n],
+                        q,
+                        &Default::default(),
+                        0,
+                        0,
+                    )),
                     weight: SIGMA_P / SIGMA_R,
                 },
             )
@@ -129,7 +135,7 @@ fn simulate(model: &Model) -> Set {
             q.clone(),
             Observation::TargetPose {
                 target: 0,
-                pose: measured,
+                pose: Box::new(measured),
                 weight: SIGMA_P / SIGMA_R,
             },
         ));

@@ -59,7 +59,7 @@ fn sample(joints: usize, targets: usize) -> impl Strategy<Value = Sample> {
         .prop_map(|(q, target, (x, y, z), sigma, config, split)| Sample {
             orientation: None,
             session: 0,
-            q,
+            q: q.into(),
             target,
             point: Vector3::new(x, y, z),
             sigma,
@@ -175,7 +175,7 @@ j1,j2,x,y,z,sigma
     let names = ["j1".to_string(), "j2".to_string()];
     let m = parse_measurements(text, &names, &opts).unwrap();
     let s = &m.samples[0];
-    assert_eq!(s.q, vec![90f64.to_radians(), (-45f64).to_radians()]);
+    assert_eq!(s.q[..], [90f64.to_radians(), (-45f64).to_radians()]);
     assert_eq!(s.point, Vector3::new(1.0, 2.0, -3.0));
     assert!((s.sigma.unwrap() - Vector3::repeat(1.5e-5)).norm() < 1e-20);
     assert_eq!(s.line, 3);

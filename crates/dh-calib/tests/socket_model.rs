@@ -167,7 +167,7 @@ fn simulated_panda_contacts_recover_planted_errors_within_three_standard_errors(
                 samples.push(Sample {
                     orientation: None,
                     session: 0,
-                    q,
+                    q: q.into(),
                     target: 0,
                     point: Vector3::zeros(),
                     sigma: None,

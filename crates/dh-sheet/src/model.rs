@@ -123,14 +123,16 @@ impl LoadedModel {
             targets.push(at);
         }
         for s in &mut data.samples {
-            let read = s.q.clone();
-            s.q.resize(data.joint_names.len(), 0.0);
+            let read = &s.q;
+            let mut q = read.to_vec();
+            q.resize(data.joint_names.len(), 0.0);
             for ((_, cols), &at) in terms.iter().zip(&targets) {
-                s.q[at] = cols
+                q[at] = cols
                     .iter()
                     .map(|&(i, c)| c * read.get(i).copied().unwrap_or(0.0))
                     .sum();
             }
+            s.q = q.into();
         }
         Ok(())
     }
@@ -170,10 +172,12 @@ impl LoadedModel {
             done.push(joint);
         }
         for s in &mut data.samples {
+            let mut q = s.q.to_vec();
             for (at, own, others) in &plan {
-                let rest: f64 = others.iter().map(|&(i, c)| c * s.q[i]).sum();
-                s.q[*at] = (s.q[*at] - rest) / own;
+                let rest: f64 = others.iter().map(|&(i, c)| c * q[i]).sum();
+                q[*at] = (q[*at] - rest) / own;
             }
+            s.q = q.into();
         }
         Ok(())
     }

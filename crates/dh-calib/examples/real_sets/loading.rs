@@ -240,14 +240,16 @@ pub(crate) fn apply_coupling(
             None => {
                 m.joint_names.push(joint.clone());
                 for s in &mut m.samples {
-                    s.q.push(0.0);
+                    s.q = s.q.iter().copied().chain([0.0]).collect();
                 }
                 m.joint_names.len() - 1
             }
         };
         for s in &mut m.samples {
             // A term on the joint itself keeps its own value (FANUC J2/J3: J3 + J2).
-            s.q[col] = idx.iter().map(|(i, c)| c * s.q[*i]).sum();
+            let mut q = s.q.to_vec();
+            q[col] = idx.iter().map(|(i, c)| c * s.q[*i]).sum();
+            s.q = q.into();
         }
     }
     Ok(())

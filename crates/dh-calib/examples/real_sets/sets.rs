@@ -118,8 +118,8 @@ pub(crate) fn boby() -> Result<(), Error> {
         let mut qs: Vec<Vec<f64>> = Vec::new();
         for &s in &sweep.samples {
             let q = &data.samples[s].q;
-            if qs.last() != Some(q) {
-                qs.push(q.clone());
+            if qs.last().map(Vec::as_slice) != Some(&**q) {
+                qs.push(q.to_vec());
             }
         }
         if qs.len() != j.motion.poses.len() {

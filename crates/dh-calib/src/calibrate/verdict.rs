@@ -514,7 +514,7 @@ mod tests {
                 .iter()
                 .enumerate()
                 .map(|(i, c)| Sample {
-                    q: vec![0.1 * i as f64, 0.1, 0.2, 0.3, 0.4, 0.5],
+                    q: vec![0.1 * i as f64, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
                     target: 0,
                     point: Vector3::new(0.1, 0.2, 0.3),
                     sigma: None,

@@ -17,13 +17,13 @@ pub(super) fn group_poses(m: &Measurements, unchanged: f64) -> Vec<Pose> {
             Some(p)
                 if p.q
                     .iter()
-                    .zip(&s.q)
+                    .zip(s.q.iter())
                     .all(|(a, b)| (a - b).abs() <= unchanged) =>
             {
                 p.samples.push(i);
             }
             _ => poses.push(Pose {
-                q: s.q.clone(),
+                q: s.q.to_vec(),
                 samples: vec![i],
             }),
         }

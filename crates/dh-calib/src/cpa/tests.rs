@@ -14,7 +14,7 @@ fn set(qs: &[[f64; 2]]) -> Measurements {
             .map(|(i, q)| crate::data::Sample {
                 orientation: None,
                 session: 0,
-                q: q.to_vec(),
+                q: q.as_slice().into(),
                 target: 0,
                 point: Vector3::zeros(),
                 sigma: None,
@@ -83,7 +83,7 @@ fn bad_input_is_named() {
         e.to_string(),
         "line 2: expected finite joint values and coordinates, found NaN"
     );
-    m.samples[1].q.pop();
+    m.samples[1].q = m.samples[1].q[..1].into();
     let e = analyse(&m, &CpaOptions::default()).unwrap_err();
     assert_eq!(e.to_string(), "line 2: expected 2 joint values, found 1");
     let opts = CpaOptions {

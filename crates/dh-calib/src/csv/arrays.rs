@@ -327,7 +327,7 @@ impl Measurements {
                 Some(s) => index_of(&mut m.sessions, &s),
             };
             m.samples.push(Sample {
-                q,
+                q: q.into(),
                 target,
                 point,
                 sigma,

@@ -412,7 +412,7 @@ impl RowReader<'_> {
         Ok(Sample {
             orientation: orientation.map(Box::new),
             session,
-            q,
+            q: q.into(),
             target,
             point,
             sigma,

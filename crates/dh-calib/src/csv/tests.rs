@@ -37,7 +37,7 @@ j1, j2 ,x,y,z,target,config,sigma,set
     assert_eq!(m.targets, names(&["A", "B"]));
     assert_eq!(m.samples.len(), 3);
     let s = &m.samples;
-    assert_eq!(s[0].q, vec![0.1, 0.2]);
+    assert_eq!(s[0].q[..], [0.1, 0.2]);
     assert_eq!(s[0].point, Vector3::new(1.0, 2.0, 3.0));
     assert_eq!(s[0].sigma, Some(Vector3::new(1e-5, 1e-5, 1e-5)));
     assert_eq!(s[0].config.as_deref(), Some("c1"));
@@ -56,7 +56,7 @@ j1, j2 ,x,y,z,target,config,sigma,set
 fn joint_columns_follow_the_models_order_not_the_files() {
     let text = "z,y,x,b,a\n3,2,1,20,10\n";
     let m = parse_measurements(text, &names(&["a", "b"]), &CsvOptions::default()).unwrap();
-    assert_eq!(m.samples[0].q, vec![10.0, 20.0]);
+    assert_eq!(m.samples[0].q[..], [10.0, 20.0]);
     assert_eq!(m.samples[0].point, Vector3::new(1.0, 2.0, 3.0));
     assert_eq!(m.targets, vec![DEFAULT_TARGET.to_string()]);
 }
@@ -185,7 +185,7 @@ fn writing_round_trips_exactly() {
     let mk = |q: Vec<f64>, target, point, sigma, config: Option<&str>, split| Sample {
         orientation: None,
         session: 0,
-        q,
+        q: q.into(),
         target,
         point,
         sigma,

@@ -255,7 +255,7 @@ pub(super) fn score(
     let rows = model.tree().rows();
     let mut travel = vec![(f64::INFINITY, f64::NEG_INFINITY); rows.len()];
     for o in &prep.cal {
-        for (t, &q) in travel.iter_mut().zip(&o.q) {
+        for (t, &q) in travel.iter_mut().zip(o.q.iter()) {
             *t = (t.0.min(q), t.1.max(q));
         }
     }

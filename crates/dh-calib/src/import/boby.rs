@@ -17,6 +17,8 @@
 //! Joints `joint_1..joint_6` in radians, targets `SMR1`, `SMR2`, `SMR3` in metres: three samples
 //! per row, all for calibration, `config` = the row number (1-based, counting data rows).
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 
 use super::numbered;
@@ -44,7 +46,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
     let mut samples = Vec::with_capacity(3 * rows.len());
     for (index, row) in rows.iter().enumerate() {
         let v = &row.values;
-        let q: Vec<f64> = v[FIRST_JOINT..FIRST_JOINT + 6]
+        let q: Arc<[f64]> = v[FIRST_JOINT..FIRST_JOINT + 6]
             .iter()
             .map(|deg| deg.to_radians())
             .collect();
@@ -53,7 +55,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
             samples.push(Sample {
                 orientation: None,
                 session: 0,
-                q: q.clone(),
+                q: Arc::clone(&q),
                 target,
                 point: Vector3::new(p[0], p[1], p[2]) / 1000.0,
                 sigma: None,
@@ -88,7 +90,7 @@ mod tests {
         assert_eq!(s.point, Vector3::new(1.0, -2.0, 0.5));
         assert_eq!(m.samples[2].point, Vector3::new(0.004, 0.005, 0.006));
         let want = [90.0, -45.0, 45.0, 0.0, 0.0, 360.0].map(f64::to_radians);
-        assert_eq!(s.q, want.to_vec());
+        assert_eq!(s.q[..], want[..]);
         assert_eq!((s.line, s.config.as_deref()), (1, Some("1")));
     }
 

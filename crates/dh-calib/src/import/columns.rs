@@ -367,7 +367,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         m.samples.push(Sample {
             orientation: orientation.map(Box::new),
             session,
-            q,
+            q: q.into(),
             target,
             point: p,
             sigma,

@@ -18,6 +18,8 @@
 //! - targets `right` and `left` (the marker on each hand): two samples per record;
 //! - `config` = the record's index; all samples for calibration; no standard deviation.
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 
 use super::numbered;
@@ -91,11 +93,12 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 found: format!("'{}'", markers.replace('\n', " ")),
             });
         }
+        let q: Arc<[f64]> = q.into();
         for (target, p) in xyz.chunks_exact(3).enumerate() {
             samples.push(Sample {
                 orientation: None,
                 session: 0,
-                q: q.clone(),
+                q: Arc::clone(&q),
                 target,
                 point: Vector3::new(p[0], p[1], p[2]),
                 sigma: None,

@@ -138,7 +138,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                     samples.push(Sample {
                         orientation: None,
                         session: 0,
-                        q,
+                        q: q.into(),
                         target: 0,
                         point: Vector3::new(p[0], p[1], p[2]),
                         sigma: Some(Vector3::repeat(SIGMA)),
@@ -256,7 +256,7 @@ column_heights:
         assert_eq!(m.joint_names, vec!["column_prismatic_joint", "a1", "a2"]);
         assert_eq!(m.samples.len(), 3);
         let s = &m.samples;
-        assert_eq!(s[0].q, vec![1.5, 0.1, -0.2]);
+        assert_eq!(s[0].q[..], [1.5, 0.1, -0.2]);
         assert_eq!(s[0].point, Vector3::new(7.0, 5.5, 1.25));
         assert_eq!(s[0].split, Split::Calibration);
         assert_eq!(s[0].sigma, Some(Vector3::repeat(0.75e-3)));

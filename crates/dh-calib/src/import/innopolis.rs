@@ -18,6 +18,8 @@
 //! - `config` = `config_id`, so the ten repeats of a pose share an id (pure error);
 //! - every sample is for calibration; no standard deviation is given.
 
+use std::sync::Arc;
+
 use nalgebra::Vector3;
 
 use super::numbered;
@@ -100,12 +102,13 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 (runs - 1).to_string()
             }
         };
+        let q: Arc<[f64]> = q.into();
         for (target, xyz) in marker_cols.iter().enumerate() {
             let point = Vector3::new(cell(xyz[0])?, cell(xyz[1])?, cell(xyz[2])?);
             samples.push(Sample {
                 orientation: None,
                 session: 0,
-                q: q.clone(),
+                q: Arc::clone(&q),
                 target,
                 point,
                 sigma: None,
@@ -141,7 +144,7 @@ q1_rad,config_id,q2_rad,q3_rad,q4_rad,q5_rad,q6_rad,mA_x_m,mA_y_m,mA_z_m,mB_x_m,
         assert_eq!(m.samples.len(), 6);
         assert_eq!(m.joint_names[5], "joint_6");
         let s = &m.samples[4];
-        assert_eq!(s.q, vec![0.5, 0.1, 0.2, -1.0, 0.3, 2.0]);
+        assert_eq!(s.q[..], [0.5, 0.1, 0.2, -1.0, 0.3, 2.0]);
         assert_eq!((s.target, s.line), (1, 3));
         assert_eq!(s.point, Vector3::new(2.1, 2.2, 2.3));
         assert_eq!(m.samples[3].point.x, 1.1001);

@@ -92,7 +92,7 @@ pub fn parse(sources: &[Source<'_>]) -> Result<Measurements, DataError> {
                 samples.push(Sample {
                     orientation: None,
                     session: 0,
-                    q,
+                    q: q.into(),
                     target: 0,
                     point: Default::default(),
                     sigma: None,

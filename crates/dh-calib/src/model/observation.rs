@@ -1,9 +1,14 @@
 //! What one sample measures ([`Observation`]: a target's position or the tip frame's pose in
 //! the device frame, metres and radians) and where it sits in the measurement sequence.
 
+use std::sync::Arc;
+
 use nalgebra::{Isometry3, Vector3};
 
 /// What is measured in one sample.
+///
+/// The poses are boxed: most samples of a large set are points, and the enum's size (40
+/// bytes) is paid by every prepared sample.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Observation {
     /// A target's position in the device frame (3 residuals: model minus measured, metres).
@@ -15,7 +20,7 @@ pub enum Observation {
     },
     /// The tip frame's pose in the device frame (6 residuals: position difference in metres,
     /// then `orientation_scale · log(R_model R_measuredᵀ)` as a rotation vector).
-    Pose(Isometry3<f64>),
+    Pose(Box<Isometry3<f64>>),
     /// A target's frame in the device frame, measured by a 6-DoF device (a tracker's 6-DoF
     /// probe, an optical marker body): 6 residuals, the position difference (metres) as for
     /// [`Observation::Point`], then `weight · log(R_model R_measuredᵀ)` (a rotation vector in
@@ -28,7 +33,7 @@ pub enum Observation {
         /// Target index.
         target: usize,
         /// Measured pose of the target frame in the device frame (metres, rotation).
-        pose: Isometry3<f64>,
+        pose: Box<Isometry3<f64>>,
         /// Metres per radian of orientation residual (`σ_position / σ_rotation`), positive.
         weight: f64,
     },
@@ -78,8 +83,9 @@ impl SampleContext {
 /// there.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Observed {
-    /// One value per table row (radians or metres).
-    pub q: Vec<f64>,
+    /// One value per table row (radians or metres); shared with the measured sample's own
+    /// ([`crate::data::Sample::q`]) when they are the same values.
+    pub q: Arc<[f64]>,
     /// The measurement.
     pub observation: Observation,
     /// Measurement session (index into [`crate::data::Measurements::sessions`]): which device
@@ -92,9 +98,9 @@ pub struct Observed {
 
 impl Observed {
     /// A sample in the neutral context.
-    pub fn new(q: Vec<f64>, observation: Observation) -> Self {
+    pub fn new(q: impl Into<Arc<[f64]>>, observation: Observation) -> Self {
         Self {
-            q,
+            q: q.into(),
             observation,
             session: 0,
             context: SampleContext::default(),

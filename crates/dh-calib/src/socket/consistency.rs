@@ -57,7 +57,7 @@ pub(super) fn contacts_of(
             }
         }
         out.contacts.push(Contact {
-            q: o.q.clone(),
+            q: o.q.to_vec(),
             target: s.target,
             socket: k,
         });

@@ -219,7 +219,7 @@ fn simulate_sized(arm: &Arm, label: Option<&str>, given: Option<&[f64]>, seed: u
         samples.push(Sample {
             orientation: None,
             session: 0,
-            q: q.clone(),
+            q: q.as_slice().into(),
             target: 0,
             point: m.point_in(&x, q, c, 0) + noise,
             sigma: Some(Vector3::repeat(arm.sigma)),
@@ -287,7 +287,7 @@ pub fn floor(
         for (i, (q, c)) in qs.iter().zip(cs).enumerate() {
             let o = Observed {
                 session: 0,
-                q: q.clone(),
+                q: q.as_slice().into(),
                 observation: Observation::Point {
                     target: 0,
                     point: m.point_in(x, q, c, 0),

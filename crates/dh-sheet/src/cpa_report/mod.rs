@@ -193,7 +193,7 @@ pub fn cpa(args: &CpaRequest, err: &mut dyn Write) -> Result<CpaReport> {
         joints: result.joints.iter().map(joint_doc).collect(),
         pairs,
         proof: {
-            let qs: Vec<Vec<f64>> = data.samples.iter().map(|s| s.q.clone()).collect();
+            let qs: Vec<Vec<f64>> = data.samples.iter().map(|s| s.q.to_vec()).collect();
             let snapped = dh_core::extract(
                 &result.axes,
                 &result.tip,

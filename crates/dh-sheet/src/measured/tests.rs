@@ -87,7 +87,7 @@ branches:
         samples: vec![dh_calib::data::Sample {
             orientation: None,
             session: 0,
-            q: vec![0.1, 0.2, 0.3, 0.4, 0.5],
+            q: vec![0.1, 0.2, 0.3, 0.4, 0.5].into(),
             target: 0,
             point: nalgebra::Vector3::zeros(),
             sigma: None,
