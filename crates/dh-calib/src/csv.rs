@@ -51,7 +51,7 @@ use std::str::FromStr;
 use nalgebra::Vector3;
 use thiserror::Error;
 
-use crate::data::{Measurements, Sample, Socket, SocketDistance, Split};
+use crate::data::{CompactString, Measurements, Sample, Socket, SocketDistance, Split};
 
 // The submodules import what they use through `use super::*`: the imports above and each
 // other's items, re-exported here.

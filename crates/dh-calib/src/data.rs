@@ -6,6 +6,8 @@
 
 use std::sync::Arc;
 
+pub use compact_str::CompactString;
+
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Which part of the data a sample belongs to.
@@ -30,8 +32,10 @@ pub struct Sample {
     pub point: Vector3<f64>,
     /// Per-axis standard deviation of `point` (metres), when known.
     pub sigma: Option<Vector3<f64>>,
-    /// Pose identifier: samples with the same id repeat one pose (pure error).
-    pub config: Option<String>,
+    /// Pose identifier: samples with the same id repeat one pose (pure error). Names of up to
+    /// 24 bytes are held in place, without an allocation of their own (millions of samples
+    /// each carry one); build it with `name.into()`.
+    pub config: Option<CompactString>,
     /// Calibration or validation.
     pub split: Split,
     /// 1-based line in the source file (0 when generated).

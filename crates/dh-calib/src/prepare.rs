@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3};
 
-use crate::data::{Measurements, Sample, Split};
+use crate::data::{CompactString, Measurements, Sample, Split};
 use crate::fit::CalibError;
 use crate::model::{Observation, Observed, SampleContext};
 use crate::tree::DhTree;
@@ -202,7 +202,7 @@ type Batched = (Result<Observed, CalibError>, u64);
 struct Named<'a> {
     hash: u64,
     /// A thin reference (8 bytes, not a `&str`'s 16): a map entry per name of millions.
-    name: &'a String,
+    name: &'a CompactString,
 }
 
 impl Hash for Named<'_> {
@@ -340,7 +340,7 @@ pub(crate) fn prepare(
             match s.split {
                 Split::Validation => {
                     let key = match &s.config {
-                        Some(c) => c.clone(),
+                        Some(c) => c.to_string(),
                         None => format!("{:?}", obs.q),
                     };
                     let next = val_ids.len();
@@ -397,7 +397,7 @@ mod tests {
             target: 0,
             point: Vector3::new(0.1 * line as f64, 0.2, 0.3),
             sigma: (!line.is_multiple_of(3)).then(|| Vector3::repeat(1e-5 * line as f64)),
-            config: config.map(str::to_string),
+            config: config.map(Into::into),
             split,
             line,
             socket: None,
@@ -451,7 +451,7 @@ mod tests {
                 point: Vector3::new(0.1, 0.2, 0.3),
                 sigma: None,
                 // Names repeat out of order; every 7th sample is unnamed.
-                config: (i % 7 != 3).then(|| format!("c{}", (i * 7919) % 1000)),
+                config: (i % 7 != 3).then(|| format!("c{}", (i * 7919) % 1000).into()),
                 split: if i % 11 == 5 {
                     Split::Validation
                 } else {
@@ -478,7 +478,7 @@ mod tests {
             .filter(|s| s.split == Split::Calibration)
         {
             let key = match &s.config {
-                Some(c) => c.clone(),
+                Some(c) => c.to_string(),
                 None => format!("{:?}", s.q),
             };
             let next = ids.len();
@@ -493,7 +493,11 @@ mod tests {
             .collect();
         assert_eq!(prep.cal.len(), cal.len());
         // The rows are the set's columns in order: the values are shared, not copied.
-        assert!(prep.cal.iter().zip(&cal).all(|(o, s)| Arc::ptr_eq(&o.q, &s.q)));
+        assert!(prep
+            .cal
+            .iter()
+            .zip(&cal)
+            .all(|(o, s)| Arc::ptr_eq(&o.q, &s.q)));
         assert_eq!(prep.val.len(), n - cal.len());
         let orders: Vec<f64> = prep.cal.iter().map(|o| o.context.order).collect();
         assert!(orders.windows(2).all(|w| w[0] < w[1]));

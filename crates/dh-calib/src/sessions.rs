@@ -78,7 +78,10 @@ pub fn check(data: &Measurements) -> Result<(), CalibError> {
                 reason: "expected a session name, found an empty one".into(),
             });
         }
-        let key = s.config.clone().unwrap_or_else(|| format!("{:?}", s.q));
+        let key = match &s.config {
+            Some(c) => c.to_string(),
+            None => format!("{:?}", s.q),
+        };
         let e = seen
             .entry((s.session, s.split == Split::Validation))
             .or_insert((s.line, Vec::new()));

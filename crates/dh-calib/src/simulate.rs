@@ -367,7 +367,7 @@ pub fn simulate(
                     // Noise-free data has no standard deviation to state (a sigma of 0 is
                     // refused by the CSV reader: it would weight the point infinitely).
                     sigma: (o.sigma > 0.0).then(|| Vector3::repeat(o.sigma)),
-                    config: Some(config.clone()),
+                    config: Some(config.as_str().into()),
                     split,
                     line: 0,
                     socket: None,

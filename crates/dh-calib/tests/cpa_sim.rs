@@ -75,7 +75,7 @@ impl Rig {
                     target: t,
                     point: self.point(q, t) + e,
                     sigma: None,
-                    config: Some(i.to_string()),
+                    config: Some(i.to_string().into()),
                     split: Split::Calibration,
                     line: 0,
                     socket: None,

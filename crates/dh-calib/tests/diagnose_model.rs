@@ -290,7 +290,7 @@ fn simulate_tree(
                 target: k,
                 point: m.point(&x, &q, k) + noise,
                 sigma: Some(Vector3::repeat(sigma)),
-                config: Some(format!("p{i}")),
+                config: Some(format!("p{i}").into()),
                 split: if i < 200 {
                     Split::Calibration
                 } else {

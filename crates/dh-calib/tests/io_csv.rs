@@ -63,7 +63,7 @@ fn sample(joints: usize, targets: usize) -> impl Strategy<Value = Sample> {
             target,
             point: Vector3::new(x, y, z),
             sigma,
-            config,
+            config: config.map(Into::into),
             split,
             line: 0,
             socket: None,

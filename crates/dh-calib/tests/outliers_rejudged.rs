@@ -44,7 +44,7 @@ fn poses(poses: usize, lower: f64, upper: f64, seed: u64, tag: &str) -> Measurem
     )
     .unwrap_or_else(|e| panic!("{e}"));
     for s in &mut m.samples {
-        s.config = s.config.as_ref().map(|c| format!("{tag}{c}"));
+        s.config = s.config.as_ref().map(|c| format!("{tag}{c}").into());
     }
     m
 }

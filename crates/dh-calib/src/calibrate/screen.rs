@@ -224,7 +224,7 @@ pub(crate) fn screen_from(
                 found.push(Outlier {
                     sample: i,
                     line: s.line,
-                    config: s.config.clone(),
+                    config: s.config.as_deref().map(str::to_string),
                     target: data.targets.get(s.target).cloned().unwrap_or_default(),
                     validation: v,
                     residual: r.norm(),

@@ -518,7 +518,7 @@ mod tests {
                     target: 0,
                     point: Vector3::new(0.1, 0.2, 0.3),
                     sigma: None,
-                    config: Some(c.to_string()),
+                    config: Some((*c).into()),
                     split: Split::Calibration,
                     line: i + 2,
                     socket: None,

@@ -331,7 +331,7 @@ impl Measurements {
                 target,
                 point,
                 sigma,
-                config,
+                config: config.map(Into::into),
                 split,
                 line: i + 2,
                 socket: None,

@@ -375,7 +375,7 @@ impl RowReader<'_> {
             .config
             .map(cell)
             .filter(|c| !c.is_empty())
-            .map(str::to_string);
+            .map(CompactString::from);
         let split = match cols.set.map(cell) {
             None | Some("") => Split::Calibration,
             Some(text) => parse_split(text).ok_or_else(|| DataError::UnknownSet {

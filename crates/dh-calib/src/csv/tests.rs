@@ -189,7 +189,7 @@ fn writing_round_trips_exactly() {
         target,
         point,
         sigma,
-        config: config.map(String::from),
+        config: config.map(Into::into),
         split,
         line: 0,
         socket: None,

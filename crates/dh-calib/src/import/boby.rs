@@ -59,7 +59,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 target,
                 point: Vector3::new(p[0], p[1], p[2]) / 1000.0,
                 sigma: None,
-                config: Some((index + 1).to_string()),
+                config: Some(compact_str::format_compact!("{}", index + 1)),
                 split: Split::Calibration,
                 line: row.line,
                 socket: None,

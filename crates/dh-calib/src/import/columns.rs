@@ -313,7 +313,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         let config = match config_col {
             Some(c) if !cell(c).is_empty() => {
                 check_name(cell(c), line, &column_name(c))?;
-                Some(cell(c).to_string())
+                Some(cell(c).into())
             }
             _ => None,
         };

@@ -102,7 +102,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 target,
                 point: Vector3::new(p[0], p[1], p[2]),
                 sigma: None,
-                config: Some(index.clone()),
+                config: Some(index.as_str().into()),
                 split: Split::Calibration,
                 line,
                 socket: None,

@@ -142,7 +142,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                         target: 0,
                         point: Vector3::new(p[0], p[1], p[2]),
                         sigma: Some(Vector3::repeat(SIGMA)),
-                        config: Some(format!("h{height}/s{space}/{id}")),
+                        config: Some(compact_str::format_compact!("h{height}/s{space}/{id}")),
                         split,
                         line: 0,
                         socket: None,

@@ -112,7 +112,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                 target,
                 point,
                 sigma: None,
-                config: Some(config.clone()),
+                config: Some(config.as_str().into()),
                 split: Split::Calibration,
                 line,
                 socket: None,

@@ -126,7 +126,7 @@ fn sample(q: &Row, p: &Row, target: usize, config: String, split: Split) -> Samp
         target,
         point: Vector3::new(v[0], v[1], v[2]) / 1000.0,
         sigma: None,
-        config: Some(config),
+        config: Some(config.into()),
         split,
         line: p.line,
         socket: None,

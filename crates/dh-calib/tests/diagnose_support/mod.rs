@@ -223,7 +223,7 @@ fn simulate_sized(arm: &Arm, label: Option<&str>, given: Option<&[f64]>, seed: u
             target: 0,
             point: m.point_in(&x, q, c, 0) + noise,
             sigma: Some(Vector3::repeat(arm.sigma)),
-            config: Some(format!("p{i}")),
+            config: Some(format!("p{i}").into()),
             split: if i < 150 {
                 Split::Calibration
             } else {
