@@ -128,6 +128,9 @@ pub(super) struct RowState {
     pub(super) zero_sigmas: Vec<usize>,
     /// Lines with a `sigma_rot` of 0, in order.
     pub(super) zero_sigmas_rot: Vec<usize>,
+    /// The row's joint values as they are read (one list for every row; each sample gets
+    /// its own copy, allocated once).
+    joints: Vec<f64>,
 }
 
 impl RowState {
@@ -139,6 +142,7 @@ impl RowState {
             largest: vec![0.0; columns],
             zero_sigmas: Vec::new(),
             zero_sigmas_rot: Vec::new(),
+            joints: Vec::new(),
         }
     }
 }
@@ -172,7 +176,8 @@ impl RowReader<'_> {
         let cell = |i: usize| row.fields[i].as_str();
         let name = |i: usize| header.fields[i].as_str();
 
-        let mut q = Vec::with_capacity(cols.joints.len());
+        let q = &mut seen.joints;
+        q.clear();
         for (&col, &revolute) in cols.joints.iter().zip(revolute_columns) {
             let value = number(cell(col), line, name(col))?;
             if revolute
@@ -412,7 +417,7 @@ impl RowReader<'_> {
         Ok(Sample {
             orientation: orientation.map(Box::new),
             session,
-            q: q.into(),
+            q: q.as_slice().into(),
             target,
             point,
             sigma,
