@@ -65,6 +65,13 @@ impl<'a> RowsAt<'a> {
         })
     }
 
+    /// The residuals and Jacobian (row-major, residual count × columns) of sample `i`.
+    pub(super) fn sample(&self, i: usize) -> (&[f64], &[f64]) {
+        let (a, b) = (self.start[i], self.start[i + 1]);
+        let p = self.columns.len();
+        (&self.residuals[a..b], &self.jacobian[a * p..b * p])
+    }
+
     /// The samples `subset` (indices into the samples) as a problem whose Jacobian at the
     /// point and columns of these rows is read from them (and made by the model elsewhere).
     pub(super) fn subset<'s>(&'s self, subset: &'s [usize]) -> RowsSubset<'s> {
