@@ -54,6 +54,7 @@ use start::*;
 mod validation;
 pub use validation::*;
 mod one_step;
+mod rows_at;
 mod session;
 pub(crate) use session::*;
 mod pipeline;

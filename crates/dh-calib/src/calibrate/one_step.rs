@@ -51,25 +51,49 @@ pub(crate) fn one_step_cross_validation(
     }
     let fold_of = |i: usize| prep.groups.get(i).map_or(0, |g| g % folds);
     let segments = cal.len().div_ceil(SEGMENT);
-    // Pass 1: per fold, Σ JᵀJ and Σ Jᵀr over its samples (scaled columns).
+    // Both passes read every sample's rows at `x`: made once when they fit in memory.
+    let at_x = super::rows_at::RowsAt::new(model, cal, x, free);
+    let rows_of = |i: usize, o: &Observed, res: &mut [f64; 6], jac: &mut [f64]| -> usize {
+        let rows = block_rows(o);
+        match &at_x {
+            Some(at) => {
+                let (r, j) = at.sample(i);
+                res[..rows].copy_from_slice(r);
+                jac[..rows * n].copy_from_slice(j);
+            }
+            None => model.jacobian(x, o, free, &mut res[..rows], &mut jac[..rows * n]),
+        }
+        rows
+    };
+    let column_scales: Vec<f64> = free.iter().map(|&c| scales[c]).collect();
+    // Pass 1: per fold, Σ JᵀJ and Σ Jᵀr over its samples (scaled columns). Each element
+    // `(a, b)`, `b ≤ a`, of the lower triangle adds `(j_a s_a) j_b s_b` of every row in sample
+    // order (skipped when `j_a s_a` is zero), a column at a time.
     let parts = fit::parallel_map(segments, |s| {
         let mut normal = vec![DMatrix::<f64>::zeros(n, n); folds];
         let mut gradient = vec![DVector::<f64>::zeros(n); folds];
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
+        let mut scaled = vec![0.0; n];
         for (i, o) in cal.iter().enumerate().skip(s * SEGMENT).take(SEGMENT) {
-            let rows = block_rows(o);
-            model.jacobian(x, o, free, &mut res[..rows], &mut jac[..rows * n]);
+            let rows = rows_of(i, o, &mut res, &mut jac);
             let f = fold_of(i);
+            let lower = normal[f].as_mut_slice();
             for r in 0..rows {
                 let row = &jac[r * n..(r + 1) * n];
-                for a in 0..n {
-                    let ja = row[a] * scales[free[a]];
-                    if ja == 0.0 {
-                        continue;
+                for (ja, (j, s)) in scaled.iter_mut().zip(row.iter().zip(&column_scales)) {
+                    *ja = j * s;
+                }
+                for (g, &ja) in gradient[f].iter_mut().zip(&scaled) {
+                    if ja != 0.0 {
+                        *g += ja * res[r];
                     }
-                    gradient[f][a] += ja * res[r];
-                    for b in 0..=a {
-                        normal[f][(a, b)] += ja * row[b] * scales[free[b]];
+                }
+                for (b, (&jb, &sb)) in row.iter().zip(&column_scales).enumerate() {
+                    let column = &mut lower[b * n + b..(b + 1) * n];
+                    for (v, &ja) in column.iter_mut().zip(&scaled[b..]) {
+                        if ja != 0.0 {
+                            *v += ja * jb * sb;
+                        }
                     }
                 }
             }
@@ -100,8 +124,7 @@ pub(crate) fn one_step_cross_validation(
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
         let mut out = Vec::with_capacity(SEGMENT);
         for (i, o) in cal.iter().enumerate().skip(s * SEGMENT).take(SEGMENT) {
-            let rows = block_rows(o);
-            model.jacobian(x, o, free, &mut res[..rows], &mut jac[..rows * n]);
+            let rows = rows_of(i, o, &mut res, &mut jac);
             let step = &steps[fold_of(i)];
             let mut moved = [0.0; 3];
             for (r, m) in moved.iter_mut().enumerate().take(rows.min(3)) {

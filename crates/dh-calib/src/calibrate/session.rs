@@ -264,7 +264,7 @@ impl<'a> Session<'a> {
                 observations: &self.prep.cal,
                 subset: &self.coarse,
             };
-            fit::solve(&sample, x0, free, &self.scales, &self.options.fit)?.x
+            fit::solve_point_from(&sample, x0, free, &self.scales, &self.options.fit, None)?
         };
         // A coarse start moves away from `x0`, where the given factor is.
         let first = first.filter(|_| self.coarse.is_empty());

@@ -265,6 +265,12 @@ pub(crate) fn held_out(
             training_subsample,
             ..
         } => {
+            // Every fold starts at `x`: its first factor is of rows made once for all folds.
+            let at_x = if training_subsample.is_none() {
+                super::rows_at::RowsAt::new(model, &prep.cal, x, free)
+            } else {
+                None
+            };
             // The folds are independent fits: run on every core, gathered in fold order.
             let per_fold = fit::parallel_map(*folds, |f| {
                 let (mut train, mut at) = (Vec::new(), Vec::new());
@@ -283,8 +289,13 @@ pub(crate) fn held_out(
                     observations: &prep.cal,
                     subset: &train,
                 };
-                let fold = fit::solve(&p, x, free, scales, fit_options)?;
-                let d = distances_at(model, &fold.x, &prep.cal, &at);
+                let first = match &at_x {
+                    Some(rows) => Some(fit::factor(&rows.subset(&train), x, free, scales)?),
+                    None => None,
+                };
+                // Only the fold's parameters are read (not its outcome's covariance).
+                let fold = fit::solve_point_from(&p, x, free, scales, fit_options, first)?;
+                let d = distances_at(model, &fold, &prep.cal, &at);
                 Ok((at, d))
             })?;
             let mut d = vec![0.0; prep.cal.len()];

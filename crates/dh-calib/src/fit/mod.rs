@@ -45,4 +45,4 @@ pub use identify::{
 pub use problem::{FitOptions, FitOutcome, Problem, Termination, MAX_BLOCK, MIN_SENSITIVITY};
 pub(crate) use psd::pseudo_inverse;
 pub use solve::solve;
-pub(crate) use solve::solve_from;
+pub(crate) use solve::{solve_from, solve_point_from};

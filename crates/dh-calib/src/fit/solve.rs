@@ -7,7 +7,7 @@
 
 use nalgebra::{DMatrix, DVector, SVD};
 
-use super::factor::{check_columns, factor, sum_of_squares, Factor, SEGMENT_BLOCKS};
+use super::factor::{check_columns, factor, sum_of_squares, Factor};
 use super::{CalibError, FitOptions, FitOutcome, Problem, Termination};
 
 /// Number of SVD sweeps allowed before giving up (nalgebra's default is unbounded).
@@ -59,6 +59,48 @@ pub(crate) fn solve_from<P: Problem + ?Sized>(
     options: &FitOptions,
     first: Option<Factor>,
 ) -> Result<FitOutcome, CalibError> {
+    let end = iterate(problem, x0, free, scales, options, first)?;
+    outcome(end, free, scales, options)
+}
+
+/// The point [`solve_from`] reaches, without its outcome (the singular value decomposition
+/// and covariance of its last factor): for a fit whose parameters alone are read, as a
+/// cross-validation fold's. The same `x`, bit for bit.
+///
+/// # Errors
+/// As [`solve`] (but none from the outcome's decomposition, which is not made).
+pub(crate) fn solve_point_from<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    free: &[usize],
+    scales: &[f64],
+    options: &FitOptions,
+    first: Option<Factor>,
+) -> Result<Vec<f64>, CalibError> {
+    Ok(iterate(problem, x0, free, scales, options, first)?.x)
+}
+
+/// Where the iterations of [`solve_from`] stop: the point, the factor there, and the
+/// singular value decomposition of that factor when the last iteration made it.
+struct End {
+    x: Vec<f64>,
+    f: Factor,
+    iterations: usize,
+    termination: Termination,
+    dec: Option<Svd>,
+}
+
+type Svd = SVD<f64, nalgebra::Dyn, nalgebra::Dyn>;
+
+/// The Levenberg-Marquardt iterations of [`solve_from`].
+fn iterate<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    free: &[usize],
+    scales: &[f64],
+    options: &FitOptions,
+    first: Option<Factor>,
+) -> Result<End, CalibError> {
     let n = problem.parameter_count();
     if x0.len() != n {
         return Err(CalibError::Length {
@@ -79,9 +121,17 @@ pub(crate) fn solve_from<P: Problem + ?Sized>(
     let mut lambda = f64::NAN;
     let mut nu = 2.0;
     let mut x_new = x.clone();
-    let speculate = problem.block_count() > SEGMENT_BLOCKS;
+    let mut kept = None;
     'outer: loop {
         if p == 0 {
+            break;
+        }
+        // Any step's predicted decrease `‖qtr‖² − ‖qtr + R du‖²` is at most `‖qtr‖²` (the
+        // same sum, less a sum of squares): when that is within the cost tolerance, the test
+        // below stops at this point whatever the step, so it stops here without the
+        // decomposition (the outcome makes it once, instead of twice).
+        if f.qtr.norm_squared() <= options.cost_tolerance * f.ssr {
+            termination = Termination::Converged;
             break;
         }
         let dec = svd(f.r.clone(), "jacobian factor")?;
@@ -121,16 +171,18 @@ pub(crate) fn solve_from<P: Problem + ?Sized>(
             let predicted = f.qtr.norm_squared() - pred_res.norm_squared();
             if predicted.is_nan() || predicted <= options.cost_tolerance * f.ssr {
                 termination = Termination::Converged;
+                // The decomposition of the last factor, which the outcome needs.
+                kept = Some(dec);
                 break 'outer;
             }
             let du_norm = du.norm();
             for (k, &c) in free.iter().enumerate() {
                 x_new[c] = x[c] + du[k] * scales[c];
             }
-            // On a large problem the factor at the trial point is made at once (its sum of
-            // squares is the same number, summed in the same order), which saves a pass over
+            // The factor at the trial point is made at once (its sum of squares is the same
+            // number, summed in the same order, as `sum_of_squares`), which saves a pass over
             // every sample when the step is taken, as it nearly always is after a taken step.
-            let trial = if speculate && rejections == 0 {
+            let trial = if rejections == 0 {
                 Some(factor(problem, &x_new, free, scales))
             } else {
                 None
@@ -178,18 +230,28 @@ pub(crate) fn solve_from<P: Problem + ?Sized>(
     if p == 0 {
         termination = Termination::Converged;
     }
-    outcome(x, free, scales, f, iterations, termination, options)
+    Ok(End {
+        x,
+        f,
+        iterations,
+        termination,
+        dec: kept,
+    })
 }
 
 fn outcome(
-    x: Vec<f64>,
+    end: End,
     free: &[usize],
     scales: &[f64],
-    f: Factor,
-    iterations: usize,
-    termination: Termination,
     options: &FitOptions,
 ) -> Result<FitOutcome, CalibError> {
+    let End {
+        x,
+        f,
+        iterations,
+        termination,
+        dec,
+    } = end;
     let p = free.len();
     let n = x.len();
     let mut std_errors = vec![None; n];
@@ -209,7 +271,10 @@ fn outcome(
             std_errors,
         });
     }
-    let dec = svd(f.r.clone(), "jacobian factor")?;
+    let dec = match dec {
+        Some(d) => d,
+        None => svd(f.r.clone(), "jacobian factor")?,
+    };
     let s: Vec<f64> = dec.singular_values.iter().copied().collect();
     let smax = s.first().copied().unwrap_or(0.0);
     let rank = s

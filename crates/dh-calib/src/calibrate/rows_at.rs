@@ -1,0 +1,124 @@
+//! The residuals and Jacobian rows of every calibration sample at one point, made once for the
+//! cross-validation folds: each fold's refit starts at the fit of all samples, so its first
+//! factor is of its training samples' rows there, the same rows in every fold.
+
+use super::*;
+use crate::fit::Problem;
+
+/// Most values (residuals and Jacobian entries) kept: 32 MiB. Larger sets make each fold's
+/// first factor from the model, as the other iterations do.
+const MAX_VALUES: usize = 1 << 22;
+
+/// The residuals and Jacobian (columns `columns`, unscaled) of every sample of `obs` at `x`,
+/// as [`Model::jacobian`] writes them.
+pub(super) struct RowsAt<'a> {
+    model: &'a Model,
+    obs: &'a [Observed],
+    x: &'a [f64],
+    columns: &'a [usize],
+    /// Where each sample's residuals start in `residuals` (its Jacobian at `columns.len()`
+    /// times that in `jacobian`); one more entry than samples.
+    start: Vec<usize>,
+    residuals: Vec<f64>,
+    jacobian: Vec<f64>,
+}
+
+impl<'a> RowsAt<'a> {
+    /// The rows of `obs` at `x`, or `None` when they would hold more than [`MAX_VALUES`].
+    pub(super) fn new(
+        model: &'a Model,
+        obs: &'a [Observed],
+        x: &'a [f64],
+        columns: &'a [usize],
+    ) -> Option<Self> {
+        let p = columns.len();
+        let mut start = Vec::with_capacity(obs.len() + 1);
+        let mut total = 0;
+        start.push(0);
+        for o in obs {
+            total += o.observation.residual_count();
+            start.push(total);
+        }
+        if total.saturating_mul(p + 1) > MAX_VALUES {
+            return None;
+        }
+        let mut residuals = vec![0.0; total];
+        let mut jacobian = vec![0.0; total * p];
+        for (i, o) in obs.iter().enumerate() {
+            let (a, b) = (start[i], start[i + 1]);
+            model.jacobian(
+                x,
+                o,
+                columns,
+                &mut residuals[a..b],
+                &mut jacobian[a * p..b * p],
+            );
+        }
+        Some(Self {
+            model,
+            obs,
+            x,
+            columns,
+            start,
+            residuals,
+            jacobian,
+        })
+    }
+
+    /// The residuals and Jacobian (row-major, residual count × columns) of sample `i`.
+    pub(super) fn sample(&self, i: usize) -> (&[f64], &[f64]) {
+        let (a, b) = (self.start[i], self.start[i + 1]);
+        let p = self.columns.len();
+        (&self.residuals[a..b], &self.jacobian[a * p..b * p])
+    }
+
+    /// The samples `subset` (indices into the samples) as a problem whose Jacobian at the
+    /// point and columns of these rows is read from them (and made by the model elsewhere).
+    pub(super) fn subset<'s>(&'s self, subset: &'s [usize]) -> RowsSubset<'s> {
+        RowsSubset { rows: self, subset }
+    }
+}
+
+/// Some samples of [`RowsAt`] as a [`Problem`] (the [`SubsetProblem`] of the same samples,
+/// with its Jacobian at the rows' point read from them).
+pub(super) struct RowsSubset<'s> {
+    rows: &'s RowsAt<'s>,
+    subset: &'s [usize],
+}
+
+impl Problem for RowsSubset<'_> {
+    fn parameter_count(&self) -> usize {
+        self.rows.model.parameter_count()
+    }
+    fn block_count(&self) -> usize {
+        self.subset.len()
+    }
+    fn block_size(&self, block: usize) -> usize {
+        let i = self.subset[block];
+        self.rows.start[i + 1] - self.rows.start[i]
+    }
+    fn residuals(&self, x: &[f64], block: usize, out: &mut [f64]) {
+        let o = &self.rows.obs[self.subset[block]];
+        self.rows.model.residuals(x, o, out);
+    }
+    fn jacobian(
+        &self,
+        x: &[f64],
+        block: usize,
+        columns: &[usize],
+        residuals: &mut [f64],
+        jacobian: &mut [f64],
+    ) {
+        let rows = self.rows;
+        let i = self.subset[block];
+        if x != rows.x || columns != rows.columns {
+            rows.model
+                .jacobian(x, &rows.obs[i], columns, residuals, jacobian);
+            return;
+        }
+        let (a, b) = (rows.start[i], rows.start[i + 1]);
+        let p = columns.len();
+        residuals[..b - a].copy_from_slice(&rows.residuals[a..b]);
+        jacobian[..(b - a) * p].copy_from_slice(&rows.jacobian[a * p..b * p]);
+    }
+}
