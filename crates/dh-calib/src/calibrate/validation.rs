@@ -4,6 +4,7 @@
 //! compared with.
 
 use super::*;
+use std::collections::BTreeMap;
 
 /// Calibration samples beyond which a cross-validation fold is fitted on a subsample of its
 /// training samples (see [`Validation::CrossValidation`]): 100 000 points fix a few dozen
@@ -325,8 +326,9 @@ pub(super) fn noise_floor(
         let sum: f64 = prep.sigmas.iter().flatten().map(|s| s.norm_squared()).sum();
         (sum / n as f64, NoiseSource::Samples)
     } else {
-        // Pooled pure error of repeated points.
-        let mut groups: HashMap<(usize, usize), Vec<Vector3<f64>>> = HashMap::new();
+        // Pooled pure error of repeated points, ordered by key: the sum is the same in every
+        // process (a hash map's order is not, and the last bit of the floor moved with it).
+        let mut groups: BTreeMap<(usize, usize), Vec<Vector3<f64>>> = BTreeMap::new();
         for (o, key) in prep.cal.iter().zip(prep.repeat_keys()) {
             if let Some(k) = key {
                 groups.entry(k).or_default().push(observed_position(o));
@@ -363,4 +365,58 @@ pub(super) fn noise_floor(
         source,
         angle_rms,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::{Measurements, Sample, Split};
+
+    /// The pooled pure error of many repeated poses is summed in the same order every time:
+    /// the floor is the same bit for bit in every run (it was summed in a hash map's order,
+    /// which differs between maps and processes).
+    #[test]
+    fn the_noise_floor_of_repeats_is_the_same_every_time() {
+        let tree = crate::tree::DhTree::serial(&crate::test_robots::ur5());
+        let samples = (0..600)
+            .map(|i| Sample {
+                q: vec![0.01 * (i / 3) as f64, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
+                target: 0,
+                // Three repeats of each pose, a little apart, by irrational steps.
+                point: Vector3::new(
+                    (i as f64 * 0.618).fract(),
+                    (i as f64 * 0.414).fract(),
+                    (i as f64 * 0.732).fract(),
+                ) * 1e-4,
+                sigma: None,
+                config: Some(format!("p{}", i / 3).into()),
+                split: Split::Calibration,
+                line: i + 2,
+                socket: None,
+                session: 0,
+                orientation: None,
+            })
+            .collect();
+        let data = Measurements {
+            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
+            targets: vec!["t".into()],
+            samples,
+            sessions: vec![],
+        };
+        let prep = crate::prepare::prepare(&tree, &data, None, false).unwrap();
+        let options = CalibrationOptions::default();
+        let first = noise_floor(&prep, &options, 10).unwrap();
+        assert!(matches!(
+            first.source,
+            NoiseSource::Repeats {
+                groups: 200,
+                dof: 400
+            }
+        ));
+        for _ in 0..20 {
+            let again = noise_floor(&prep, &options, 10).unwrap();
+            assert_eq!(again.rms.to_bits(), first.rms.to_bits());
+            assert_eq!(again.sigma.to_bits(), first.sigma.to_bits());
+        }
+    }
 }

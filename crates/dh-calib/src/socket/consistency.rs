@@ -3,6 +3,7 @@
 //! estimate of a fit.
 
 use super::*;
+use std::collections::BTreeMap;
 
 /// Contacts of one split with their own socket numbering.
 #[derive(Clone, Debug, Default)]
@@ -157,7 +158,8 @@ pub fn consistency(
             parent[ra] = rb;
         }
     }
-    let mut per: HashMap<usize, (f64, usize)> = HashMap::new();
+    // Ordered by socket: the mean of the means is summed in the same order in every process.
+    let mut per: BTreeMap<usize, (f64, usize)> = BTreeMap::new();
     let mut all = Vec::with_capacity(points.len());
     for (p, c) in points.iter().zip(contacts) {
         let d = (p - mean[c.socket].0).norm();
