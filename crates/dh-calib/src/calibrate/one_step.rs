@@ -191,6 +191,7 @@ mod tests {
             &[],
             (&[], None),
             None,
+            Folds::Refit,
         )
         .expect("a fit");
         let (session, geo) = (fitted.session, fitted.geo);

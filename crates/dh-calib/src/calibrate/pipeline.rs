@@ -51,6 +51,7 @@ pub fn calibrate_tree(
         &options.effects,
         (&options.effects, None),
         None,
+        Folds::Refit,
     )?;
     let mut last = last.outcome;
     if !options.effects.is_empty() {
@@ -89,7 +90,8 @@ pub(crate) struct Fitted<'a> {
 /// whole file's sequence: a dropped pose was still visited, so the direction of the next
 /// one's motion and the time are the file's. `screened`: the findings of that screen, made
 /// before (by [`screen_from`] with no first round, the same `judged_with` and `within`), used
-/// instead of screening again.
+/// instead of screening again. The geometric step's cross-validation folds are fitted as
+/// `folds` says.
 pub(crate) fn fitted_session<'a>(
     tree: &DhTree,
     data: &Measurements,
@@ -100,6 +102,7 @@ pub(crate) fn fitted_session<'a>(
         Option<&std::collections::BTreeSet<usize>>,
     ),
     screened: Option<crate::outliers::OutlierReport>,
+    folds: Folds,
 ) -> Result<Fitted<'a>, CalibError> {
     if options.outliers.screen {
         check_level(options)?;
@@ -109,7 +112,7 @@ pub(crate) fn fitted_session<'a>(
         .as_ref()
         .filter(|s| options.outliers.screen && !s.kept && !s.outliers.is_empty())
     {
-        let (session, geo) = without_outliers(tree, data, options, effects, scan)?;
+        let (session, geo) = without_outliers(tree, data, options, effects, scan, folds)?;
         return Ok(Fitted {
             session,
             geo,
@@ -118,7 +121,7 @@ pub(crate) fn fitted_session<'a>(
     }
     let mut session = Session::new(tree, data, options, effects, None)?;
     if !options.outliers.screen {
-        let geo = session.geometric()?;
+        let geo = session.geometric_with(folds)?;
         return Ok(Fitted {
             session,
             geo,
@@ -140,7 +143,7 @@ pub(crate) fn fitted_session<'a>(
         )?,
     };
     if scan.kept || scan.outliers.is_empty() {
-        session.finish_geometric(&mut geo)?;
+        session.finish_geometric(&mut geo, folds)?;
         return Ok(Fitted {
             session,
             geo,
@@ -149,7 +152,7 @@ pub(crate) fn fitted_session<'a>(
     }
     // The first session's samples are not needed any more: free them before the second.
     drop(session);
-    let (session, geo) = without_outliers(tree, data, options, effects, &scan)?;
+    let (session, geo) = without_outliers(tree, data, options, effects, &scan, folds)?;
     Ok(Fitted {
         session,
         geo,
@@ -158,13 +161,14 @@ pub(crate) fn fitted_session<'a>(
 }
 
 /// The session of the samples of `data` that `scan` keeps, placed in the whole file's
-/// sequence, with `effects`, and its geometric step.
+/// sequence, with `effects`, and its geometric step (its folds fitted as `folds` says).
 fn without_outliers<'a>(
     tree: &DhTree,
     data: &Measurements,
     options: &'a CalibrationOptions,
     effects: &[Arc<dyn Effect>],
     scan: &crate::outliers::OutlierReport,
+    folds: Folds,
 ) -> Result<(Session<'a>, Geometric), CalibError> {
     let dropped: std::collections::BTreeSet<usize> =
         scan.outliers.iter().map(|o| o.sample).collect();
@@ -174,7 +178,7 @@ fn without_outliers<'a>(
         });
     let cleaned = scan.without(data);
     let mut session = Session::new(tree, &cleaned, options, effects, Some(&sequence))?;
-    let geo = session.geometric()?;
+    let geo = session.geometric_with(folds)?;
     Ok((session, geo))
 }
 

@@ -423,10 +423,14 @@ impl<'a> Session<'a> {
     }
 
     /// Gives the `geometric` step of `geo` (from [`Session::geometric_with`] with
-    /// [`Folds::Later`]) the held-out figures [`Session::geometric`] gives it: the folds
-    /// refitted from its fit.
-    pub(crate) fn finish_geometric(&self, geo: &mut Geometric) -> Result<(), CalibError> {
-        let held = self.held_out_with(&geo.last.outcome.x, &geo.free, Folds::Refit)?;
+    /// [`Folds::Later`]) the held-out figures [`Session::geometric_with`] gives it with
+    /// `folds`.
+    pub(crate) fn finish_geometric(
+        &self,
+        geo: &mut Geometric,
+        folds: Folds,
+    ) -> Result<(), CalibError> {
+        let held = self.held_out_with(&geo.last.outcome.x, &geo.free, folds)?;
         set_val(&mut geo.last.report, &held);
         if let Some(step) = geo.steps.last_mut() {
             set_val(step, &held);

@@ -178,8 +178,7 @@ fn rejudge(
 /// labels, flagging any); `judged` carries that screen's findings, made by the run before.
 /// With `may_rejudge`, the points it left out are then judged again against the effects it
 /// selected ([`rejudge`]) before the report is finished, so that a run whose selection runs
-/// again spends nothing on its report (the exact cross-validation of the steps it accepted,
-/// the structure checks).
+/// again spends nothing on its report (the structure checks).
 fn diagnose_judged(
     tree: &DhTree,
     data: &Measurements,
@@ -213,6 +212,14 @@ fn diagnose_judged(
         Some((e, w, scan)) => (&e[..], Some(w), Some(scan.clone())),
         None => (if forced { &pool[..] } else { &[][..] }, None, None),
     };
+    // The held-out figures of the geometric step and of every step after it (the trials and
+    // the steps the report lists) step each fold once from the fit (`Folds::OneStep`); without
+    // candidates the geometric step's folds are refitted.
+    let folds = if pool.is_empty() {
+        Folds::Refit
+    } else {
+        Folds::OneStep
+    };
     let crate::calibrate::Fitted { session, geo, scan } = crate::calibrate::fitted_session(
         tree,
         data,
@@ -220,17 +227,11 @@ fn diagnose_judged(
         &pool,
         (judged_with, within),
         screened,
+        folds,
     )?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
-    // The trials' held-out figures step each fold once from the fit (`Folds::OneStep`), and
-    // are compared with the same figure of the fit they extend; the steps the report lists
-    // are refitted per fold.
-    let mut held = if pool.is_empty() {
-        geo.last.held_out
-    } else {
-        session.held_out_with(&last.x, &geo.free, Folds::OneStep)?
-    };
+    let mut held = geo.last.held_out;
     let mut free = geo.free;
     let mut fixed = geo.fixed;
     let all_effects: Vec<usize> = (0..pool.len()).collect();
@@ -241,9 +242,6 @@ fn diagnose_judged(
     let mut first_table: Vec<CandidateReport> = Vec::new();
     let mut rejected: Vec<usize> = Vec::new();
     let mut aliased: Vec<usize> = Vec::new();
-    // The accepted steps whose held-out figures are refitted per fold once the report is
-    // known to be final: (index in `steps`, fit, free columns).
-    let mut pending: Vec<(usize, Vec<f64>, Vec<usize>)> = Vec::new();
     if !pool.is_empty() {
         if !forced && !residual_test.significant {
             notes.push(format!(
@@ -420,7 +418,6 @@ fn diagnose_judged(
                         .collect();
                     fixed2.sort_by_key(|f| f.index);
                     step.report.fixed = session.named_geometric(&fixed2);
-                    pending.push((steps.len(), step.outcome.x.clone(), f2.clone()));
                     steps.push(step.report);
                     last = step.outcome;
                     held = step.held_out;
@@ -485,16 +482,6 @@ fn diagnose_judged(
             }
             Rejudgement::Nothing => {}
             Rejudgement::Confirmed(labels) => confirmed = Some(labels),
-        }
-    }
-    // The steps listed are refitted per fold (the trials stepped each fold once); the step
-    // after each one compares with its figure.
-    for (i, x, f) in pending {
-        let held = session.held_out_with(&x, &f, Folds::Refit)?;
-        crate::calibrate::set_val(&mut steps[i], &held);
-        let val_rms = steps[i].val_rms;
-        if let Some(next) = steps.get_mut(i + 1) {
-            next.val_rms_before = val_rms;
         }
     }
     let effect_parameters = effect_estimates(&session.model, &last, &selected);
