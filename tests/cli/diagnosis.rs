@@ -116,6 +116,12 @@ fn auto_names_a_backlash_that_follows_the_last_motion_and_lists_its_rivals() {
         "{text}"
     );
     assert_eq!(report["verdict"]["summary"], "model complete", "{text}");
+    // The held-out figures of the diagnosis's steps are one-step folds, and both outputs say so.
+    assert_eq!(report["validation"]["fold_fits"], "one-step", "{text}");
+    assert!(
+        text.contains("cross-validation over 200 poses (each fold one Gauss-Newton step"),
+        "{text}"
+    );
     let z = recovered(&report, "backlash_direction:elbow_joint", 1e-4);
     assert!(z.abs() < 4.0, "backlash {z:.2} standard errors off");
     // The rivals of the elbow's angle that passed the tests too are listed with the reason.

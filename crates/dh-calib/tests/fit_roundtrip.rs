@@ -411,6 +411,7 @@ fn noise_floor_from_repeats() {
             folds: 5,
             groups: 80,
             training_subsample: None,
+            one_step: false,
         }
     );
 }

@@ -102,6 +102,11 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
                 .training_subsample
                 .map(|n| format!(" (each fold fitted on {n} evenly spaced training samples)"))
                 .unwrap_or_default()
+                + if doc.validation.fold_fits.as_deref() == Some("one-step") {
+                    " (each fold one Gauss-Newton step from the fit of all samples)"
+                } else {
+                    ""
+                }
         ),
         _ => "no validation (fewer than 2 poses)".to_string(),
     };

@@ -122,6 +122,7 @@ impl<'a> Session<'a> {
                 folds: options.folds.min(prep.group_count),
                 groups: prep.group_count,
                 training_subsample: (prep.cal.len() > CV_TRAINING_MAX).then_some(CV_TRAINING_MAX),
+                one_step: false,
             }
         } else {
             Validation::None

@@ -491,6 +491,9 @@ fn diagnose_judged(
         .filter(|e| !selected.contains(e))
         .collect();
     let mut report = session.report(&last, steps, fixed, &hidden);
+    if let Validation::CrossValidation { one_step, .. } = &mut report.validation {
+        *one_step = folds == Folds::OneStep;
+    }
     report.selected_effects = selected.iter().map(|&e| pool[e].label()).collect();
     if diag.alpha != DEFAULT_ALPHA {
         report.verdict = verdict(

@@ -39,17 +39,20 @@ impl CalibrationDoc {
                 folds: None,
                 groups: None,
                 training_subsample: None,
+                fold_fits: None,
             },
             Validation::CrossValidation {
                 folds,
                 groups,
                 training_subsample,
+                one_step,
             } => ValidationDoc {
                 method: "k-fold".into(),
                 samples: None,
                 folds: Some(*folds),
                 groups: Some(*groups),
                 training_subsample: *training_subsample,
+                fold_fits: one_step.then(|| "one-step".into()),
             },
             Validation::None => ValidationDoc {
                 method: "none".into(),
@@ -57,6 +60,7 @@ impl CalibrationDoc {
                 folds: None,
                 groups: None,
                 training_subsample: None,
+                fold_fits: None,
             },
         };
         let val_count = data

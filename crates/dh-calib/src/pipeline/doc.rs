@@ -155,6 +155,10 @@ pub struct ValidationDoc {
     /// fold on all of its training samples (k-fold beyond [`crate::calibrate::CV_TRAINING_MAX`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub training_subsample: Option<usize>,
+    /// `one-step` when each fold's figures come from one Gauss-Newton step from the fit of
+    /// all samples (the automatic diagnosis); absent when each fold is refitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fold_fits: Option<String>,
 }
 
 /// Where the noise level comes from.
