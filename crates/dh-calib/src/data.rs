@@ -98,6 +98,26 @@ pub struct Measurements {
     pub sessions: Vec<String>,
 }
 
+#[cfg(test)]
+impl Sample {
+    /// For tests: a calibration sample of target 0 at joint values `q`, measured at `point`
+    /// (metres), from line `line`; no sigma, config, socket, session or orientation.
+    pub(crate) fn test_point(q: &[f64], point: Vector3<f64>, line: usize) -> Self {
+        Sample {
+            q: q.into(),
+            target: 0,
+            point,
+            sigma: None,
+            config: None,
+            split: Split::Calibration,
+            line,
+            socket: None,
+            session: 0,
+            orientation: None,
+        }
+    }
+}
+
 impl Measurements {
     /// The same set with only the samples `keep(index, sample)` accepts (names and targets
     /// kept, sample order kept).

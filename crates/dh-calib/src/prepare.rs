@@ -393,16 +393,14 @@ mod tests {
         let tree = DhTree::serial(&crate::test_robots::ur5());
         let joint_names: Vec<String> = (1..=6).map(|j| format!("j{j}")).collect();
         let sample = |q0: f64, config: Option<&str>, split: Split, line: usize| Sample {
-            q: vec![q0, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
-            target: 0,
-            point: Vector3::new(0.1 * line as f64, 0.2, 0.3),
             sigma: (!line.is_multiple_of(3)).then(|| Vector3::repeat(1e-5 * line as f64)),
             config: config.map(Into::into),
             split,
-            line,
-            socket: None,
-            session: 0,
-            orientation: None,
+            ..Sample::test_point(
+                &[q0, 0.1, 0.2, 0.3, 0.4, 0.5],
+                Vector3::new(0.1 * line as f64, 0.2, 0.3),
+                line,
+            )
         };
         let cal = Split::Calibration;
         let data = Measurements {
@@ -446,10 +444,6 @@ mod tests {
         let n = PREPARE_PARALLEL_MIN + PREPARE_BATCH + 17;
         let samples: Vec<Sample> = (0..n)
             .map(|i| Sample {
-                q: vec![i as f64 * 1e-5, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
-                target: 0,
-                point: Vector3::new(0.1, 0.2, 0.3),
-                sigma: None,
                 // Names repeat out of order; every 7th sample is unnamed.
                 config: (i % 7 != 3).then(|| format!("c{}", (i * 7919) % 1000).into()),
                 split: if i % 11 == 5 {
@@ -457,10 +451,11 @@ mod tests {
                 } else {
                     Split::Calibration
                 },
-                line: i + 2,
-                socket: None,
-                session: 0,
-                orientation: None,
+                ..Sample::test_point(
+                    &[i as f64 * 1e-5, 0.1, 0.2, 0.3, 0.4, 0.5],
+                    Vector3::new(0.1, 0.2, 0.3),
+                    i + 2,
+                )
             })
             .collect();
         let data = Measurements {
@@ -509,18 +504,7 @@ mod tests {
     fn columns_out_of_row_order_are_copied_into_row_order() {
         let tree = DhTree::serial(&crate::test_robots::ur5());
         let q = [0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 9.0];
-        let sample = Sample {
-            q: q.as_slice().into(),
-            target: 0,
-            point: Vector3::new(0.1, 0.2, 0.3),
-            sigma: None,
-            config: None,
-            split: Split::Calibration,
-            line: 2,
-            socket: None,
-            session: 0,
-            orientation: None,
-        };
+        let sample = Sample::test_point(&q, Vector3::new(0.1, 0.2, 0.3), 2);
         let mut data = Measurements {
             joint_names: ["j6", "j5", "j4", "j3", "j2", "j1", "extra"]
                 .map(String::from)

@@ -370,7 +370,7 @@ pub(super) fn noise_floor(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::{Measurements, Sample, Split};
+    use crate::data::{Measurements, Sample};
 
     /// The pooled pure error of many repeated poses is summed in the same order every time:
     /// the floor is the same bit for bit in every run (it was summed in a hash map's order,
@@ -380,21 +380,17 @@ mod tests {
         let tree = crate::tree::DhTree::serial(&crate::test_robots::ur5());
         let samples = (0..600)
             .map(|i| Sample {
-                q: vec![0.01 * (i / 3) as f64, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
-                target: 0,
-                // Three repeats of each pose, a little apart, by irrational steps.
-                point: Vector3::new(
-                    (i as f64 * 0.618).fract(),
-                    (i as f64 * 0.414).fract(),
-                    (i as f64 * 0.732).fract(),
-                ) * 1e-4,
-                sigma: None,
                 config: Some(format!("p{}", i / 3).into()),
-                split: Split::Calibration,
-                line: i + 2,
-                socket: None,
-                session: 0,
-                orientation: None,
+                // Three repeats of each pose, a little apart, by irrational steps.
+                ..Sample::test_point(
+                    &[0.01 * (i / 3) as f64, 0.1, 0.2, 0.3, 0.4, 0.5],
+                    Vector3::new(
+                        (i as f64 * 0.618).fract(),
+                        (i as f64 * 0.414).fract(),
+                        (i as f64 * 0.732).fract(),
+                    ) * 1e-4,
+                    i + 2,
+                )
             })
             .collect();
         let data = Measurements {
