@@ -55,6 +55,7 @@ mod validation;
 pub use validation::*;
 mod one_step;
 mod rows_at;
+pub(crate) use rows_at::sample_rows;
 mod session;
 pub(crate) use session::*;
 mod pipeline;

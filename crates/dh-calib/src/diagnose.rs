@@ -82,7 +82,9 @@ pub use crate::findings::{
 // other's items, re-exported here.
 mod selection;
 pub use selection::*;
+mod attempts;
 mod fold_normals;
+use attempts::{Attempts, Wanted};
 mod scoring;
 use fold_normals::FoldNormals;
 pub(crate) use scoring::*;

@@ -20,6 +20,18 @@ const RATIO: f64 = 3e-3;
 /// `poses` poses of the UR5 with its shoulder lift (`j2`) within `[lower, upper]` degrees, the
 /// others anywhere, measured by one device on two fixed targets; configs prefixed by `tag`.
 fn poses(poses: usize, lower: f64, upper: f64, seed: u64, tag: &str) -> Measurements {
+    poses_with(poses, lower, upper, seed, tag, &[("gear_ratio:j2", RATIO)])
+}
+
+/// [`poses`] with these effects planted.
+fn poses_with(
+    poses: usize,
+    lower: f64,
+    upper: f64,
+    seed: u64,
+    tag: &str,
+    planted: &[(&str, f64)],
+) -> Measurements {
     let mut table: DhTable = fit_support::ur5();
     table.rows[1].limits = Some(Limits {
         lower: lower.to_radians(),
@@ -36,8 +48,8 @@ fn poses(poses: usize, lower: f64, upper: f64, seed: u64, tag: &str) -> Measurem
                 Vector3::new(-0.02, 0.04, 0.03),
             ]),
             device: Some(from_xyz_rpy([1.2, -0.4, 0.3], [0.0, 0.0, 2.0])),
-            effects: vec!["gear_ratio:j2".into()],
-            errors: Errors::Explicit(vec![("gear_ratio:j2".into(), RATIO)]),
+            effects: planted.iter().map(|(l, _)| l.to_string()).collect(),
+            errors: Errors::Explicit(planted.iter().map(|(l, v)| (l.to_string(), *v)).collect()),
             validation_fraction: 0.0,
             ..Default::default()
         },
@@ -147,5 +159,47 @@ fn declared_effects_judge_the_outliers_from_the_start() {
         !r.notes.iter().any(|n| n.contains("judged again")),
         "{:?}",
         r.notes
+    );
+}
+
+/// With a second, smaller effect planted, the points left out are judged again as soon as the
+/// first effect is in: the selection runs again from there, and the note names that effect
+/// alone; the final model has both and leaves out only the true outlier.
+#[test]
+fn the_outliers_are_judged_again_as_soon_as_an_effect_is_in() {
+    let planted = [("gear_ratio:j2", RATIO), ("gear_ratio:j3", 5e-4)];
+    let mut m = poses_with(80, -40.0, 40.0, 11, "n", &planted);
+    m.samples
+        .extend(poses_with(6, 160.0, 180.0, 12, "w", &planted).samples);
+    for (i, s) in m.samples.iter_mut().enumerate() {
+        s.line = i + 2;
+    }
+    m.samples[17].point += Vector3::new(3e-3, -4e-3, 0.0);
+    let planted_line = m.samples[17].line;
+    let table = fit_support::ur5();
+    let r = diagnose(
+        &table,
+        &m,
+        &CalibrationOptions::default(),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(
+        r.selected_effects,
+        vec!["gear_ratio:j2".to_string(), "gear_ratio:j3".to_string()]
+    );
+    assert_eq!(named(&r), vec![planted_line]);
+    let note = r
+        .notes
+        .iter()
+        .find(|n| n.contains("outliers judged again"))
+        .unwrap_or_else(|| panic!("{:?}", r.notes));
+    assert!(
+        note.contains("against the geometry and gear_ratio:j2: 1 point(s) left out"),
+        "{note}"
+    );
+    assert_eq!(
+        r.outliers.as_ref().unwrap().effects,
+        vec!["gear_ratio:j2".to_string()]
     );
 }

@@ -24,8 +24,12 @@ use super::validation::distances_at;
 use super::*;
 use crate::fit;
 
-/// Samples per parallel segment of a pass.
+/// Samples per segment of the first pass (whose sums are added segment by segment, so the
+/// segments fix the rounding).
 const SEGMENT: usize = 4096;
+
+/// Samples per piece of work of the second pass.
+const PIECE: usize = 256;
 
 /// One-step held-out distances of every calibration sample under `folds`-fold
 /// cross-validation over `prep.groups` (fold of a sample: its group modulo `folds`), in
@@ -42,6 +46,33 @@ pub(crate) fn one_step_cross_validation(
     scales: &[f64],
     rank_tolerance: f64,
 ) -> Result<Vec<f64>, CalibError> {
+    let at = FitPoint {
+        x,
+        free,
+        scales,
+        rank_tolerance,
+    };
+    one_step_distances(model, prep, folds, &at, true)
+}
+
+/// The point and columns of a fit, and its rank tolerance.
+struct FitPoint<'a> {
+    x: &'a [f64],
+    free: &'a [usize],
+    scales: &'a [f64],
+    rank_tolerance: f64,
+}
+
+/// [`one_step_cross_validation`]; `rows_once`: the rows at `x` made once when they fit in
+/// memory (else made by the model in each pass, as for a larger set: the same values).
+fn one_step_distances(
+    model: &Model,
+    prep: &Prepared,
+    folds: usize,
+    at: &FitPoint<'_>,
+    rows_once: bool,
+) -> Result<Vec<f64>, CalibError> {
+    let (x, free, scales, rank_tolerance) = (at.x, at.free, at.scales, at.rank_tolerance);
     let n = free.len();
     let cal = &prep.cal;
     let folds = folds.max(1);
@@ -52,7 +83,7 @@ pub(crate) fn one_step_cross_validation(
     let fold_of = |i: usize| prep.groups.get(i).map_or(0, |g| g % folds);
     let segments = cal.len().div_ceil(SEGMENT);
     // Both passes read every sample's rows at `x`: made once when they fit in memory.
-    let at_x = super::rows_at::RowsAt::new(model, cal, x, free);
+    let at_x = super::rows_at::RowsAt::new(model, cal, x, free).filter(|_| rows_once);
     let rows_of = |i: usize, o: &Observed, res: &mut [f64; 6], jac: &mut [f64]| -> usize {
         let rows = block_rows(o);
         match &at_x {
@@ -68,15 +99,23 @@ pub(crate) fn one_step_cross_validation(
     let column_scales: Vec<f64> = free.iter().map(|&c| scales[c]).collect();
     // Pass 1: per fold, Σ JᵀJ and Σ Jᵀr over its samples (scaled columns). Each element
     // `(a, b)`, `b ≤ a`, of the lower triangle adds `(j_a s_a) j_b s_b` of every row in sample
-    // order (skipped when `j_a s_a` is zero), a column at a time.
-    let parts = fit::parallel_map(segments, |s| {
-        let mut normal = vec![DMatrix::<f64>::zeros(n, n); folds];
-        let mut gradient = vec![DVector::<f64>::zeros(n); folds];
+    // order (skipped when `j_a s_a` is zero), a column at a time; a segment's sums start at
+    // zero and are added in segment order. When the rows are made once, each (segment, fold)
+    // is a piece of work of its own (the same sums in the same order, on more cores).
+    let split = if at_x.is_some() { folds } else { 1 };
+    let parts = fit::parallel_map(segments * split, |k| {
+        let (s, only) = (k / split, (split > 1).then_some(k % split));
+        let mut normal = vec![DMatrix::<f64>::zeros(n, n); if split > 1 { 1 } else { folds }];
+        let mut gradient = vec![DVector::<f64>::zeros(n); normal.len()];
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
         let mut scaled = vec![0.0; n];
         for (i, o) in cal.iter().enumerate().skip(s * SEGMENT).take(SEGMENT) {
-            let rows = rows_of(i, o, &mut res, &mut jac);
             let f = fold_of(i);
+            if only.is_some_and(|g| g != f) {
+                continue;
+            }
+            let rows = rows_of(i, o, &mut res, &mut jac);
+            let f = if split > 1 { 0 } else { f };
             let lower = normal[f].as_mut_slice();
             for r in 0..rows {
                 let row = &jac[r * n..(r + 1) * n];
@@ -98,32 +137,32 @@ pub(crate) fn one_step_cross_validation(
                 }
             }
         }
-        Ok((normal, gradient))
+        Ok((only, normal, gradient))
     })?;
     let mut normal = vec![DMatrix::<f64>::zeros(n, n); folds];
     let mut gradient = vec![DVector::<f64>::zeros(n); folds];
-    for (nf, gf) in parts {
-        for f in 0..folds {
-            normal[f] += &nf[f];
-            gradient[f] += &gf[f];
+    for (only, nf, gf) in parts {
+        for (k, (a, b)) in nf.iter().zip(&gf).enumerate() {
+            let f = only.unwrap_or(k);
+            normal[f] += a;
+            gradient[f] += b;
         }
     }
     let total_n: DMatrix<f64> = normal.iter().fold(DMatrix::zeros(n, n), |a, b| a + b);
     let total_g: DVector<f64> = gradient.iter().fold(DVector::zeros(n), |a, b| a + b);
-    // Each fold's step, in scaled parameters.
-    let steps: Vec<DVector<f64>> = (0..folds)
-        .map(|f| {
-            let mut m = &total_n - &normal[f];
-            symmetrise_lower(&mut m);
-            let g = &total_g - &gradient[f];
-            fit::pseudo_inverse(&m, rank_tolerance) * -g
-        })
-        .collect();
-    // Pass 2: each sample's residual after its fold's step.
-    let distances = fit::parallel_map(segments, |s| {
+    // Each fold's step, in scaled parameters (one fold per piece of work).
+    let steps: Vec<DVector<f64>> = fit::parallel_map(folds, |f| {
+        let mut m = &total_n - &normal[f];
+        symmetrise_lower(&mut m);
+        let g = &total_g - &gradient[f];
+        Ok(fit::pseudo_inverse(&m, rank_tolerance) * -g)
+    })?;
+    // Pass 2: each sample's residual after its fold's step, a sample's own computation (so in
+    // pieces of any size).
+    let distances = fit::parallel_map(cal.len().div_ceil(PIECE), |s| {
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
-        let mut out = Vec::with_capacity(SEGMENT);
-        for (i, o) in cal.iter().enumerate().skip(s * SEGMENT).take(SEGMENT) {
+        let mut out = Vec::with_capacity(PIECE);
+        for (i, o) in cal.iter().enumerate().skip(s * PIECE).take(PIECE) {
             let rows = rows_of(i, o, &mut res, &mut jac);
             let step = &steps[fold_of(i)];
             let mut moved = [0.0; 3];
@@ -214,5 +253,17 @@ mod tests {
         assert!(worst < 1e-9, "largest difference {worst} m");
         assert!((rms(&exact) - rms(&approx)).abs() < 1e-6 * rms(&exact));
         assert!(rms(&exact) > 2e-5 && rms(&exact) < 6e-5, "{}", rms(&exact));
+        // The rows made once and the sums per (segment, fold) give the distances of the rows
+        // made in each pass and the sums per segment, bit for bit.
+        let at = FitPoint {
+            x,
+            free: &geo.free,
+            scales: &session.scales,
+            rank_tolerance: options.fit.rank_tolerance,
+        };
+        let by_fold = one_step_distances(&session.model, &session.prep, 10, &at, true).unwrap();
+        let by_segment = one_step_distances(&session.model, &session.prep, 10, &at, false).unwrap();
+        assert_eq!(by_fold, by_segment);
+        assert_eq!(by_fold, approx);
     }
 }

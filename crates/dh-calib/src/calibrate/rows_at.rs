@@ -42,18 +42,7 @@ impl<'a> RowsAt<'a> {
         if total.saturating_mul(p + 1) > MAX_VALUES {
             return None;
         }
-        let mut residuals = vec![0.0; total];
-        let mut jacobian = vec![0.0; total * p];
-        for (i, o) in obs.iter().enumerate() {
-            let (a, b) = (start[i], start[i + 1]);
-            model.jacobian(
-                x,
-                o,
-                columns,
-                &mut residuals[a..b],
-                &mut jacobian[a * p..b * p],
-            );
-        }
+        let (residuals, jacobian) = sample_rows(model, obs, x, columns, &start)?;
         Some(Self {
             model,
             obs,
@@ -77,6 +66,49 @@ impl<'a> RowsAt<'a> {
     pub(super) fn subset<'s>(&'s self, subset: &'s [usize]) -> RowsSubset<'s> {
         RowsSubset { rows: self, subset }
     }
+}
+
+/// Samples per piece of work of [`sample_rows`].
+const PIECE: usize = 128;
+
+/// The residuals and Jacobian (columns `columns`, unscaled, row-major) of every sample of `obs`
+/// at `x`, as [`Model::jacobian`] writes them, stacked in sample order: sample `i`'s residuals
+/// at `start[i]..start[i + 1]` (`start` has one more entry than `obs`). Each sample's rows are
+/// its own computation, so they are made on the machine's cores, the same bits whatever their
+/// number. `None` only when a worker thread lost its result.
+pub(crate) fn sample_rows(
+    model: &Model,
+    obs: &[Observed],
+    x: &[f64],
+    columns: &[usize],
+    start: &[usize],
+) -> Option<(Vec<f64>, Vec<f64>)> {
+    let p = columns.len();
+    let pieces = dh_core::parallel::map(obs.len().div_ceil(PIECE), |k| {
+        let (first, last) = (k * PIECE, ((k + 1) * PIECE).min(obs.len()));
+        let (base, end) = (start[first], start[last]);
+        let mut residuals = vec![0.0; end - base];
+        let mut jacobian = vec![0.0; (end - base) * p];
+        for (i, o) in obs.iter().enumerate().take(last).skip(first) {
+            let (a, b) = (start[i] - base, start[i + 1] - base);
+            model.jacobian(
+                x,
+                o,
+                columns,
+                &mut residuals[a..b],
+                &mut jacobian[a * p..b * p],
+            );
+        }
+        (residuals, jacobian)
+    })?;
+    let total = start.last().copied().unwrap_or(0);
+    let mut residuals = Vec::with_capacity(total);
+    let mut jacobian = Vec::with_capacity(total * p);
+    for (r, j) in pieces {
+        residuals.extend_from_slice(&r);
+        jacobian.extend_from_slice(&j);
+    }
+    Some((residuals, jacobian))
 }
 
 /// Some samples of [`RowsAt`] as a [`Problem`] (the [`SubsetProblem`] of the same samples,
@@ -120,5 +152,51 @@ impl Problem for RowsSubset<'_> {
         let p = columns.len();
         residuals[..b - a].copy_from_slice(&rows.residuals[a..b]);
         jacobian[..(b - a) * p].copy_from_slice(&rows.jacobian[a * p..b * p]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simulate::{simulate, SimulationOptions};
+
+    /// The rows made in pieces on the cores are each sample's own rows, in sample order.
+    #[test]
+    fn the_rows_made_in_pieces_are_each_samples_own() {
+        let table = crate::test_robots::ur5();
+        // 300 poses of 3 targets: 900 samples, 8 pieces, the last one short.
+        let (data, _) = simulate(
+            &table,
+            &SimulationOptions {
+                poses: 300,
+                target_count: 3,
+                validation_fraction: 0.0,
+                ..SimulationOptions::default()
+            },
+        )
+        .expect("a simulated set");
+        let options = CalibrationOptions::default();
+        let fitted = super::super::fitted_session(
+            &DhTree::serial(&table),
+            &data,
+            &options,
+            &[],
+            (&[], None),
+            None,
+            Folds::Refit,
+        )
+        .expect("a fit");
+        let (session, geo) = (fitted.session, fitted.geo);
+        let (model, cal, x) = (&session.model, &session.prep.cal, &geo.last.outcome.x);
+        let columns = &geo.free;
+        let p = columns.len();
+        let rows = RowsAt::new(model, cal, x, columns).expect("rows that fit in memory");
+        assert_eq!(cal.len(), 900);
+        for (i, o) in cal.iter().enumerate() {
+            let m = o.observation.residual_count();
+            let (mut res, mut jac) = (vec![0.0; m], vec![0.0; m * p]);
+            model.jacobian(x, o, columns, &mut res, &mut jac);
+            assert_eq!(rows.sample(i), (&res[..], &jac[..]), "sample {i}");
+        }
     }
 }

@@ -5,36 +5,39 @@
 
 use super::*;
 
+/// The scaled Jacobian, the residuals and the first row of each observation.
+pub(super) type Dense = (DMatrix<f64>, DVector<f64>, Vec<usize>);
+
 /// Stacks the scaled Jacobian of `columns` and the residuals of `obs` at `x`; returns them
-/// with the first row of each observation.
+/// with the first row of each observation (the rows made on the machine's cores,
+/// [`crate::calibrate::sample_rows`]).
+///
+/// # Errors
+/// [`CalibError::NonFinite`] when a worker thread lost its result.
 pub(super) fn dense(
     model: &Model,
     obs: &[Observed],
     x: &[f64],
     columns: &[usize],
     scales: &[f64],
-) -> (DMatrix<f64>, DVector<f64>, Vec<usize>) {
-    let sizes: Vec<usize> = obs.iter().map(|o| o.observation.residual_count()).collect();
-    let m: usize = sizes.iter().sum();
-    let n = columns.len();
-    let mut j = DMatrix::zeros(m, n);
-    let mut r = DVector::zeros(m);
-    let mut starts = Vec::with_capacity(obs.len());
-    let mut row = 0;
-    let mut res = [0.0; 6];
-    let mut jac = vec![0.0; 6 * n];
-    for (o, &s) in obs.iter().zip(&sizes) {
-        starts.push(row);
-        model.jacobian(x, o, columns, &mut res[..s], &mut jac[..s * n]);
-        for i in 0..s {
-            r[row + i] = res[i];
-            for (k, &c) in columns.iter().enumerate() {
-                j[(row + i, k)] = jac[i * n + k] * scales[c];
-            }
-        }
-        row += s;
+) -> Result<Dense, CalibError> {
+    let mut starts = Vec::with_capacity(obs.len() + 1);
+    starts.push(0);
+    for o in obs {
+        starts.push(starts[starts.len() - 1] + o.observation.residual_count());
     }
-    (j, r, starts)
+    let m = starts[obs.len()];
+    let n = columns.len();
+    let (res, jac) =
+        crate::calibrate::sample_rows(model, obs, x, columns, &starts).ok_or_else(|| {
+            CalibError::NonFinite {
+                what: "a worker thread lost its result".into(),
+            }
+        })?;
+    let j = DMatrix::from_fn(m, n, |i, k| jac[i * n + k] * scales[columns[k]]);
+    let r = DVector::from_vec(res);
+    starts.pop();
+    Ok((j, r, starts))
 }
 
 /// Least squares of `r + J_F δ_F + C δ_C` on a subset of rows, through the QR of `J_F`.
@@ -167,7 +170,7 @@ pub(super) fn score(
     }
     let p = free.len();
     let prep = &session.prep;
-    let (j, r, starts) = dense(model, &prep.cal, x, &columns, &session.scales);
+    let (j, r, starts) = dense(model, &prep.cal, x, &columns, &session.scales)?;
     if j.iter().chain(r.iter()).any(|v| !v.is_finite()) {
         return Err(CalibError::NonFinite {
             what: "candidate scoring".into(),
@@ -196,7 +199,7 @@ pub(super) fn score(
     let held = match &session.validation {
         Validation::Split { .. } => {
             let val = crate::sessions::val_for_linearisation(model, x, prep);
-            let (jv, rv, sv) = dense(model, &val, x, &columns, &session.scales);
+            let (jv, rv, sv) = dense(model, &val, x, &columns, &session.scales)?;
             let locate = crate::calibrate::validation_locations(model, x, prep);
             Held::Split {
                 jv,
@@ -265,8 +268,10 @@ pub(super) fn score(
             .and_then(|k| travel.get(k))
             .is_some_and(|(lo, hi)| hi - lo < MIN_JOINT_MOTION)
     };
-    let mut out = Vec::with_capacity(remaining.len());
-    for (&e, span) in remaining.iter().zip(&spans) {
+    // Each candidate is judged on its own, so the candidates are spread over the cores; the
+    // table is in `remaining`'s order whatever the number of threads.
+    let out = crate::fit::parallel_map(remaining.len(), |i| {
+        let (e, span) = (remaining[i], &spans[i]);
         let c = j.columns(span.start, span.len()).into_owned();
         let fit = full.solve(&c);
         let (reduction, independence) = (fit.2, fit.3);
@@ -299,7 +304,7 @@ pub(super) fn score(
             .get(e)
             .map(|(eff, _)| eff.label())
             .unwrap_or_default();
-        out.push((
+        Ok((
             e,
             CandidateReport {
                 label,
@@ -316,8 +321,8 @@ pub(super) fn score(
                     CandidateStatus::NotSelected
                 },
             },
-        ));
-    }
+        ))
+    })?;
     Ok(Scored {
         candidates: out,
         baseline_val,

@@ -57,11 +57,12 @@ pub(crate) fn effect_context(
 /// The outlier screen first judges the points against the geometric fit, before any effect is
 /// known; a pose that only an unmodelled effect puts far off (the most gravity-loaded poses
 /// before a compliance is added) is then left out, and with it the evidence for that effect.
-/// So when points were left out and effects selected, the points left out are judged again
-/// against the geometry and the selected effects (a second judgement only gives points back:
-/// the tighter scale of a better model never takes more); when it gives some back, the
-/// selection runs again with them (at most [`MAX_REJUDGE`] times), and a note says so.
-/// Declared labels are judged with from the start.
+/// So when points were left out, they are judged again against the geometry and the effects
+/// selected so far each time the selection adds one (a second judgement only gives points
+/// back: the tighter scale of a better model never takes more); as soon as it gives some back,
+/// the selection stops and runs again from the start with them, judged against those effects
+/// (at most [`MAX_REJUDGE`] times), and a note says so. The rest of a run that points would
+/// come back to is never made. Declared labels are judged with from the start.
 ///
 /// # Errors
 /// Those of [`crate::calibrate::calibrate_tree`]; [`CalibError::BadOption`] /
@@ -176,9 +177,10 @@ fn rejudge(
 /// One diagnosis whose outlier screen judges the points against the geometry and the effects
 /// of `judged`, flagging only its samples (`None`: the geometric model, or the declared
 /// labels, flagging any); `judged` carries that screen's findings, made by the run before.
-/// With `may_rejudge`, the points it left out are then judged again against the effects it
-/// selected ([`rejudge`]) before the report is finished, so that a run whose selection runs
-/// again spends nothing on its report (the structure checks).
+/// With `may_rejudge`, the points it left out are judged again ([`rejudge`]) against the
+/// effects selected so far after each one it adds, and against all it selected before the
+/// report is finished, so that a run whose selection runs again stops there and spends nothing
+/// on the rest of its rounds or on its report (the structure checks).
 fn diagnose_judged(
     tree: &DhTree,
     data: &Measurements,
@@ -242,6 +244,9 @@ fn diagnose_judged(
     let mut first_table: Vec<CandidateReport> = Vec::new();
     let mut rejected: Vec<usize> = Vec::new();
     let mut aliased: Vec<usize> = Vec::new();
+    // The last judgement again of the points left out, and after how many selected effects.
+    let mut confirmed = None;
+    let mut judged_last = 0;
     if !pool.is_empty() {
         if !forced && !residual_test.significant {
             notes.push(format!(
@@ -355,8 +360,11 @@ fn diagnose_judged(
                 );
                 Ok((trial, Some((step, trial_free, trial_fixed))))
             };
-            for &(e, _, k) in eligible.iter().take(tries) {
-                let (trial, fitted) = attempt(e, k)?;
+            let mut made = Attempts::new(&attempt);
+            let tried: Vec<Wanted> = eligible.iter().take(tries).map(|c| (c.0, c.2)).collect();
+            for (t, &(e, _)) in tried.iter().enumerate() {
+                // One at a time: the next is needed only when this one fails.
+                let (trial, fitted) = made.take(&tried[t..=t])?;
                 let ok = trial.accepted;
                 round.trials.push(trial);
                 let Some(fitted) = fitted.filter(|_| ok) else {
@@ -368,14 +376,17 @@ fn diagnose_judged(
                 // pass is added (see `rivals`).
                 let mut passed = vec![(e, round.trials.len() - 1, fitted)];
                 if !forced {
-                    for &(r, _, kr) in &eligible {
-                        if r == e
-                            || rejected.contains(&r)
-                            || !rivals::are_rivals(pool[e].as_ref(), pool[r].as_ref())
-                        {
-                            continue;
-                        }
-                        let (trial, fitted) = attempt(r, kr)?;
+                    let rivals: Vec<Wanted> = eligible
+                        .iter()
+                        .filter(|&&(r, _, _)| {
+                            r != e
+                                && !rejected.contains(&r)
+                                && rivals::are_rivals(pool[e].as_ref(), pool[r].as_ref())
+                        })
+                        .map(|c| (c.0, c.2))
+                        .collect();
+                    for (i, &(r, _)) in rivals.iter().enumerate() {
+                        let (trial, fitted) = made.take(&rivals[i..])?;
                         let ok = trial.accepted;
                         round.trials.push(trial);
                         match fitted.filter(|_| ok) {
@@ -425,6 +436,21 @@ fn diagnose_judged(
                     fixed = fixed2;
                     // A rejection in one round may pass once another effect is in.
                     rejected.clear();
+                    // The points left out are judged again as soon as an effect is in: when
+                    // it gives some back, the rest of this run would select on data without
+                    // them, so the selection runs again at once.
+                    if may_rejudge && !forced {
+                        let so_far: Vec<Arc<dyn Effect>> =
+                            selected.iter().map(|&e| pool[e].clone()).collect();
+                        match rejudge(tree, data, options, scan.as_ref(), &so_far)? {
+                            Rejudgement::Changed(before, again) => {
+                                return Ok(Judgement::Again(Box::new((so_far, before, again))))
+                            }
+                            Rejudgement::Nothing => confirmed = None,
+                            Rejudgement::Confirmed(labels) => confirmed = Some(labels),
+                        }
+                        judged_last = selected.len();
+                    }
                 }
                 None => break,
             }
@@ -474,8 +500,8 @@ fn diagnose_judged(
         }
     }
     let effects: Vec<Arc<dyn Effect>> = selected.iter().map(|&e| pool[e].clone()).collect();
-    let mut confirmed = None;
-    if may_rejudge {
+    if may_rejudge && judged_last != selected.len() {
+        confirmed = None;
         match rejudge(tree, data, options, scan.as_ref(), &effects)? {
             Rejudgement::Changed(before, again) => {
                 return Ok(Judgement::Again(Box::new((effects, before, again))))

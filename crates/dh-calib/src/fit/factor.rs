@@ -240,13 +240,15 @@ pub fn factor<P: Problem + ?Sized>(
     let p = columns.len();
     let blocks = problem.block_count();
     if blocks <= SEGMENT_BLOCKS {
-        let (full, ssr, rows) = factor_blocks(problem, x, columns, scales, 0..blocks)?;
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let pipelined = blocks >= PIPELINE_BLOCKS && cores > 1;
+        let (full, ssr, rows) = factor_blocks(problem, x, columns, scales, 0..blocks, pipelined)?;
         return Ok(split_factor(&full, p, ssr, rows));
     }
     // Segments in parallel, their factors stacked in segment order: the same result whatever
     // the number of threads.
     let parts = segments(blocks, |range| {
-        factor_blocks(problem, x, columns, scales, range)
+        factor_blocks(problem, x, columns, scales, range, false)
     })?;
     let mut tsqr = Tsqr::new(p + 1);
     let (mut ssr, mut rows) = (0.0, 0);
@@ -301,38 +303,105 @@ fn split_factor(full: &DMatrix<f64>, p: usize, ssr: f64, rows: usize) -> Factor 
     }
 }
 
+/// Problems of at least this many blocks (and at most [`SEGMENT_BLOCKS`], on a machine of more
+/// than one core) have their Jacobian made on a second thread while the calling one factors it:
+/// the same rows pushed in the same order, so the same factor bit for bit.
+const PIPELINE_BLOCKS: usize = 512;
+
+/// Blocks per message from the Jacobian thread.
+const MESSAGE_BLOCKS: usize = 64;
+
 /// The triangular factor of `[J·diag(s) | r]` over `range` of blocks, its sum of squared
-/// residuals and its number of rows.
-fn factor_blocks<P: Problem + ?Sized>(
+/// residuals and its number of rows; `pipelined`: the Jacobian made on a second thread.
+pub(super) fn factor_blocks<P: Problem + ?Sized>(
     problem: &P,
     x: &[f64],
     columns: &[usize],
     scales: &[f64],
     range: std::ops::Range<usize>,
+    pipelined: bool,
 ) -> Result<(DMatrix<f64>, f64, usize), CalibError> {
     let p = columns.len();
-    let mut tsqr = Tsqr::new(p + 1);
-    let mut res = [0.0; MAX_BLOCK];
-    let mut jac = vec![0.0; MAX_BLOCK * p];
     let column_scales: Vec<f64> = columns.iter().map(|&c| scales[c]).collect();
-    let mut ssr = 0.0;
-    let mut rows = 0;
-    for b in range {
-        let m = problem.block_size(b).min(MAX_BLOCK);
-        problem.jacobian(x, b, columns, &mut res[..m], &mut jac[..m * p]);
-        for i in 0..m {
+    let mut into = Rows {
+        tsqr: Tsqr::new(p + 1),
+        column_scales,
+        ssr: 0.0,
+        rows: 0,
+    };
+    if !pipelined {
+        let mut res = [0.0; MAX_BLOCK];
+        let mut jac = vec![0.0; MAX_BLOCK * p];
+        for b in range {
+            let m = problem.block_size(b).min(MAX_BLOCK);
+            problem.jacobian(x, b, columns, &mut res[..m], &mut jac[..m * p]);
+            into.push(b, &res[..m], &jac[..m * p])?;
+        }
+    } else {
+        // (first block, row counts, residuals, Jacobian rows) of consecutive blocks.
+        type Message = (usize, Vec<usize>, Vec<f64>, Vec<f64>);
+        let produce = |send: &mut dyn FnMut(Message) -> bool| {
+            for first in range.clone().step_by(MESSAGE_BLOCKS) {
+                let blocks = first..(first + MESSAGE_BLOCKS).min(range.end);
+                let sizes: Vec<usize> = blocks
+                    .clone()
+                    .map(|b| problem.block_size(b).min(MAX_BLOCK))
+                    .collect();
+                let total: usize = sizes.iter().sum();
+                let (mut res, mut jac) = (vec![0.0; total], vec![0.0; total * p]);
+                let mut at = 0;
+                for (b, &m) in blocks.zip(&sizes) {
+                    let (r, j) = (&mut res[at..at + m], &mut jac[at * p..(at + m) * p]);
+                    problem.jacobian(x, b, columns, r, j);
+                    at += m;
+                }
+                if !send((first, sizes, res, jac)) {
+                    return;
+                }
+            }
+        };
+        dh_core::parallel::pipeline(4, produce, |items| -> Result<(), CalibError> {
+            for (first, sizes, res, jac) in items {
+                let mut at = 0;
+                for (k, &m) in sizes.iter().enumerate() {
+                    into.push(first + k, &res[at..at + m], &jac[at * p..(at + m) * p])?;
+                    at += m;
+                }
+            }
+            Ok(())
+        })?;
+    }
+    Ok((into.tsqr.finish(), into.ssr, into.rows))
+}
+
+/// What [`factor_blocks`] accumulates, block after block.
+struct Rows {
+    tsqr: Tsqr,
+    column_scales: Vec<f64>,
+    ssr: f64,
+    rows: usize,
+}
+
+impl Rows {
+    /// Adds block `b`'s residuals `res` and Jacobian rows `jac` (row-major, unscaled).
+    fn push(&mut self, b: usize, res: &[f64], jac: &[f64]) -> Result<(), CalibError> {
+        let p = self.column_scales.len();
+        for (i, &r) in res.iter().enumerate() {
             // The scaled Jacobian row, then the residual; the factor is thrown away on a
             // value that is not finite.
-            if !tsqr.push_scaled(&jac[i * p..(i + 1) * p], &column_scales, res[i]) {
+            if !self
+                .tsqr
+                .push_scaled(&jac[i * p..(i + 1) * p], &self.column_scales, r)
+            {
                 return Err(CalibError::NonFinite {
                     what: format!("residual block {b}"),
                 });
             }
-            ssr += res[i] * res[i];
+            self.ssr += r * r;
         }
-        rows += m;
+        self.rows += res.len();
+        Ok(())
     }
-    Ok((tsqr.finish(), ssr, rows))
 }
 
 /// Sum of squared residuals at `x`, or `None` when one is not finite.

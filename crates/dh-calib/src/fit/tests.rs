@@ -102,6 +102,30 @@ fn circle_fit_recovers_centre_and_radius() {
 }
 
 #[test]
+fn the_pipelined_factor_is_the_serial_one_bit_for_bit() {
+    // 2000 blocks: 32 messages from the Jacobian thread, several chunk flushes.
+    let pts: Vec<_> = (0..2000)
+        .map(|i| ((i as f64 * 0.013).sin() * 3.0, (i as f64 * 0.021).cos()))
+        .collect();
+    let p = Circle(pts);
+    let (x, cols, scales) = ([0.1, 0.2, 1.5], [0, 1, 2], [1.0, 2.0, 3.0]);
+    let serial = super::factor::factor_blocks(&p, &x, &cols, &scales, 0..2000, false).unwrap();
+    let piped = super::factor::factor_blocks(&p, &x, &cols, &scales, 0..2000, true).unwrap();
+    assert_eq!(serial, piped);
+    // A block whose residual is not finite is named by either path.
+    let mut bad = p.0.clone();
+    bad[1500] = (f64::NAN, 0.0);
+    let bad = Circle(bad);
+    for pipelined in [false, true] {
+        let e = super::factor::factor_blocks(&bad, &x, &cols, &scales, 0..2000, pipelined);
+        assert!(
+            matches!(&e, Err(CalibError::NonFinite { what }) if what == "residual block 1500"),
+            "{e:?}"
+        );
+    }
+}
+
+#[test]
 fn factor_matches_dense_qr_across_chunks() {
     // 700 rows forces several chunk flushes.
     let pts: Vec<_> = (0..700)
