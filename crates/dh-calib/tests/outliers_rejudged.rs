@@ -202,4 +202,12 @@ fn the_outliers_are_judged_again_as_soon_as_an_effect_is_in() {
         r.outliers.as_ref().unwrap().effects,
         vec!["gear_ratio:j2".to_string()]
     );
+    // The points given back were judged against a model of one effect: judged against the
+    // final one of two, none of them is an outlier either, and a note says so.
+    assert!(
+        r.notes.iter().any(|n| n.starts_with("none of the ")
+            && n.contains("point(s) given back is an outlier of the final model (the geometry and 2 effect(s)")),
+        "{:?}",
+        r.notes
+    );
 }

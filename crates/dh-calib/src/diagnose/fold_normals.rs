@@ -78,8 +78,12 @@ impl FoldNormals {
             .collect();
         let total_a = own.iter().fold(DMatrix::zeros(p, p), |acc, (n, _)| acc + n);
         let total_g = own.iter().fold(DVector::zeros(p), |acc, (_, g)| acc + g);
-        for (f, (n, g)) in built.iter_mut().zip(&own) {
-            f.a_inv = pseudo_inverse(&(&total_a - n), RANK_TOLERANCE);
+        // Each fold's pseudo-inverse on its own, on the machine's cores.
+        let inverse = |k: usize| pseudo_inverse(&(&total_a - &own[k].0), RANK_TOLERANCE);
+        let inverses = dh_core::parallel::map(own.len(), inverse)
+            .unwrap_or_else(|| (0..own.len()).map(inverse).collect());
+        for ((f, (_, g)), a_inv) in built.iter_mut().zip(&own).zip(inverses) {
+            f.a_inv = a_inv;
             f.a = &total_g - g;
         }
         Self { folds: built }

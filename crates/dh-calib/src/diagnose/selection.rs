@@ -74,7 +74,7 @@ pub fn diagnose_tree(
     diag: &DiagnoseOptions,
 ) -> Result<Report, CalibError> {
     let mut judged: Option<Rejudged> = None;
-    let mut first_count = 0;
+    let mut first_left = BTreeSet::new();
     let mut passes = 0;
     loop {
         match diagnose_judged(
@@ -87,13 +87,14 @@ pub fn diagnose_tree(
         )? {
             Judgement::Again(again) => {
                 if passes == 0 {
-                    first_count = again.1.len();
+                    first_left = again.1.clone();
                 }
                 judged = Some(*again);
                 passes += 1;
             }
-            Judgement::Final(mut report, confirmed) => {
-                let count = left_out(report.outliers.as_ref()).map_or(0, |b| b.len());
+            Judgement::Final(mut report, confirmed, effects) => {
+                let left = left_out(report.outliers.as_ref()).unwrap_or_default();
+                let count = left.len();
                 if passes > 0 {
                     let judged = report
                         .outliers
@@ -102,9 +103,17 @@ pub fn diagnose_tree(
                         .unwrap_or_default();
                     report.notes.push(format!(
                         "outliers judged again against the geometry and {judged}: {count} \
-                         point(s) left out instead of the {first_count} of the geometric fit; \
-                         the selection ran again with the points given back ({passes} time(s))"
+                         point(s) left out instead of the {} of the geometric fit; \
+                         the selection ran again with the points given back ({passes} time(s))",
+                        first_left.len()
                     ));
+                    let given_back: BTreeSet<usize> =
+                        first_left.difference(&left).copied().collect();
+                    if let Some(note) =
+                        given_back_check(tree, data, options, &report, &effects, &given_back)?
+                    {
+                        report.notes.push(note);
+                    }
                 } else if let Some(with) = confirmed {
                     report.notes.push(format!(
                         "the {count} point(s) left out are outliers of the final model too \
@@ -117,6 +126,48 @@ pub fn diagnose_tree(
     }
 }
 
+/// The points given back judged against the final model, when it has effects the judgement
+/// that gave them back did not: that judgement's model was looser, so a point it gave back
+/// may still be far off the final one. They stay in the fit either way (a second judgement
+/// only gives points back); the note names those beyond the final model's threshold.
+fn given_back_check(
+    tree: &DhTree,
+    data: &Measurements,
+    options: &CalibrationOptions,
+    report: &Report,
+    effects: &[Arc<dyn Effect>],
+    given_back: &BTreeSet<usize>,
+) -> Result<Option<String>, CalibError> {
+    let judged_with = report.outliers.as_ref().map(|s| &s.effects);
+    if given_back.is_empty() || judged_with == Some(&report.selected_effects) {
+        return Ok(None);
+    }
+    let check =
+        crate::calibrate::screen_from(tree, data, options, None, effects, Some(given_back))?;
+    let beyond: Vec<String> = check
+        .outliers
+        .iter()
+        .filter(|o| !o.validation)
+        .map(|o| format!("line {} ({:.1} sigma)", o.line, o.sigmas))
+        .collect();
+    let n = given_back.len();
+    let model = format!(
+        "the final model (the geometry and {} effect(s), threshold {:.1} sigma)",
+        effects.len(),
+        check.threshold
+    );
+    Ok(Some(if beyond.is_empty() {
+        format!("none of the {n} point(s) given back is an outlier of {model}")
+    } else {
+        format!(
+            "{} of the {n} point(s) given back are beyond the threshold of {model}: {}; they \
+             stay in the fit",
+            beyond.len(),
+            beyond.join(", ")
+        )
+    }))
+}
+
 /// Most times [`diagnose_tree`] judges the outliers again and reruns the selection.
 pub const MAX_REJUDGE: usize = 3;
 
@@ -125,10 +176,10 @@ pub const MAX_REJUDGE: usize = 3;
 type Rejudged = (Vec<Arc<dyn Effect>>, BTreeSet<usize>, OutlierReport);
 
 /// What one selection run leads to: its report (with the effects the points left out were
-/// judged against again and confirmed as outliers, if so), or another run with the effects
+/// judged against again and confirmed as outliers, if so, and the effects it selected), or another run with the effects
 /// it selected, giving back the points left out that are not outliers of them.
 enum Judgement {
-    Final(Box<Report>, Option<String>),
+    Final(Box<Report>, Option<String>, Vec<Arc<dyn Effect>>),
     Again(Box<Rejudged>),
 }
 
@@ -560,5 +611,5 @@ fn diagnose_judged(
         structure,
         notes,
     });
-    Ok(Judgement::Final(Box::new(report), confirmed))
+    Ok(Judgement::Final(Box::new(report), confirmed, effects))
 }
