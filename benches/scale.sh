@@ -4,6 +4,7 @@
 #
 #   benches/scale.sh              # every case (about 2 minutes on 2 cores, 1 GB of temporary files)
 #   benches/scale.sh calibrate    # the cases whose name contains "calibrate"
+#   benches/scale.sh Agile        # the Agile Justin diagnosis of issue 13 §7 (needs ../shared)
 #
 # The inputs are generated in a temporary directory (python3, stdlib only) and removed at the
 # end; nothing here is a test: the figures are for the notes and docs/scale.md.
@@ -97,3 +98,14 @@ run "calibrate 2 000 000 CSV rows"               "$BIN" calibrate --model "$PAND
 run "extract - < /dev/zero (1 GB offered)"       bash -c "head -c 1000000000 /dev/zero | '$BIN' extract -"
 run "simulate --poses 100000000"                 "$BIN" simulate --model "$PANDA" --poses 100000000 --out s.csv
 run "extract --samples 1000000000"               "$BIN" extract "$PANDA" --samples 1000000000
+
+# Issue 13 §7: the README's Agile Justin diagnosis (134 s when the issue was filed), when
+# ../shared/measured is beside the project.
+DLR="$OLDPWD/../shared/measured/dlr_agile_justin_vicon/measurements.csv"
+if [ -f "$DLR" ]; then
+  "$BIN" import --layout dlr "$DLR" --out dlr.csv >/dev/null 2>&1
+  run "calibrate Agile Justin --effects auto"    "$BIN" calibrate --model "$OLDPWD/fixtures/measured/dlr_agile_justin/model.yaml" \
+    --data dlr.csv --folds 10 --effects auto --max-effects 40 --quiet
+else
+  echo "calibrate Agile Justin --effects auto: skipped ($DLR is absent)"
+fi
