@@ -58,11 +58,12 @@ pub(crate) fn effect_context(
 /// known; a pose that only an unmodelled effect puts far off (the most gravity-loaded poses
 /// before a compliance is added) is then left out, and with it the evidence for that effect.
 /// So when points were left out, they are judged again against the geometry and the effects
-/// selected so far each time the selection adds one (a second judgement only gives points
-/// back: the tighter scale of a better model never takes more); as soon as it gives some back,
-/// the selection stops and runs again from the start with them, judged against those effects
-/// (at most [`MAX_REJUDGE`] times), and a note says so. The rest of a run that points would
-/// come back to is never made. Declared labels are judged with from the start.
+/// selected so far once the selection has added 1, 2, 4, 8... effects, and at its end (a
+/// second judgement only gives points back: the tighter scale of a better model never takes
+/// more); as soon as it gives some back, the selection stops and runs again from the start
+/// with them, judged against those effects (at most [`MAX_REJUDGE`] times), and a note says
+/// so; the points given back are then judged against the final model too, in a second note.
+/// Declared labels are judged with from the start.
 ///
 /// # Errors
 /// Those of [`crate::calibrate::calibrate_tree`]; [`CalibError::BadOption`] /
@@ -176,8 +177,9 @@ pub const MAX_REJUDGE: usize = 3;
 type Rejudged = (Vec<Arc<dyn Effect>>, BTreeSet<usize>, OutlierReport);
 
 /// What one selection run leads to: its report (with the effects the points left out were
-/// judged against again and confirmed as outliers, if so, and the effects it selected), or another run with the effects
-/// it selected, giving back the points left out that are not outliers of them.
+/// judged against again and confirmed as outliers, if so, and the effects it selected), or
+/// another run with the effects selected so far, giving back the points left out that are not
+/// outliers of them.
 enum Judgement {
     Final(Box<Report>, Option<String>, Vec<Arc<dyn Effect>>),
     Again(Box<Rejudged>),
@@ -229,9 +231,10 @@ fn rejudge(
 /// of `judged`, flagging only its samples (`None`: the geometric model, or the declared
 /// labels, flagging any); `judged` carries that screen's findings, made by the run before.
 /// With `may_rejudge`, the points it left out are judged again ([`rejudge`]) against the
-/// effects selected so far after each one it adds, and against all it selected before the
-/// report is finished, so that a run whose selection runs again stops there and spends nothing
-/// on the rest of its rounds or on its report (the structure checks).
+/// effects selected so far once it has added 1, 2, 4, 8... of them, and against all it
+/// selected before the report is finished, so that a run whose selection runs again stops
+/// there and spends nothing on the rest of its rounds or on its report (the structure
+/// checks).
 fn diagnose_judged(
     tree: &DhTree,
     data: &Measurements,
@@ -487,10 +490,12 @@ fn diagnose_judged(
                     fixed = fixed2;
                     // A rejection in one round may pass once another effect is in.
                     rejected.clear();
-                    // The points left out are judged again as soon as an effect is in: when
-                    // it gives some back, the rest of this run would select on data without
-                    // them, so the selection runs again at once.
-                    if may_rejudge && !forced {
+                    // The points left out are judged again once the first, second, fourth,
+                    // eighth... effect is in: when it gives some back, the rest of this run
+                    // would select on data without them, so the selection runs again at once.
+                    // (A judgement costs a fit with the effects; doubling the count between
+                    // them bounds what points that stay out cost to about log2 of it.)
+                    if may_rejudge && !forced && selected.len().is_power_of_two() {
                         let so_far: Vec<Arc<dyn Effect>> =
                             selected.iter().map(|&e| pool[e].clone()).collect();
                         match rejudge(tree, data, options, scan.as_ref(), &so_far)? {
