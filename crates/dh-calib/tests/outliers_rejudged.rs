@@ -18,13 +18,9 @@ const SIGMA: f64 = 3e-5;
 const RATIO: f64 = 3e-3;
 
 /// `poses` poses of the UR5 with its shoulder lift (`j2`) within `[lower, upper]` degrees, the
-/// others anywhere, measured by one device on two fixed targets; configs prefixed by `tag`.
-fn poses(poses: usize, lower: f64, upper: f64, seed: u64, tag: &str) -> Measurements {
-    poses_with(poses, lower, upper, seed, tag, &[("gear_ratio:j2", RATIO)])
-}
-
-/// [`poses`] with these effects planted.
-fn poses_with(
+/// others anywhere, measured by one device on two fixed targets, with the effects `planted`;
+/// configs prefixed by `tag`.
+fn poses(
     poses: usize,
     lower: f64,
     upper: f64,
@@ -64,8 +60,13 @@ fn poses_with(
 /// The narrow and the wide poses in one file (lines numbered), and the line of the true
 /// outlier planted in the narrow ones.
 fn data() -> (Measurements, Vec<usize>, usize) {
-    let mut m = poses(80, -40.0, 40.0, 11, "n");
-    let wide = poses(6, 160.0, 180.0, 12, "w");
+    data_with(&[("gear_ratio:j2", RATIO)])
+}
+
+/// [`data`] with these effects planted.
+fn data_with(planted: &[(&str, f64)]) -> (Measurements, Vec<usize>, usize) {
+    let mut m = poses(80, -40.0, 40.0, 11, "n", planted);
+    let wide = poses(6, 160.0, 180.0, 12, "w", planted);
     let first_wide = m.samples.len();
     m.samples.extend(wide.samples);
     for (i, s) in m.samples.iter_mut().enumerate() {
@@ -167,15 +168,7 @@ fn declared_effects_judge_the_outliers_from_the_start() {
 /// alone; the final model has both and leaves out only the true outlier.
 #[test]
 fn the_outliers_are_judged_again_as_soon_as_an_effect_is_in() {
-    let planted = [("gear_ratio:j2", RATIO), ("gear_ratio:j3", 5e-4)];
-    let mut m = poses_with(80, -40.0, 40.0, 11, "n", &planted);
-    m.samples
-        .extend(poses_with(6, 160.0, 180.0, 12, "w", &planted).samples);
-    for (i, s) in m.samples.iter_mut().enumerate() {
-        s.line = i + 2;
-    }
-    m.samples[17].point += Vector3::new(3e-3, -4e-3, 0.0);
-    let planted_line = m.samples[17].line;
+    let (m, _, planted_line) = data_with(&[("gear_ratio:j2", RATIO), ("gear_ratio:j3", 5e-4)]);
     let table = fit_support::ur5();
     let r = diagnose(
         &table,

@@ -223,16 +223,7 @@ mod tests {
             folds: 10,
             ..CalibrationOptions::default()
         };
-        let fitted = super::super::fitted_session(
-            &DhTree::serial(&table),
-            &data,
-            &options,
-            &[],
-            (&[], None),
-            None,
-            Folds::Refit,
-        )
-        .expect("a fit");
+        let fitted = super::super::fitted_for_tests(&table, &data, &options);
         let (session, geo) = (fitted.session, fitted.geo);
         assert!(matches!(
             session.validation,

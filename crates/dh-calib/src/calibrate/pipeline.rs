@@ -186,3 +186,23 @@ fn without_outliers<'a>(
 pub(crate) fn attach_outliers(report: &mut Report, scan: Option<crate::outliers::OutlierReport>) {
     report.outliers = scan;
 }
+
+/// The geometric fit of `data` measured on the serial robot `table` (no effects, every fold
+/// refitted): the session and step the unit tests of the fits' parts start from.
+#[cfg(test)]
+pub(crate) fn fitted_for_tests<'a>(
+    table: &dh_core::DhTable,
+    data: &Measurements,
+    options: &'a CalibrationOptions,
+) -> Fitted<'a> {
+    fitted_session(
+        &DhTree::serial(table),
+        data,
+        options,
+        &[],
+        (&[], None),
+        None,
+        Folds::Refit,
+    )
+    .expect("a fit")
+}

@@ -176,16 +176,7 @@ mod tests {
         )
         .expect("a simulated set");
         let options = CalibrationOptions::default();
-        let fitted = super::super::fitted_session(
-            &DhTree::serial(&table),
-            &data,
-            &options,
-            &[],
-            (&[], None),
-            None,
-            Folds::Refit,
-        )
-        .expect("a fit");
+        let fitted = super::super::fitted_for_tests(&table, &data, &options);
         let (session, geo) = (fitted.session, fitted.geo);
         let (model, cal, x) = (&session.model, &session.prep.cal, &geo.last.outcome.x);
         let columns = &geo.free;
