@@ -83,7 +83,9 @@ fn one_step_distances(
     let fold_of = |i: usize| prep.groups.get(i).map_or(0, |g| g % folds);
     let segments = cal.len().div_ceil(SEGMENT);
     // Both passes read every sample's rows at `x`: made once when they fit in memory.
-    let at_x = super::rows_at::RowsAt::new(model, cal, x, free).filter(|_| rows_once);
+    let at_x = rows_once
+        .then(|| super::rows_at::RowsAt::new(model, cal, x, free))
+        .flatten();
     let rows_of = |i: usize, o: &Observed, res: &mut [f64; 6], jac: &mut [f64]| -> usize {
         let rows = block_rows(o);
         match &at_x {

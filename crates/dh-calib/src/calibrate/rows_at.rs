@@ -42,7 +42,12 @@ impl<'a> RowsAt<'a> {
         if total.saturating_mul(p + 1) > MAX_VALUES {
             return None;
         }
-        let (residuals, jacobian) = sample_rows(model, obs, x, columns, &start)?;
+        let mut residuals = Vec::with_capacity(total);
+        let mut jacobian = Vec::with_capacity(total * p);
+        sample_rows(model, obs, x, columns, &start, |_, r, j| {
+            residuals.extend_from_slice(r);
+            jacobian.extend_from_slice(j);
+        })?;
         Some(Self {
             model,
             obs,
@@ -71,44 +76,51 @@ impl<'a> RowsAt<'a> {
 /// Samples per piece of work of [`sample_rows`].
 const PIECE: usize = 128;
 
+/// Pieces made at once by [`sample_rows`] (what is held besides its output).
+const PIECES_AT_ONCE: usize = 64;
+
 /// The residuals and Jacobian (columns `columns`, unscaled, row-major) of every sample of `obs`
-/// at `x`, as [`Model::jacobian`] writes them, stacked in sample order: sample `i`'s residuals
-/// at `start[i]..start[i + 1]` (`start` has one more entry than `obs`). Each sample's rows are
-/// its own computation, so they are made on the machine's cores, the same bits whatever their
-/// number. `None` only when a worker thread lost its result.
+/// at `x`, as [`Model::jacobian`] writes them, handed to `sink` in sample order a piece at a
+/// time: `sink(first, residuals, jacobian)` for the samples from `first` on, whose residuals
+/// start at `start[first]` (`start` has one more entry than `obs`). Each sample's rows are its
+/// own computation, so [`PIECES_AT_ONCE`] pieces of [`PIECE`] samples are made at a time on
+/// the machine's cores: the same bits whatever their number, and at most those pieces held
+/// besides what `sink` keeps. `None` only when a worker thread lost its result.
 pub(crate) fn sample_rows(
     model: &Model,
     obs: &[Observed],
     x: &[f64],
     columns: &[usize],
     start: &[usize],
-) -> Option<(Vec<f64>, Vec<f64>)> {
+    mut sink: impl FnMut(usize, &[f64], &[f64]),
+) -> Option<()> {
     let p = columns.len();
-    let pieces = dh_core::parallel::map(obs.len().div_ceil(PIECE), |k| {
-        let (first, last) = (k * PIECE, ((k + 1) * PIECE).min(obs.len()));
-        let (base, end) = (start[first], start[last]);
-        let mut residuals = vec![0.0; end - base];
-        let mut jacobian = vec![0.0; (end - base) * p];
-        for (i, o) in obs.iter().enumerate().take(last).skip(first) {
-            let (a, b) = (start[i] - base, start[i + 1] - base);
-            model.jacobian(
-                x,
-                o,
-                columns,
-                &mut residuals[a..b],
-                &mut jacobian[a * p..b * p],
-            );
+    let pieces = obs.len().div_ceil(PIECE);
+    for group in (0..pieces).step_by(PIECES_AT_ONCE) {
+        let count = PIECES_AT_ONCE.min(pieces - group);
+        let made = dh_core::parallel::map(count, |k| {
+            let k = group + k;
+            let (first, last) = (k * PIECE, ((k + 1) * PIECE).min(obs.len()));
+            let (base, end) = (start[first], start[last]);
+            let mut residuals = vec![0.0; end - base];
+            let mut jacobian = vec![0.0; (end - base) * p];
+            for (i, o) in obs.iter().enumerate().take(last).skip(first) {
+                let (a, b) = (start[i] - base, start[i + 1] - base);
+                model.jacobian(
+                    x,
+                    o,
+                    columns,
+                    &mut residuals[a..b],
+                    &mut jacobian[a * p..b * p],
+                );
+            }
+            (first, residuals, jacobian)
+        })?;
+        for (first, r, j) in made {
+            sink(first, &r, &j);
         }
-        (residuals, jacobian)
-    })?;
-    let total = start.last().copied().unwrap_or(0);
-    let mut residuals = Vec::with_capacity(total);
-    let mut jacobian = Vec::with_capacity(total * p);
-    for (r, j) in pieces {
-        residuals.extend_from_slice(&r);
-        jacobian.extend_from_slice(&j);
     }
-    Some((residuals, jacobian))
+    Some(())
 }
 
 /// Some samples of [`RowsAt`] as a [`Problem`] (the [`SubsetProblem`] of the same samples,
@@ -164,11 +176,11 @@ mod tests {
     #[test]
     fn the_rows_made_in_pieces_are_each_samples_own() {
         let table = crate::test_robots::ur5();
-        // 300 poses of 3 targets: 900 samples, 8 pieces, the last one short.
+        // 2800 poses of 3 targets: 8400 samples, 66 pieces in two groups, the last one short.
         let (data, _) = simulate(
             &table,
             &SimulationOptions {
-                poses: 300,
+                poses: 2800,
                 target_count: 3,
                 validation_fraction: 0.0,
                 ..SimulationOptions::default()
@@ -182,7 +194,7 @@ mod tests {
         let columns = &geo.free;
         let p = columns.len();
         let rows = RowsAt::new(model, cal, x, columns).expect("rows that fit in memory");
-        assert_eq!(cal.len(), 900);
+        assert_eq!(cal.len(), 8400);
         for (i, o) in cal.iter().enumerate() {
             let m = o.observation.residual_count();
             let (mut res, mut jac) = (vec![0.0; m], vec![0.0; m * p]);

@@ -28,14 +28,22 @@ pub(super) fn dense(
     }
     let m = starts[obs.len()];
     let n = columns.len();
-    let (res, jac) =
-        crate::calibrate::sample_rows(model, obs, x, columns, &starts).ok_or_else(|| {
-            CalibError::NonFinite {
-                what: "a worker thread lost its result".into(),
+    let mut j = DMatrix::zeros(m, n);
+    let mut r = DVector::zeros(m);
+    let column_scales: Vec<f64> = columns.iter().map(|&c| scales[c]).collect();
+    let filled =
+        crate::calibrate::sample_rows(model, obs, x, columns, &starts, |first, res, jac| {
+            let row = starts[first];
+            for (i, &v) in res.iter().enumerate() {
+                r[row + i] = v;
+                for (k, &s) in column_scales.iter().enumerate() {
+                    j[(row + i, k)] = jac[i * n + k] * s;
+                }
             }
-        })?;
-    let j = DMatrix::from_fn(m, n, |i, k| jac[i * n + k] * scales[columns[k]]);
-    let r = DVector::from_vec(res);
+        });
+    filled.ok_or_else(|| CalibError::NonFinite {
+        what: "a worker thread lost its result".into(),
+    })?;
     starts.pop();
     Ok((j, r, starts))
 }
