@@ -79,6 +79,17 @@ fn data_with(planted: &[(&str, f64)]) -> (Measurements, Vec<usize>, usize) {
     (m, wide_lines, planted)
 }
 
+/// The automatic diagnosis of `m` with the default options.
+fn diagnose_auto(m: &Measurements) -> Report {
+    diagnose(
+        &fit_support::ur5(),
+        m,
+        &CalibrationOptions::default(),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap()
+}
+
 fn named(r: &Report) -> Vec<usize> {
     r.outliers
         .as_ref()
@@ -106,14 +117,7 @@ fn the_geometric_screen_alone_leaves_the_loaded_poses_out() {
 #[test]
 fn the_diagnosis_judges_the_outliers_again_with_the_effect_it_found() {
     let (m, wide, planted) = data();
-    let table = fit_support::ur5();
-    let r = diagnose(
-        &table,
-        &m,
-        &CalibrationOptions::default(),
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
+    let r = diagnose_auto(&m);
     assert_eq!(r.selected_effects, vec!["gear_ratio:j2".to_string()]);
     // Only the true outlier is left out; the loaded poses are back in the fit.
     assert_eq!(named(&r), vec![planted], "wide poses on lines {wide:?}");
@@ -169,14 +173,7 @@ fn declared_effects_judge_the_outliers_from_the_start() {
 #[test]
 fn the_outliers_are_judged_again_as_soon_as_an_effect_is_in() {
     let (m, _, planted_line) = data_with(&[("gear_ratio:j2", RATIO), ("gear_ratio:j3", 5e-4)]);
-    let table = fit_support::ur5();
-    let r = diagnose(
-        &table,
-        &m,
-        &CalibrationOptions::default(),
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
+    let r = diagnose_auto(&m);
     assert_eq!(
         r.selected_effects,
         vec!["gear_ratio:j2".to_string(), "gear_ratio:j3".to_string()]
