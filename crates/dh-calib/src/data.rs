@@ -118,6 +118,20 @@ impl Sample {
     }
 }
 
+#[cfg(test)]
+impl Measurements {
+    /// For tests: `samples` of one target `t` on the UR5 of [`crate::test_robots::ur5`]
+    /// (joints `j1`..`j6`), without sessions.
+    pub(crate) fn test_ur5(samples: Vec<Sample>) -> Self {
+        Measurements {
+            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
+            targets: vec!["t".into()],
+            samples,
+            sessions: vec![],
+        }
+    }
+}
+
 impl Measurements {
     /// The same set with only the samples `keep(index, sample)` accepts (names and targets
     /// kept, sample order kept).

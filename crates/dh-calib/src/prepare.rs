@@ -458,12 +458,7 @@ mod tests {
                 )
             })
             .collect();
-        let data = Measurements {
-            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
-            targets: vec!["t".into()],
-            samples,
-            sessions: vec![],
-        };
+        let data = Measurements::test_ur5(samples);
         let prep = prepare(&tree, &data, None, false).unwrap();
         let mut ids: HashMap<String, usize> = HashMap::new();
         let mut expected = vec![];

@@ -393,12 +393,7 @@ mod tests {
                 )
             })
             .collect();
-        let data = Measurements {
-            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
-            targets: vec!["t".into()],
-            samples,
-            sessions: vec![],
-        };
+        let data = Measurements::test_ur5(samples);
         let prep = crate::prepare::prepare(&tree, &data, None, false).unwrap();
         let options = CalibrationOptions::default();
         let first = noise_floor(&prep, &options, 10).unwrap();

@@ -499,7 +499,7 @@ fn bins<I: Iterator<Item = f64>>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::{Measurements, Sample, Split};
+    use crate::data::{Measurements, Sample};
     use crate::tree::DhTree;
 
     /// With a sample per pose group, the unit and group means are the residuals bit for bit,
@@ -507,26 +507,21 @@ mod tests {
     #[test]
     fn single_sample_groups_have_their_residuals_as_means() {
         let tree = DhTree::serial(&crate::test_robots::ur5());
-        let data = |configs: &[&str]| Measurements {
-            joint_names: (1..=6).map(|j| format!("j{j}")).collect(),
-            targets: vec!["t".into()],
-            samples: configs
-                .iter()
-                .enumerate()
-                .map(|(i, c)| Sample {
-                    q: vec![0.1 * i as f64, 0.1, 0.2, 0.3, 0.4, 0.5].into(),
-                    target: 0,
-                    point: Vector3::new(0.1, 0.2, 0.3),
-                    sigma: None,
-                    config: Some((*c).into()),
-                    split: Split::Calibration,
-                    line: i + 2,
-                    socket: None,
-                    session: 0,
-                    orientation: None,
-                })
-                .collect(),
-            sessions: vec![],
+        let data = |configs: &[&str]| {
+            Measurements::test_ur5(
+                configs
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| Sample {
+                        config: Some((*c).into()),
+                        ..Sample::test_point(
+                            &[0.1 * i as f64, 0.1, 0.2, 0.3, 0.4, 0.5],
+                            Vector3::new(0.1, 0.2, 0.3),
+                            i + 2,
+                        )
+                    })
+                    .collect(),
+            )
         };
         let res: Vec<Vector3<f64>> = (0..5)
             .map(|i| Vector3::new(1e-4 / (i as f64 + 3.0), -7e-5 * (i as f64 + 1.0), 0.1 / 3.0))
