@@ -54,6 +54,8 @@ use start::*;
 mod validation;
 pub use validation::*;
 mod one_step;
+mod residuals_at;
+pub(crate) use residuals_at::{ResidualsAt, SessionProblem};
 mod rows_at;
 pub(crate) use rows_at::sample_rows;
 mod session;

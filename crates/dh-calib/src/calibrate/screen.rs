@@ -176,7 +176,13 @@ pub(crate) fn screen_from(
         };
         let x = &x;
         rms_with.get_or_insert(rms);
-        let cal_r = residual_vectors(&session.model, x, &full.cal);
+        // The first round's session reads its own samples: their residuals at its fit are
+        // those its step's distances read (computed once).
+        let cal_r = if std::ptr::eq(&session.prep, full) {
+            session.position_residuals(x)
+        } else {
+            Arc::new(residual_vectors(&session.model, x, &full.cal))
+        };
         let val_r = residual_vectors(&session.model, x, &full.val);
         // The first round's session is the one `full` belongs to, at its own fit: its
         // distances are the norms of `cal_r`.

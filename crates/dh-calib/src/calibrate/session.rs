@@ -24,6 +24,9 @@ pub(crate) struct Session<'a> {
     /// or two passes over millions of samples instead of one per iteration). Empty for
     /// smaller sets, which are fitted as they are.
     pub(super) coarse: Vec<usize>,
+    /// The position residuals of `prep.cal` at the last point asked for
+    /// ([`Session::position_residuals`]).
+    pub(super) residuals_at: ResidualsAt,
 }
 
 /// What [`Session::identify_factored`] finds: the free and held columns, and the factor it
@@ -183,7 +186,15 @@ impl<'a> Session<'a> {
             device_nominal,
             targets_nominal,
             coarse,
+            residuals_at: ResidualsAt::default(),
         })
+    }
+
+    /// The position residuals (model minus measured, device frame, metres) of every
+    /// calibration sample at `x`, computed once per point for the passes that read them
+    /// there (see [`ResidualsAt`]).
+    pub(crate) fn position_residuals(&self, x: &[f64]) -> Arc<Vec<Vector3<f64>>> {
+        self.residuals_at.of(&self.model, x, &self.prep.cal)
     }
 
     /// Fits `free` from `x0` and reports the step; `previous` is the step before it.
@@ -253,10 +264,7 @@ impl<'a> Session<'a> {
         folds: Folds,
         first: Option<fit::Factor>,
     ) -> Result<StepResult, CalibError> {
-        let problem = ModelProblem {
-            model: &self.model,
-            observations: &self.prep.cal,
-        };
+        let problem = SessionProblem { session: self };
         let start = if self.coarse.is_empty() {
             x0.to_vec()
         } else {
@@ -277,7 +285,12 @@ impl<'a> Session<'a> {
             &self.options.fit,
             first,
         )?;
-        let cal = Stats::of(&distances(&self.model, &outcome.x, &self.prep.cal));
+        let cal: Vec<f64> = self
+            .position_residuals(&outcome.x)
+            .iter()
+            .map(|r| r.norm())
+            .collect();
+        let cal = Stats::of(&cal);
         let held = self.held_out_with(&outcome.x, free, folds)?;
         let val = Stats::of(&held);
         let cal = cal.unwrap_or(Stats {
@@ -569,7 +582,7 @@ impl<'a> Session<'a> {
         ));
         // The residuals at `x`, computed once for the sessions' figures and both tests of the
         // verdict (three passes over millions of samples before).
-        let res = position_residuals(self, &x);
+        let res = self.position_residuals(&x);
         let cal_d: Vec<f64> = res.iter().map(|r| r.norm()).collect();
         let sessions = self.session_reports_with(&x, &cal_d);
         drop(cal_d);

@@ -26,12 +26,12 @@ pub(crate) fn verdict(
     rms: f64,
     selected: &[String],
 ) -> Verdict {
-    let res = position_residuals(session, &fit.x);
+    let res = session.position_residuals(&fit.x);
     verdict_with(session, fit, alpha, floor, rms, selected, &res)
 }
 
 /// [`verdict`] given the position residuals `res` of every calibration sample at `fit.x`
-/// ([`position_residuals`]): both tests read them, computed once.
+/// ([`Session::position_residuals`]): both tests read them, computed once.
 pub(crate) fn verdict_with(
     session: &Session<'_>,
     fit: &FitOutcome,
@@ -148,7 +148,7 @@ pub(crate) fn residual_test(session: &Session<'_>, fit: &FitOutcome, alpha: f64)
 }
 
 /// [`residual_test`], reading the position residuals at `fit.x` from `res` when given
-/// ([`position_residuals`]; a 6-DoF pose's angle residuals are computed again).
+/// ([`Session::position_residuals`]; a 6-DoF pose's angle residuals are computed again).
 fn residual_test_in(
     session: &Session<'_>,
     fit: &FitOutcome,
@@ -231,7 +231,7 @@ fn residual_test_in(
 }
 
 /// The residual's structure at `fit` (step 5 of the verdict), given the position residuals
-/// `res` of every calibration sample at `fit.x` ([`position_residuals`]).
+/// `res` of every calibration sample at `fit.x` ([`Session::position_residuals`]).
 fn structure_checks(
     session: &Session<'_>,
     fit: &FitOutcome,
@@ -427,12 +427,6 @@ fn joint_check(
             8,
         ),
     })
-}
-
-/// The position residuals (model minus measured, metres) of every calibration sample of
-/// `session` at `x`, in parallel segments on a large set (each the same as on one thread).
-pub(crate) fn position_residuals(session: &Session<'_>, x: &[f64]) -> Vec<Vector3<f64>> {
-    super::residual_vectors(&session.model, x, &session.prep.cal)
 }
 
 /// A hasher for the integer keys of the pose maps above (rustc's Fx: a rotate, xor and

@@ -31,6 +31,12 @@ pub trait Problem: Sync {
         residuals: &mut [f64],
         jacobian: &mut [f64],
     );
+    /// Sum of squared residuals at `x`, or `None` when one is not finite:
+    /// [`sum_of_squares`](super::sum_of_squares), the number an implementation that overrides
+    /// it must give too (the same residuals summed in the same order).
+    fn sum_of_squares(&self, x: &[f64]) -> Option<f64> {
+        super::sum_of_squares(self, x)
+    }
 }
 
 /// Largest residual block a [`Problem`] may have.

@@ -178,3 +178,85 @@ fn aliased_columns_are_found_with_their_partners() {
     assert!(d.aliases.is_empty());
     assert!(id.condition_number.is_finite());
 }
+
+/// [`Circle`] counting the blocks whose Jacobian it was asked for (a factor asks once per
+/// block).
+struct Counted {
+    circle: Circle,
+    jacobians: std::sync::atomic::AtomicUsize,
+}
+
+impl Problem for Counted {
+    fn parameter_count(&self) -> usize {
+        self.circle.parameter_count()
+    }
+    fn block_count(&self) -> usize {
+        self.circle.block_count()
+    }
+    fn block_size(&self, b: usize) -> usize {
+        self.circle.block_size(b)
+    }
+    fn residuals(&self, x: &[f64], b: usize, out: &mut [f64]) {
+        self.circle.residuals(x, b, out);
+    }
+    fn jacobian(&self, x: &[f64], b: usize, cols: &[usize], r: &mut [f64], j: &mut [f64]) {
+        self.jacobians
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.circle.jacobian(x, b, cols, r, j);
+    }
+}
+
+/// A large fit's last step is checked by a sum of squares, not a factor: the same point and
+/// sum of squares, bit for bit, one factor fewer, and the standard errors of the factor one
+/// step before, which differ from the point's in the last digits. A small fit makes every
+/// factor.
+#[test]
+fn a_large_fit_takes_its_last_step_without_a_factor() {
+    use rand::{Rng, SeedableRng};
+    use std::sync::atomic::Ordering;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let noisy = |n: usize, rng: &mut rand_chacha::ChaCha8Rng| {
+        let circle = Circle(
+            (0..n)
+                .map(|i| {
+                    let t = i as f64 * 0.001;
+                    let r = 2.0 + rng.random_range(-0.01..0.01);
+                    (1.0 + r * t.cos(), -0.5 + r * t.sin())
+                })
+                .collect(),
+        );
+        Counted {
+            circle,
+            jacobians: 0.into(),
+        }
+    };
+    let (x0, free, scales) = ([1.0001, -0.4999, 1.9999], [0, 1, 2], [1.0; 3]);
+    let options = FitOptions::default();
+    let blocks = 3 * SEGMENT_BLOCKS;
+    let p = noisy(blocks, &mut rng);
+    let last = solve(&p, &x0, &free, &scales, &options).unwrap();
+    let factors_last = p.jacobians.swap(0, Ordering::Relaxed) / blocks;
+    let every = super::solve::solve_with_every_factor(&p, &x0, &free, &scales, &options).unwrap();
+    let factors_every = p.jacobians.load(Ordering::Relaxed) / blocks;
+    assert_eq!(factors_last + 1, factors_every);
+    assert!(factors_last >= 2, "{factors_last} factors");
+    assert_eq!(last.x, every.x);
+    assert_eq!(last.ssr, every.ssr);
+    assert_eq!(last.iterations, every.iterations);
+    assert_eq!(last.termination, Termination::Converged);
+    assert_eq!(last.rank, every.rank);
+    for (a, b) in last.std_errors.iter().zip(&every.std_errors) {
+        let (a, b) = (a.unwrap(), b.unwrap());
+        assert!(a != b && ((a - b) / b).abs() < 1e-6, "{a} against {b}");
+    }
+    // At most SEGMENT_BLOCKS blocks: every point factored, as before.
+    let p = noisy(SEGMENT_BLOCKS, &mut rng);
+    let small = solve(&p, &x0, &free, &scales, &options).unwrap();
+    let factors_small = p.jacobians.swap(0, Ordering::Relaxed) / SEGMENT_BLOCKS;
+    let every = super::solve::solve_with_every_factor(&p, &x0, &free, &scales, &options).unwrap();
+    assert_eq!(
+        factors_small,
+        p.jacobians.load(Ordering::Relaxed) / SEGMENT_BLOCKS
+    );
+    assert_eq!(small.std_errors, every.std_errors);
+}

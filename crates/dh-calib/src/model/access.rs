@@ -134,6 +134,12 @@ impl Model {
         &self.targets
     }
 
+    /// A number renewed by every change of the model (every `&mut self` method): results
+    /// computed from the model at one revision hold while it is the same.
+    pub(crate) fn revision(&self) -> u64 {
+        self.revision
+    }
+
     /// The reference device frame `T_device_base` (at `x = 0`).
     pub fn device(&self) -> Isometry3<f64> {
         self.ops[0].fixed.to_iso()
