@@ -14,11 +14,15 @@ pub(super) const CHUNK_BYTES: usize = 1 << 20;
 const CHUNKS_PER_THREAD: usize = 4;
 
 /// What a chunk's rows gave: their samples (lines counted from the chunk's first line as 1,
-/// targets and sessions numbered in the chunk's own `seen`), and the chunk's line count.
+/// targets and sessions numbered in the chunk's own `seen`).
 struct Chunk {
     samples: Vec<Sample>,
     seen: RowState,
-    lines: usize,
+}
+
+/// The number of line breaks in `text`.
+fn line_breaks(text: &str) -> usize {
+    text.bytes().filter(|&b| b == b'\n').count()
 }
 
 /// Reads the data rows of `text` (a whole file whose header `reader` holds) into `m` in
@@ -45,21 +49,22 @@ pub(super) fn read_chunked(
         line => text.match_indices('\n').nth(line - 1)?.0 + 1,
     };
     let chunks = split_lines(&text[start..], chunk_bytes.max(1));
-    let rows_bound = text[start..].bytes().filter(|&b| b == b'\n').count() + 1;
-    m.samples.reserve_exact(rows_bound);
+    // Each chunk's line breaks, counted on every core: the rows' bound for the set's list.
+    let breaks = crate::fit::parallel_map(chunks.len(), |k| Ok(line_breaks(chunks[k]))).ok()?;
+    m.samples.reserve_exact(breaks.iter().sum::<usize>() + 1);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let wave = (threads * CHUNKS_PER_THREAD).max(1);
     let columns = seen.largest.len();
     // 1-based line number of the chunk's first line, less one.
     let mut offset = reader.header.line;
-    for group in chunks.chunks(wave) {
+    for (group, lines) in chunks.chunks(wave).zip(breaks.chunks(wave)) {
         let read =
             crate::fit::parallel_map(group.len(), |k| Ok(read_chunk(group[k], reader, columns)))
                 .ok()?;
-        for chunk in read {
+        for (chunk, lines) in read.into_iter().zip(lines) {
             let chunk = chunk?;
             join(chunk.samples, &chunk.seen, offset, m, seen);
-            offset += chunk.lines;
+            offset += lines;
         }
     }
     m.samples.shrink_to_fit();
@@ -85,26 +90,24 @@ fn split_lines(text: &str, size: usize) -> Vec<&str> {
     out
 }
 
-/// The rows of one chunk; `None` for a faulty row.
+/// The rows of one chunk (a text without a double quote); `None` for a faulty row. Each line
+/// is read as [`Records`] reads it (a line feed, then a carriage return, dropped; blank lines
+/// and comments skipped; the cells between commas trimmed), its cells borrowed from `text`.
 fn read_chunk(text: &str, reader: &RowReader<'_>, columns: usize) -> Option<Chunk> {
     let mut seen = RowState::new(columns);
     let mut samples = Vec::new();
-    let mut rows = Records::lines_of(text, ',', true);
-    let mut row = Record {
-        line: 0,
-        fields: Vec::new(),
-    };
-    while let Some(read) = rows.next_into(&mut row) {
-        read.ok()?;
-        samples.push(reader.sample(&row, &mut seen).ok()?);
+    let mut cells: Vec<&str> = Vec::new();
+    for (index, raw) in text.split('\n').enumerate() {
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        let trimmed = raw.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            continue;
+        }
+        cells.clear();
+        cells.extend(raw.split(',').map(str::trim));
+        samples.push(reader.sample(index + 1, &cells, &mut seen).ok()?);
     }
-    // Lines in the chunk: its line breaks (the last piece may end without one).
-    let lines = text.bytes().filter(|&b| b == b'\n').count();
-    Some(Chunk {
-        samples,
-        seen,
-        lines,
-    })
+    Some(Chunk { samples, seen })
 }
 
 /// Appends a chunk's samples to `m`, their lines moved by `offset` and their targets and
@@ -149,7 +152,8 @@ mod tests {
     use super::*;
 
     /// A file of `rows` rows over three targets (the third first seen late), two sessions, a
-    /// zero sigma now and then, comments and blank lines between the rows.
+    /// zero sigma now and then, CRLF line ends, spaces around cells, comments (some indented)
+    /// and blank lines (some of spaces and a tab) between the rows.
     fn file(rows: usize) -> String {
         let mut text = String::from("\u{feff}# a comment\n\nj1, j2,x,y,z,target,session,sigma\n");
         for i in 0..rows {
@@ -169,6 +173,9 @@ mod tests {
             ));
             if i % 50 == 0 {
                 text.push_str("# between rows\n\n");
+            }
+            if i % 70 == 0 {
+                text.push_str("   # an indented comment\r\n \t \n");
             }
         }
         text

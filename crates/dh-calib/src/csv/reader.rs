@@ -82,7 +82,8 @@ pub fn parse_measurements_noting(
         m.samples = Vec::new();
         seen = RowState::new(header.fields.len());
         for row in rows {
-            let sample = reader.sample(&row?, &mut seen)?;
+            let row = row?;
+            let sample = reader.sample(row.line, &row.fields, &mut seen)?;
             m.samples.push(sample);
         }
         m.targets = std::mem::take(&mut seen.targets);
@@ -148,12 +149,17 @@ impl RowState {
 }
 
 impl RowReader<'_> {
-    /// The sample of data row `row`, after the rows `seen` summarises (its targets and
-    /// sessions numbered there).
+    /// The sample of the data row on line `line` whose cells (unquoted, trimmed) are
+    /// `fields`, after the rows `seen` summarises (its targets and sessions numbered there).
     ///
     /// # Errors
     /// As [`parse_measurements`], for this row.
-    pub(super) fn sample(&self, row: &Record, seen: &mut RowState) -> Result<Sample, DataError> {
+    pub(super) fn sample<C: AsRef<str>>(
+        &self,
+        line: usize,
+        fields: &[C],
+        seen: &mut RowState,
+    ) -> Result<Sample, DataError> {
         let (header, cols, opts) = (self.header, self.cols, self.opts);
         let revolute_columns = &self.revolute;
         let length = |v: f64| opts.length_unit.to_metres(v);
@@ -165,15 +171,14 @@ impl RowReader<'_> {
         };
         let largest = &mut seen.largest;
         let zero_sigmas = &mut seen.zero_sigmas;
-        let line = row.line;
-        if row.fields.len() != expected {
+        if fields.len() != expected {
             return Err(DataError::FieldCount {
                 line,
                 expected,
-                found: row.fields.len(),
+                found: fields.len(),
             });
         }
-        let cell = |i: usize| row.fields[i].as_str();
+        let cell = |i: usize| fields[i].as_ref();
         let name = |i: usize| header.fields[i].as_str();
 
         let q = &mut seen.joints;

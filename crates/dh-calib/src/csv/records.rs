@@ -53,44 +53,6 @@ impl<'a> Records<'a> {
     }
 }
 
-impl Records<'_> {
-    /// The next record into `record`, reusing its cells' buffers: a reader of millions of
-    /// rows then allocates no string per cell. The same record as [`Iterator::next`];
-    /// `None` at the end.
-    pub(crate) fn next_into(&mut self, record: &mut Record) -> Option<Result<(), DataError>> {
-        let delimiter = self.delimiter;
-        loop {
-            let &(index, raw) = self.lines.peek()?;
-            let raw = raw.strip_suffix('\r').unwrap_or(raw);
-            let trimmed = raw.trim();
-            if trimmed.is_empty() || self.comments && trimmed.starts_with('#') {
-                self.lines.next();
-                continue;
-            }
-            if raw.contains('"') {
-                // A quoted cell may run over a line break: as `next` reads it.
-                return Some(self.next()?.map(|r| *record = r));
-            }
-            self.lines.next();
-            record.line = index + 1;
-            let mut used = 0;
-            for cell in raw.split(delimiter) {
-                let cell = cell.trim();
-                match record.fields.get_mut(used) {
-                    Some(f) => {
-                        f.clear();
-                        f.push_str(cell);
-                    }
-                    None => record.fields.push(cell.to_string()),
-                }
-                used += 1;
-            }
-            record.fields.truncate(used);
-            return Some(Ok(()));
-        }
-    }
-}
-
 impl Iterator for Records<'_> {
     type Item = Result<Record, DataError>;
 

@@ -306,32 +306,3 @@ fn bad_orientations_name_line_and_column() {
     let e = err("j1,x,y,z,qw,qx,qy\n0.1,1,2,3,1,0,0\n", &["j1"]);
     assert!(e.contains("missing point column 'qz'"), "{e}");
 }
-
-/// `Records::next_into` reuses one record's cells and reads the same records as the iterator:
-/// comments, blank lines, CRLF ends, spaces around cells, rows of different lengths and a
-/// quoted cell over a line break.
-#[test]
-fn records_read_into_one_record_are_the_iterators() {
-    let text =
-        "# c\r\na, b ,c\r\n\r\n1,2,3,4,5\n  # indented comment\nx\n\"q,\nr\", s ,\"t\"\n,,\n";
-    let expected: Vec<Record> = Records::lines_of(text, ',', true)
-        .collect::<Result<_, _>>()
-        .expect("records");
-    assert_eq!(expected.len(), 5);
-    let mut rows = Records::lines_of(text, ',', true);
-    let mut record = Record {
-        line: 0,
-        fields: Vec::new(),
-    };
-    let mut read = Vec::new();
-    while let Some(r) = rows.next_into(&mut record) {
-        r.expect("record");
-        read.push(record.clone());
-    }
-    assert_eq!(read, expected);
-    let mut open = Records::lines_of("a,\"b\n", ',', true);
-    assert!(matches!(
-        open.next_into(&mut record),
-        Some(Err(DataError::UnterminatedQuote { line: 1 }))
-    ));
-}
