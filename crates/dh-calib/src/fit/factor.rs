@@ -4,10 +4,12 @@
 //! everything seen so far and re-factored by Householder reflections, so memory is `O(p²)`
 //! and the accuracy that of a QR of the full Jacobian. The residual rides along as an extra
 //! column (`Qᵀr` for free). Large problems are factored in segments on several threads and
-//! the segments' factors stacked, deterministically in segment order.
+//! the segments' factors stacked, deterministically in segment order, unless their Gram
+//! matrix gives the factor (module `gram`).
 
 use nalgebra::{DMatrix, DVector};
 
+use super::gram::Gram;
 use super::{CalibError, Problem, MAX_BLOCK};
 
 /// The triangular factor of the column-scaled Jacobian of some columns, with the residuals.
@@ -224,7 +226,9 @@ pub(super) fn check_columns(n: usize, columns: &[usize], scales: &[f64]) -> Resu
 }
 
 /// Factors the column-scaled Jacobian of `columns` at `x` (see [`Factor`]); the columns of
-/// `r` are in the order of `columns`.
+/// `r` are in the order of `columns`. A problem of more than [`SEGMENT_BLOCKS`] blocks is
+/// factored from its Gram matrix when the Jacobian's condition number allows it
+/// ([`super::GRAM_MAX_CONDITION`]), else by the QR in a second pass over the blocks.
 ///
 /// # Errors
 /// [`CalibError::NonFinite`] when a residual or derivative is not finite;
@@ -245,8 +249,22 @@ pub fn factor<P: Problem + ?Sized>(
         let (full, ssr, rows) = factor_blocks(problem, x, columns, scales, 0..blocks, pipelined)?;
         return Ok(split_factor(&full, p, ssr, rows));
     }
-    // Segments in parallel, their factors stacked in segment order: the same result whatever
-    // the number of threads.
+    // The Gram matrix of each segment in parallel, summed in segment order (the same result
+    // whatever the number of threads), when it is well enough conditioned (see `gram`).
+    let parts = segments(blocks, |range| {
+        accumulate(problem, x, columns, scales, range, false, Gram::new(p + 1))
+    })?;
+    let mut gram = Gram::new(p + 1);
+    let (mut ssr, mut rows) = (0.0, 0);
+    for (g, s, m) in parts {
+        gram.add(g);
+        ssr += s;
+        rows += m;
+    }
+    if let Some(f) = super::gram::factor_of(gram, ssr, rows) {
+        return Ok(f);
+    }
+    // Else the segments' factors in parallel, stacked in segment order.
     let parts = segments(blocks, |range| {
         factor_blocks(problem, x, columns, scales, range, false)
     })?;
@@ -321,10 +339,40 @@ pub(super) fn factor_blocks<P: Problem + ?Sized>(
     range: std::ops::Range<usize>,
     pipelined: bool,
 ) -> Result<(DMatrix<f64>, f64, usize), CalibError> {
+    let tsqr = Tsqr::new(columns.len() + 1);
+    let (tsqr, ssr, rows) = accumulate(problem, x, columns, scales, range, pipelined, tsqr)?;
+    Ok((tsqr.finish(), ssr, rows))
+}
+
+/// Where the rows `[a₀·s₀, …, a_{p−1}·s_{p−1}, r]` of a scaled Jacobian and its residuals go,
+/// one at a time in block order: a [`Tsqr`] or a [`super::gram::Gram`].
+pub(super) trait RowSink: Send {
+    /// Adds the row `[a₀·s₀, …, a_{p−1}·s_{p−1}, last]`; whether every value is finite.
+    fn push_scaled(&mut self, a: &[f64], s: &[f64], last: f64) -> bool;
+}
+
+impl RowSink for Tsqr {
+    fn push_scaled(&mut self, a: &[f64], s: &[f64], last: f64) -> bool {
+        Tsqr::push_scaled(self, a, s, last)
+    }
+}
+
+/// The rows of `[J·diag(s) | r]` over `range` of blocks pushed into `sink` in block order, with
+/// their sum of squared residuals and their number; `pipelined`: the Jacobian made on a second
+/// thread.
+pub(super) fn accumulate<P: Problem + ?Sized, S: RowSink>(
+    problem: &P,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+    range: std::ops::Range<usize>,
+    pipelined: bool,
+    sink: S,
+) -> Result<(S, f64, usize), CalibError> {
     let p = columns.len();
     let column_scales: Vec<f64> = columns.iter().map(|&c| scales[c]).collect();
     let mut into = Rows {
-        tsqr: Tsqr::new(p + 1),
+        sink,
         column_scales,
         ssr: 0.0,
         rows: 0,
@@ -371,18 +419,18 @@ pub(super) fn factor_blocks<P: Problem + ?Sized>(
             Ok(())
         })?;
     }
-    Ok((into.tsqr.finish(), into.ssr, into.rows))
+    Ok((into.sink, into.ssr, into.rows))
 }
 
-/// What [`factor_blocks`] accumulates, block after block.
-struct Rows {
-    tsqr: Tsqr,
+/// What [`accumulate`] accumulates, block after block.
+struct Rows<S> {
+    sink: S,
     column_scales: Vec<f64>,
     ssr: f64,
     rows: usize,
 }
 
-impl Rows {
+impl<S: RowSink> Rows<S> {
     /// Adds block `b`'s residuals `res` and Jacobian rows `jac` (row-major, unscaled).
     fn push(&mut self, b: usize, res: &[f64], jac: &[f64]) -> Result<(), CalibError> {
         let p = self.column_scales.len();
@@ -390,7 +438,7 @@ impl Rows {
             // The scaled Jacobian row, then the residual; the factor is thrown away on a
             // value that is not finite.
             if !self
-                .tsqr
+                .sink
                 .push_scaled(&jac[i * p..(i + 1) * p], &self.column_scales, r)
             {
                 return Err(CalibError::NonFinite {

@@ -43,7 +43,7 @@ pub(super) fn svd(
 /// predicted, `p₀`, put the next one, `p₁ · (p₁ / p₀)` at the observed rate of convergence, under
 /// `cost_tolerance · ssr`, the test that would stop the fit at the new point. Its point is then
 /// checked by a sum of squares instead of a factor, and the fit stops there when the step is
-/// taken with `ρ ≥` [`LAST_STEP_MIN_RHO`] (otherwise it goes on as usual). The point is the one
+/// taken with `ρ ≥ 0.25` (otherwise it goes on as usual). The point is the one
 /// the full iteration reaches (the same step from the same factor); the sum of squares is that
 /// point's; the standard errors, singular values and covariance are those of the factor one step
 /// before, a Jacobian that differs from the point's by that last step (on the 2 000 000-row Panda
