@@ -191,6 +191,19 @@ fn bench(c: &mut Criterion) {
     g.bench_function("calibrate, validation split", |b| {
         b.iter(|| calibrate(&table, black_box(&large), &CalibrationOptions::default()).unwrap())
     });
+    // One factor pass over every calibration sample at the nominal point: beyond
+    // `fit::SEGMENT_BLOCKS` blocks, the Gram matrix of the scaled Jacobian on every core (the
+    // QR when it is ill-conditioned), a pass of each large fit's iterations.
+    let (model, obs, x0, free) = setup(&table, &large);
+    let scales = model.scales();
+    let problem = ModelProblem {
+        model: &model,
+        observations: &obs,
+    };
+    g.throughput(Throughput::Elements(obs.len() as u64));
+    g.bench_function("factor of the geometric columns", |b| {
+        b.iter(|| fit::factor(&problem, black_box(&x0), &free, &scales).unwrap())
+    });
     g.finish();
 }
 
