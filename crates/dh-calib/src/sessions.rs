@@ -162,11 +162,10 @@ pub(crate) fn register_each(
     sessions
         .iter()
         .map(|&s| {
-            let (a, b): (Vec<_>, Vec<_>) = obs
-                .iter()
-                .filter(|o| o.session == s)
-                .map(|o| (base_point(model, x, o), measured(o)))
-                .unzip();
+            let own: Vec<&Observed> = obs.iter().filter(|o| o.session == s).collect();
+            // The model's points on every core (a closed-form start reads 100 000 of them).
+            let a = crate::fit::in_segments(&own, |o| base_point(model, x, o));
+            let b: Vec<Vector3<f64>> = own.iter().map(|o| measured(o)).collect();
             register(&a, &b).map(|t| (s, t))
         })
         .collect()

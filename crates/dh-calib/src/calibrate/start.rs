@@ -14,13 +14,21 @@ pub(super) fn observed_position(o: &Observed) -> Vector3<f64> {
 pub(super) fn targets_given_device(model: &mut Model, x: &[f64], cal: &[Observed]) {
     let k = model.targets().len();
     let mut sums = vec![(Vector3::zeros(), 0usize); k];
-    for o in cal {
-        if let Observation::Point { target, point } = &o.observation {
+    // Each point in its tip frame on every core, summed in order (the same sums).
+    let in_tip = fit::in_segments(cal, |o| match &o.observation {
+        Observation::Point { target, point } => {
             let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
-            if let Some(s) = sums.get_mut(*target) {
-                s.0 += tip.inverse_transform_point(&(*point).into()).coords;
-                s.1 += 1;
-            }
+            Some((
+                *target,
+                tip.inverse_transform_point(&(*point).into()).coords,
+            ))
+        }
+        _ => None,
+    });
+    for (target, p) in in_tip.into_iter().flatten() {
+        if let Some(s) = sums.get_mut(target) {
+            s.0 += p;
+            s.1 += 1;
         }
     }
     for (t, (sum, n)) in sums.into_iter().enumerate() {

@@ -36,7 +36,7 @@ pub(crate) fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> 
 /// [`distances`] of the observations `obs[i]` for `i` in `at`, in parallel segments for long
 /// lists.
 pub(super) fn distances_at(model: &Model, x: &[f64], obs: &[Observed], at: &[usize]) -> Vec<f64> {
-    in_segments(at, |i| {
+    fit::in_segments(at, |i| {
         let mut r = [0.0; 6];
         model.residuals(x, &obs[*i], &mut r);
         Vector3::new(r[0], r[1], r[2]).norm()
@@ -47,28 +47,11 @@ pub(super) fn distances_at(model: &Model, x: &[f64], obs: &[Observed], at: &[usi
 /// in `obs` at `x`, in parallel segments for long lists (each the same value as on one thread).
 /// Their norms are [`distances`].
 pub(crate) fn residual_vectors(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<Vector3<f64>> {
-    in_segments(obs, |o| {
+    fit::in_segments(obs, |o| {
         let mut r = [0.0; 6];
         model.residuals(x, o, &mut r);
         Vector3::new(r[0], r[1], r[2])
     })
-}
-
-/// `one` of every item, in parallel segments of [`fit::SEGMENT_BLOCKS`] items for long lists
-/// (each value the same as on one thread), in order.
-fn in_segments<T: Sync, R: Send>(items: &[T], one: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let parts: Vec<&[T]> = items.chunks(fit::SEGMENT_BLOCKS).collect();
-    if parts.len() <= 1 {
-        return items.iter().map(&one).collect();
-    }
-    match fit::parallel_map(parts.len(), |k| {
-        Ok(parts[k].iter().map(&one).collect::<Vec<R>>())
-    }) {
-        Ok(r) => r.into_iter().flatten().collect(),
-        // Only a lost result gets here (a worker's panic reaches the caller): compute on this
-        // thread instead.
-        Err(_) => items.iter().map(one).collect(),
-    }
 }
 
 /// Distances of the validation samples at `x`. A target that no calibration sample measured

@@ -311,6 +311,23 @@ pub(crate) fn parallel_map<T: Send>(
     })
 }
 
+/// `one` of every item, in parallel segments of [`SEGMENT_BLOCKS`] items for long lists (each
+/// value the same as on one thread), in order.
+pub(crate) fn in_segments<T: Sync, R: Send>(items: &[T], one: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let parts: Vec<&[T]> = items.chunks(SEGMENT_BLOCKS).collect();
+    if parts.len() <= 1 {
+        return items.iter().map(&one).collect();
+    }
+    match parallel_map(parts.len(), |k| {
+        Ok(parts[k].iter().map(&one).collect::<Vec<R>>())
+    }) {
+        Ok(r) => r.into_iter().flatten().collect(),
+        // Only a lost result gets here (a worker's panic reaches the caller): compute on this
+        // thread instead.
+        Err(_) => items.iter().map(one).collect(),
+    }
+}
+
 /// `(r_factor, qtr)` out of the `(p + 1) × (p + 1)` factor of `[J | r]`.
 fn split_factor(full: &DMatrix<f64>, p: usize, ssr: f64, rows: usize) -> Factor {
     Factor {
