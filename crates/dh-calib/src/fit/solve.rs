@@ -76,9 +76,15 @@ pub(crate) fn solve_from<P: Problem + ?Sized>(
     options: &FitOptions,
     first: Option<Factor>,
 ) -> Result<FitOutcome, CalibError> {
-    let last_step = problem.block_count() > SEGMENT_BLOCKS;
-    let end = iterate(problem, x0, free, scales, options, first, last_step)?;
+    let end = iterate(problem, x0, free, scales, options, first, large(problem))?;
     outcome(end, free, scales, options)
+}
+
+/// Whether `problem` is large enough for its last step to be checked by a sum of squares
+/// (see [`solve`]): more than [`SEGMENT_BLOCKS`] blocks, where a factor is a pass over every
+/// sample on every core.
+fn large<P: Problem + ?Sized>(problem: &P) -> bool {
+    problem.block_count() > SEGMENT_BLOCKS
 }
 
 /// [`solve`] with a factor at every point, the last one too (no last step by a sum of squares
@@ -109,8 +115,7 @@ pub(crate) fn solve_point_from<P: Problem + ?Sized>(
     options: &FitOptions,
     first: Option<Factor>,
 ) -> Result<Vec<f64>, CalibError> {
-    let last_step = problem.block_count() > SEGMENT_BLOCKS;
-    Ok(iterate(problem, x0, free, scales, options, first, last_step)?.x)
+    Ok(iterate(problem, x0, free, scales, options, first, large(problem))?.x)
 }
 
 /// Where the iterations of [`solve_from`] stop: the point, its sum of squares, the factor there
