@@ -2,7 +2,6 @@
 //! sample contexts (sequence, config) and the calibration/validation split ([`Prepared`]).
 
 use std::collections::HashMap;
-use std::hash::{BuildHasher, BuildHasherDefault, Hash, Hasher};
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3};
@@ -12,7 +11,10 @@ use crate::fit::CalibError;
 use crate::model::{Observation, Observed, SampleContext};
 use crate::tree::DhTree;
 
+mod groups;
 mod sigmas;
+
+use groups::{pose_groups, PoseKey};
 
 pub(crate) use sigmas::Sigmas;
 
@@ -192,51 +194,9 @@ fn observation_of(s: &Sample) -> Result<Observation, CalibError> {
     }
 }
 
-/// A prepared sample (or why it cannot be) and the hash of its config name (0 without one).
+/// A prepared sample (or why it cannot be) and the hash of its pose key ([`PoseKey`]; 0 for a
+/// validation sample).
 type Batched = (Result<Observed, CalibError>, u64);
-
-/// A config name and its hash (by a [`RandomState`](std::collections::hash_map::RandomState)),
-/// as a key of a map whose hasher passes the hash on ([`Prehashed`]): the hash is made on
-/// another thread than the map's look-ups.
-#[derive(Clone, Copy, Debug)]
-struct Named<'a> {
-    hash: u64,
-    /// A thin reference (8 bytes, not a `&str`'s 16): a map entry per name of millions.
-    name: &'a CompactString,
-}
-
-impl Hash for Named<'_> {
-    fn hash<H: Hasher>(&self, state: &mut H) {
-        state.write_u64(self.hash);
-    }
-}
-
-impl PartialEq for Named<'_> {
-    fn eq(&self, other: &Self) -> bool {
-        self.hash == other.hash && self.name == other.name
-    }
-}
-
-impl Eq for Named<'_> {}
-
-/// The hasher of [`Named`] keys: their hash as it is.
-#[derive(Clone, Copy, Debug, Default)]
-struct Prehashed(u64);
-
-impl Hasher for Prehashed {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        // Only `write_u64` is called by `Named`; anything else is folded in, never ignored.
-        for &b in bytes {
-            self.0 = self.0.rotate_left(8) ^ u64::from(b);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = v;
-    }
-}
 
 /// Samples per batch handed from the thread that prepares them to the one that files them.
 const PREPARE_BATCH: usize = 4096;
@@ -276,7 +236,7 @@ pub(crate) fn prepare(
     let mut out = Prepared {
         cal: Vec::with_capacity(n_cal),
         val: Vec::with_capacity(n_val),
-        groups: Vec::with_capacity(n_cal),
+        groups: Vec::new(),
         group_count: 0,
         named: Vec::with_capacity(n_cal),
         sigmas: Sigmas::default(),
@@ -284,12 +244,12 @@ pub(crate) fn prepare(
         val_groups: Vec::with_capacity(n_val),
     };
     let mut val_ids: HashMap<String, usize> = HashMap::new();
-    let mut group_ids: HashMap<Vec<u64>, usize> = HashMap::new();
-    // The config names' hashes are made beside the samples, on the second thread below
-    // (SipHash with random keys, as a map's own); the map only compares names.
-    let config_hasher = std::collections::hash_map::RandomState::new();
-    let mut config_ids: HashMap<Named<'_>, usize, BuildHasherDefault<Prehashed>> =
-        HashMap::default();
+    // The pose keys' hashes are made beside the samples, on the second thread below (SipHash
+    // with random keys, as a map's own); the calibration samples' config names (`None`: the
+    // joint values are the key) and hashes are kept for `pose_groups`.
+    let key_hasher = std::collections::hash_map::RandomState::new();
+    let mut names: Vec<Option<&CompactString>> = Vec::with_capacity(n_cal);
+    let mut hashes: Vec<u64> = Vec::with_capacity(n_cal);
     for s in &data.samples {
         if s.target >= data.targets.len() {
             return Err(CalibError::BadTarget {
@@ -305,14 +265,15 @@ pub(crate) fn prepare(
         }
     }
     // The prepared samples are made in order on a second thread (their joint values, what
-    // they measure, their contexts), a batch at a time, while this one numbers the pose groups
-    // (a map of the config names, in order of first appearance) and files them.
+    // they measure, their contexts, their pose keys' hashes), a batch at a time, while this
+    // one files them.
     let produce = |send: &mut dyn FnMut(Vec<Batched>) -> bool| {
         let mut batch = Vec::with_capacity(PREPARE_BATCH);
         for ((s, q), context) in data.samples.iter().zip(rows_q).zip(contexts) {
             let hash = match (&s.config, s.split) {
-                (Some(c), Split::Calibration) => config_hasher.hash_one(c.as_str()),
-                _ => 0,
+                (_, Split::Validation) => 0,
+                (Some(c), _) => PoseKey::Named(c).hash_by(&key_hasher),
+                (None, _) => PoseKey::Unnamed(&q).hash_by(&key_hasher),
             };
             let obs = observation_of(s).map(|observation| Observed {
                 session: s.session,
@@ -348,14 +309,8 @@ pub(crate) fn prepare(
                     out.val.push(obs);
                 }
                 Split::Calibration => {
-                    let next = group_ids.len() + config_ids.len();
-                    let g = match &s.config {
-                        Some(c) => *config_ids.entry(Named { hash, name: c }).or_insert(next),
-                        None => *group_ids
-                            .entry(obs.q.iter().map(|v| v.to_bits()).collect())
-                            .or_insert(next),
-                    };
-                    out.groups.push(g);
+                    names.push(s.config.as_ref());
+                    hashes.push(hash);
                     out.named.push(s.config.is_some());
                     out.sigmas.push(s.sigma);
                     if let Some(o) = &s.orientation {
@@ -377,7 +332,15 @@ pub(crate) fn prepare(
         });
         consume(&mut batches.into_iter())?;
     }
-    out.group_count = group_ids.len() + config_ids.len();
+    let cal = &out.cal;
+    let key = |i: usize| match names[i] {
+        Some(c) => PoseKey::Named(c),
+        None => PoseKey::Unnamed(&cal[i].q),
+    };
+    let (groups, count) = pose_groups(&key, &hashes);
+    drop((names, hashes));
+    out.groups = groups;
+    out.group_count = count;
     Ok(out)
 }
 
