@@ -100,7 +100,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             doc.validation.groups.unwrap_or(0),
             doc.validation
                 .training_subsample
-                .map(|n| format!(" (each fold fitted on {n} evenly spaced training samples)"))
+                .map(|n| format!(" (each fold fitted on about {n} evenly spaced training samples)"))
                 .unwrap_or_default()
                 + if doc.validation.fold_fits.as_deref() == Some("one-step") {
                     " (each fold one Gauss-Newton step from the fit of all samples)"

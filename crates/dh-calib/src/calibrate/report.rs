@@ -86,10 +86,11 @@ pub enum Validation {
         folds: usize,
         /// Number of pose groups.
         groups: usize,
-        /// Beyond [`CV_TRAINING_MAX`] calibration samples, each fold is fitted on an evenly
-        /// spaced subsample of this many of its training samples (every held-out sample is
-        /// still predicted): the held-out figure is then that of a model fitted on fewer
-        /// samples, so it errs on the high side. `None`: every training sample.
+        /// Beyond [`CV_TRAINING_MAX`] calibration samples, each fold is fitted on about this
+        /// many of its training samples, its share of one evenly spaced pool (see
+        /// [`CV_TRAINING_MAX`]; every held-out sample is still predicted): the held-out figure
+        /// is then that of a model fitted on fewer samples, so it errs on the high side.
+        /// `None`: every training sample.
         training_subsample: Option<usize>,
         /// Each fold's held-out figures from one Gauss-Newton step from the fit of all
         /// samples (the automatic diagnosis: its trials, and the steps it lists, see

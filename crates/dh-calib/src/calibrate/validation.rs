@@ -1,7 +1,7 @@
 //! Held-out errors: the Euclidean distances between modelled and measured points (metres) on
 //! the validation split, or k-fold cross-validation over poses (samples sharing `config`, or
-//! else the same joint values, stay in one fold; at most [`CV_TRAINING_MAX`] training samples), and the noise floor they are
-//! compared with.
+//! else the same joint values, stay in one fold; about [`CV_TRAINING_MAX`] training samples per
+//! fold at most), and the noise floor they are compared with.
 
 use super::*;
 use std::collections::BTreeMap;
@@ -10,6 +10,13 @@ use std::collections::BTreeMap;
 /// training samples (see [`Validation::CrossValidation`]): 100 000 points fix a few dozen
 /// kinematic parameters far below any tracker's noise, and the folds then cost one fit of the
 /// whole data between them instead of `folds` fits.
+///
+/// The folds share their subsample: a pool of `CV_TRAINING_MAX · k/(k − 1)` evenly spaced
+/// samples (`k` folds; 125 000 for 5), each fold trained on its training samples among them
+/// (about `CV_TRAINING_MAX`: exactly when the pose groups spread evenly over the folds). Every
+/// fold starts at the fit of all samples, so the Gram matrix there of each fold's part of the
+/// pool is made once (one pass over the pool), and each fold's first factor is that of the
+/// other parts' sum instead of a pass over its own training samples.
 pub const CV_TRAINING_MAX: usize = 100_000;
 
 /// RMS per axis (radians) of the orientation residuals of the 6-DoF poses in `obs` (the
@@ -249,33 +256,50 @@ pub(crate) fn held_out(
             training_subsample,
             ..
         } => {
+            let folds = *folds;
+            let fold_of = |i: usize| prep.groups[i] % folds;
             // Every fold starts at `x`: its first factor is of rows made once for all folds.
             let at_x = if training_subsample.is_none() {
                 super::rows_at::RowsAt::new(model, &prep.cal, x, free)
             } else {
                 None
             };
+            // Beyond `CV_TRAINING_MAX` samples, the folds train on their samples among one pool
+            // of evenly spaced ones; the Gram matrix at `x` of each fold's part of the pool is
+            // made once, and each fold's first factor is that of the other parts' sum.
+            let pool = training_subsample.map(|keep| {
+                let size = (keep * folds).div_ceil(folds.saturating_sub(1).max(1));
+                evenly_spaced((0..prep.cal.len()).collect(), size)
+            });
+            let parts = match &pool {
+                Some(pool) => Some(fit::parallel_map(folds, |f| {
+                    let part: Vec<usize> =
+                        pool.iter().copied().filter(|&i| fold_of(i) == f).collect();
+                    let p = SubsetProblem {
+                        model,
+                        observations: &prep.cal,
+                        subset: &part,
+                    };
+                    fit::GramSum::of(&p, x, free, scales)
+                })?),
+                None => None,
+            };
             // The folds are independent fits: run on every core, gathered in fold order.
-            let per_fold = fit::parallel_map(*folds, |f| {
-                let (mut train, mut at) = (Vec::new(), Vec::new());
-                for (i, g) in prep.groups.iter().enumerate() {
-                    if g % folds == f {
-                        at.push(i);
-                    } else {
-                        train.push(i);
-                    }
-                }
-                if let Some(keep) = training_subsample {
-                    train = evenly_spaced(train, *keep);
-                }
+            let per_fold = fit::parallel_map(folds, |f| {
+                let at: Vec<usize> = (0..prep.cal.len()).filter(|&i| fold_of(i) == f).collect();
+                let train: Vec<usize> = match &pool {
+                    Some(pool) => pool.iter().copied().filter(|&i| fold_of(i) != f).collect(),
+                    None => (0..prep.cal.len()).filter(|&i| fold_of(i) != f).collect(),
+                };
                 let p = SubsetProblem {
                     model,
                     observations: &prep.cal,
                     subset: &train,
                 };
-                let first = match &at_x {
-                    Some(rows) => Some(fit::factor(&rows.subset(&train), x, free, scales)?),
-                    None => None,
+                let first = match (&at_x, &parts) {
+                    (Some(rows), _) => Some(fit::factor(&rows.subset(&train), x, free, scales)?),
+                    (None, Some(parts)) => trained_on_others(parts, f),
+                    (None, None) => None,
                 };
                 // Only the fold's parameters are read (not its outcome's covariance).
                 let fold = fit::solve_point_from(&p, x, free, scales, fit_options, first)?;
@@ -292,6 +316,18 @@ pub(crate) fn held_out(
         }
         Validation::None => Ok(vec![]),
     }
+}
+
+/// The factor of every part of `parts` but `fold`'s, summed in part order; `None` when that
+/// sum cannot give it (the fold's fit then makes its own, see [`fit::GramSum::factor`]).
+fn trained_on_others(parts: &[fit::GramSum], fold: usize) -> Option<fit::Factor> {
+    let mut others = parts.iter().enumerate().filter(|(k, _)| *k != fold);
+    let (_, first) = others.next()?;
+    let mut sum = first.clone();
+    for (_, part) in others {
+        sum.add(part);
+    }
+    sum.factor()
 }
 
 pub(super) fn noise_floor(
@@ -354,6 +390,68 @@ pub(super) fn noise_floor(
 mod tests {
     use super::*;
     use crate::data::{Measurements, Sample};
+
+    /// A fold's first factor from the other folds' parts of the pool (`trained_on_others`) is
+    /// the factor of the fold's own training samples: the same rows summed in another order,
+    /// so `R` and `Qᵀr` agree with the QR of those rows up to the signs of their rows, to 1e-9
+    /// of their largest element; and the part left out is the fold's own.
+    #[test]
+    fn a_fold_factored_from_the_other_parts_has_its_own_factor() {
+        let table = crate::test_robots::ur5();
+        let model = Model::new(&table, &["t".into()], &Default::default()).unwrap();
+        let x: Vec<f64> = (0..model.parameter_count())
+            .map(|i| 1e-3 * (i as f64 * 0.7).sin())
+            .collect();
+        let cal: Vec<Observed> = (0..3001)
+            .map(|i| {
+                let q: Vec<f64> = (0..6)
+                    .map(|j| ((i * 6 + j) as f64 * 1.3).sin() * 2.5)
+                    .collect();
+                let point = Vector3::new((i as f64).sin(), (i as f64).cos(), 0.5);
+                Observed::new(q, Observation::Point { target: 0, point })
+            })
+            .collect();
+        // The device frame and the target: 9 well-identified columns.
+        let free = model.indices(|b| matches!(b, Block::Device | Block::Target(_)));
+        assert_eq!(free.len(), 9);
+        let scales = model.scales();
+        let folds = 5;
+        let fold_of = |i: usize| (i * 7) % folds;
+        let pool = evenly_spaced((0..cal.len()).collect(), 2000);
+        let parts: Vec<fit::GramSum> = (0..folds)
+            .map(|f| {
+                let part: Vec<usize> = pool.iter().copied().filter(|&i| fold_of(i) == f).collect();
+                let p = SubsetProblem {
+                    model: &model,
+                    observations: &cal,
+                    subset: &part,
+                };
+                fit::GramSum::of(&p, &x, &free, &scales).unwrap()
+            })
+            .collect();
+        for f in 0..folds {
+            let train: Vec<usize> = pool.iter().copied().filter(|&i| fold_of(i) != f).collect();
+            let p = SubsetProblem {
+                model: &model,
+                observations: &cal,
+                subset: &train,
+            };
+            let want = fit::factor(&p, &x, &free, &scales).unwrap();
+            let got = trained_on_others(&parts, f).expect("well conditioned");
+            assert_eq!(got.rows, want.rows);
+            assert!((got.ssr - want.ssr).abs() <= 1e-12 * want.ssr);
+            let scale = want.r.abs().max();
+            for i in 0..free.len() {
+                let sign = got.r[(i, i)].signum() * want.r[(i, i)].signum();
+                for j in 0..free.len() {
+                    let d = (got.r[(i, j)] - sign * want.r[(i, j)]).abs();
+                    assert!(d < 1e-9 * scale, "fold {f}: R[{i},{j}] off by {d}");
+                }
+                let d = (got.qtr[i] - sign * want.qtr[i]).abs();
+                assert!(d < 1e-9 * scale, "fold {f}: qtr[{i}] off by {d}");
+            }
+        }
+    }
 
     /// The pooled pure error of many repeated poses is summed in the same order every time:
     /// the floor is the same bit for bit in every run (it was summed in a hash map's order,

@@ -13,7 +13,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::factor::{Factor, RowSink};
+use super::factor::{accumulate, check_columns, Factor, RowSink};
+use super::{CalibError, Problem};
 
 /// Largest condition number of the column-scaled Jacobian whose factor is taken from its Gram
 /// matrix: `ε·κ²` is then at most 2.2e-8, the relative accuracy of its weakest direction.
@@ -23,6 +24,7 @@ pub const GRAM_MAX_CONDITION: f64 = 1e4;
 const STAGE_ROWS: usize = 4;
 
 /// The lower triangle of `[A | r]ᵀ[A | r]` over the rows pushed so far.
+#[derive(Clone, Debug)]
 pub(super) struct Gram {
     cols: usize,
     /// Element `(i, j)`, `j ≤ i`, at `i · cols + j`.
@@ -95,6 +97,53 @@ impl RowSink for Gram {
             self.fold();
         }
         finite
+    }
+}
+
+/// The Gram matrix of the scaled Jacobian and residuals of one part of a problem's samples at one
+/// point, with the residuals' sum of squares and number: the parts of a problem are factored once
+/// each, and the factor of any union of them is that of their sum ([`GramSum::factor`]), as
+/// cross-validation's folds share the samples they are trained on.
+#[derive(Clone, Debug)]
+pub(crate) struct GramSum {
+    gram: Gram,
+    ssr: f64,
+    rows: usize,
+}
+
+impl GramSum {
+    /// The sum over every block of `problem` at `x`, for the columns `columns` scaled by
+    /// `scales`, in block order on this thread (the same bits whatever the machine).
+    ///
+    /// # Errors
+    /// As [`super::factor`]: a residual or derivative that is not finite, bad `columns` or
+    /// `scales`.
+    pub(crate) fn of<P: Problem + ?Sized>(
+        problem: &P,
+        x: &[f64],
+        columns: &[usize],
+        scales: &[f64],
+    ) -> Result<GramSum, CalibError> {
+        check_columns(problem.parameter_count(), columns, scales)?;
+        let blocks = problem.block_count();
+        let empty = Gram::new(columns.len() + 1);
+        let (mut gram, ssr, rows) =
+            accumulate(problem, x, columns, scales, 0..blocks, false, empty)?;
+        gram.fold();
+        Ok(GramSum { gram, ssr, rows })
+    }
+
+    /// Adds the rows of `other` (of the same columns).
+    pub(crate) fn add(&mut self, other: &GramSum) {
+        self.gram.add(other.gram.clone());
+        self.ssr += other.ssr;
+        self.rows += other.rows;
+    }
+
+    /// The factor of the rows summed (see [`factor_of`]): `None` when their Gram matrix is
+    /// singular or too ill-conditioned to give it.
+    pub(crate) fn factor(self) -> Option<Factor> {
+        factor_of(self.gram, self.ssr, self.rows)
     }
 }
 

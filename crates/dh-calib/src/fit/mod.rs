@@ -45,6 +45,7 @@ mod tests;
 pub use error::CalibError;
 pub use factor::{factor, sum_of_squares, Factor, SEGMENT_BLOCKS};
 pub(crate) use factor::{in_segments, parallel_map, Tsqr};
+pub(crate) use gram::GramSum;
 pub use gram::GRAM_MAX_CONDITION;
 pub use identify::{
     identifiability, identifiability_above, numeric_jacobian, Fixed, Identifiability,

@@ -151,8 +151,9 @@ pub struct ValidationDoc {
     /// Pose groups (k-fold).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub groups: Option<usize>,
-    /// Training samples each fold is fitted on, when the data are too many to fit every
-    /// fold on all of its training samples (k-fold beyond [`crate::calibrate::CV_TRAINING_MAX`]).
+    /// About how many training samples each fold is fitted on (its share of one evenly spaced
+    /// pool), when the data are too many to fit every fold on all of its training samples
+    /// (k-fold beyond [`crate::calibrate::CV_TRAINING_MAX`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub training_subsample: Option<usize>,
     /// `one-step` when each fold's figures come from one Gauss-Newton step from the fit of
