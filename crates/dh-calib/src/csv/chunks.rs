@@ -99,12 +99,12 @@ fn read_chunk(text: &str, reader: &RowReader<'_>, columns: usize) -> Option<Chun
     let mut cells: Vec<&str> = Vec::new();
     for (index, raw) in text.split('\n').enumerate() {
         let raw = raw.strip_suffix('\r').unwrap_or(raw);
-        let trimmed = raw.trim();
+        let trimmed = super::records::trim(raw);
         if trimmed.is_empty() || trimmed.starts_with('#') {
             continue;
         }
         cells.clear();
-        cells.extend(raw.split(',').map(str::trim));
+        cells.extend(raw.split(',').map(super::records::trim));
         samples.push(reader.sample(index + 1, &cells, &mut seen).ok()?);
     }
     Some(Chunk { samples, seen })

@@ -28,6 +28,10 @@ pub fn is_spoofing(c: char) -> bool {
 /// A name cell (`target`, `config`, `socket`, a header column) without [`is_spoofing`]
 /// characters.
 pub(crate) fn check_name(text: &str, line: usize, column: &str) -> Result<(), DataError> {
+    // Printable ASCII has no such character: most names are checked without decoding one.
+    if text.bytes().all(|b| (b' '..=b'~').contains(&b)) {
+        return Ok(());
+    }
     match text.chars().enumerate().find(|(_, c)| is_spoofing(*c)) {
         None => Ok(()),
         Some((k, c)) => Err(DataError::Format {

@@ -62,14 +62,14 @@ impl Iterator for Records<'_> {
             let (index, raw) = self.lines.next()?;
             let line = index + 1;
             let raw = raw.strip_suffix('\r').unwrap_or(raw);
-            let trimmed = raw.trim();
+            let trimmed = trim(raw);
             if trimmed.is_empty() || self.comments && trimmed.starts_with('#') {
                 continue;
             }
             if !raw.contains('"') {
                 // No quotes: the cells between delimiters, trimmed (as the loop below reads
                 // them, without a copy of the line and a push per character).
-                let fields = raw.split(delimiter).map(|c| c.trim().to_string()).collect();
+                let fields = raw.split(delimiter).map(|c| trim(c).to_string()).collect();
                 return Some(Ok(Record { line, fields }));
             }
             let mut fields = Vec::new();
@@ -144,7 +144,7 @@ impl Cell {
 /// # Errors
 /// [`DataError::NotANumber`] or [`DataError::NonFinite`], naming `line` and `column`.
 pub(crate) fn number(text: &str, line: usize, column: &str) -> Result<f64, DataError> {
-    let value: f64 = text.trim().parse().map_err(|_| DataError::NotANumber {
+    let value: f64 = trim(text).parse().map_err(|_| DataError::NotANumber {
         line,
         column: column.into(),
         text: text.into(),
@@ -157,4 +157,16 @@ pub(crate) fn number(text: &str, line: usize, column: &str) -> Result<f64, DataE
         });
     }
     Ok(value)
+}
+
+/// `text` without leading and trailing whitespace, as [`str::trim`] (Unicode's White_Space,
+/// the vertical tab included), without decoding a character when the text starts and ends with
+/// an ASCII character that is not whitespace, as nearly every cell of a large file does.
+pub(crate) fn trim(text: &str) -> &str {
+    let plain = |b: u8| b.is_ascii() && b != b' ' && !(b'\t'..=b'\r').contains(&b);
+    match text.as_bytes() {
+        [first, .., last] if plain(*first) && plain(*last) => text,
+        [only] if plain(*only) => text,
+        _ => text.trim(),
+    }
 }

@@ -306,3 +306,22 @@ fn bad_orientations_name_line_and_column() {
     let e = err("j1,x,y,z,qw,qx,qy\n0.1,1,2,3,1,0,0\n", &["j1"]);
     assert!(e.contains("missing point column 'qz'"), "{e}");
 }
+
+/// The cells' trim is `str::trim`: the same text for every mix of ASCII and Unicode whitespace
+/// (the vertical tab, NEL, no-break and em spaces), letters and multi-byte characters at
+/// either end.
+#[test]
+fn the_cells_trim_is_str_trim() {
+    let parts = [
+        "", " ", "\t", "\u{b}", "\u{c}", "\r", "\n", "\u{85}", "\u{a0}", "\u{2003}", "a", "1.5",
+        "é", "#", "~", "\u{7f}", "\u{1}",
+    ];
+    for a in parts {
+        for b in parts {
+            for c in parts {
+                let text = format!("{a}{b}{c}");
+                assert_eq!(records::trim(&text), text.trim(), "{text:?}");
+            }
+        }
+    }
+}
