@@ -36,8 +36,10 @@ pub(super) fn identify_in<P: fit::Problem>(
     Ok((free, fixed))
 }
 
-/// [`identify_in`], with the factor of `columns` at `x` it decided on ([`fit::factor`] of
-/// `problem`): a fit of the same columns from `x` starts from it ([`fit::solve_from`]).
+/// [`identify_in`], with the factor of `columns` at `x` it decided on ([`fit::factor_by_qr`]
+/// of `problem`: the columns are asked about because some may be aliased, where the Gram
+/// matrix of a large problem is refused): a fit of the same columns from `x` starts from it
+/// ([`fit::solve_from`]).
 pub(super) fn identify_factored_in<P: fit::Problem>(
     problem: &P,
     model: &Model,
@@ -46,7 +48,7 @@ pub(super) fn identify_factored_in<P: fit::Problem>(
     scales: &[f64],
     options: &CalibrationOptions,
 ) -> Result<(Vec<usize>, Vec<fit::Fixed>, fit::Factor), CalibError> {
-    let f = fit::factor(problem, x, columns, scales)?;
+    let f = fit::factor_by_qr(problem, x, columns, scales)?;
     let prio_all = model.priorities();
     let prio: Vec<u32> = columns.iter().map(|&c| prio_all[c]).collect();
     // The sensitivity floor is an RMS over points: the factor's singular values are sums in

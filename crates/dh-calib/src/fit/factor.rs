@@ -264,7 +264,37 @@ pub fn factor<P: Problem + ?Sized>(
     if let Some(f) = super::gram::factor_of(gram, ssr, rows) {
         return Ok(f);
     }
-    // Else the segments' factors in parallel, stacked in segment order.
+    qr_segments(problem, x, columns, scales)
+}
+
+/// [`factor`] by the QR whatever the problem's size (never from the Gram matrix): for a
+/// caller that looks for the directions the data do not determine, where the Gram matrix
+/// would be refused after a pass over every block ([`super::GRAM_MAX_CONDITION`]).
+///
+/// # Errors
+/// As [`factor`].
+pub fn factor_by_qr<P: Problem + ?Sized>(
+    problem: &P,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+) -> Result<Factor, CalibError> {
+    if problem.block_count() <= SEGMENT_BLOCKS {
+        return factor(problem, x, columns, scales);
+    }
+    check_columns(problem.parameter_count(), columns, scales)?;
+    qr_segments(problem, x, columns, scales)
+}
+
+/// The QR factor of a problem of more than [`SEGMENT_BLOCKS`] blocks: the segments' factors in
+/// parallel, stacked in segment order.
+fn qr_segments<P: Problem + ?Sized>(
+    problem: &P,
+    x: &[f64],
+    columns: &[usize],
+    scales: &[f64],
+) -> Result<Factor, CalibError> {
+    let (p, blocks) = (columns.len(), problem.block_count());
     let parts = segments(blocks, |range| {
         factor_blocks(problem, x, columns, scales, range, false)
     })?;

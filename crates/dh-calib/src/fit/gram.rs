@@ -295,6 +295,18 @@ mod tests {
                 .map(|i| f.r[(i, i)].abs())
                 .fold(f64::INFINITY, f64::min);
             assert_eq!(smallest < 1e-6, aliased, "{smallest}");
+            // Asked for the QR, the problem gets it whatever its conditioning: the factor the
+            // fallback makes when the Gram matrix is refused, and not the Gram matrix's
+            // Cholesky factor (whose diagonal is positive) when it is not.
+            let q = crate::fit::factor_by_qr(&p, &[0.0; 4], &columns, &[1.0; 4]).expect("QR");
+            let rtr = q.r.transpose() * &q.r;
+            assert!((rtr - &ata).abs().max() < 1e-9 * ata.abs().max());
+            if aliased {
+                assert_eq!(q, f);
+            } else {
+                assert!((0..4).all(|i| f.r[(i, i)] > 0.0));
+                assert_ne!(q, f);
+            }
         }
     }
 }

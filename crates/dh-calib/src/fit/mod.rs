@@ -43,7 +43,7 @@ mod solve;
 mod tests;
 
 pub use error::CalibError;
-pub use factor::{factor, sum_of_squares, Factor, SEGMENT_BLOCKS};
+pub use factor::{factor, factor_by_qr, sum_of_squares, Factor, SEGMENT_BLOCKS};
 pub(crate) use factor::{in_segments, parallel_map, Tsqr};
 pub(crate) use gram::GramSum;
 pub use gram::GRAM_MAX_CONDITION;
