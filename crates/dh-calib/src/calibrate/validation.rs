@@ -182,16 +182,27 @@ pub(super) const COARSE_STRATUM_MIN: usize = 1000;
 pub(super) fn coarse_subset(cal: &[Observed], keep: usize) -> Vec<usize> {
     let mut place: HashMap<(usize, usize), usize> = HashMap::new();
     let mut strata: Vec<Vec<usize>> = Vec::new();
+    // The last sample's stratum: runs of one session and target are the rule, so most samples
+    // skip the map.
+    let mut last: Option<((usize, usize), usize)> = None;
     for (i, o) in cal.iter().enumerate() {
         let target = match o.observation {
             Observation::Point { target, .. } | Observation::TargetPose { target, .. } => target,
             Observation::Pose(_) => usize::MAX,
         };
-        let next = strata.len();
-        let k = *place.entry((o.session, target)).or_insert(next);
-        if k == next {
-            strata.push(Vec::new());
-        }
+        let key = (o.session, target);
+        let k = match last {
+            Some((previous, k)) if previous == key => k,
+            _ => {
+                let next = strata.len();
+                let k = *place.entry(key).or_insert(next);
+                if k == next {
+                    strata.push(Vec::new());
+                }
+                last = Some((key, k));
+                k
+            }
+        };
         strata[k].push(i);
     }
     if strata.len() == 1 {

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::PipelineError;
-use crate::data::{Measurements, Sample, Split};
+use crate::data::{Measurements, Split};
 
 /// Name of the session of a validation set without sessions when the calibration data names its
 /// sessions (or the other way round).
@@ -102,21 +102,69 @@ pub fn keep_targets(data: &mut Measurements, keep: &[String]) -> Result<(), Pipe
 /// # Errors
 /// [`PipelineError::TooFewSamples`].
 pub fn enough_samples(data: &Measurements) -> Result<(), PipelineError> {
-    let cal: Vec<&Sample> = data
+    // The distinct targets of the calibration samples, marked by index (one outside the set's
+    // list, which `prepare` refuses later, counted apart), without a list of millions.
+    let mut marked = vec![false; data.targets.len()];
+    let mut beyond = std::collections::BTreeSet::new();
+    let mut found = 0;
+    for s in data
         .samples
         .iter()
         .filter(|s| s.split == Split::Calibration)
-        .collect();
-    let mut targets: Vec<usize> = cal.iter().map(|s| s.target).collect();
-    targets.sort_unstable();
-    targets.dedup();
-    let needed = targets.len() + 3;
-    if cal.len() < needed {
+    {
+        found += 1;
+        match marked.get_mut(s.target) {
+            Some(m) => *m = true,
+            None => {
+                beyond.insert(s.target);
+            }
+        }
+    }
+    let targets = marked.iter().filter(|m| **m).count() + beyond.len();
+    let needed = targets + 3;
+    if found < needed {
         return Err(PipelineError::TooFewSamples {
             needed,
-            targets: targets.len(),
-            found: cal.len(),
+            targets,
+            found,
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::Sample;
+    use nalgebra::Vector3;
+
+    /// The count asks for 3 calibration samples more than their distinct targets: validation
+    /// samples are not counted, and a target index beyond the set's list counts once.
+    #[test]
+    fn enough_samples_counts_the_distinct_targets_of_the_calibration_samples() {
+        let sample = |target: usize, split: Split| Sample {
+            target,
+            split,
+            ..Sample::test_point(&[0.0; 6], Vector3::zeros(), 2)
+        };
+        let mut data = Measurements::test_ur5(vec![
+            sample(0, Split::Calibration),
+            sample(0, Split::Calibration),
+            sample(7, Split::Calibration),
+            sample(7, Split::Calibration),
+            sample(0, Split::Validation),
+        ]);
+        // Targets 0 and 7 (beyond the list of one): 5 needed, 4 found.
+        let Err(PipelineError::TooFewSamples {
+            needed,
+            targets,
+            found,
+        }) = enough_samples(&data)
+        else {
+            panic!("expected too few samples");
+        };
+        assert_eq!((needed, targets, found), (5, 2, 4));
+        data.samples.push(sample(7, Split::Calibration));
+        assert!(enough_samples(&data).is_ok());
+    }
 }
