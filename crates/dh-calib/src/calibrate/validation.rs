@@ -1,7 +1,7 @@
 //! Held-out errors: the Euclidean distances between modelled and measured points (metres) on
 //! the validation split, or k-fold cross-validation over poses (samples sharing `config`, or
-//! else the same joint values, stay in one fold; about [`CV_TRAINING_MAX`] training samples per
-//! fold at most), and the noise floor they are compared with.
+//! else the same joint values, stay in one fold; beyond [`CV_TRAINING_MAX`] samples, each fold
+//! trained on about that many), and the noise floor they are compared with.
 
 use super::*;
 use std::collections::BTreeMap;
