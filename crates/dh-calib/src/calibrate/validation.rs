@@ -336,7 +336,7 @@ fn trained_on_others(parts: &[fit::GramSum], fold: usize) -> Option<fit::Factor>
     let (_, first) = others.next()?;
     let mut sum = first.clone();
     for (_, part) in others {
-        sum.add(part);
+        sum.add(part.clone());
     }
     sum.factor()
 }

@@ -9,7 +9,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::gram::Gram;
+use super::gram::GramSum;
 use super::{CalibError, Problem, MAX_BLOCK};
 
 /// The triangular factor of the column-scaled Jacobian of some columns, with the residuals.
@@ -252,19 +252,16 @@ pub fn factor<P: Problem + ?Sized>(
     // The Gram matrix of each segment in parallel, summed in segment order (the same result
     // whatever the number of threads), when it is well enough conditioned (see `gram`).
     let parts = segments(blocks, |range| {
-        accumulate(problem, x, columns, scales, range, false, Gram::new(p + 1))
+        GramSum::over(problem, x, columns, scales, range)
     })?;
-    let mut gram = Gram::new(p + 1);
-    let (mut ssr, mut rows) = (0.0, 0);
-    for (g, s, m) in parts {
-        gram.add(g);
-        ssr += s;
-        rows += m;
+    let mut sum = GramSum::empty(p + 1);
+    for part in parts {
+        sum.add(part);
     }
-    if let Some(f) = super::gram::factor_of(gram, ssr, rows) {
-        return Ok(f);
+    match sum.factor() {
+        Some(f) => Ok(f),
+        None => qr_segments(problem, x, columns, scales),
     }
-    qr_segments(problem, x, columns, scales)
 }
 
 /// [`factor`] by the QR whatever the problem's size (never from the Gram matrix): for a
@@ -392,7 +389,7 @@ pub(super) fn factor_blocks<P: Problem + ?Sized>(
 }
 
 /// Where the rows `[a₀·s₀, …, a_{p−1}·s_{p−1}, r]` of a scaled Jacobian and its residuals go,
-/// one at a time in block order: a [`Tsqr`] or a [`super::gram::Gram`].
+/// one at a time in block order: a [`Tsqr`] or the Gram matrix of a [`GramSum`].
 pub(super) trait RowSink: Send {
     /// Adds the row `[a₀·s₀, …, a_{p−1}·s_{p−1}, last]`; whether every value is finite.
     fn push_scaled(&mut self, a: &[f64], s: &[f64], last: f64) -> bool;

@@ -112,6 +112,15 @@ pub(crate) struct GramSum {
 }
 
 impl GramSum {
+    /// No rows yet, of `cols` values each (the scaled Jacobian's and the residual).
+    pub(super) fn empty(cols: usize) -> GramSum {
+        GramSum {
+            gram: Gram::new(cols),
+            ssr: 0.0,
+            rows: 0,
+        }
+    }
+
     /// The sum over every block of `problem` at `x`, for the columns `columns` scaled by
     /// `scales`, in block order on this thread (the same bits whatever the machine).
     ///
@@ -125,17 +134,27 @@ impl GramSum {
         scales: &[f64],
     ) -> Result<GramSum, CalibError> {
         check_columns(problem.parameter_count(), columns, scales)?;
-        let blocks = problem.block_count();
+        Self::over(problem, x, columns, scales, 0..problem.block_count())
+    }
+
+    /// The sum over the blocks `range` of `problem` (columns already checked), in block order
+    /// on this thread.
+    pub(super) fn over<P: Problem + ?Sized>(
+        problem: &P,
+        x: &[f64],
+        columns: &[usize],
+        scales: &[f64],
+        range: std::ops::Range<usize>,
+    ) -> Result<GramSum, CalibError> {
         let empty = Gram::new(columns.len() + 1);
-        let (mut gram, ssr, rows) =
-            accumulate(problem, x, columns, scales, 0..blocks, false, empty)?;
+        let (mut gram, ssr, rows) = accumulate(problem, x, columns, scales, range, false, empty)?;
         gram.fold();
         Ok(GramSum { gram, ssr, rows })
     }
 
     /// Adds the rows of `other` (of the same columns).
-    pub(crate) fn add(&mut self, other: &GramSum) {
-        self.gram.add(other.gram.clone());
+    pub(crate) fn add(&mut self, other: GramSum) {
+        self.gram.add(other.gram);
         self.ssr += other.ssr;
         self.rows += other.rows;
     }
@@ -151,7 +170,7 @@ impl GramSum {
 /// `rows`: their number): `R = Lᵀ` of the Cholesky factor `L` of `AᵀA` and `Qᵀr = L⁻¹·Aᵀr`
 /// (so `‖r + A·u‖² = ‖Qᵀr + R·u‖² + ρ²`, as [`Factor`] says). `None` without columns, when
 /// `AᵀA` is not positive definite, or when `κ(R) >` [`GRAM_MAX_CONDITION`].
-pub(super) fn factor_of(mut gram: Gram, ssr: f64, rows: usize) -> Option<Factor> {
+fn factor_of(mut gram: Gram, ssr: f64, rows: usize) -> Option<Factor> {
     gram.fold();
     let (c, p) = (gram.cols, gram.cols.checked_sub(1)?);
     if p == 0 {
