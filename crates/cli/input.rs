@@ -5,8 +5,8 @@
 use anyhow::Result;
 
 pub use dh_sheet::input::{
-    chain_error, display_name, load_chain, load_chain_bytes, read_bytes, read_robot,
-    read_robot_bytes, read_text, urdf_warnings, utf8_text,
+    chain_error, display_name, load_chain, load_chain_bytes, read_bytes, read_data_bytes,
+    read_data_text, read_robot, read_robot_bytes, read_text, urdf_warnings, utf8_text,
 };
 
 /// Reads a data table: UTF-8 text, or a MATLAB level-5 `.mat` file as the CSV text of its
@@ -15,7 +15,7 @@ pub use dh_sheet::input::{
 /// # Errors
 /// As [`read_text`]; a `.mat` file that does not read (naming the file).
 pub fn read_table(path: &str, err: &mut dyn std::io::Write) -> Result<String> {
-    let bytes = read_bytes(path)?;
+    let bytes = read_data_bytes(path)?;
     if !dh_calib::import::mat::is_mat(&bytes) {
         return utf8_text(path, bytes);
     }

@@ -17,6 +17,7 @@ pub mod plot;
 pub mod plot_motion;
 pub mod progress;
 pub mod readback;
+pub mod stdout;
 pub mod svg;
 
 // The sheet formats, their units and writers are the `dh-sheet` library's; the CLI keeps their

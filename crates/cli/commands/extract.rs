@@ -2,6 +2,8 @@
 //! The extraction and its proof are the `dh-sheet` library's ([`dh_sheet::extract`]); this
 //! command reads the file, draws the frames (`--svg`) and prints.
 
+use std::path::Path;
+
 use anyhow::Result;
 use dh_core::{Convention, Tolerance};
 
@@ -98,7 +100,7 @@ pub fn extract(
     for w in &ex.extraction.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
-    let mut piped_svg = None;
+    let mut drawing = None;
     if let Some(path) = &args.svg {
         let n = ex.extraction.table.rows.len();
         let q = args.q.clone().unwrap_or_else(|| vec![0.0; n]);
@@ -123,21 +125,22 @@ pub fn extract(
         );
         let svg = crate::svg::frames_svg(&ex.extraction.table, &q, &title)
             .ok_or_else(|| anyhow::anyhow!("--q: the joint values do not fit the table"))?;
-        if path == crate::output::STDIO {
-            piped_svg = Some(svg);
-        } else {
-            crate::output::write_atomically(std::path::Path::new(path), svg.as_bytes())?;
-        }
+        drawing = Some((path, svg));
     }
     let samples = args
         .samples
         .unwrap_or_else(|| default_samples(ex.extraction.table.rows.len()));
     let (text, passed) = prove_extracted(&mut ex, args.format, samples, args.seed)?;
-    // `--svg -`: the picture on standard output, the table on standard error.
-    match piped_svg {
-        Some(svg) => {
-            out.write_all(svg.as_bytes())?;
+    // `--svg -`: the picture on standard output, the table on standard error. A drawing in a
+    // file lands only once the table has reached standard output.
+    match drawing {
+        Some((path, svg)) if path == crate::output::STDIO => {
+            crate::output::write_all_or_stdout(&[(Path::new(path), svg.as_bytes())], out)?;
             err.write_all(text.as_bytes())?;
+        }
+        Some((path, svg)) => {
+            out.write_all(text.as_bytes())?;
+            crate::output::write_all_after(out, &[(Path::new(path), svg.as_bytes())])?;
         }
         None => out.write_all(text.as_bytes())?,
     }

@@ -3,14 +3,19 @@
 //! warnings ([`urdf_warnings`]). Errors name the file as [`display_name`] shows it (no
 //! directories), with a hint where the user can do something ([`crate::error::Hinted`]).
 
-use std::io::Read;
 use std::path::Path;
 use std::process::Command;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::hinted;
+
+mod source;
+
+pub use source::{
+    read_capped, read_within, reading_once, too_large, TooLarge, MAX_DATA_BYTES, MAX_TEXT_BYTES,
+};
 
 /// Reads `path`, or standard input when it is `-`, as bytes, refusing more than
 /// [`urdf_axes::MAX_URDF_BYTES`] without reading further (so `- < /dev/zero` stops there).
@@ -19,103 +24,40 @@ use crate::error::hinted;
 /// The file cannot be read; the message names it. Too long: [`urdf_axes::UrdfError::TooLarge`]
 /// in the context "`NAME`: invalid URDF".
 pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
-    let limit = urdf_axes::MAX_URDF_BYTES;
-    let mut buf = Vec::new();
-    let mut size = None;
-    let read = if path == "-" {
-        std::io::stdin()
-            .take(limit as u64 + 1)
-            .read_to_end(&mut buf)
-            .context("reading standard input")
-    } else {
-        std::fs::File::open(path)
-            .and_then(|f| {
-                size = f
-                    .metadata()
-                    .ok()
-                    .and_then(|m| usize::try_from(m.len()).ok());
-                f.take(limit as u64 + 1).read_to_end(&mut buf)
-            })
-            .with_context(|| format!("{path}: cannot read the file"))
-    };
-    read?;
-    if buf.len() > limit {
-        return Err(anyhow::Error::new(urdf_axes::UrdfError::TooLarge {
-            size: size.filter(|&s| s > limit),
-            limit,
+    read_capped(path, urdf_axes::MAX_URDF_BYTES)?.map_err(|t| {
+        anyhow::Error::new(urdf_axes::UrdfError::TooLarge {
+            size: t.size,
+            limit: t.limit,
         })
-        .context(format!("{}: invalid URDF", display_name(path))));
-    }
-    Ok(buf)
+        .context(format!("{}: invalid URDF", display_name(path)))
+    })
 }
 
-/// Reads `path`, or standard input when it is `-`, as bytes.
+/// Reads a text input (a sheet, a list, a model, an inertials file): `path`, or standard input
+/// when it is `-`, as bytes, at most [`MAX_TEXT_BYTES`] of them, opened once
+/// ([`reading_once`]).
 ///
 /// # Errors
-/// The file cannot be read; the message names it (an [`std::io::Error`] in the chain).
+/// The file cannot be read, or is larger than the cap; the message names it.
 pub fn read_bytes(path: &str) -> Result<Vec<u8>> {
-    if path == "-" {
-        let mut buf = Vec::new();
-        std::io::stdin()
-            .read_to_end(&mut buf)
-            .context("reading standard input")?;
-        return Ok(buf);
-    }
-    read_file(path, PARALLEL_READ_BYTES).with_context(|| format!("{path}: cannot read the file"))
+    read_within(path, &display_name(path), MAX_TEXT_BYTES, "a text file")
 }
 
-/// Files of at least this many bytes are read in as many parts as there are cores, each part
-/// by its own thread (a 418 MB measurement file: the kernel's copy and the new pages' zeroing
-/// took 0.6 s on one thread).
-const PARALLEL_READ_BYTES: u64 = 64 << 20;
+/// Reads a data input (measurements, joint values): as [`read_bytes`] with the cap
+/// [`MAX_DATA_BYTES`].
+///
+/// # Errors
+/// The file cannot be read, or is larger than the cap; the message names it.
+pub fn read_data_bytes(path: &str) -> Result<Vec<u8>> {
+    read_within(path, &display_name(path), MAX_DATA_BYTES, "a data file")
+}
 
-/// The bytes of the file `path`, as [`std::fs::read`] gives them; in parts on every core from
-/// `parallel_from` bytes.
-fn read_file(path: &str, parallel_from: u64) -> std::io::Result<Vec<u8>> {
-    #[cfg(unix)]
-    {
-        use std::io::{Seek, SeekFrom};
-        use std::os::unix::fs::FileExt;
-        let mut file = std::fs::File::open(path)?;
-        let meta = file.metadata()?;
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        if let (true, Ok(len)) = (
-            meta.is_file() && meta.len() >= parallel_from && threads > 1,
-            usize::try_from(meta.len()),
-        ) {
-            let mut bytes = vec![0u8; len];
-            let part = len.div_ceil(threads);
-            let parts: Vec<std::io::Result<()>> = std::thread::scope(|scope| {
-                let file = &file;
-                let readers: Vec<_> = bytes
-                    .chunks_mut(part)
-                    .enumerate()
-                    .map(|(k, piece)| {
-                        scope.spawn(move || file.read_exact_at(piece, (k * part) as u64))
-                    })
-                    .collect();
-                readers
-                    .into_iter()
-                    .map(|r| {
-                        r.join()
-                            .unwrap_or_else(|_| Err(std::io::Error::other("a reader failed")))
-                    })
-                    .collect()
-            });
-            match parts.into_iter().collect::<std::io::Result<Vec<()>>>() {
-                Ok(_) => {
-                    // What was appended after the length was taken, as `fs::read` reads it.
-                    file.seek(SeekFrom::Start(len as u64))?;
-                    file.read_to_end(&mut bytes)?;
-                    return Ok(bytes);
-                }
-                // The file shrank while it was read: read it again as it is now.
-                Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {}
-                Err(e) => return Err(e),
-            }
-        }
-    }
-    std::fs::read(path)
+/// [`read_data_bytes`] as UTF-8 text (see [`utf8_text`]).
+///
+/// # Errors
+/// As [`read_data_bytes`] and [`utf8_text`].
+pub fn read_data_text(path: &str) -> Result<String> {
+    utf8_text(path, read_data_bytes(path)?)
 }
 
 /// Reads `path` (or `-`) as UTF-8 text, without the byte-order mark some editors put first
@@ -179,15 +121,18 @@ pub fn read_robot(path: &str) -> Result<Vec<u8>> {
 }
 
 /// A display name for a path argument (`<stdin>` for `-`), without directories so that outputs
-/// stay the same wherever the file lives.
+/// stay the same wherever the file lives, cut to [`crate::text::MAX_QUOTED`] characters (a
+/// path of 10^8 characters makes a message of a few hundred). Outputs are named by
+/// [`crate::text::output_name`] (`<stdout>` for `-`).
 pub fn display_name(path: &str) -> String {
     if path == "-" {
         return "<stdin>".into();
     }
-    Path::new(path)
+    let name = Path::new(path)
         .file_name()
-        .map(|f| f.to_string_lossy().into_owned())
-        .unwrap_or_else(|| path.to_string())
+        .map(|f| f.to_string_lossy())
+        .unwrap_or(std::borrow::Cow::Borrowed(path));
+    crate::text::cut(&name).into_owned()
 }
 
 /// Loads the URDF and its chain.
@@ -210,7 +155,15 @@ pub fn load_chain_bytes(
     base: Option<&str>,
     tip: Option<&str>,
 ) -> Result<(UrdfModel, Chain)> {
-    let model = UrdfModel::from_bytes(bytes).with_context(|| format!("{name}: invalid URDF"))?;
+    let model =
+        UrdfModel::from_bytes(bytes).map_err(|e| match crate::sniff::not_a_robot(bytes) {
+            // A sheet, a CSV or an image given as the robot: say what it is and what reads it.
+            Some(s) => crate::error::hinted(
+                format!("{name}: invalid URDF: {e}; the file is {}", s.what),
+                s.hint,
+            ),
+            None => anyhow::Error::new(e).context(format!("{name}: invalid URDF")),
+        })?;
     let chain = model.chain(base, tip).map_err(|e| chain_error(name, e))?;
     Ok((model, chain))
 }
@@ -234,29 +187,4 @@ pub fn urdf_warnings(name: &str, model: &UrdfModel, chain: &Chain) -> Vec<String
         .iter()
         .map(|w| format!("{name}: {w}"))
         .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A file read in parts on every core is the file: parts of unequal length, a file just
-    /// at the size where the parts start, and one below it.
-    #[test]
-    fn a_file_read_in_parts_is_the_file() {
-        let dir = tempfile::tempdir().expect("a directory");
-        let path = dir.path().join("rows.csv");
-        let bytes: Vec<u8> = (0..1_000_003u32).map(|i| (i % 251) as u8).collect();
-        std::fs::write(&path, &bytes).expect("written");
-        let path = path.to_str().expect("a UTF-8 path");
-        for from in [1, 1_000_003, 1_000_004] {
-            assert_eq!(
-                read_file(path, from).expect("read"),
-                bytes,
-                "from {from} bytes"
-            );
-        }
-        let missing = dir.path().join("missing.csv");
-        assert!(read_file(missing.to_str().expect("UTF-8"), 1).is_err());
-    }
 }

@@ -11,7 +11,7 @@ use dh_calib::model::Effect;
 use dh_core::{DhTable, JointKind};
 
 use crate::error::hinted;
-use crate::input::{display_name, read_text};
+use crate::input::{display_name, read_data_text};
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Columns of the canonical CSV that are not joints (the format's own list).
@@ -61,7 +61,7 @@ impl DataFile {
     pub fn read(path: &str) -> Result<DataFile> {
         Ok(DataFile {
             name: display_name(path),
-            text: read_text(path)?,
+            text: read_data_text(path)?,
         })
     }
 }

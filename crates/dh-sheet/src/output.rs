@@ -1,9 +1,20 @@
-//! Writing output files so that a failed run never leaves one half-written.
+//! Writing output files so that a failed run never leaves one half-written, never replaces a
+//! device node or a FIFO, and never lands on an input.
 //!
-//! Every command that writes a file (rather than standard output) goes through
-//! [`write_atomically`]: the bytes go to a temporary file beside the target, are flushed to disk,
-//! and only then renamed over the target. A run that fails before that point (bad input, a full
-//! disk, a killed process) leaves the previous file, or no file, but never a truncated one.
+//! The rules, for every command:
+//! - **Regular files are staged.** A new file or an existing regular file is written in full to
+//!   a temporary file beside it, synced, and only then renamed over it: a run that fails before
+//!   that (bad input, a full disk, a killed process) leaves the previous file, or none, never a
+//!   truncated one.
+//! - **Special files are written in place.** A destination that exists and is not a regular
+//!   file (`/dev/null`, a terminal, a FIFO a reader waits on) is opened and written as it is,
+//!   never replaced by a regular file; a socket or a directory is refused.
+//! - **Every write error is an error** (a full device, a closed pipe), naming the destination.
+//! - **All or nothing, standard output included.** A run's files are committed (renamed) only
+//!   after standard output has been written and flushed and every special file written: a run
+//!   whose standard output fails leaves none of its files.
+//! - **Never over an input** ([`check_destinations`]), however spelled, standard input included
+//!   (the file the shell redirected into it).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -13,16 +24,16 @@ use anyhow::{Context, Result};
 use crate::error::hinted;
 use crate::text::escape;
 
-/// Writes `bytes` to `path` atomically: into a temporary file in the target's own directory
-/// (a rename is atomic only within one file system), synced to disk, then renamed over `path`.
+/// Writes `bytes` to `path` by the module's rules: a regular file atomically (a temporary file
+/// in the target's own directory, synced, renamed over `path`), a special file in place.
 ///
 /// A new file gets the usual permissions (`0666` less the umask on Unix); an existing file keeps
 /// its own. A symbolic link is followed, so the file it points to is replaced, not the link.
 /// On any error the temporary file is removed and `path` is untouched.
 ///
 /// # Errors
-/// The directory does not exist or is not writable, the disk is full, or `path` is a directory;
-/// the message names `path`.
+/// The directory does not exist or is not writable, the disk is full, `path` is a directory or
+/// a socket; the message names `path`.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     write_all(&[(path, bytes)])
 }
@@ -37,33 +48,97 @@ pub fn any_stdout<'a>(paths: impl IntoIterator<Item = Option<&'a str>>) -> bool 
     paths.into_iter().flatten().any(|p| p == STDIO)
 }
 
-/// [`write_all`], with a path of `-` written to `stdout` once every file is in place.
+/// [`write_all`], with a path of `-` written to `stdout`: the files are staged, `stdout` is
+/// written and flushed, the special files written, and only then are the files renamed into
+/// place, so a failure of standard output leaves every file as it was.
 ///
 /// # Errors
-/// As [`write_all`], and a failed write to `stdout`.
+/// As [`write_all`], and a failed write or flush of `stdout` (named "standard output").
 pub fn write_all_or_stdout(files: &[(&Path, &[u8])], stdout: &mut dyn Write) -> Result<()> {
-    let (piped, real): (Vec<_>, Vec<_>) = files
-        .iter()
-        .copied()
-        .partition(|(p, _)| p.as_os_str() == STDIO);
-    write_all(&real)?;
-    for (_, bytes) in piped {
-        stdout.write_all(bytes)?;
-    }
-    Ok(())
+    commit(files, Some(stdout))
 }
 
-/// Writes several files as one: every file is staged (written in full and synced to a
-/// temporary beside its target) before the first rename, so a failure while writing (a full
-/// disk, a vanished directory) leaves every target as it was. Only a failure of a rename itself
-/// (which moves no data) can leave the earlier targets replaced.
+/// Writes several files as one: every regular file is staged (written in full and synced to a
+/// temporary beside its target) and every special file written before the first rename, so a
+/// failure while writing (a full disk, a vanished directory, a full device) leaves every
+/// regular target as it was. Only a failure of a rename itself (which moves no data) can leave
+/// the earlier targets replaced. A path of `-` is a file of that name here; see
+/// [`write_all_or_stdout`] for standard output.
 ///
 /// # Errors
 /// As [`write_atomically`], for the first file that fails.
 pub fn write_all(files: &[(&Path, &[u8])]) -> Result<()> {
+    commit(files, None)
+}
+
+/// Flushes `stdout` (the report a command wrote there), then writes `files` as [`write_all`]
+/// does: for a command whose files must not land when its standard output failed.
+///
+/// # Errors
+/// A failed flush of `stdout`, then as [`write_all`].
+pub fn write_all_after(stdout: &mut dyn Write, files: &[(&Path, &[u8])]) -> Result<()> {
+    stdout.flush().map_err(named_stdout)?;
+    write_all(files)
+}
+
+/// What a destination is when it is written.
+enum Destination {
+    /// A new or regular file: staged, then renamed.
+    Regular,
+    /// An existing file that is not a regular file: written in place.
+    Special,
+}
+
+/// The kind of the destination `target` (symbolic links resolved), refusing what cannot be
+/// written: a directory, a socket.
+fn destination(target: &Path, shown: &str) -> Result<Destination> {
+    let Ok(m) = std::fs::metadata(target) else {
+        return Ok(Destination::Regular);
+    };
+    if m.is_file() {
+        return Ok(Destination::Regular);
+    }
+    if m.is_dir() {
+        anyhow::bail!("{shown}: cannot write the output: expected a file, found a directory");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if m.file_type().is_socket() {
+            anyhow::bail!("{shown}: cannot write the output: expected a file, found a socket");
+        }
+    }
+    Ok(Destination::Special)
+}
+
+fn commit(files: &[(&Path, &[u8])], mut stdout: Option<&mut dyn Write>) -> Result<()> {
     let mut staged = Vec::with_capacity(files.len());
+    let mut special = Vec::new();
+    let mut piped = Vec::new();
     for (path, bytes) in files {
-        staged.push(stage(path, bytes)?);
+        if stdout.is_some() && path.as_os_str() == STDIO {
+            piped.push(*bytes);
+            continue;
+        }
+        let target = resolve_symlink(path);
+        let shown = escape(&path.to_string_lossy()).into_owned();
+        match destination(&target, &shown)? {
+            Destination::Regular => staged.push(stage(&target, &shown, bytes)?),
+            Destination::Special => special.push((target, shown, *bytes)),
+        }
+    }
+    if let Some(out) = stdout.as_deref_mut() {
+        let written = (|| -> std::io::Result<()> {
+            for bytes in &piped {
+                out.write_all(bytes)?;
+            }
+            out.flush()
+        })();
+        written.map_err(named_stdout)?;
+    }
+    for (target, shown, bytes) in special {
+        write_in_place(&target, bytes)
+            .with_context(|| format!("{shown}: cannot write the output"))?;
     }
     for (tmp, target, shown) in staged {
         tmp.persist(&target)
@@ -73,19 +148,36 @@ pub fn write_all(files: &[(&Path, &[u8])]) -> Result<()> {
     Ok(())
 }
 
-/// Writes `bytes` to a synced temporary file beside `path`'s target: (the temporary, the
-/// target, `path` as shown in messages).
-fn stage(path: &Path, bytes: &[u8]) -> Result<(tempfile::NamedTempFile, PathBuf, String)> {
-    let target = resolve_symlink(path);
-    let shown = path.display().to_string();
+/// A failed write to standard output as an error that names it once (a writer may name it
+/// already, as the CLI's does).
+fn named_stdout(e: std::io::Error) -> anyhow::Error {
+    if e.to_string().starts_with("standard output") {
+        anyhow::Error::new(e)
+    } else {
+        anyhow::Error::new(e).context("standard output: cannot write the output")
+    }
+}
+
+/// Writes `bytes` to the existing special file `target` as it is (no truncation, no rename):
+/// a device node, or a FIFO (which waits for its reader, as a shell's `>` does).
+fn write_in_place(target: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut f = std::fs::OpenOptions::new().write(true).open(target)?;
+    f.write_all(bytes)?;
+    f.flush()
+}
+
+/// Writes `bytes` to a synced temporary file beside `target`: (the temporary, the target, the
+/// destination as shown in messages).
+fn stage(
+    target: &Path,
+    shown: &str,
+    bytes: &[u8],
+) -> Result<(tempfile::NamedTempFile, PathBuf, String)> {
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let existing = std::fs::metadata(&target).ok();
-    if existing.as_ref().is_some_and(|m| m.is_dir()) {
-        anyhow::bail!("{shown}: cannot write the output: expected a file, found a directory");
-    }
+    let existing = std::fs::metadata(target).ok();
     let mut builder = tempfile::Builder::new();
     builder.prefix(".urdf-dh-").suffix(".tmp");
     #[cfg(unix)]
@@ -105,7 +197,7 @@ fn stage(path: &Path, bytes: &[u8]) -> Result<(tempfile::NamedTempFile, PathBuf,
         tmp.as_file().sync_all()
     })();
     written.with_context(|| format!("{shown}: cannot write the output"))?;
-    Ok((tmp, target, shown))
+    Ok((tmp, target.to_path_buf(), shown.to_string()))
 }
 
 /// What makes two spellings of a path the same file: the device and inode of an existing file
@@ -117,9 +209,11 @@ enum Identity {
     Path(PathBuf),
 }
 
-fn identity(path: &str) -> Option<Identity> {
-    if path == "-" {
-        return None;
+/// The identity of an input (`-`: what standard input is, when it is a regular file: `cmd - <
+/// a.urdf` reads `a.urdf`) or of an output (`-`: none, standard output is never a file here).
+fn identity(path: &str, input: bool) -> Option<Identity> {
+    if path == STDIO {
+        return if input { stdin_identity() } else { None };
     }
     let p = Path::new(path);
     if let Ok(m) = std::fs::metadata(p) {
@@ -143,11 +237,31 @@ fn identity(path: &str) -> Option<Identity> {
     Some(Identity::Path(dir.join(p.file_name()?)))
 }
 
+/// The regular file standard input reads, by device and inode (`fstat` of descriptor 0): a
+/// pipe, a terminal or a device is nothing an output could overwrite.
+fn stdin_identity() -> Option<Identity> {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsFd;
+        use std::os::unix::fs::MetadataExt;
+        let fd = std::io::stdin().as_fd().try_clone_to_owned().ok()?;
+        let m = std::fs::File::from(fd).metadata().ok()?;
+        m.is_file().then(|| Identity::Inode(m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        None
+    }
+}
+
 /// Checks a run's output files before it reads or computes anything: each output must be a
 /// new file or a plain file, in a directory that exists and can be written, and no output may
 /// be one of the inputs or another output, however spelled (`./d.csv`, a symbolic or hard
-/// link). `inputs` and `outputs` are `(option, path)`; `-` (standard input or output) is never
-/// a clash with a file, but at most one output may be `-` (standard output).
+/// link). `inputs` and `outputs` are `(option, path)`. An input `-` is standard input, which
+/// clashes with an output that is the regular file redirected into it (`< a.urdf`); an output
+/// `-` is standard output, and at most one output may be `-`. An existing output that is not a
+/// regular file (a device node, a FIFO) is written in place later and needs no probe here; a
+/// directory or a socket is refused.
 ///
 /// # Errors
 /// A usage error naming both options and the file, or the output that cannot be written.
@@ -167,39 +281,44 @@ pub fn check_destinations(inputs: &[(&str, &str)], outputs: &[(&str, &str)]) -> 
     }
     let ids: Vec<Option<Identity>> = inputs
         .iter()
-        .chain(outputs)
-        .map(|(_, p)| identity(p))
+        .map(|(_, p)| identity(p, true))
+        .chain(outputs.iter().map(|(_, p)| identity(p, false)))
         .collect();
     for (k, (option, path)) in outputs.iter().enumerate() {
         let at = inputs.len() + k;
         let shown = escape(path);
+        let target = (*path != STDIO).then(|| resolve_symlink(Path::new(path)));
+        let kind = match &target {
+            Some(t) => Some(destination(t, &format!("{option} {shown}"))?),
+            None => None,
+        };
+        // Two outputs to one device (`--out /dev/null --plot /dev/null`) lose nothing.
+        let special = matches!(kind, Some(Destination::Special));
         if let Some(id) = &ids[at] {
-            if let Some(j) = ids[..at].iter().position(|o| o.as_ref() == Some(id)) {
+            let clash = ids[..at]
+                .iter()
+                .enumerate()
+                .position(|(j, o)| o.as_ref() == Some(id) && (j < inputs.len() || !special));
+            if let Some(j) = clash {
                 let (other, kind) = if j < inputs.len() {
                     (inputs[j], "input")
                 } else {
                     (outputs[j - inputs.len()], "output")
                 };
+                let found = if other.1 == STDIO {
+                    format!("the file standard input reads ({} -)", other.0)
+                } else {
+                    format!("the {kind} {} {}", other.0, escape(other.1))
+                };
                 return Err(hinted(
-                    format!(
-                        "{option} {shown}: expected a file of its own, found the {kind} {} {}",
-                        other.0,
-                        escape(other.1)
-                    ),
+                    format!("{option} {shown}: expected a file of its own, found {found}"),
                     "write each output to a new file: urdf-dh never writes over its inputs or one output over another",
                 ));
             }
         }
-        if *path == "-" {
+        let (Some(target), Some(Destination::Regular)) = (target, kind) else {
             continue;
-        }
-        let p = Path::new(path);
-        if p.is_dir() {
-            anyhow::bail!(
-                "{option} {shown}: cannot write the output: expected a file, found a directory"
-            );
-        }
-        let target = resolve_symlink(p);
+        };
         let dir = match target.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
@@ -322,6 +441,112 @@ mod tests {
             ["d.csv", "sub"],
             "the probe leaves nothing"
         );
+    }
+
+    /// A standard output that fails: nothing of the run lands.
+    struct FullOut;
+    impl Write for FullOut {
+        fn write(&mut self, _: &[u8]) -> std::io::Result<usize> {
+            Err(std::io::Error::from_raw_os_error(28))
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_failed_standard_output_commits_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let truth = dir.path().join("truth.yaml");
+        let e = write_all_or_stdout(
+            &[
+                (Path::new(STDIO), b"data".as_slice()),
+                (&truth, b"truth".as_slice()),
+            ],
+            &mut FullOut,
+        )
+        .unwrap_err();
+        assert!(format!("{e:#}").starts_with("standard output: "), "{e:#}");
+        assert!(entries(dir.path()).is_empty(), "{:?}", entries(dir.path()));
+        // The report a command wrote before its files: flushed first, and its failure keeps
+        // the files out.
+        let mut buffered = std::io::BufWriter::new(FullOut);
+        buffered.write_all(b"report").unwrap();
+        let e = write_all_after(&mut buffered, &[(&truth, b"t".as_slice())]).unwrap_err();
+        assert!(format!("{e:#}").starts_with("standard output: "), "{e:#}");
+        assert!(entries(dir.path()).is_empty(), "{:?}", entries(dir.path()));
+    }
+
+    /// A FIFO and a private device node are written where they are, never replaced by a
+    /// regular file; a socket is refused; a full device is an error naming it.
+    #[cfg(unix)]
+    #[test]
+    fn special_files_are_written_in_place() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("out.fifo");
+        assert!(std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).unwrap())
+        };
+        write_all(&[(&fifo, b"through the pipe".as_slice())]).unwrap();
+        assert_eq!(reader.join().unwrap(), b"through the pipe");
+        assert!(std::fs::symlink_metadata(&fifo)
+            .unwrap()
+            .file_type()
+            .is_fifo());
+        check_destinations(&[], &[("--out", fifo.to_str().unwrap())]).unwrap();
+
+        let socket = dir.path().join("s.sock");
+        let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+        let e = write_all(&[(&socket, b"x".as_slice())]).unwrap_err();
+        assert!(format!("{e:#}").contains("found a socket"), "{e:#}");
+        let e = check_destinations(&[], &[("--out", socket.to_str().unwrap())]).unwrap_err();
+        assert!(format!("{e:#}").contains("--out"), "{e:#}");
+
+        // Device nodes need root (CAP_MKNOD): private ones, never the system's.
+        let node = |name: &str, minor: &str| {
+            let p = dir.path().join(name);
+            std::process::Command::new("mknod")
+                .arg(&p)
+                .args(["c", "1", minor])
+                .stderr(std::process::Stdio::null())
+                .status()
+                .is_ok_and(|s| s.success())
+                .then_some(p)
+        };
+        let (Some(null), Some(full)) = (node("null", "3"), node("full", "7")) else {
+            println!("special_files_are_written_in_place: device nodes skipped: mknod is not allowed here");
+            return;
+        };
+        write_all(&[(&null, b"gone".as_slice())]).unwrap();
+        assert!(std::fs::symlink_metadata(&null)
+            .unwrap()
+            .file_type()
+            .is_char_device());
+        // Two outputs on one device lose nothing; an input and an output on it still clash.
+        let n = null.to_str().unwrap();
+        check_destinations(&[], &[("--out", n), ("--plot", n)]).unwrap();
+        assert!(check_destinations(&[("--data", n)], &[("--out", n)]).is_err());
+        let plain = dir.path().join("plain.yaml");
+        let e = write_all(&[(&plain, b"x".as_slice()), (&full, b"y".as_slice())]).unwrap_err();
+        assert!(
+            format!("{e:#}").contains("full: cannot write the output"),
+            "{e:#}"
+        );
+        assert!(
+            !plain.exists(),
+            "a regular file landed though the device failed"
+        );
+        assert!(std::fs::symlink_metadata(&full)
+            .unwrap()
+            .file_type()
+            .is_char_device());
     }
 
     #[cfg(unix)]

@@ -81,28 +81,32 @@ pub fn calibrate(
         files.push((Path::new(path), residuals_svg(&chart)));
     }
     // `--out -` or `--plot -`: that artefact on standard output, the report on standard error.
+    // Otherwise the report goes to standard output first, and the files land only once it has
+    // been written and flushed (all or nothing, standard output included).
     let piped = crate::output::any_stdout([request.out.as_deref(), args.plot.as_deref()]);
+    let report = match args.format {
+        CalibrateFormat::Json => calibrated.json()?,
+        CalibrateFormat::Text => match &calibrated {
+            Calibrated::Points(p) => text(&p.calibration.doc, &p.inputs),
+            Calibrated::Contacts(c) => crate::commands::sockets::text(&c.calibration.doc),
+            Calibrated::Tree(t) => crate::commands::calibrate_tree::text(t),
+        },
+    };
+    if !piped {
+        out.write_all(report.as_bytes())?;
+    }
     if proved {
         let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
         let written = crate::output::write_all_or_stdout(&files, out);
         match (&calibrated, &request.out) {
             (Calibrated::Tree(_), Some(path)) => written.with_context(|| {
-                format!("writing the calibrated tree to {}", display_name(path))
+                format!("writing the calibrated tree to {}", crate::guard::output_name(path))
             })?,
             _ => written?,
         }
     }
-    let report_sink: &mut dyn Write = if piped { err } else { out };
-    match args.format {
-        CalibrateFormat::Json => report_sink.write_all(calibrated.json()?.as_bytes())?,
-        CalibrateFormat::Text => {
-            let report = match &calibrated {
-                Calibrated::Points(p) => text(&p.calibration.doc, &p.inputs),
-                Calibrated::Contacts(c) => crate::commands::sockets::text(&c.calibration.doc),
-                Calibrated::Tree(t) => crate::commands::calibrate_tree::text(t),
-            };
-            report_sink.write_all(report.as_bytes())?;
-        }
+    if piped {
+        err.write_all(report.as_bytes())?;
     }
     Ok(if proved {
         Outcome::Pass

@@ -112,7 +112,7 @@ pub fn gravity_inputs(
             Some(i)
         }
         (None, Some(model)) if model.to_ascii_lowercase().ends_with(".urdf") => {
-            let urdf = std::fs::read_to_string(model)
+            let urdf = crate::input::read_text(model)
                 .ok()
                 .and_then(|t| urdf_axes::UrdfModel::parse(&t).ok());
             let bodies = urdf.as_ref().and_then(|u| {
