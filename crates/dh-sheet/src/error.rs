@@ -209,6 +209,12 @@ pub enum SheetError {
     /// command's own output.
     #[error("{0}")]
     ReadBack(String),
+    /// A format that is no DH sheet (`poe`) asked of a writer of sheets.
+    #[error("--format {format}: expected a sheet format (text, yaml, json, csv, markdown), found {format}, which only extract writes (from a robot's chain)")]
+    NotSheetFormat {
+        /// The format.
+        format: &'static str,
+    },
     /// A sheet that cannot be written as YAML.
     #[error(transparent)]
     Yaml(#[from] serde_yaml::Error),

@@ -181,14 +181,10 @@ impl Chain {
                 }
                 JointType::Revolute | JointType::Continuous => JointKind::Revolute,
                 JointType::Prismatic => JointKind::Prismatic,
-                JointType::Floating | JointType::Planar => {
+                JointType::Floating | JointType::Planar | JointType::Ball | JointType::Free => {
                     return Err(UrdfError::JointTypeInChain {
                         joint: joint.name.clone(),
-                        found: if joint_type == JointType::Floating {
-                            "floating"
-                        } else {
-                            "planar"
-                        },
+                        found: joint_type.label(),
                         base: base_name,
                         tip: tip_name,
                         line,

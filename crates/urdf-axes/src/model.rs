@@ -92,6 +92,12 @@ impl UrdfModel {
         }
     }
 
+    /// Validates a robot read from another format (MJCF) as [`UrdfModel::parse`] validates a
+    /// URDF's.
+    pub(crate) fn from_robot(robot: Robot) -> Result<UrdfModel, UrdfError> {
+        Self::validate(robot)
+    }
+
     fn validate(mut robot: Robot) -> Result<UrdfModel, UrdfError> {
         if robot.links.is_empty() {
             return Err(UrdfError::NoLinks {
