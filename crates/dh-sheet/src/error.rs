@@ -343,8 +343,8 @@ pub fn hint_for(e: &anyhow::Error) -> Option<String> {
             "the tip must lie in the link tree below the base; '{base}' is not above it \
              (leave out --base to start at the root link)"
         ),
-        urdf_axes::UrdfError::JointTypeInChain { joint, .. } => format!(
-            "a floating or planar joint has no axis line: start the chain below '{joint}' \
+        urdf_axes::UrdfError::JointTypeInChain { joint, found, .. } => format!(
+            "a {found} joint has no axis line: start the chain below '{joint}' \
              with --base (its child link), or end it above with --tip"
         ),
         urdf_axes::UrdfError::NoMovingJoint { .. } => "choose a --base and --tip with a revolute, \
