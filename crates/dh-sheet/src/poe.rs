@@ -12,7 +12,7 @@
 //! `multiplier` plus `offset`, as there.
 
 use anyhow::{bail, ensure, Context, Result};
-use dh_core::{DhTable, JointKind, JointSampler};
+use dh_core::{DhTable, JointAxis, JointKind, JointSampler};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 use urdf_axes::Chain;
@@ -96,15 +96,20 @@ fn rounded(x: f64) -> f64 {
 }
 
 impl PoeDoc {
-    /// The PoE form of `chain` with the rows (names, limits, mimics) of `table`, its extracted
-    /// table.
-    pub fn of_chain(chain: &Chain, table: &DhTable, robot: Option<String>) -> PoeDoc {
-        let joints = chain
-            .axes()
+    /// The PoE form of joint axes at zero in the base frame (`axes`: names, kinds, limits,
+    /// mimics) and the tip's pose at zero (`home`), at full precision.
+    pub fn new(
+        axes: &[JointAxis],
+        home: &Isometry3<f64>,
+        base_link: &str,
+        tip_link: &str,
+        robot: Option<String>,
+    ) -> PoeDoc {
+        let joints = axes
             .iter()
-            .zip(&table.rows)
-            .map(|(axis, row)| {
+            .map(|axis| {
                 let d = axis.line.direction();
+                // The moment p x d of the line is v = -omega x p for a revolute joint.
                 let (omega, v) = match axis.kind {
                     JointKind::Revolute => (d, axis.line.moment()),
                     JointKind::Prismatic => (Vector3::zeros(), d),
@@ -115,10 +120,10 @@ impl PoeDoc {
                         JointKind::Revolute => "revolute".into(),
                         JointKind::Prismatic => "prismatic".into(),
                     },
-                    screw: [omega.x, omega.y, omega.z, v.x, v.y, v.z].map(rounded),
-                    lower: row.limits.map(|l| l.lower),
-                    upper: row.limits.map(|l| l.upper),
-                    mimic: row.mimic.as_ref().map(|m| crate::sheet::MimicDoc {
+                    screw: [omega.x, omega.y, omega.z, v.x, v.y, v.z],
+                    lower: axis.limits.map(|l| l.lower),
+                    upper: axis.limits.map(|l| l.upper),
+                    mimic: axis.mimic.as_ref().map(|m| crate::sheet::MimicDoc {
                         joint: m.joint.clone(),
                         multiplier: m.multiplier,
                         offset: m.offset,
@@ -126,18 +131,48 @@ impl PoeDoc {
                 }
             })
             .collect();
-        let m = chain.tip_pose().to_homogeneous();
+        let m = home.to_homogeneous();
         PoeDoc {
             robot,
-            base_link: chain.base().to_owned(),
-            tip_link: chain.tip().to_owned(),
+            base_link: base_link.to_owned(),
+            tip_link: tip_link.to_owned(),
             convention: POE_CONVENTION.into(),
             length_unit: "m".into(),
             angle_unit: "rad".into(),
             joints,
-            home: std::array::from_fn(|i| std::array::from_fn(|j| rounded(m[(i, j)]))),
+            home: std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)])),
             verification: None,
         }
+    }
+
+    /// The PoE form of `chain` (a URDF's or MJCF's), at full precision.
+    pub fn of_chain(chain: &Chain, robot: Option<String>) -> PoeDoc {
+        PoeDoc::new(
+            chain.axes(),
+            &chain.tip_pose(),
+            chain.base(),
+            chain.tip(),
+            robot,
+        )
+    }
+
+    /// The PoE form of a DH table's own kinematics (its axes and tip at zero: the same forward
+    /// kinematics as [`DhTable::fk`]), at full precision.
+    ///
+    /// # Errors
+    /// A table of non-finite values.
+    pub fn of_table(table: &DhTable, base_link: &str, tip_link: &str) -> Result<PoeDoc> {
+        let home = table.fk(&vec![0.0; table.rows.len()])?;
+        Ok(PoeDoc::new(&table.axes()?, &home, base_link, tip_link, None))
+    }
+
+    /// The same form with every number rounded to 1e-12 (as written).
+    fn rounded(mut self) -> PoeDoc {
+        for j in &mut self.joints {
+            j.screw = j.screw.map(rounded);
+        }
+        self.home = self.home.map(|row| row.map(rounded));
+        self
     }
 
     /// Reads a PoE document and checks it: units, unit `ω` (or zero `ω` and unit `v` for a
@@ -282,7 +317,8 @@ fn deviation(a: &Matrix4<f64>, b: &Isometry3<f64>) -> (f64, f64) {
     (dp, s.atan2(c))
 }
 
-/// Writes the PoE form of `chain` (rows from `table`), reads the text back and compares its
+/// Writes the PoE form of `chain` (`table` is its extracted table, whose rows the sampler
+/// follows: limits, mimics), reads the text back and compares its
 /// forward kinematics with `oracle` (the URDF's) at `samples` joint values drawn with `seed`
 /// (the zero pose first; mimic rows follow their drivers). Returns the JSON text with its
 /// verification, the verification, and whether it passed.
@@ -300,7 +336,7 @@ pub fn prove_poe<F>(
 where
     F: FnMut(&[f64]) -> Isometry3<f64>,
 {
-    let mut doc = PoeDoc::of_chain(chain, table, robot);
+    let mut doc = PoeDoc::of_chain(chain, robot).rounded();
     let first = to_json(&doc)?;
     let back = PoeDoc::parse(&first).context("internal error: the poe text does not read back")?;
     let mut sampler = JointSampler::new(&table.rows, table.size(), seed);
@@ -437,6 +473,12 @@ mod tests {
         // Written to 1e-12: a few 1e-12 m at most on an arm of half a metre.
         assert!(passed && v.max_position_error < 1e-11, "{v:?}");
         assert_eq!(PoeDoc::parse(&text).unwrap().joints.len(), 3);
+        // The table's own form gives the table's own forward kinematics.
+        let own = PoeDoc::of_table(&table, "a", "d").unwrap();
+        for q in [[0.0, 0.0, 0.0], [0.5, 0.3, -2.0], [-0.9, 0.45, 3.0]] {
+            let (dp, dr) = deviation(&own.fk(&q).unwrap(), &table.fk(&q).unwrap());
+            assert!(dp < 1e-15 && dr < 1e-15, "{q:?}: {dp:e} m, {dr:e} rad");
+        }
         let off = Isometry3::translation(1e-6, 0.0, 0.0);
         let (_, v, passed) =
             prove_poe(&chain, &table, None, 200, 3, |q| off * chain.fk(q)).unwrap();

@@ -5,6 +5,7 @@ use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
 use dh_sheet::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
+use dh_sheet::poe::PoeDoc;
 use dh_sheet::input::{display_name, folder_of, load_chain_in, read_robot, read_text};
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
@@ -64,6 +65,8 @@ struct NativeTable {
     sheet_json: String,
     verification_json: String,
     warnings: Vec<String>,
+    /// Base and tip link of the chain.
+    links: (String, String),
 }
 
 #[pymethods]
@@ -125,6 +128,16 @@ impl NativeTable {
     /// The verification of the YAML as written, as JSON.
     fn verification_json(&self) -> &str {
         &self.verification_json
+    }
+
+    /// The table's product-of-exponentials form as JSON (`dh_sheet::poe::PoeDoc`: screws in
+    /// the base frame at zero and the tip's home pose), at full precision.
+    fn poe_json(&self, py: Python<'_>) -> PyResult<String> {
+        let run = || -> anyhow::Result<String> {
+            let doc = PoeDoc::of_table(&self.table, &self.links.0, &self.links.1)?;
+            Ok(serde_json::to_string(&doc)?)
+        };
+        run().map_err(|e| to_py(py, e))
     }
 
     /// Extraction warnings (near-degenerate pairs and the like).
@@ -190,6 +203,7 @@ fn extract(
             sheet_json: serde_json::to_string(&ex.sheet)?,
             verification_json: serde_json::to_string(verification)?,
             warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            links: (ex.chain.base().to_owned(), ex.chain.tip().to_owned()),
             table,
         })
     };
