@@ -26,7 +26,7 @@ pub const POE_CONVENTION: &str = "product of exponentials, space form (Lynch & P
 const DECIMALS: i32 = 12;
 
 /// Deviation allowed between the written form's forward kinematics and the URDF's (metres,
-/// radians): the rounding to [`DECIMALS`] moves a tip a few 1e-12 m per joint at a few metres,
+/// radians): the rounding to 12 decimals moves a tip a few 1e-12 m per joint at a few metres,
 /// so a nanometre keeps a margin of a hundred and still catches any real defect, as the written
 /// artefacts of `calibrate` are held to ([`crate::written::WRITTEN_TOLERANCE`]).
 pub const POE_BOUND: f64 = 1e-9;
@@ -270,9 +270,9 @@ fn to_json(doc: &PoeDoc) -> Result<String> {
     while let Some(line) = lines.next() {
         if line.trim_end().ends_with('[') {
             let mut items = Vec::new();
-            let mut probe = lines.clone();
+            let probe = lines.clone();
             let mut close = None;
-            while let Some(next) = probe.next() {
+            for next in probe {
                 let t = next.trim();
                 if t.starts_with(']') {
                     close = Some(t);

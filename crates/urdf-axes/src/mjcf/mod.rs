@@ -3,10 +3,22 @@
 //!
 //! # Names and values
 //! Links are body names (the world body is `world`); rows are joint names; a joint's value is
-//! MuJoCo's `qpos` (its `ref` is folded into the joint's origin, see [`build`]'s frames). Hinge
-//! and slide joints are revolute (continuous when not limited) and prismatic joints; `ball` and
-//! `free` joints are kept, and refused on a chosen chain (a free joint at the root is fine:
-//! choose a base below it). An `<equality><joint>` coupling with a linear `polycoef` is a mimic.
+//! MuJoCo's `qpos` (its `ref` is folded into the joint's origin). Hinge and slide joints are
+//! revolute (continuous when not limited) and prismatic joints; `ball` and `free` joints are
+//! kept, and refused on a chosen chain (a free joint at the root is fine: choose a base below
+//! it). An `<equality><joint>` coupling with a linear `polycoef` is a mimic.
+//!
+//! # Frames
+//! MuJoCo's `mj_kinematics` places a body at `F = F_parent · pose(body)` and then applies its
+//! joints in document order, each on the right, in the body frame as moved so far: a hinge with
+//! anchor `p` and unit axis `a` multiplies by `T(p) · R(a, q − ref) · T(−p)`, a slide by
+//! `T(a (q − ref))`. A URDF joint rotates about an axis through its frame's origin, so a hinge
+//! becomes the joint frame `T(p) · R(a, −ref)` (`R(a, −ref)` commutes with `R(a, q)`), and the
+//! `T(−p)` after it goes into the next joint's origin, or into a fixed joint `anchor:BODY` to
+//! the body's own link after the last one. A body with several joints becomes a chain of
+//! zero-length links `BODY:JOINT`; a body without joints is welded to its parent by a fixed
+//! joint `weld:BODY`. Rotations are stored as URDF roll-pitch-yaw
+//! ([`dh_core::pose::to_xyz_rpy`], exact to 1e-15 rad at gimbal lock too: see the tests).
 //!
 //! # What is read
 //! `<compiler angle eulerseq autolimits>`, `<default>` classes (nesting, `class`,
