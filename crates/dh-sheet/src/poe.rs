@@ -163,7 +163,13 @@ impl PoeDoc {
     /// A table of non-finite values.
     pub fn of_table(table: &DhTable, base_link: &str, tip_link: &str) -> Result<PoeDoc> {
         let home = table.fk(&vec![0.0; table.rows.len()])?;
-        Ok(PoeDoc::new(&table.axes()?, &home, base_link, tip_link, None))
+        Ok(PoeDoc::new(
+            &table.axes()?,
+            &home,
+            base_link,
+            tip_link,
+            None,
+        ))
     }
 
     /// The same form with every number rounded to 1e-12 (as written).

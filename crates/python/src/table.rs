@@ -5,8 +5,8 @@ use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
 use dh_sheet::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
-use dh_sheet::poe::PoeDoc;
 use dh_sheet::input::{display_name, folder_of, load_chain_in, read_robot, read_text};
+use dh_sheet::poe::PoeDoc;
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
 
