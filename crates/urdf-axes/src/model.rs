@@ -36,6 +36,9 @@ pub struct UrdfModel {
     /// Per link: joints whose parent it is.
     pub(crate) child_joints: Vec<Vec<usize>>,
     pub(crate) root: usize,
+    /// The base of a chain when none is given: the root link, or (MJCF) the body of the one
+    /// free joint at the root.
+    pub(crate) default_base: usize,
 }
 
 impl UrdfModel {
@@ -217,7 +220,26 @@ impl UrdfModel {
             parent_joint,
             child_joints,
             root,
+            default_base: root,
         })
+    }
+
+    /// Makes `link` the default base of chains (an MJCF body floating on a free joint: the chain
+    /// starts below it) when a revolute, continuous or prismatic joint lies below it.
+    pub(crate) fn set_default_base_if_moving_below(&mut self, link: &str) {
+        let Some(l) = self.link_index_of(link) else {
+            return;
+        };
+        let moving_below = self.robot.joints.iter().enumerate().any(|(k, j)| {
+            j.kind.is_some_and(crate::robot::JointType::is_moving)
+                && self
+                    .joint_child
+                    .get(k)
+                    .is_some_and(|&c| self.is_below(c, l))
+        });
+        if moving_below {
+            self.default_base = l;
+        }
     }
 
     /// Warnings of the reading: faults of visuals, collisions, materials and inertials (each

@@ -131,7 +131,10 @@ fn default_tip_warnings_and_joints_without_one_axis() {
         ball.to_string().contains("joint 'gimbal' (line 30)"),
         "{ball}"
     );
-    let free = model.chain(None, Some("hand")).unwrap_err().to_string();
+    // One body on a free joint at the root: chains start below it by default.
+    let default = model.chain(None, None).unwrap();
+    assert_eq!((default.base(), default.tip()), ("cart", "hand"));
+    let free = model.chain(Some("world"), Some("hand")).unwrap_err().to_string();
     assert!(
         free.contains("joint 'root'") && free.contains("found a free joint"),
         "{free}"

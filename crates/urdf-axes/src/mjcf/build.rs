@@ -67,6 +67,8 @@ pub(crate) struct Builder<'c> {
     pub robot: Robot,
     bodies: HashMap<String, usize>,
     joints: HashMap<String, JointFacts>,
+    /// Bodies on a free joint (children of the world).
+    pub free_bodies: Vec<String>,
 }
 
 impl<'c> Builder<'c> {
@@ -80,6 +82,7 @@ impl<'c> Builder<'c> {
             },
             bodies: HashMap::new(),
             joints: HashMap::new(),
+            free_bodies: Vec::new(),
         }
     }
 
@@ -345,6 +348,7 @@ impl<'c> Builder<'c> {
                         k + 1
                     )));
                 }
+                self.free_bodies.push(body.to_owned());
                 (JointType::Free, 0.0, None)
             }
             other => {

@@ -5,8 +5,8 @@
 //! Links are body names (the world body is `world`); rows are joint names; a joint's value is
 //! MuJoCo's `qpos` (its `ref` is folded into the joint's origin). Hinge and slide joints are
 //! revolute (continuous when not limited) and prismatic joints; `ball` and `free` joints are
-//! kept, and refused on a chosen chain (a free joint at the root is fine: choose a base below
-//! it). An `<equality><joint>` coupling with a linear `polycoef` is a mimic.
+//! kept, and refused on a chosen chain. A free joint at the root is fine: when the world holds
+//! one body on a free joint with joints below it, chains start at that body by default. An `<equality><joint>` coupling with a linear `polycoef` is a mimic.
 //!
 //! # Frames
 //! MuJoCo's `mj_kinematics` places a body at `F = F_parent · pose(body)` and then applies its
@@ -128,5 +128,10 @@ pub fn read(text: &str, dir: Option<&Path>) -> Result<UrdfModel, MjcfError> {
             }
         }
     }
-    Ok(UrdfModel::from_robot(builder.robot)?)
+    let free_bodies = std::mem::take(&mut builder.free_bodies);
+    let mut model = UrdfModel::from_robot(builder.robot)?;
+    if let [body] = free_bodies.as_slice() {
+        model.set_default_base_if_moving_below(body);
+    }
+    Ok(model)
 }
