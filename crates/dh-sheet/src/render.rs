@@ -22,8 +22,8 @@ pub enum Format {
     Csv,
     /// A Markdown table for documents.
     Markdown,
-    /// The product-of-exponentials form (JSON): each joint's screw axis in the base frame at
-    /// zero and the tip's home pose ([`crate::poe`]); written from a chain (`extract`) only.
+    /// The product-of-exponentials form, JSON: each joint's screw axis in the base frame at
+    /// zero and the tip's home pose (extract only)
     Poe,
 }
 

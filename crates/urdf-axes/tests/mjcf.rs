@@ -427,3 +427,23 @@ mod props {
         }
     }
 }
+
+#[test]
+fn what_cannot_change_the_chain_is_a_warning() {
+    let m = read(
+        "<worldbody>\n<body name=\"b\">\n<wibble/>\n<joint name=\"j\"/>\n<body name=\"c\">\n<joint name=\"k\"/>\n</body>\n</body>\n</worldbody>\n<foo/>\n<equality>\n<joint joint1=\"k\" joint2=\"j\" polycoef=\"0 1 0.5 0 0\"/>\n<joint joint1=\"k\" joint2=\"j\" active=\"false\"/>\n</equality>",
+    )
+    .unwrap();
+    let w: Vec<String> = m.warnings().iter().map(ToString::to_string).collect();
+    assert_eq!(
+        w,
+        [
+            "<wibble> (line 4): unknown element <wibble> in body 'b'; ignored",
+            "<foo> (line 11): unknown element <foo> in <mujoco>; ignored",
+            "<joint> (line 13): a polynomial coupling beyond degree 1 is not a mimic; ignored",
+            "<joint> (line 14): inactive (active=\"false\"); not taken as a mimic",
+        ]
+    );
+    // Neither coupling is a mimic.
+    assert!(m.chain(Some("b"), Some("c")).unwrap().mimics().is_empty());
+}

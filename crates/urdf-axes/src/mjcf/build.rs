@@ -3,17 +3,8 @@
 //! value is MuJoCo's `qpos`, so that chains, default tips, mimics and the forward kinematics
 //! oracle work as for a URDF.
 //!
-//! # Frames
-//! MuJoCo's `mj_kinematics` places a body at `F = F_parent · pose(body)` and then applies its
-//! joints in document order, each on the right, in the body frame as moved so far:
-//! a hinge with anchor `p` and unit axis `a` multiplies by `T(p) · R(a, q − ref) · T(−p)`, a slide
-//! by `T(a (q − ref))`. A URDF joint rotates about an axis through its frame's origin, so a hinge
-//! becomes the joint frame `T(p) · R(a, −ref)` (the `ref` folded into the origin: `R(a, −ref)`
-//! commutes with `R(a, q)`), and the `T(−p)` after it is carried into the next joint's origin, or
-//! into a fixed joint `anchor:BODY` to the body's own link after the last one. A body with
-//! several joints becomes a chain of zero-length links `BODY:JOINT`; a body without joints is
-//! welded to its parent by a fixed joint `weld:BODY`. A `<frame>`'s pose is composed into the
-//! poses of the bodies and the anchors and axes of the joints inside it.
+//! The frames (how MuJoCo's `mj_kinematics` becomes URDF joints, `ref` folded in, anchors
+//! undone by the next origin or `anchor:BODY`) are described in [`super`]'s docs.
 
 use std::collections::HashMap;
 
