@@ -39,7 +39,10 @@ fn mjcf_errors_name_the_element_and_line() {
     );
     insta::assert_snapshot!(
         "free_in_chain",
-        run(&["extract", CONSTRUCTS, "--base", "world", "--tip", "hand"], None)
+        run(
+            &["extract", CONSTRUCTS, "--base", "world", "--tip", "hand"],
+            None
+        )
     );
 }
 
