@@ -11,7 +11,7 @@ the base body's frame) at random qpos: joints with a range inside it, others in 
 Usage: python tests/formats/mjcf_oracle.py [--bin target/release/urdf-dh]
        [--formats ../shared/formats] [--samples 200] [--seed 1]
 Prints one line per chain and form (standard, modified, poe), then 'N passed, N failed'; exits 1 on a failure,
-0 otherwise (2 when ../shared/formats is absent, after checking the fixtures).
+0 otherwise (the real models skipped, saying so, when ../shared/formats is absent).
 """
 import argparse
 import json
@@ -178,7 +178,7 @@ def main():
             print(f"{'ok  ' if ok else 'FAIL'} {entry['id']:<22} {convention:<9} {what}")
     print(f"{passed} passed, {failed} failed")
     if not os.path.isfile(manifest):
-        return 2
+        print("mjcf_oracle: the real models were skipped: ../shared/formats is absent")
     return 1 if failed else 0
 
 

@@ -204,8 +204,9 @@ def extract(
     """Extracts the DH table of a URDF chain, as ``urdf-dh extract`` does.
 
     Args:
-        path_or_xml: a path (str or os.PathLike; ``.xacro`` needs the ``xacro`` command), or URDF
-            XML text (a string starting with ``<`` after whitespace).
+        path_or_xml: a path (str or os.PathLike; ``.xacro`` needs the ``xacro`` command; an MJCF
+            file, recognised by its ``<mujoco>`` root, with its ``<include>`` files beside it), or
+            URDF or MJCF XML text (a string starting with ``<`` after whitespace).
         base: base link (default: the root link).
         tip: tip link (default: the only leaf).
         convention: ``"standard"`` or ``"modified"``.
