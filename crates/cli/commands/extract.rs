@@ -154,7 +154,11 @@ pub fn extract(
         writeln!(
             err,
             "{}",
-            failure_line("the table", "the URDF", ex.sheet.verification.as_ref())
+            failure_line(
+                "the table",
+                ex.against.as_deref().unwrap_or("the URDF"),
+                ex.sheet.verification.as_ref()
+            )
         )?;
         Ok(Outcome::Differs)
     }

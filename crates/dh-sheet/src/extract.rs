@@ -42,6 +42,9 @@ pub struct Extracted {
     pub sheet: SheetDoc,
     /// Warnings of reading the URDF that concern the chain (see [`urdf_warnings`]).
     pub urdf_warnings: Vec<String>,
+    /// What the table is proved against when the robot file is not a URDF (`the MJCF`), for
+    /// the verification line; `None` for a URDF.
+    pub against: Option<String>,
 }
 
 /// What an extraction of one chain needs besides the chain.
@@ -106,14 +109,19 @@ where
         chain,
         extraction,
         sheet,
+        against,
         ..
     } = ex;
     let table = &extraction.table;
     if format == Format::Poe {
-        let (text, verification, passed) =
-            crate::poe::prove_poe(chain, table, sheet.robot.clone(), samples, seed, |q| {
-                oracle(chain, q)
-            })?;
+        let (text, verification, passed) = crate::poe::prove_poe(
+            chain,
+            table,
+            (sheet.robot.clone(), against.clone()),
+            samples,
+            seed,
+            |q| oracle(chain, q),
+        )?;
         sheet.verification = Some(verification);
         return Ok((text, passed));
     }
@@ -129,7 +137,7 @@ where
             table,
             bound: extraction.bound,
             oracle: |q: &[f64]| oracle(chain, q),
-            against: None,
+            against: against.clone(),
             samples,
             seed,
         },
@@ -217,10 +225,12 @@ pub fn extract_chain(
     });
     sheet.warnings = Some(extraction.warnings.iter().map(|w| w.to_string()).collect());
     let urdf_warnings = urdf_warnings(name, model, &chain);
+    let against = (model.format_name() != "URDF").then(|| format!("the {}", model.format_name()));
     Ok(Extracted {
         chain,
         extraction,
         sheet,
         urdf_warnings,
+        against,
     })
 }

@@ -326,15 +326,16 @@ fn deviation(a: &Matrix4<f64>, b: &Isometry3<f64>) -> (f64, f64) {
 /// Writes the PoE form of `chain` (`table` is its extracted table, whose rows the sampler
 /// follows: limits, mimics), reads the text back and compares its
 /// forward kinematics with `oracle` (the URDF's) at `samples` joint values drawn with `seed`
-/// (the zero pose first; mimic rows follow their drivers). Returns the JSON text with its
-/// verification, the verification, and whether it passed.
+/// (the zero pose first; mimic rows follow their drivers). `robot` is the robot's name and what
+/// the verification names as the source when it is not the URDF (`the MJCF`). Returns the JSON
+/// text with its verification, the verification, and whether it passed.
 ///
 /// # Errors
 /// The written text does not read back (a writer bug).
 pub fn prove_poe<F>(
     chain: &Chain,
     table: &DhTable,
-    robot: Option<String>,
+    robot: (Option<String>, Option<String>),
     samples: usize,
     seed: u64,
     mut oracle: F,
@@ -342,6 +343,7 @@ pub fn prove_poe<F>(
 where
     F: FnMut(&[f64]) -> Isometry3<f64>,
 {
+    let (robot, against) = robot;
     let mut doc = PoeDoc::of_chain(chain, robot).rounded();
     let first = to_json(&doc)?;
     let back = PoeDoc::parse(&first).context("internal error: the poe text does not read back")?;
@@ -373,7 +375,7 @@ where
         position_bound: POE_BOUND,
         orientation_bound: POE_BOUND,
         passed,
-        against: None,
+        against,
     };
     doc.verification = Some(v.clone());
     let text = to_json(&doc)?;
@@ -475,7 +477,8 @@ mod tests {
         )
         .unwrap()
         .table;
-        let (text, v, passed) = prove_poe(&chain, &table, None, 200, 3, |q| chain.fk(q)).unwrap();
+        let (text, v, passed) =
+            prove_poe(&chain, &table, (None, None), 200, 3, |q| chain.fk(q)).unwrap();
         // Written to 1e-12: a few 1e-12 m at most on an arm of half a metre.
         assert!(passed && v.max_position_error < 1e-11, "{v:?}");
         assert_eq!(PoeDoc::parse(&text).unwrap().joints.len(), 3);
@@ -487,7 +490,7 @@ mod tests {
         }
         let off = Isometry3::translation(1e-6, 0.0, 0.0);
         let (_, v, passed) =
-            prove_poe(&chain, &table, None, 200, 3, |q| off * chain.fk(q)).unwrap();
+            prove_poe(&chain, &table, (None, None), 200, 3, |q| off * chain.fk(q)).unwrap();
         assert!(
             !passed && (v.max_position_error - 1e-6).abs() < 1e-11,
             "{v:?}"

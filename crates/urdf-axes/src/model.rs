@@ -39,6 +39,8 @@ pub struct UrdfModel {
     /// The base of a chain when none is given: the root link, or (MJCF) the body of the one
     /// free joint at the root.
     pub(crate) default_base: usize,
+    /// The format the model was read from (`URDF`, `MJCF`).
+    pub(crate) format_name: &'static str,
 }
 
 impl UrdfModel {
@@ -221,6 +223,7 @@ impl UrdfModel {
             child_joints,
             root,
             default_base: root,
+            format_name: "URDF",
         })
     }
 
@@ -282,6 +285,11 @@ impl UrdfModel {
             });
         }
         out
+    }
+
+    /// The format the model was read from: `URDF`, or `MJCF` for [`crate::mjcf::read`].
+    pub fn format_name(&self) -> &'static str {
+        self.format_name
     }
 
     /// The `name` attribute of `<robot>` (empty when absent).

@@ -130,6 +130,7 @@ pub fn read(text: &str, dir: Option<&Path>) -> Result<UrdfModel, MjcfError> {
     }
     let free_bodies = std::mem::take(&mut builder.free_bodies);
     let mut model = UrdfModel::from_robot(builder.robot)?;
+    model.format_name = "MJCF";
     if let [body] = free_bodies.as_slice() {
         model.set_default_base_if_moving_below(body);
     }
