@@ -30,6 +30,47 @@ fn error(body: &str) -> String {
     read(body).unwrap_err().to_string()
 }
 
+/// Every MJCF chain of `../shared/formats/manifest.json` (the mujoco_menagerie arms) reads and
+/// builds (their kinematics against MuJoCo's: `tests/formats/mjcf_oracle.py`). Skips, saying
+/// so, without `../shared`.
+#[test]
+fn the_menagerie_chains_read() {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/formats");
+    let Ok(text) = std::fs::read_to_string(folder.join("manifest.json")) else {
+        println!("the_menagerie_chains_read: skipped: ../shared/formats is absent");
+        return;
+    };
+    let manifest: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mut chains = 0;
+    for e in manifest["models"].as_array().unwrap() {
+        if e["format"] != "mjcf" {
+            continue;
+        }
+        let path = folder.join(e["file"].as_str().unwrap());
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(mjcf::is_mjcf(&bytes), "{}", path.display());
+        let model = mjcf::from_bytes(&bytes, path.parent())
+            .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+        let chain = model
+            .chain(e["base"].as_str(), e["tip"].as_str())
+            .unwrap_or_else(|err| panic!("{}: {err}", e["id"]));
+        assert!(
+            chain.axes().len() >= 5,
+            "{}: {} rows",
+            e["id"],
+            chain.axes().len()
+        );
+        let zero = vec![0.0; chain.axes().len()];
+        assert!(chain.fk(&zero).translation.vector.relative_eq(
+            &chain.tip_pose().translation.vector,
+            1e-15,
+            1e-15
+        ));
+        chains += 1;
+    }
+    assert_eq!(chains, 20);
+}
+
 #[test]
 fn every_construct_gives_mujocos_pose() {
     let model = constructs();
