@@ -16,6 +16,7 @@ mod import_columns;
 mod invalid;
 mod limits;
 mod measured;
+mod mjcf;
 mod outputs;
 mod pose6;
 mod predict;

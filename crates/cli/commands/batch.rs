@@ -15,7 +15,7 @@ use anyhow::{bail, Result};
 use dh_core::{Convention, Tolerance};
 use nalgebra::Isometry3;
 use serde::Serialize;
-use urdf_axes::{Chain, UrdfModel};
+use urdf_axes::Chain;
 
 use crate::commands::extract::{extract_chain, prove_extracted_with, ExtractOptions};
 use crate::error::Outcome;
@@ -167,7 +167,8 @@ fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
     let path = entries[0].path.to_string_lossy().into_owned();
     let name = display_name(&path);
     let model = read_robot(&path).and_then(|bytes| {
-        UrdfModel::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{name}: invalid URDF: {e}"))
+        dh_sheet::input::read_model(&bytes, &name, dh_sheet::input::folder_of(&path).as_deref())
+            .map_err(|e| anyhow::anyhow!("{e:#}"))
     });
     entries
         .iter()

@@ -15,8 +15,8 @@ use crate::readback::failure_line;
 use crate::render::Format;
 use crate::units::{AngleUnit, LengthUnit};
 pub use dh_sheet::extract::{
-    default_samples, extract_bytes, extract_chain, prove_extracted, prove_extracted_with,
-    ExtractOptions, Extracted,
+    default_samples, extract_bytes, extract_bytes_in, extract_chain, prove_extracted,
+    prove_extracted_with, ExtractOptions, Extracted,
 };
 
 /// Everything `extract` needs.
@@ -54,7 +54,14 @@ pub struct ExtractArgs {
 /// As [`load_chain`], plus geometry errors (a chain without moving joints).
 pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
     let bytes = read_robot(&args.path)?;
-    run_extract_bytes(&bytes, &display_name(&args.path), args)
+    extract_bytes_in(
+        &bytes,
+        &display_name(&args.path),
+        dh_sheet::input::folder_of(&args.path).as_deref(),
+        args.base.as_deref(),
+        args.tip.as_deref(),
+        &args.options(),
+    )
 }
 
 /// [`run_extract`] on a URDF given as bytes (`args.path` is not read); `name` names it in
@@ -150,7 +157,11 @@ pub fn extract(
         writeln!(
             err,
             "{}",
-            failure_line("the table", "the URDF", ex.sheet.verification.as_ref())
+            failure_line(
+                "the table",
+                ex.against.as_deref().unwrap_or("the URDF"),
+                ex.sheet.verification.as_ref()
+            )
         )?;
         Ok(Outcome::Differs)
     }

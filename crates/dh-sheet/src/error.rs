@@ -209,6 +209,12 @@ pub enum SheetError {
     /// command's own output.
     #[error("{0}")]
     ReadBack(String),
+    /// A format that is no DH sheet (`poe`) asked of a writer of sheets.
+    #[error("--format {format}: expected a sheet format (text, yaml, json, csv, markdown), found {format}, which only extract writes (from a robot's chain)")]
+    NotSheetFormat {
+        /// The format.
+        format: &'static str,
+    },
     /// A sheet that cannot be written as YAML.
     #[error(transparent)]
     Yaml(#[from] serde_yaml::Error),
@@ -337,8 +343,8 @@ pub fn hint_for(e: &anyhow::Error) -> Option<String> {
             "the tip must lie in the link tree below the base; '{base}' is not above it \
              (leave out --base to start at the root link)"
         ),
-        urdf_axes::UrdfError::JointTypeInChain { joint, .. } => format!(
-            "a floating or planar joint has no axis line: start the chain below '{joint}' \
+        urdf_axes::UrdfError::JointTypeInChain { joint, found, .. } => format!(
+            "a {found} joint has no axis line: start the chain below '{joint}' \
              with --base (its child link), or end it above with --tip"
         ),
         urdf_axes::UrdfError::NoMovingJoint { .. } => "choose a --base and --tip with a revolute, \

@@ -26,7 +26,7 @@ use anyhow::{Context, Result};
 use dh_core::{Convention, Extraction, Tolerance};
 use urdf_axes::{Chain, UrdfModel};
 
-use crate::input::{load_chain_bytes, urdf_warnings};
+use crate::input::{load_chain_in, urdf_warnings};
 use crate::prove::{prove, Isometry3Pair, Source};
 use crate::render::Format;
 use crate::sheet::{PairDoc, SheetDoc, TolerancesDoc};
@@ -42,6 +42,9 @@ pub struct Extracted {
     pub sheet: SheetDoc,
     /// Warnings of reading the URDF that concern the chain (see [`urdf_warnings`]).
     pub urdf_warnings: Vec<String>,
+    /// What the table is proved against when the robot file is not a URDF (`the MJCF`), for
+    /// the verification line; `None` for a URDF.
+    pub against: Option<String>,
 }
 
 /// What an extraction of one chain needs besides the chain.
@@ -106,9 +109,22 @@ where
         chain,
         extraction,
         sheet,
+        against,
         ..
     } = ex;
     let table = &extraction.table;
+    if format == Format::Poe {
+        let (text, verification, passed) = crate::poe::prove_poe(
+            chain,
+            table,
+            (sheet.robot.clone(), against.clone()),
+            samples,
+            seed,
+            |q| oracle(chain, q),
+        )?;
+        sheet.verification = Some(verification);
+        return Ok((text, passed));
+    }
     let free = Isometry3Pair {
         base: table.base,
         tool: table.tool,
@@ -121,7 +137,7 @@ where
             table,
             bound: extraction.bound,
             oracle: |q: &[f64]| oracle(chain, q),
-            against: None,
+            against: against.clone(),
             samples,
             seed,
         },
@@ -135,11 +151,11 @@ pub fn default_samples(joints: usize) -> usize {
     (10_000_000 / joints.max(1)).clamp(10, 1000)
 }
 
-/// Extracts the chain `base` -> `tip` (defaults as [`load_chain_bytes`]) of the URDF `bytes`,
+/// Extracts the chain `base` -> `tip` (defaults as [`crate::input::load_chain_bytes`]) of the URDF `bytes`,
 /// named `name` in messages; the caller proves it ([`prove_extracted`]).
 ///
 /// # Errors
-/// As [`load_chain_bytes`], plus geometry errors (a chain without moving joints).
+/// As [`crate::input::load_chain_bytes`], plus geometry errors (a chain without moving joints).
 pub fn extract_bytes(
     bytes: &[u8],
     name: &str,
@@ -147,7 +163,23 @@ pub fn extract_bytes(
     tip: Option<&str>,
     options: &ExtractOptions,
 ) -> Result<Extracted> {
-    let (model, chain) = load_chain_bytes(bytes, name, base, tip)?;
+    extract_bytes_in(bytes, name, None, base, tip, options)
+}
+
+/// [`extract_bytes`] of a robot file read from folder `dir` (where an MJCF `<include>` is
+/// resolved; `None` when it was not read from a file).
+///
+/// # Errors
+/// As [`load_chain_in`], plus geometry errors (a chain without moving joints).
+pub fn extract_bytes_in(
+    bytes: &[u8],
+    name: &str,
+    dir: Option<&std::path::Path>,
+    base: Option<&str>,
+    tip: Option<&str>,
+    options: &ExtractOptions,
+) -> Result<Extracted> {
+    let (model, chain) = load_chain_in(bytes, name, dir, base, tip)?;
     extract_chain(&model, chain, name, options)
 }
 
@@ -193,10 +225,12 @@ pub fn extract_chain(
     });
     sheet.warnings = Some(extraction.warnings.iter().map(|w| w.to_string()).collect());
     let urdf_warnings = urdf_warnings(name, model, &chain);
+    let against = (model.format_name() != "URDF").then(|| format!("the {}", model.format_name()));
     Ok(Extracted {
         chain,
         extraction,
         sheet,
         urdf_warnings,
+        against,
     })
 }

@@ -141,7 +141,46 @@ pub fn display_name(path: &str) -> String {
 /// Unreadable file, invalid URDF, unknown or ambiguous base/tip.
 pub fn load_chain(path: &str, base: Option<&str>, tip: Option<&str>) -> Result<(UrdfModel, Chain)> {
     let bytes = read_robot(path)?;
-    load_chain_bytes(&bytes, &display_name(path), base, tip)
+    load_chain_in(
+        &bytes,
+        &display_name(path),
+        folder_of(path).as_deref(),
+        base,
+        tip,
+    )
+}
+
+/// The folder of the robot file `path`, against which an MJCF `<include>` is resolved; `None`
+/// for standard input (`-`).
+pub fn folder_of(path: &str) -> Option<std::path::PathBuf> {
+    if path == "-" {
+        return None;
+    }
+    Some(match Path::new(path).parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    })
+}
+
+/// Reads the robot model of `bytes`, the file shown as `name` in folder `dir` (`None` when
+/// it was not read from a file): MJCF when its root element is `<mujoco>` (only the prolog is
+/// looked at), else URDF.
+///
+/// # Errors
+/// An invalid model ("`NAME`: invalid MJCF" or "`NAME`: invalid URDF").
+pub fn read_model(bytes: &[u8], name: &str, dir: Option<&Path>) -> Result<UrdfModel> {
+    if urdf_axes::mjcf::is_mjcf(bytes) {
+        return urdf_axes::mjcf::from_bytes(bytes, dir)
+            .with_context(|| format!("{name}: invalid MJCF"));
+    }
+    UrdfModel::from_bytes(bytes).map_err(|e| match crate::sniff::not_a_robot(bytes) {
+        // A sheet, a CSV or an image given as the robot: say what it is and what reads it.
+        Some(s) => crate::error::hinted(
+            format!("{name}: invalid URDF: {e}; the file is {}", s.what),
+            s.hint,
+        ),
+        None => anyhow::Error::new(e).context(format!("{name}: invalid URDF")),
+    })
 }
 
 /// Loads the chain of a URDF given as bytes; `name` names it in error messages (a file name, or
@@ -155,15 +194,22 @@ pub fn load_chain_bytes(
     base: Option<&str>,
     tip: Option<&str>,
 ) -> Result<(UrdfModel, Chain)> {
-    let model =
-        UrdfModel::from_bytes(bytes).map_err(|e| match crate::sniff::not_a_robot(bytes) {
-            // A sheet, a CSV or an image given as the robot: say what it is and what reads it.
-            Some(s) => crate::error::hinted(
-                format!("{name}: invalid URDF: {e}; the file is {}", s.what),
-                s.hint,
-            ),
-            None => anyhow::Error::new(e).context(format!("{name}: invalid URDF")),
-        })?;
+    load_chain_in(bytes, name, None, base, tip)
+}
+
+/// [`load_chain_bytes`] of a model read from a file in folder `dir` (`None`: not from a file),
+/// URDF or MJCF ([`read_model`]).
+///
+/// # Errors
+/// Invalid model, unknown or ambiguous base/tip.
+pub fn load_chain_in(
+    bytes: &[u8],
+    name: &str,
+    dir: Option<&Path>,
+    base: Option<&str>,
+    tip: Option<&str>,
+) -> Result<(UrdfModel, Chain)> {
+    let model = read_model(bytes, name, dir)?;
     let chain = model.chain(base, tip).map_err(|e| chain_error(name, e))?;
     Ok((model, chain))
 }

@@ -69,6 +69,7 @@ pub mod input;
 pub mod measured;
 pub mod model;
 pub mod output;
+pub mod poe;
 pub mod predict;
 pub mod prove;
 pub mod ranges;

@@ -37,7 +37,8 @@ pub fn precision_at(
         (0.5 * 10f64.powi(-(angle.decimals() as i32)) * angle.radians()).max(10.0 * PRINT_NOISE);
     let (l, a) = (sheet_length + PRINT_NOISE, sheet_angle + PRINT_NOISE);
     match format {
-        Format::Yaml | Format::Json | Format::Csv => Precision::rounded(l, a),
+        // PoE is proved by `crate::poe`, at its own precision; as JSON here.
+        Format::Yaml | Format::Json | Format::Csv | Format::Poe => Precision::rounded(l, a),
         Format::Text | Format::Markdown => {
             let step = |decimals: usize| 0.5 * 10f64.powi(-((decimals + extra) as i32));
             Precision::rounded(

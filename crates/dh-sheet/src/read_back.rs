@@ -42,6 +42,7 @@ pub fn read_back(text: &str, format: Format) -> Result<SheetDoc> {
         Format::Csv => read_csv(text),
         Format::Text => read_text(text),
         Format::Markdown => read_markdown(text),
+        Format::Poe => Err(SheetError::NotSheetFormat { format: "poe" }),
     }
 }
 

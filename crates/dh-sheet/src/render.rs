@@ -22,6 +22,9 @@ pub enum Format {
     Csv,
     /// A Markdown table for documents.
     Markdown,
+    /// The product-of-exponentials form, JSON: each joint's screw axis in the base frame at
+    /// zero and the tip's home pose (extract only)
+    Poe,
 }
 
 /// Renders `doc` in `format`.
@@ -45,6 +48,7 @@ pub fn render_sheet_at(doc: &SheetDoc, format: Format, extra: usize) -> Result<S
         Format::Text => text(doc, extra),
         Format::Csv => csv(doc),
         Format::Markdown => markdown(doc, extra),
+        Format::Poe => return Err(crate::error::SheetError::NotSheetFormat { format: "poe" }),
     })
 }
 

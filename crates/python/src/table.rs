@@ -4,8 +4,9 @@
 use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
-use dh_sheet::extract::{extract_bytes, prove_extracted, ExtractOptions};
-use dh_sheet::input::{display_name, load_chain_bytes, read_robot, read_text};
+use dh_sheet::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
+use dh_sheet::input::{display_name, folder_of, load_chain_in, read_robot, read_text};
+use dh_sheet::poe::PoeDoc;
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
 
@@ -18,11 +19,14 @@ type Matrix = [[f64; 4]; 4];
 const XML_NAME: &str = "<string>";
 
 /// The URDF bytes and their display name: XML text as given, or the file at `path`.
-fn robot_bytes(source: &str, is_xml: bool) -> anyhow::Result<(Vec<u8>, String)> {
+fn robot_bytes(
+    source: &str,
+    is_xml: bool,
+) -> anyhow::Result<(Vec<u8>, String, Option<std::path::PathBuf>)> {
     if is_xml {
-        Ok((source.as_bytes().to_vec(), XML_NAME.to_string()))
+        Ok((source.as_bytes().to_vec(), XML_NAME.to_string(), None))
     } else {
-        Ok((read_robot(source)?, display_name(source)))
+        Ok((read_robot(source)?, display_name(source), folder_of(source)))
     }
 }
 
@@ -61,6 +65,8 @@ struct NativeTable {
     sheet_json: String,
     verification_json: String,
     warnings: Vec<String>,
+    /// Base and tip link of the chain.
+    links: (String, String),
 }
 
 #[pymethods]
@@ -124,6 +130,16 @@ impl NativeTable {
         &self.verification_json
     }
 
+    /// The table's product-of-exponentials form as JSON (`dh_sheet::poe::PoeDoc`: screws in
+    /// the base frame at zero and the tip's home pose), at full precision.
+    fn poe_json(&self, py: Python<'_>) -> PyResult<String> {
+        let run = || -> anyhow::Result<String> {
+            let doc = PoeDoc::of_table(&self.table, &self.links.0, &self.links.1)?;
+            Ok(serde_json::to_string(&doc)?)
+        };
+        run().map_err(|e| to_py(py, e))
+    }
+
     /// Extraction warnings (near-degenerate pairs and the like).
     fn warnings(&self) -> Vec<String> {
         self.warnings.clone()
@@ -157,14 +173,21 @@ fn extract(
     angular: f64,
 ) -> PyResult<NativeTable> {
     let run = || -> anyhow::Result<NativeTable> {
-        let (bytes, name) = robot_bytes(source, is_xml)?;
+        let (bytes, name, dir) = robot_bytes(source, is_xml)?;
         let options = ExtractOptions {
             convention: convention(convention_name)?,
             length_unit: LengthUnit::M,
             angle_unit: AngleUnit::Rad,
             tolerance: Tolerance::new(linear, angular)?,
         };
-        let mut ex = extract_bytes(&bytes, &name, base.as_deref(), tip.as_deref(), &options)?;
+        let mut ex = extract_bytes_in(
+            &bytes,
+            &name,
+            dir.as_deref(),
+            base.as_deref(),
+            tip.as_deref(),
+            &options,
+        )?;
         let (yaml, _passed) = prove_extracted(&mut ex, Format::Yaml, samples, seed)?;
         let verification = ex
             .sheet
@@ -180,6 +203,7 @@ fn extract(
             sheet_json: serde_json::to_string(&ex.sheet)?,
             verification_json: serde_json::to_string(verification)?,
             warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            links: (ex.chain.base().to_owned(), ex.chain.tip().to_owned()),
             table,
         })
     };
@@ -202,8 +226,14 @@ fn check(
     angular: f64,
 ) -> PyResult<String> {
     let run = || -> anyhow::Result<String> {
-        let (bytes, name) = robot_bytes(source, is_xml)?;
-        let (_, chain) = load_chain_bytes(&bytes, &name, base.as_deref(), tip.as_deref())?;
+        let (bytes, name, dir) = robot_bytes(source, is_xml)?;
+        let (_, chain) = load_chain_in(
+            &bytes,
+            &name,
+            dir.as_deref(),
+            base.as_deref(),
+            tip.as_deref(),
+        )?;
         let sheet_name = display_name(sheet);
         let sheet = Sheet::parse(&read_text(sheet)?, &sheet_name)?;
         let report = compare(&chain, &sheet, Tolerance::new(linear, angular)?)?;

@@ -61,7 +61,8 @@ pub struct Chain {
 impl UrdfModel {
     /// Chooses a serial chain from `base` down to `tip` (link names).
     ///
-    /// `base` defaults to the root link. `tip` defaults to the end of the arm below the base:
+    /// `base` defaults to the root link (for an MJCF model whose world holds one body on a free
+    /// joint with joints below it, to that body: the chain starts below the free joint). `tip` defaults to the end of the arm below the base:
     /// the leaf at the end of the longest run of moving joints, preferring a tool-like fixed
     /// link (`tool0`, `flange`...) off the last moving link, and the hand link when the
     /// longest runs are the fingers of one gripper (the rule is in the `tip` module's docs).
@@ -87,7 +88,7 @@ impl UrdfModel {
     pub fn chain(&self, base: Option<&str>, tip: Option<&str>) -> Result<Chain, UrdfError> {
         let base = match base {
             Some(name) => self.find_link(name, "base")?,
-            None => self.root,
+            None => self.default_base,
         };
         let tip = match tip {
             Some(name) => self.find_link(name, "tip")?,
@@ -181,14 +182,10 @@ impl Chain {
                 }
                 JointType::Revolute | JointType::Continuous => JointKind::Revolute,
                 JointType::Prismatic => JointKind::Prismatic,
-                JointType::Floating | JointType::Planar => {
+                JointType::Floating | JointType::Planar | JointType::Ball | JointType::Free => {
                     return Err(UrdfError::JointTypeInChain {
                         joint: joint.name.clone(),
-                        found: if joint_type == JointType::Floating {
-                            "floating"
-                        } else {
-                            "planar"
-                        },
+                        found: joint_type.label(),
                         base: base_name,
                         tip: tip_name,
                         line,

@@ -27,6 +27,7 @@ mod check;
 mod error;
 pub mod inertia;
 mod mimic;
+pub mod mjcf;
 mod model;
 mod read;
 mod robot;

@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use crate::robot::{Joint, JointType};
+use crate::robot::Joint;
 use crate::UrdfError;
 
 /// Longest mimic cycle whose joints are all named in its error.
@@ -31,11 +31,7 @@ pub(crate) fn check_mimics(joints: &mut [Joint], index: &HashMap<String, usize>)
                 Some(kind) if !kind.is_moving() => Some(UrdfError::MimicOfFixed {
                     joint: j.name.clone(),
                     driver: m.joint.clone(),
-                    kind: match kind {
-                        JointType::Floating => "floating",
-                        JointType::Planar => "planar",
-                        _ => "fixed",
-                    },
+                    kind: kind.label(),
                     line: j.mimic_line.or(Some(j.line)),
                 }),
                 _ => {

@@ -36,6 +36,11 @@ pub struct UrdfModel {
     /// Per link: joints whose parent it is.
     pub(crate) child_joints: Vec<Vec<usize>>,
     pub(crate) root: usize,
+    /// The base of a chain when none is given: the root link, or (MJCF) the body of the one
+    /// free joint at the root.
+    pub(crate) default_base: usize,
+    /// The format the model was read from (`URDF`, `MJCF`).
+    pub(crate) format_name: &'static str,
 }
 
 impl UrdfModel {
@@ -90,6 +95,12 @@ impl UrdfModel {
                 Err(UrdfError::NotUtf8 { offset, line })
             }
         }
+    }
+
+    /// Validates a robot read from another format (MJCF) as [`UrdfModel::parse`] validates a
+    /// URDF's.
+    pub(crate) fn from_robot(robot: Robot) -> Result<UrdfModel, UrdfError> {
+        Self::validate(robot)
     }
 
     fn validate(mut robot: Robot) -> Result<UrdfModel, UrdfError> {
@@ -211,7 +222,27 @@ impl UrdfModel {
             parent_joint,
             child_joints,
             root,
+            default_base: root,
+            format_name: "URDF",
         })
+    }
+
+    /// Makes `link` the default base of chains (an MJCF body floating on a free joint: the chain
+    /// starts below it) when a revolute, continuous or prismatic joint lies below it.
+    pub(crate) fn set_default_base_if_moving_below(&mut self, link: &str) {
+        let Some(l) = self.link_index_of(link) else {
+            return;
+        };
+        let moving_below = self.robot.joints.iter().enumerate().any(|(k, j)| {
+            j.kind.is_some_and(crate::robot::JointType::is_moving)
+                && self
+                    .joint_child
+                    .get(k)
+                    .is_some_and(|&c| self.is_below(c, l))
+        });
+        if moving_below {
+            self.default_base = l;
+        }
     }
 
     /// Warnings of the reading: faults of visuals, collisions, materials and inertials (each
@@ -254,6 +285,11 @@ impl UrdfModel {
             });
         }
         out
+    }
+
+    /// The format the model was read from: `URDF`, or `MJCF` for [`crate::mjcf::read`].
+    pub fn format_name(&self) -> &'static str {
+        self.format_name
     }
 
     /// The `name` attribute of `<robot>` (empty when absent).

@@ -34,7 +34,7 @@ impl fmt::Display for Warning {
     }
 }
 
-/// A joint type of URDF.
+/// A joint type of URDF (and MJCF's `ball` and `free`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum JointType {
     Revolute,
@@ -43,12 +43,30 @@ pub(crate) enum JointType {
     Fixed,
     Floating,
     Planar,
+    /// MJCF `ball`: three rotations about one point.
+    Ball,
+    /// MJCF `free`: a floating body.
+    Free,
 }
 
 impl JointType {
     /// Revolute, continuous or prismatic: one axis line.
     pub fn is_moving(self) -> bool {
         matches!(self, Self::Revolute | Self::Continuous | Self::Prismatic)
+    }
+
+    /// The name of a joint type without one axis line, for messages.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Floating => "floating",
+            Self::Planar => "planar",
+            Self::Ball => "ball",
+            Self::Free => "free",
+            Self::Fixed => "fixed",
+            Self::Revolute => "revolute",
+            Self::Continuous => "continuous",
+            Self::Prismatic => "prismatic",
+        }
     }
 }
 

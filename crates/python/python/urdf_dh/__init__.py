@@ -132,6 +132,25 @@ class Table:
         """The same sheet as a dict (the keys of ``urdf-dh extract --format json``)."""
         return dict(json.loads(self._native.sheet_json()))
 
+    def to_poe(self) -> Dict[str, Any]:
+        """The table's product-of-exponentials form (Lynch & Park, *Modern Robotics*, eq. 4.14,
+        the space form): ``fk(q) = expm([S_1] q_1) @ ... @ expm([S_n] q_n) @ M``.
+
+        Returns a dict with ``screws`` (n x 6 array: each row ``(omega, v)``, the joint's unit
+        screw axis in the base link frame at zero; ``v = -omega x p`` for a point ``p`` of a
+        revolute axis, ``omega = 0`` and ``v`` the unit direction for a prismatic one), ``M``
+        (4x4, the tip link at zero), ``names`` and ``types`` (one per row). The same form as
+        ``urdf-dh extract --format poe``, here from the table itself, at full precision.
+        """
+        doc = json.loads(self._native.poe_json())
+        joints = doc["joints"]
+        return {
+            "screws": np.array([j["screw"] for j in joints], dtype=float).reshape(-1, 6),
+            "M": np.array(doc["home"], dtype=float),
+            "names": [j["name"] for j in joints],
+            "types": [j["type"] for j in joints],
+        }
+
     def to_roboticstoolbox(self) -> Any:
         """The table as a Robotics Toolbox ``DHRobot`` (needs ``roboticstoolbox-python``).
 
@@ -185,8 +204,9 @@ def extract(
     """Extracts the DH table of a URDF chain, as ``urdf-dh extract`` does.
 
     Args:
-        path_or_xml: a path (str or os.PathLike; ``.xacro`` needs the ``xacro`` command), or URDF
-            XML text (a string starting with ``<`` after whitespace).
+        path_or_xml: a path (str or os.PathLike; ``.xacro`` needs the ``xacro`` command; an MJCF
+            file, recognised by its ``<mujoco>`` root, with its ``<include>`` files beside it), or
+            URDF or MJCF XML text (a string starting with ``<`` after whitespace).
         base: base link (default: the root link).
         tip: tip link (default: the only leaf).
         convention: ``"standard"`` or ``"modified"``.
