@@ -20,6 +20,7 @@ mod outputs;
 mod pose6;
 mod predict;
 mod roundtrip;
+mod sdf;
 mod sessions;
 mod tree;
 mod writers;

@@ -31,6 +31,7 @@ mod model;
 mod read;
 mod robot;
 mod scan;
+mod sdf;
 mod text;
 mod tip;
 

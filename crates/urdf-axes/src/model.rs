@@ -61,6 +61,9 @@ impl UrdfModel {
             });
         }
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        if crate::sdf::is_sdf(text) {
+            return Self::validate(crate::sdf::read(text)?);
+        }
         let doc = scan::scan(text).map_err(|e| match e {
             ScanError::Entity { line } => UrdfError::EntityDeclaration { line },
             ScanError::Malformed { message, line } => UrdfError::Parse { message, line },
