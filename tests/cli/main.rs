@@ -23,5 +23,6 @@ mod roundtrip;
 mod sdf;
 mod sessions;
 mod tree;
+mod ur_deltas;
 mod writers;
 mod written;
