@@ -154,7 +154,7 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
             inertial,
         });
     }
-    let mut held = std::collections::HashSet::new();
+    let mut ends = Vec::with_capacity(graph.joints.len());
     let mut world_used = false;
     for j in &graph.joints {
         let parent = if j.parent == "world" {
@@ -180,7 +180,13 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
                 ),
                 line: Some(j.child_line),
             })?;
-        if !held.insert(child.clone()) {
+        ends.push((parent, child));
+    }
+    let link_order: Vec<&str> = graph.links.iter().map(|l| l.name.as_str()).collect();
+    let keep = tree_joints(&ends, &link_order);
+    let mut held = std::collections::HashSet::new();
+    for ((j, (parent, child)), keep) in graph.joints.iter().zip(ends).zip(keep) {
+        if !keep {
             robot.warn(
                 format!("joint '{}'", j.name),
                 line_of(j.node),
@@ -188,6 +194,7 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
             );
             continue;
         }
+        held.insert(child.clone());
         let (x_p, x_c, x_j) = (
             world_pose(&parent),
             world_pose(&child),
@@ -273,6 +280,53 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
         }
     }
     Ok(robot)
+}
+
+/// Which joints make the tree (per joint, in order): from each link that is no joint's child
+/// (`world` first, then in document order, the canonical link first), the whole tree below it
+/// breadth first along parent to child; a joint whose child already has a parent closes a loop
+/// (PR2's gripper and screw linkages) and is left out. Joints no such link reaches are then
+/// taken in document order.
+fn tree_joints(ends: &[(String, String)], links: &[&str]) -> Vec<bool> {
+    use std::collections::{HashMap, HashSet, VecDeque};
+    let children: HashSet<&str> = ends.iter().map(|(_, c)| c.as_str()).collect();
+    let mut by_parent: HashMap<&str, Vec<usize>> = HashMap::new();
+    for (k, (p, _)) in ends.iter().enumerate() {
+        by_parent.entry(p.as_str()).or_default().push(k);
+    }
+    let mut keep = vec![false; ends.len()];
+    let mut reached = vec![false; ends.len()];
+    let mut held: HashSet<&str> = HashSet::new();
+    let roots = std::iter::once("world")
+        .chain(links.iter().copied())
+        .filter(|l| !children.contains(l));
+    for root in roots {
+        let mut queue = VecDeque::from([root]);
+        while let Some(link) = queue.pop_front() {
+            for &k in by_parent.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+                let Some((_, child)) = ends.get(k) else {
+                    continue;
+                };
+                if let Some(r) = reached.get_mut(k) {
+                    *r = true;
+                }
+                if held.insert(child.as_str()) {
+                    if let Some(slot) = keep.get_mut(k) {
+                        *slot = true;
+                    }
+                    queue.push_back(child.as_str());
+                }
+            }
+        }
+    }
+    for (k, (_, child)) in ends.iter().enumerate() {
+        if !reached.get(k).copied().unwrap_or(true) && held.insert(child.as_str()) {
+            if let Some(slot) = keep.get_mut(k) {
+                *slot = true;
+            }
+        }
+    }
+    keep
 }
 
 fn origin_of(p: &Isometry3<f64>) -> Origin {

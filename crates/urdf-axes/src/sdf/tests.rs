@@ -351,3 +351,20 @@ fn the_root_element_tells_the_format() {
     assert_eq!(root_element_name("<!-- unclosed"), None);
     assert_eq!(root_element_name(""), None);
 }
+
+/// A loop's closing joint is found from the root, whatever the document order: written first,
+/// the loop joint `c -> b` still leaves `a -> b` as b's parent.
+#[test]
+fn the_tree_is_grown_from_the_root_so_a_loop_written_first_is_still_cut() {
+    let body = "<link name='a'/><link name='b'><pose>1 0 0 0 0 0</pose></link><link name='c'><pose>2 0 0 0 0 0</pose></link>
+<joint name='loop' type='revolute'><parent>c</parent><child>b</child><axis><xyz>0 0 1</xyz></axis></joint>
+<joint name='hinge' type='continuous'><parent>a</parent><child>b</child><axis><xyz>0 0 1</xyz></axis></joint>
+<joint name='elbow' type='continuous'><parent>b</parent><child>c</child><axis><xyz>0 0 1</xyz></axis></joint>\n";
+    let m = UrdfModel::parse(&sdf("1.7", body)).expect("sdf");
+    let chain = m.chain(Some("a"), Some("c")).expect("chain");
+    assert_eq!(chain.joints(), ["hinge", "elbow"]);
+    assert!(m
+        .warnings()
+        .iter()
+        .any(|w| w.element == "joint 'loop'" && w.line == Some(5)));
+}
