@@ -39,7 +39,8 @@ pub struct UrdfModel {
 }
 
 impl UrdfModel {
-    /// Parses and validates a whole URDF document.
+    /// Parses and validates a whole URDF document, or an SDFormat one (root element `<sdf>`,
+    /// converted into the same model: [`UrdfError::Sdf`], [`UrdfError::SdfJointType`]).
     ///
     /// A leading byte-order mark is ignored. Documents declaring entities (`<!ENTITY`) are
     /// refused before any XML parsing, so an entity-expansion bomb costs one linear scan.
