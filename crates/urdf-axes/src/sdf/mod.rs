@@ -138,6 +138,16 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
             )
         })?;
     robot.name = top.attribute("name").unwrap_or("").to_owned();
+    if graph.links.is_empty() {
+        return Err(sdf_error(
+            top,
+            format!(
+                "<{}> '{}': expected at least one <link>, found none",
+                top.tag_name().name(),
+                robot.name
+            ),
+        ));
+    }
     let poses = graph.world_poses()?;
     let world_pose = |name: &str| -> Isometry3<f64> {
         graph

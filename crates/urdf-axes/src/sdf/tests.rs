@@ -320,6 +320,12 @@ fn unresolvable_frames_are_errors_naming_the_line() {
         UrdfModel::parse("<!DOCTYPE sdf [<!ENTITY a 'b'>]><sdf version='1.7'/>"),
         Err(UrdfError::EntityDeclaration { .. })
     ));
+    let empty =
+        UrdfModel::parse("<sdf version='1.6'>\n<model name='arm'/></sdf>").expect_err("no link");
+    assert_eq!(
+        empty.to_string(),
+        "sdformat error (line 2): <model> 'arm': expected at least one <link>, found none"
+    );
 }
 
 /// SDFormat before 1.7 gave links and joints names of their own (gazebo_models' UR10 has a link
