@@ -43,6 +43,27 @@ fn every_manifest_sdf_chain_extracts_and_verifies() {
         chains += 1;
     }
     assert_eq!(chains, 9, "expected the 9 SDF chains of the manifest");
+    // The same chains through `batch`, one process: 9 tables proved.
+    let list: String = manifest["models"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["format"] == "sdf")
+        .map(|m| {
+            format!(
+                "{} {} {}\n",
+                formats.join(m["file"].as_str().unwrap()).display(),
+                m["base"].as_str().unwrap(),
+                m["tip"].as_str().unwrap()
+            )
+        })
+        .collect();
+    let out = run(&["batch", "-"], Some(list.as_bytes()));
+    assert!(
+        out.starts_with("exit: 0")
+            && out.contains("9 tables: 9 proved, 0 failed their proof, 0 refused"),
+        "{out}"
+    );
 }
 
 /// A deterministic joint vector in [-pi, pi) per sample.
