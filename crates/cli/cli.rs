@@ -51,7 +51,7 @@ enum Command {
     Check(CheckCli),
     /// Convert a sheet to the other DH convention (or other units), exactly.
     #[command(
-        after_help = "EXAMPLES:\n  urdf-dh convert vendor-dh.yaml --to modified\n  urdf-dh convert vendor-dh.yaml --to standard --length-unit mm --angle-unit deg --format markdown"
+        after_help = "EXAMPLES:\n  urdf-dh convert vendor-dh.yaml --to modified\n  urdf-dh convert vendor-dh.yaml --to standard --length-unit mm --angle-unit deg --format markdown\n  urdf-dh convert ur5e --deltas calibration.conf > calibrated.yaml"
     )]
     Convert(ConvertCli),
     /// Write a URDF whose kinematics equal a DH sheet.
@@ -106,11 +106,16 @@ enum Command {
 
 #[derive(Debug, Args)]
 struct ConvertCli {
-    /// The DH sheet (YAML or JSON), or - for standard input.
+    /// The DH sheet (YAML or JSON), - for standard input, or the name of a shipped nominal table
+    /// (ur3, ur5, ur10, ur3e, ur5e, ur10e, ur16e, ur20, ur30).
     sheet: String,
-    /// Target convention.
-    #[arg(long, value_enum)]
-    to: ConventionDoc,
+    /// Target convention [default with --deltas: standard].
+    #[arg(long, value_enum, required_unless_present = "deltas")]
+    to: Option<ConventionDoc>,
+    /// A UR controller's calibration.conf: write the sheet calibrated by its [mounting] deltas
+    /// (standard DH delta_theta, delta_a, delta_d, delta_alpha).
+    #[arg(long, value_name = "CALIBRATION.CONF")]
+    deltas: Option<String>,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Yaml)]
     format: Format,
@@ -407,7 +412,8 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
         Command::Convert(a) => convert(
             &ConvertArgs {
                 sheet: a.sheet,
-                to: a.to.into(),
+                to: a.to.map_or(dh_core::Convention::Standard, Into::into),
+                deltas: a.deltas,
                 format: a.format,
                 length_unit: a.length_unit,
                 angle_unit: a.angle_unit,

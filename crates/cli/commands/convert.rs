@@ -12,12 +12,15 @@ use crate::readback::{failure_line, prove, Isometry3Pair, Source};
 use crate::render::{render_sheet, Format};
 use crate::sheet::{Sheet, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
+use dh_sheet::ur;
 
 /// Everything `convert` needs.
 #[derive(Clone, Debug)]
 pub struct ConvertArgs {
-    /// Sheet path or `-`.
+    /// Sheet path, `-`, or the name of a shipped nominal table ([`dh_sheet::ur::nominal`]).
     pub sheet: String,
+    /// A UR controller's `calibration.conf`, whose deltas calibrate the sheet.
+    pub deltas: Option<String>,
     /// Target convention.
     pub to: Convention,
     /// Output format.
@@ -40,11 +43,28 @@ pub struct ConvertArgs {
 /// # Errors
 /// Unreadable or invalid sheet.
 pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    let name = display_name(&args.sheet);
-    let sheet = Sheet::parse(&read_text(&args.sheet)?, &name)?;
+    let (name, text) = sheet_text(&args.sheet)?;
+    let mut sheet = Sheet::parse(&text, &name)?;
     for w in &sheet.warnings {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
+    // With deltas, the source the written table is proved against is the nominal numbers plus
+    // the deltas, composed directly (`ur::calibrated_fk`), not the calibrated table itself.
+    let calibration = match &args.deltas {
+        None => None,
+        Some(path) => {
+            let conf_name = display_name(path);
+            let conf = ur::CalibrationConf::parse(&read_text(path)?, &conf_name)?;
+            let nominal = sheet.table.clone();
+            sheet.table = ur::calibrated(&nominal, &conf.deltas)
+                .map_err(|e| anyhow::anyhow!("{name} with {conf_name}: {e:#}"))?;
+            sheet.source = Some(format!(
+                "{} + the factory calibration deltas of {conf_name} ([mounting] delta_theta, delta_a, delta_d, delta_alpha)",
+                sheet.source.as_deref().unwrap_or(name.as_str())
+            ));
+            Some((nominal, conf.deltas, conf_name))
+        }
+    };
     let table = sheet.table.to_convention(args.to);
     let mut doc = SheetDoc::from_table(
         &table,
@@ -80,6 +100,10 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         position: 16.0 * n * f64::EPSILON * sheet.table.size(),
         orientation: 16.0 * n * f64::EPSILON,
     };
+    let against = match &calibration {
+        None => "the input sheet".to_owned(),
+        Some((_, _, conf)) => format!("{name} + the deltas of {conf}"),
+    };
     let (text, passed) = prove(
         &mut doc,
         args.format,
@@ -87,8 +111,11 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         Source {
             table: &sheet.table,
             bound,
-            oracle: |q: &[f64]| source.fk(q).unwrap_or_else(|_| Isometry3::identity()),
-            against: Some("the input sheet".into()),
+            oracle: |q: &[f64]| match &calibration {
+                Some((nominal, deltas, _)) => ur::calibrated_fk(nominal, deltas, q),
+                None => source.fk(q).unwrap_or_else(|_| Isometry3::identity()),
+            },
+            against: Some(against),
             samples: args.samples,
             seed: args.seed,
         },
@@ -103,4 +130,23 @@ pub fn convert(args: &ConvertArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         failure_line("the converted table", &name, doc.verification.as_ref())
     )?;
     Ok(Outcome::Differs)
+}
+
+/// The sheet's display name and text: the file (or `-`), else a shipped nominal table of that
+/// name (`ur5e` reads as `ur5e.yaml`).
+///
+/// # Errors
+/// No such file and no such nominal table (the hint lists the names); an unreadable file.
+fn sheet_text(path: &str) -> Result<(String, String)> {
+    if path != "-" && !std::path::Path::new(path).exists() {
+        if let Some(n) = ur::nominal(path) {
+            return Ok((format!("{}.yaml", n.name), n.text.to_owned()));
+        }
+        let names: Vec<&str> = ur::NOMINAL.iter().map(|n| n.name).collect();
+        return Err(crate::error::hinted(
+            format!("{path}: cannot read the file: no such file, and no shipped nominal table of that name"),
+            format!("the shipped nominal tables: {}", names.join(", ")),
+        ));
+    }
+    Ok((display_name(path), read_text(path)?))
 }

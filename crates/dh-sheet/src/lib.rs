@@ -16,6 +16,7 @@
 //! | [`extract`] | a URDF chain's DH table as a sheet with the extraction's facts, and its proof ([`prove_extracted`](extract::prove_extracted)) |
 //! | [`check`] | [`compare`]: a URDF chain against a sheet, as a [`CheckReport`] |
 //! | [`ranges`] | the ranges of the numeric options (tolerances, sigmas, counts, levels), one parser each |
+//! | [`ur`] | a Universal Robots controller's factory calibration (`calibration.conf` deltas) on the UR family's shipped nominal tables |
 //! | [`urdf_writer`] | a DH table written as a URDF with the same kinematics, and its proof (read back and extracted again) |
 //! | [`urdf_edit`] | a calibrated table written as a minimal edit of the user's own URDF (only the chain's joint origins change) |
 //! | [`written`] | the proof of a calibrated model as written: read back, it predicts every measured point as the fit did |
@@ -80,6 +81,7 @@ pub mod simulation;
 pub mod text;
 pub mod tree_sheet;
 pub mod units;
+pub mod ur;
 pub mod urdf_edit;
 pub mod urdf_writer;
 pub mod written;

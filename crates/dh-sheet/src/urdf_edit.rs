@@ -9,6 +9,9 @@
 //! and each origin is the zero-pose transform from the previous joint frame (through the
 //! unchanged fixed joints between) to the new one; the last fixed joint before the tip takes
 //! the calibrated tool. Then URDF FK equals the calibrated table's at every joint value.
+//! Where `D_i'` lies farther than the arm's size from the nominal joint frame (nearly parallel
+//! axes of a factory calibration), it first slides along its own axis to the foot of the
+//! nominal origin (`D_i' Tz(s)`, which commutes with the joint's motion).
 
 use anyhow::{bail, Context, Result};
 use dh_core::pose::{pose_error, rot_z, trans_z};
@@ -89,6 +92,10 @@ pub fn minimal_edit(
     }
     let (d_nominal, d_calibrated) = (motion_frames(nominal)?, motion_frames(calibrated)?);
     // Nominal URDF joint frames at the zero pose, and the new ones.
+    // A calibrated frame far from the nominal one (the common normal of nearly parallel axes,
+    // metres out: see `urdf_writer`) slides along its own axis to the foot of the nominal joint
+    // origin on it; `Tz(s)` commutes with the joint's motion, so the kinematics stay.
+    let far = crate::urdf_writer::arm_size(nominal);
     let mut t = Isometry3::identity();
     let mut new_frames = Vec::new();
     let mut k = 0;
@@ -96,7 +103,14 @@ pub fn minimal_edit(
         t *= p.origin;
         if p.moving {
             let fixed = d_nominal[k].inverse() * t;
-            new_frames.push(d_calibrated[k] * fixed);
+            let placed = d_calibrated[k] * fixed;
+            let gap = t.translation.vector - placed.translation.vector;
+            let slide = if gap.norm() > far {
+                gap.dot(&(d_calibrated[k].rotation * nalgebra::Vector3::z()))
+            } else {
+                0.0
+            };
+            new_frames.push(d_calibrated[k] * trans_z(slide) * fixed);
             k += 1;
         }
     }

@@ -7,6 +7,16 @@
 //! Hayati-Mirmirani tilt, 0 in plain DH). Joint `i`'s origin is then
 //! `post_(i-1) · pre_i` (the first one `base · pre_1`), its axis `0 0 1`, and a fixed joint
 //! `post_n · tool` carries the tip link. Links sit on the joint axes, as vendor URDFs place them.
+//!
+//! A calibrated arm's parallel axes (a UR's joints 2, 3, 4) are milliradians off parallel, so
+//! their common normals, where the DH frames sit, lie metres away along them (a UR3's factory
+//! deltas: d of -6.29 m and +8.57 m). A link frame may slide along its own joint axis without
+//! changing the kinematics (`Tz(s)` commutes with the joint's `Rz(q)` or `Tz(q)`): joint `i`'s
+//! origin becomes `Tz(-s_(i-1)) · origin_i · Tz(s_i)` and the tip's `Tz(-s_n) · post_n · tool`.
+//! [`joint_origins`] slides a joint's frame to the foot of the previous joint's origin on its
+//! axis when its axis is within [`PARALLEL_RUN_ANGLE`] of the previous one and its DH origin
+//! lies farther from that origin than the arm's size ([`arm_size`]): the written URDF's joint
+//! origins stay on the arm, and its proof (read back, extracted) is the same.
 
 use std::fmt::Write as _;
 
@@ -14,6 +24,109 @@ use anyhow::Result;
 use dh_core::pose::{rot_x, rot_y, rot_z, to_xyz_rpy, trans_x, trans_z};
 use dh_core::{Convention, DhRow, DhTable, JointKind};
 use nalgebra::Isometry3;
+
+/// Consecutive axes within this angle (radians) form a run of parallel axes whose common normals
+/// may lie far along them: 50 mrad, four times the largest calibration tilt of a UR's parallel
+/// axes seen (12 mrad).
+pub const PARALLEL_RUN_ANGLE: f64 = 0.05;
+
+/// The link frames of the rows at zero (in the base link frame): `L_i = L_(i-1) · origin_i`.
+fn raw_origins(table: &DhTable) -> (Vec<Isometry3<f64>>, Isometry3<f64>) {
+    let mut before = table.base;
+    let mut origins = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let (pre, post) = split(row, table.convention);
+        origins.push(before * pre);
+        before = post;
+    }
+    (origins, before * table.tool)
+}
+
+/// For each row: whether its axis is within [`PARALLEL_RUN_ANGLE`] of the previous row's.
+fn parallel_to_previous(frames: &[Isometry3<f64>]) -> Vec<bool> {
+    let mut out = vec![false; frames.len()];
+    for (k, pair) in frames.windows(2).enumerate() {
+        if let ([a, b], Some(slot)) = (pair, out.get_mut(k + 1)) {
+            let angle =
+                (a.rotation * nalgebra::Vector3::z()).angle(&(b.rotation * nalgebra::Vector3::z()));
+            *slot = angle < PARALLEL_RUN_ANGLE;
+        }
+    }
+    out
+}
+
+/// The arm's size for placing link frames (metres, at least 1 mm): the sum of `|a|`, of `|d|`
+/// outside runs of parallel axes, of `|sum of d|` over each run (only the sum of a run's `d`
+/// is defined by its axes), and the base and tool offsets.
+pub fn arm_size(table: &DhTable) -> f64 {
+    let (origins, _) = raw_origins(table);
+    let mut frames = Vec::with_capacity(origins.len());
+    let mut pose = Isometry3::identity();
+    for o in &origins {
+        pose *= o;
+        frames.push(pose);
+    }
+    let parallel = parallel_to_previous(&frames);
+    let in_run = |k: usize| {
+        parallel.get(k).copied().unwrap_or(false) || parallel.get(k + 1).copied().unwrap_or(false)
+    };
+    let mut size = table.base.translation.vector.norm() + table.tool.translation.vector.norm();
+    let mut run_sum: Option<f64> = None;
+    for (k, row) in table.rows.iter().enumerate() {
+        size += row.a.abs();
+        let continues = parallel.get(k).copied().unwrap_or(false);
+        if !continues {
+            if let Some(sum) = run_sum.take() {
+                size += sum.abs();
+            }
+        }
+        if in_run(k) {
+            run_sum = Some(run_sum.unwrap_or(0.0) + row.d);
+        } else {
+            size += row.d.abs();
+        }
+    }
+    size += run_sum.map_or(0.0, f64::abs);
+    size.max(1e-3)
+}
+
+/// The origins of the rows' joints (each in its parent link's frame) and of the tip's fixed
+/// joint, link frames slid along their axes onto the arm (see the module's documentation).
+pub fn joint_origins(table: &DhTable) -> (Vec<Isometry3<f64>>, Isometry3<f64>) {
+    let (origins, tip) = raw_origins(table);
+    let size = arm_size(table);
+    let mut frames = Vec::with_capacity(origins.len());
+    let mut pose = Isometry3::identity();
+    for o in &origins {
+        pose *= o;
+        frames.push(pose);
+    }
+    let parallel = parallel_to_previous(&frames);
+    // Slides s_k of each link frame, and its placed origin (base link frame).
+    let mut slides = vec![0.0; origins.len()];
+    let mut placed_prev: Option<nalgebra::Vector3<f64>> = None;
+    for (k, frame) in frames.iter().enumerate() {
+        let p = frame.translation.vector;
+        let z = frame.rotation * nalgebra::Vector3::z();
+        let mut s = 0.0;
+        if let (Some(prev), true) = (placed_prev, parallel.get(k).copied().unwrap_or(false)) {
+            if (p - prev).norm() > size {
+                s = -(p - prev).dot(&z);
+            }
+        }
+        if let Some(slot) = slides.get_mut(k) {
+            *slot = s;
+        }
+        placed_prev = Some(p + z * s);
+    }
+    let mut out = Vec::with_capacity(origins.len());
+    let mut prev_slide = 0.0;
+    for (o, &s) in origins.iter().zip(&slides) {
+        out.push(trans_z(-prev_slide) * o * trans_z(s));
+        prev_slide = s;
+    }
+    (out, trans_z(-prev_slide) * tip)
+}
 
 fn split(row: &DhRow, convention: Convention) -> (Isometry3<f64>, Isometry3<f64>) {
     match convention {
@@ -84,8 +197,8 @@ pub fn check_urdf(table: &DhTable, robot: &str, base_link: &str, tip_link: &str)
             "at that scale the sheet's own forward kinematics round by more than the 1 mm a written URDF is proved to; check the sheet's length_unit and its base and tool",
         ));
     }
-    let mut before = table.base;
-    for row in &table.rows {
+    let (origins, tip) = joint_origins(table);
+    for (row, joint_origin) in table.rows.iter().zip(&origins) {
         if row.kind == JointKind::Prismatic && row.limits.is_none() {
             return Err(crate::error::hinted(
                 format!(
@@ -95,8 +208,7 @@ pub fn check_urdf(table: &DhTable, robot: &str, base_link: &str, tip_link: &str)
                 "a URDF prismatic joint needs a <limit>: give the row lower and upper in the sheet",
             ));
         }
-        let (pre, post) = split(row, table.convention);
-        let (xyz, _) = to_xyz_rpy(&(before * pre));
+        let (xyz, _) = to_xyz_rpy(joint_origin);
         let limits = row.limits.map_or([0.0; 2], |l| [l.lower, l.upper]);
         let mimic = row
             .mimic
@@ -113,9 +225,8 @@ pub fn check_urdf(table: &DhTable, robot: &str, base_link: &str, tip_link: &str)
                 escape(&row.name)
             );
         }
-        before = post;
     }
-    let (xyz, _) = to_xyz_rpy(&(before * table.tool));
+    let (xyz, _) = to_xyz_rpy(&tip);
     if let Some(v) = xyz
         .iter()
         .find(|v| v.abs() > URDF_MAX_MAGNITUDE || !v.is_finite())
@@ -174,9 +285,8 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
     let _ = writeln!(s, "<robot name=\"{}\">", xml(name));
     let _ = writeln!(s, "  <link name=\"{}\"/>", xml(base_link));
     let mut parent = base_link.to_string();
-    let mut before = table.base;
-    for (i, row) in table.rows.iter().enumerate() {
-        let (pre, post) = split(row, table.convention);
+    let (origins, tip) = joint_origins(table);
+    for (row, joint_origin) in table.rows.iter().zip(&origins) {
         let child = format!("{}_link", row.name);
         let kind = match (row.kind, row.limits) {
             (JointKind::Prismatic, _) => "prismatic",
@@ -187,7 +297,7 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
         let _ = writeln!(s, "  <joint name=\"{}\" type=\"{kind}\">", xml(&row.name));
         let _ = writeln!(s, "    <parent link=\"{}\"/>", xml(&parent));
         let _ = writeln!(s, "    <child link=\"{}\"/>", xml(&child));
-        let _ = writeln!(s, "    {}", origin(&(before * pre)));
+        let _ = writeln!(s, "    {}", origin(joint_origin));
         let _ = writeln!(s, "    <axis xyz=\"0 0 1\"/>");
         if let Some(l) = row.limits {
             let _ = writeln!(
@@ -213,8 +323,6 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
         }
         let _ = writeln!(s, "  </joint>");
         parent = child;
-        before = post;
-        let _ = i;
     }
     let _ = writeln!(s, "  <link name=\"{}\"/>", xml(tip_link));
     let _ = writeln!(
@@ -224,7 +332,7 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
     );
     let _ = writeln!(s, "    <parent link=\"{}\"/>", xml(&parent));
     let _ = writeln!(s, "    <child link=\"{}\"/>", xml(tip_link));
-    let _ = writeln!(s, "    {}", origin(&(before * table.tool)));
+    let _ = writeln!(s, "    {}", origin(&tip));
     let _ = writeln!(s, "  </joint>");
     let _ = writeln!(s, "</robot>");
     s

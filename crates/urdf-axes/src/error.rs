@@ -253,6 +253,31 @@ pub enum UrdfError {
         /// Line of the joint.
         line: Option<usize>,
     },
+    /// An SDFormat document whose frames, poses or joints cannot be resolved (an unknown
+    /// `relative_to`, a cycle of frames, a malformed `<pose>`), or that is not `<sdf>` with a
+    /// `<model>` or `<world>`.
+    #[error("sdformat error{}: {message}", at(.line))]
+    Sdf {
+        /// What was expected and what was found, naming the element.
+        message: String,
+        /// 1-based line, when it could be found.
+        line: Option<usize>,
+    },
+    /// An SDFormat joint of a type with no single axis (`ball`, `universal`, `revolute2`,
+    /// `screw`, `gearbox`): refused on a chain, a warning elsewhere.
+    #[error(
+        "joint '{joint}'{}: expected an sdformat joint of type revolute, continuous, prismatic \
+         or fixed, found '{found}'",
+        at(.line)
+    )]
+    SdfJointType {
+        /// The joint (scoped, `model::joint`, when the file has several models).
+        joint: String,
+        /// The type as written.
+        found: String,
+        /// Line of the joint.
+        line: Option<usize>,
+    },
     /// A `<mimic>` names a joint the URDF does not define.
     #[error(
         "joint '{joint}'{}: mimic: expected an existing driver joint, found '{driver}', which no <joint> defines",

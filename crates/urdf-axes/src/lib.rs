@@ -12,6 +12,11 @@
 //! cannot change the chain's kinematics, as ROS's urdfdom is (it ignores unknown elements,
 //! takes the first `<material>`, logs a malformed `rgba` and goes on). Inputs beyond
 //! [`MAX_URDF_BYTES`] are refused.
+//!
+//! # SDFormat
+//! A document whose root element is `<sdf>` is read by the SDFormat reader (`sdf` module: poses
+//! and frames by the document's version, 1.4 to 1.11) into the same robot model, so chains,
+//! checks and warnings work on it unchanged; see [`UrdfModel::parse`].
 #![cfg_attr(
     not(test),
     deny(
@@ -32,6 +37,7 @@ mod model;
 mod read;
 mod robot;
 mod scan;
+mod sdf;
 mod text;
 mod tip;
 

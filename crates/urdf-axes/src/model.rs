@@ -44,7 +44,8 @@ pub struct UrdfModel {
 }
 
 impl UrdfModel {
-    /// Parses and validates a whole URDF document.
+    /// Parses and validates a whole URDF document, or an SDFormat one (root element `<sdf>`,
+    /// converted into the same model: [`UrdfError::Sdf`], [`UrdfError::SdfJointType`]).
     ///
     /// A leading byte-order mark is ignored. Documents declaring entities (`<!ENTITY`) are
     /// refused before any XML parsing, so an entity-expansion bomb costs one linear scan.
@@ -66,6 +67,9 @@ impl UrdfModel {
             });
         }
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        if crate::sdf::is_sdf(text) {
+            return Self::validate(crate::sdf::read(text)?);
+        }
         let doc = scan::scan(text).map_err(|e| match e {
             ScanError::Entity { line } => UrdfError::EntityDeclaration { line },
             ScanError::Malformed { message, line } => UrdfError::Parse { message, line },
