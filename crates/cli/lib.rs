@@ -18,6 +18,7 @@ pub mod plot_motion;
 pub mod progress;
 pub mod readback;
 pub mod svg;
+pub mod xacro_flags;
 
 // The sheet formats, their units and writers are the `dh-sheet` library's; the CLI keeps their
 // old paths (`urdf_dh::sheet`, `crate::units`, ...) for its commands and for callers of this

@@ -55,6 +55,8 @@ pub struct Expander<'o> {
     pub calls: Vec<(String, Pos)>,
     /// Bytes of output produced so far (an estimate, for the size guard).
     pub produced: usize,
+    /// The size limit of the document.
+    pub limit: usize,
     pub warnings: Vec<String>,
 }
 
@@ -72,6 +74,10 @@ impl<'o> Expander<'o> {
             macros: vec![HashMap::new()],
             calls: Vec::new(),
             produced: 0,
+            limit: opts
+                .max_bytes
+                .unwrap_or(MAX_OUTPUT_BYTES)
+                .min(MAX_OUTPUT_BYTES),
             warnings: Vec::new(),
         }
     }
@@ -84,7 +90,7 @@ impl<'o> Expander<'o> {
         let mut xml = String::from("<?xml version=\"1.0\" ?>\n");
         tree::write(&out, &mut xml);
         xml.push('\n');
-        if xml.len() > MAX_OUTPUT_BYTES {
+        if xml.len() > self.limit {
             return Err(self.too_large(root.pos));
         }
         Ok(Expansion {
@@ -115,21 +121,23 @@ impl<'o> Expander<'o> {
         Ok(root)
     }
 
-    /// `file: line N` of `pos`, with the include chain and the macro being expanded.
-    pub fn location(&self, pos: Pos) -> String {
+    /// `file: line N` of `pos`, and the context after the message: the include chain and the
+    /// macro being expanded.
+    pub fn location(&self, pos: Pos) -> (String, String) {
         let name = |i: usize| {
             self.files
                 .get(i)
                 .map(|f| display(&f.path))
                 .unwrap_or_default()
         };
-        let mut s = name(pos.file);
+        let mut head = name(pos.file);
         if pos.line > 0 {
-            s.push_str(&format!(": line {}", pos.line));
+            head.push_str(&format!(": line {}", pos.line));
         }
+        let mut tail = String::new();
         let mut from = self.files.get(pos.file).and_then(|f| f.included_from);
         while let Some(at) = from {
-            s.push_str(&format!(
+            tail.push_str(&format!(
                 " (included from {}: line {})",
                 name(at.file),
                 at.line
@@ -137,23 +145,25 @@ impl<'o> Expander<'o> {
             from = self.files.get(at.file).and_then(|f| f.included_from);
         }
         if let Some((m, at)) = self.calls.last() {
-            s.push_str(&format!(
+            tail.push_str(&format!(
                 " (in macro '{m}' called at {}: line {})",
                 name(at.file),
                 at.line
             ));
         }
-        s
+        (head, tail)
     }
 
     /// An error at `pos`.
     pub fn invalid(&self, pos: Pos, message: &str) -> XacroError {
-        XacroError::Invalid(format!("{}: {message}", self.location(pos)))
+        let (head, tail) = self.location(pos);
+        XacroError::Invalid(format!("{head}: {message}{tail}"))
     }
 
     /// An expression error at `pos` (unsupported constructs stay distinguishable).
     pub fn fail(&self, pos: Pos, e: ExprError) -> XacroError {
-        let message = format!("{}: {}", self.location(pos), e.message);
+        let (head, tail) = self.location(pos);
+        let message = format!("{head}: {}{tail}", e.message);
         match e.unsupported {
             Some(construct) => XacroError::Unsupported { construct, message },
             None => XacroError::Invalid(message),
@@ -168,7 +178,7 @@ impl<'o> Expander<'o> {
     fn too_large(&self, pos: Pos) -> XacroError {
         self.invalid(
             pos,
-            &format!("the expanded document exceeds {MAX_OUTPUT_BYTES} bytes"),
+            &format!("the expanded document exceeds {} bytes", self.limit),
         )
     }
 
@@ -201,7 +211,7 @@ impl<'o> Expander<'o> {
                 .iter()
                 .map(|(k, v)| k.len() + v.len() + 4)
                 .sum::<usize>();
-        if self.produced > MAX_OUTPUT_BYTES {
+        if self.produced > self.limit {
             return Err(self.too_large(e.pos));
         }
         let mut children = Vec::new();
@@ -229,10 +239,7 @@ impl<'o> Expander<'o> {
                 Node::Element(e) => self.node(e, scope, out, attrs)?,
                 Node::Text(t) => {
                     let t = self.text_at(t, scope, pos)?;
-                    self.produced += t.len();
-                    if self.produced > MAX_OUTPUT_BYTES {
-                        return Err(self.too_large(pos));
-                    }
+                    self.charge(t.len(), pos)?;
                     out.push(Node::Text(t));
                 }
                 Node::Comment(c) => out.push(Node::Comment(c.clone())),
@@ -412,9 +419,9 @@ impl<'o> Expander<'o> {
                     p
                 }
                 None => {
+                    let (head, tail) = self.location(e.pos);
                     self.warnings.push(format!(
-                        "{}: property '{name}': no parent scope at global scope",
-                        self.location(e.pos)
+                        "{head}: property '{name}': no parent scope at global scope{tail}"
                     ));
                     return Ok(());
                 }
@@ -502,6 +509,15 @@ impl<'o> Expander<'o> {
             .and_then(|f| f.path.parent().map(Path::to_path_buf))
             .unwrap_or_default();
         dir.join(p)
+    }
+
+    /// Counts `bytes` of output against the size limit.
+    pub fn charge(&mut self, bytes: usize, pos: Pos) -> Result<(), XacroError> {
+        self.produced = self.produced.saturating_add(bytes);
+        if self.produced > self.limit {
+            return Err(self.too_large(pos));
+        }
+        Ok(())
     }
 
     /// The depth guard of macro calls.

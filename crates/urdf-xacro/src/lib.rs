@@ -52,6 +52,8 @@ pub struct Options {
     /// Package folders for `$(find NAME)`, searched before `ROS_PACKAGE_PATH` and
     /// `AMENT_PREFIX_PATH`.
     pub packages: Vec<(String, PathBuf)>,
+    /// A smaller limit than [`MAX_OUTPUT_BYTES`] on the expanded document, if any.
+    pub max_bytes: Option<usize>,
 }
 
 impl Options {

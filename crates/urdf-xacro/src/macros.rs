@@ -147,6 +147,9 @@ impl Expander<'_> {
             return Err(self.invalid(call.pos, &format!("unknown macro name: xacro:{name}")));
         };
         self.check_depth(call.pos)?;
+        // Every call counts against the size budget, so that calls which write nothing cannot
+        // run without end either.
+        self.charge(name.len() + 16, call.pos)?;
         let inner = self.scopes.len();
         self.scopes.push(Scope {
             parent: Some(scope),

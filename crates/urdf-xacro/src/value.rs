@@ -349,6 +349,19 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        /// Python's float text reads back as the same float, and always looks like a float.
+        #[test]
+        fn float_text_reads_back(bits in proptest::prelude::any::<u64>()) {
+            let f = f64::from_bits(bits);
+            proptest::prop_assume!(f.is_finite());
+            let text = float_repr(f);
+            proptest::prop_assert_eq!(text.parse::<f64>().ok(), Some(f));
+            proptest::prop_assert!(text.contains('.') || text.contains('e'), "{}", text);
+            proptest::prop_assert!(matches!(literal(Value::str(text.as_str())), Value::Float(g) if g == f));
+        }
+    }
+
     #[test]
     fn literals_follow_xacro() {
         assert!(matches!(literal(Value::str("12")), Value::Int(12)));
