@@ -24,3 +24,4 @@ mod sessions;
 mod tree;
 mod writers;
 mod written;
+mod xacro;

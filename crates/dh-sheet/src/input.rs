@@ -153,13 +153,21 @@ pub fn utf8_text(path: &str, mut bytes: Vec<u8>) -> Result<String> {
 /// The file cannot be read; a `.xacro` file that does not expand (the message names the file
 /// and line).
 pub fn read_robot(path: &str) -> Result<Vec<u8>> {
+    read_robot_with(path, &crate::xacro::default_options())
+}
+
+/// [`read_robot`] with the xacro options given (arguments, package folders).
+///
+/// # Errors
+/// As [`read_robot`].
+pub fn read_robot_with(path: &str, xacro: &crate::xacro::XacroOptions) -> Result<Vec<u8>> {
     if !path.ends_with(".xacro") {
         return read_robot_bytes(path);
     }
     if !Path::new(path).is_file() {
         anyhow::bail!("{path}: cannot read the file: no such file");
     }
-    crate::xacro::expand(path)
+    crate::xacro::expand_with(path, xacro)
 }
 
 /// A display name for a path argument (`<stdin>` for `-`), without directories so that outputs

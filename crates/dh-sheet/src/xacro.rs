@@ -84,10 +84,10 @@ pub fn expand_with(path: &str, options: &XacroOptions) -> Result<Vec<u8>> {
             }
             Ok(done.xml.into_bytes())
         }
-        Err(XacroError::Invalid(message)) => Err(hinted(
-            message,
-            "urdf-dh expands xacro itself; pass arguments as --xacro-arg NAME:=VALUE and package folders as --package NAME=DIR",
-        )),
+        Err(XacroError::Invalid(message)) => Err(match hint_for(&message) {
+            Some(hint) => hinted(message, hint),
+            None => anyhow::anyhow!(message),
+        }),
         Err(XacroError::Unsupported { message, .. }) => {
             let bytes = external(path, options, &message)?;
             warn(format!(
@@ -96,6 +96,27 @@ pub fn expand_with(path: &str, options: &XacroOptions) -> Result<Vec<u8>> {
             Ok(bytes)
         }
     }
+}
+
+/// The remedy of an expansion error the user can fix from the command line.
+fn hint_for(message: &str) -> Option<String> {
+    let quoted = |after: &str| {
+        let start = message.find(after)? + after.len();
+        let end = start + message[start..].find('\'')?;
+        Some(message[start..end].to_string())
+    };
+    if let Some(name) = quoted("undefined argument '") {
+        return Some(format!(
+            "give it as --xacro-arg {name}:=VALUE (xacro_args={{'{name}': ...}} in Python)"
+        ));
+    }
+    if message.contains("not found (looked in the given package folders") {
+        let name = quoted("package '").unwrap_or_else(|| "NAME".into());
+        return Some(format!(
+            "give the package's folder as --package {name}=DIR (packages={{'{name}': DIR}} in Python), or put a folder that holds it on ROS_PACKAGE_PATH"
+        ));
+    }
+    None
 }
 
 /// Python's `xacro` on `path`, for a construct the native expansion refused (`why`).

@@ -384,7 +384,7 @@ impl<'o> Expander<'o> {
             }
             return Ok(());
         }
-        let mut value = value.map(|v| Value::str(v));
+        let mut value = value.map(Value::str);
         let mut name = name;
         if let Some(d) = default {
             if self.lookup_at(&name, scope, e.pos)?.is_some()
@@ -523,18 +523,11 @@ impl<'o> Expander<'o> {
     /// The depth guard of macro calls.
     pub fn check_depth(&self, pos: Pos) -> Result<(), XacroError> {
         if self.calls.len() >= MAX_MACRO_DEPTH {
-            let names: Vec<&str> = self
-                .calls
-                .iter()
-                .rev()
-                .take(4)
-                .map(|(n, _)| n.as_str())
-                .collect();
+            let name = self.calls.last().map_or("", |(n, _)| n.as_str());
             return Err(self.invalid(
                 pos,
                 &format!(
-                    "macro calls nested deeper than {MAX_MACRO_DEPTH} (a macro that calls itself without end? innermost: {})",
-                    names.join(" <- ")
+                    "macro calls nested deeper than {MAX_MACRO_DEPTH} (does '{name}' call itself without end?)"
                 ),
             ));
         }

@@ -55,9 +55,7 @@ impl Packages {
             }
         }
         Err(format!(
-            "package '{name}' not found (looked in --package, ROS_PACKAGE_PATH={:?}, AMENT_PREFIX_PATH={:?})",
-            ros.to_string_lossy(),
-            ament.to_string_lossy()
+            "package '{name}' not found (looked in the given package folders, ROS_PACKAGE_PATH and AMENT_PREFIX_PATH)"
         ))
     }
 }

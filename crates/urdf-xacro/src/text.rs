@@ -144,18 +144,17 @@ impl Expander<'_> {
     }
 
     fn arg(&self, name: &str) -> Result<String, ExprError> {
-        self.args.get(name).cloned().ok_or_else(|| {
-            ExprError::new(format!(
-                "undefined argument '{name}' (pass it as --xacro-arg {name}:=VALUE)"
-            ))
-        })
+        self.args
+            .get(name)
+            .cloned()
+            .ok_or_else(|| ExprError::new(format!("undefined argument '{name}'")))
     }
 
     fn find(&mut self, pkg: &str) -> Result<String, ExprError> {
         self.packages
             .find(pkg)
             .map(|p| p.to_string_lossy().into_owned())
-            .map_err(|m| ExprError::new(format!("{m}; give its folder with --package {pkg}=DIR")))
+            .map_err(ExprError::new)
     }
 
     fn dirname(&self) -> Result<String, ExprError> {

@@ -173,10 +173,7 @@ fn args_eval_env_and_dirname() {
     assert!(xml.contains(&format!(r#"d="{}""#, here.display())), "{xml}");
     assert!(xml.contains(r#"c="${x}""#), "{xml}");
     let e = err(r#"<a v="$(arg nope)"/>"#);
-    assert!(
-        e.contains("undefined argument 'nope'") && e.contains("--xacro-arg nope:=VALUE"),
-        "{e}"
-    );
+    assert!(e.contains("undefined argument 'nope'"), "{e}");
     let e = err(r#"<a v="$(env URDF_XACRO_UNSET_VAR)"/>"#);
     assert!(e.contains("URDF_XACRO_UNSET_VAR is not set"), "{e}");
 }
@@ -225,7 +222,6 @@ fn includes_find_packages_and_load_yaml() {
         e.starts_with("top.xacro: line 1: package 'arm_pkg' not found"),
         "{e}"
     );
-    assert!(e.contains("--package arm_pkg=DIR"), "{e}");
 }
 
 #[test]

@@ -56,6 +56,8 @@ def extract(
     seed: int,
     linear: float,
     angular: float,
+    xacro_args: Optional[List[Tuple[str, str]]] = ...,
+    packages: Optional[List[Tuple[str, str]]] = ...,
 ) -> NativeTable: ...
 def check(
     source: str,
@@ -65,6 +67,8 @@ def check(
     tip: Optional[str],
     linear: float = ...,
     angular: float = ...,
+    xacro_args: Optional[List[Tuple[str, str]]] = ...,
+    packages: Optional[List[Tuple[str, str]]] = ...,
 ) -> str: ...
 def run(argv: List[str]) -> Tuple[str, str, bool]: ...
 def calibrate(

@@ -257,13 +257,7 @@ pub fn binary(op: &str, a: Value, b: Value) -> Result<Value, ExprError> {
         _ => {}
     }
     let (x, y) = (num(&a, op)?, num(&b, op)?);
-    let zero = || {
-        ExprError::new(format!(
-            "division by zero in '{}' {op} {}",
-            a.repr(),
-            b.repr()
-        ))
-    };
+    let zero = || ExprError::new(format!("division by zero: {} {op} {}", a.repr(), b.repr()));
     if let (Num::Int(i), Num::Int(j)) = (x, y) {
         return Ok(match op {
             "+" => Value::Int(i.checked_add(j).ok_or_else(|| overflow(op))?),

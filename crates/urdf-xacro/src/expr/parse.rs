@@ -71,6 +71,9 @@ fn show(t: &Token) -> String {
     }
 }
 
+/// A call's positional and keyword arguments.
+type Arguments = (Vec<Expr>, Vec<(String, Expr)>);
+
 struct Parser<'a> {
     tokens: &'a [Token],
     at: usize,
@@ -280,7 +283,7 @@ impl Parser<'_> {
         }
     }
 
-    fn arguments(&mut self) -> Result<(Vec<Expr>, Vec<(String, Expr)>), ExprError> {
+    fn arguments(&mut self) -> Result<Arguments, ExprError> {
         let mut args = Vec::new();
         let mut kwargs = Vec::new();
         while !self.eat_op(")") {
