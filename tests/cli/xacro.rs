@@ -284,3 +284,93 @@ fn xacro_corpus_matches_python_xacro() {
     });
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A construct the native expansion refuses is handed to the `xacro` command when it is on
+/// PATH, with a warning naming it; without one it is an error naming it.
+#[test]
+fn xacro_refused_construct_falls_back_to_python_xacro() {
+    const FILE: &str = "fixtures/xacro/comprehension.urdf.xacro";
+    let (code, out, err) = run_without_path(&["extract", FILE], &[]);
+    assert_eq!(code, 2);
+    assert!(out.is_empty());
+    assert_eq!(
+        err,
+        "urdf-dh: error: comprehension.urdf.xacro: line 10: comprehensions are not supported by the native xacro expansion in '${[mm * 0.001 for mm in [400, 300]]}' (property 'lengths' of comprehension.urdf.xacro: line 5), and the 'xacro' command is not on PATH\nhint: install it with 'pip install xacro', or expand the file yourself: xacro fixtures/xacro/comprehension.urdf.xacro > robot.urdf\n"
+    );
+    // A stand-in `xacro` on PATH that prints the URDF Python's xacro gives.
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("xacro");
+    std::fs::write(
+        &script,
+        "#!/bin/sh\n/bin/cat <<'X'\n<robot name=\"comprehension\"><link name=\"base\"/><link name=\"l1\"/><link name=\"tip\"/>\n<joint name=\"j1\" type=\"revolute\"><parent link=\"base\"/><child link=\"l1\"/><origin xyz=\"0 0 0\"/><axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/></joint>\n<joint name=\"j2\" type=\"revolute\"><parent link=\"l1\"/><child link=\"tip\"/><origin xyz=\"0.4 0 0\"/><axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/></joint></robot>\nX\n",
+    )
+    .unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_urdf-dh"))
+        .args(["extract", FILE, "--format", "json"])
+        .current_dir(root())
+        .env("PATH", dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert_eq!(
+        stderr,
+        "urdf-dh: warning: comprehension.urdf.xacro: line 10: comprehensions are not supported by the native xacro expansion in '${[mm * 0.001 for mm in [400, 300]]}' (property 'lengths' of comprehension.urdf.xacro: line 5); expanded with Python's 'xacro' command instead\n"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["joints"][0]["a"].as_f64(), Some(0.4));
+}
+
+/// `--xacro-arg` / `--package` reach the other commands that read a robot: `simulate --model`,
+/// `check`, `batch` and `calibrate --model` on the fixture package.
+#[test]
+fn xacro_flags_reach_every_robot_reading_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, truth, list) = (
+        dir.path().join("m.csv"),
+        dir.path().join("truth.yaml"),
+        dir.path().join("chains.list"),
+    );
+    let (csv, truth) = (csv.to_str().unwrap(), truth.to_str().unwrap());
+    let long = ["--xacro-arg", "reach:=long", ARM_PKG, "--tip", "flange"];
+    let with = |args: &[&str]| -> Vec<String> {
+        args.iter()
+            .chain(long.iter())
+            .map(|s| s.to_string())
+            .collect()
+    };
+    let go = |args: Vec<String>| {
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, out, err) = run_without_path(&refs, &[]);
+        assert_eq!(code, 0, "urdf-dh {}: {err}", args.join(" "));
+        out
+    };
+    go(with(&[
+        "simulate", "--model", ARM, "--poses", "20", "--noise", "1e-5", "--seed", "3", "--out",
+        csv, "--truth", truth,
+    ]));
+    let report = go(with(&["check", ARM, "--sheet", truth]));
+    assert!(report.contains("MATCH"), "{report}");
+    let report = go(with(&["calibrate", "--model", ARM, "--data", csv]));
+    assert!(report.contains("result: RMS"), "{report}");
+    std::fs::write(&list, format!("{}\n", root().join(ARM).display())).unwrap();
+    let lines = go(vec![
+        "batch".into(),
+        list.display().to_string(),
+        "--xacro-arg".into(),
+        "reach:=long".into(),
+        ARM_PKG.into(),
+    ]);
+    let row: serde_json::Value = serde_json::from_str(lines.lines().next().unwrap()).unwrap();
+    assert_eq!(row["sheet"]["robot"], "demo_arm", "{lines}");
+    assert_eq!(
+        row["sheet"]["joints"][1]["a"].as_f64(),
+        Some(0.6),
+        "{lines}"
+    );
+}

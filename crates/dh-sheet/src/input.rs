@@ -153,6 +153,9 @@ pub fn utf8_text(path: &str, mut bytes: Vec<u8>) -> Result<String> {
 /// The file cannot be read; a `.xacro` file that does not expand (the message names the file
 /// and line).
 pub fn read_robot(path: &str) -> Result<Vec<u8>> {
+    if !path.ends_with(".xacro") {
+        return read_robot_bytes(path);
+    }
     read_robot_with(path, &crate::xacro::default_options())
 }
 

@@ -19,8 +19,8 @@ use crate::{Expansion, Options, XacroError, MAX_INCLUDE_DEPTH, MAX_MACRO_DEPTH, 
 pub enum Slot {
     /// The value.
     Ready(Value),
-    /// The raw text, evaluated in its own scope when first used.
-    Lazy(Rc<str>),
+    /// The raw text, evaluated in its own scope when first used, and where it is defined.
+    Lazy(Rc<str>, Pos),
 }
 
 /// A table of properties; `parent` is the enclosing table (a macro call's caller).
@@ -433,7 +433,7 @@ impl<'o> Expander<'o> {
             v => v,
         };
         let slot = match literal(value) {
-            Value::Str(s) if lazy => Slot::Lazy(s),
+            Value::Str(s) if lazy => Slot::Lazy(s, e.pos),
             v => Slot::Ready(v),
         };
         self.scopes[target].vars.insert(name, slot);

@@ -73,7 +73,10 @@ impl Expander<'_> {
                     let src_text = self.eval_text(src, scope)?.to_text();
                     let mut names = Symbols { ex: self, scope };
                     expr::evaluate(&src_text, &mut names).map_err(|mut e| {
-                        e.message = format!("{} in '${{{src}}}'", e.message);
+                        // The innermost expression is the one to quote.
+                        if !e.message.contains(" in '${") {
+                            e.message = format!("{} in '${{{src}}}'", e.message);
+                        }
                         e
                     })?
                 }
@@ -103,8 +106,8 @@ impl Expander<'_> {
             let Some(s) = self.scopes.get(k) else { break };
             match s.vars.get(name) {
                 Some(Slot::Ready(v)) => return Ok(Some(v.clone())),
-                Some(Slot::Lazy(raw)) => {
-                    let raw = raw.clone();
+                Some(Slot::Lazy(raw, at)) => {
+                    let (raw, at) = (raw.clone(), *at);
                     if let Some(first) = self
                         .resolving
                         .iter()
@@ -129,7 +132,10 @@ impl Expander<'_> {
                     let value = self.eval_text(&raw, k);
                     self.resolving.pop();
                     let value = literal(value.map_err(|mut e| {
-                        e.message = format!("property '{name}' = '{raw}': {}", e.message);
+                        if !e.message.contains("(property '") {
+                            let (head, _) = self.location(at);
+                            e.message = format!("{} (property '{name}' of {head})", e.message);
+                        }
                         e
                     })?);
                     if let Some(s) = self.scopes.get_mut(k) {
