@@ -343,10 +343,19 @@ fn round(args: &[Value]) -> Result<Value, ExprError> {
             let Some(Num::Int(n)) = n.number() else {
                 return Err(ExprError::new("round() needs an integer number of digits"));
             };
-            let scale = 10f64.powi(i32::try_from(n.clamp(-300, 300)).unwrap_or(0));
-            Ok(match x {
-                Num::Int(i) if n >= 0 => Value::Int(i),
-                _ => Value::Float((x.as_f64() * scale).round_ties_even() / scale),
+            Ok(match (x, usize::try_from(n)) {
+                (Num::Int(i), Ok(_)) => Value::Int(i),
+                // Correctly rounded, half to even on the exact value, as Python's round does
+                // (round(2.675, 2) is 2.67: 2.675 is 2.67499... in binary).
+                (_, Ok(digits)) => Value::Float(
+                    format!("{:.*}", digits.min(340), x.as_f64())
+                        .parse()
+                        .unwrap_or(f64::NAN),
+                ),
+                (_, Err(_)) => {
+                    let scale = 10f64.powi(i32::try_from(n.clamp(-300, 0)).unwrap_or(0));
+                    Value::Float((x.as_f64() * scale).round_ties_even() / scale)
+                }
             })
         }
     }
