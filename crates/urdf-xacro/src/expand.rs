@@ -37,8 +37,7 @@ pub struct File {
 }
 
 /// The state of one expansion.
-pub struct Expander<'o> {
-    _opts: std::marker::PhantomData<&'o Options>,
+pub struct Expander {
     pub packages: Packages,
     pub files: Vec<File>,
     /// Files being expanded, innermost last (relative paths are relative to the last).
@@ -60,11 +59,10 @@ pub struct Expander<'o> {
     pub warnings: Vec<String>,
 }
 
-impl<'o> Expander<'o> {
+impl Expander {
     /// A fresh expansion with the caller's options.
-    pub fn new(opts: &'o Options) -> Expander<'o> {
+    pub fn new(opts: &Options) -> Expander {
         Expander {
-            _opts: std::marker::PhantomData,
             packages: Packages::new(&opts.packages),
             files: Vec::new(),
             file_stack: Vec::new(),
@@ -115,8 +113,18 @@ impl<'o> Expander<'o> {
             Some(at) => self.invalid(at, &format!("cannot read '{}': {e}", path.display())),
             None => XacroError::Invalid(format!("{}: cannot read the file: {e}", path.display())),
         })?;
-        let root = tree::parse(&text, index)
-            .map_err(|e| self.invalid(here, &format!("invalid XML: {e}")))?;
+        let root = tree::parse(&text, index).map_err(|e| match e {
+            tree::ParseError::Malformed(m) => self.invalid(here, &format!("invalid XML: {m}")),
+            tree::ParseError::Unsupported(construct, m) => {
+                let (head, tail) = self.location(here);
+                XacroError::Unsupported {
+                    construct: construct.to_string(),
+                    message: format!(
+                        "{head}: {construct} are not supported by the native xacro expansion ({m}){tail}"
+                    ),
+                }
+            }
+        })?;
         self.file_stack.push(index);
         Ok(root)
     }

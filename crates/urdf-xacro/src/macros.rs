@@ -105,7 +105,7 @@ fn default_len(s: &str) -> usize {
     bytes.len()
 }
 
-impl Expander<'_> {
+impl Expander {
     /// Records a `<xacro:macro>` in the innermost macro table.
     pub fn define_macro(&mut self, e: &Element) -> Result<(), XacroError> {
         let name = self.required(e, "name")?.to_string();

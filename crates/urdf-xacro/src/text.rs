@@ -56,7 +56,7 @@ fn pieces(text: &str) -> Result<Vec<Piece<'_>>, ExprError> {
     Ok(out)
 }
 
-impl Expander<'_> {
+impl Expander {
     /// Evaluates `text` in property table `scope`.
     ///
     /// # Errors
@@ -226,12 +226,12 @@ impl Expander<'_> {
 
 /// Names of `${}`: the property tables from `scope` outwards, and `xacro.load_yaml` /
 /// `xacro.arg`.
-struct Symbols<'a, 'o> {
-    ex: &'a mut Expander<'o>,
+struct Symbols<'a> {
+    ex: &'a mut Expander,
     scope: usize,
 }
 
-impl Names for Symbols<'_, '_> {
+impl Names for Symbols<'_> {
     fn lookup(&mut self, name: &str) -> Result<Option<Value>, ExprError> {
         self.ex.lookup(name, self.scope)
     }
@@ -254,8 +254,8 @@ impl Names for Symbols<'_, '_> {
 
 /// Names of `$(eval)`: roslaunch's — the arguments (as numbers or booleans where they read as
 /// such), `arg()`, `find()`, `env()`, `optenv()`, `dirname()`, `true`/`false`, and `math`.
-struct EvalArgs<'a, 'o> {
-    ex: &'a mut Expander<'o>,
+struct EvalArgs<'a> {
+    ex: &'a mut Expander,
 }
 
 /// roslaunch's `convert_value(value, 'auto')`.
@@ -272,7 +272,7 @@ fn auto(value: &str) -> Value {
     })
 }
 
-impl Names for EvalArgs<'_, '_> {
+impl Names for EvalArgs<'_> {
     fn lookup(&mut self, name: &str) -> Result<Option<Value>, ExprError> {
         Ok(match name {
             "true" | "True" => Some(Value::Bool(true)),

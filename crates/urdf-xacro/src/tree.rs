@@ -55,16 +55,34 @@ impl Element {
     }
 }
 
+/// Why a file does not parse.
+#[derive(Debug)]
+pub enum ParseError {
+    /// Not well-formed XML: roxmltree's message, which names the line and column.
+    Malformed(String),
+    /// Well-formed for Python's (namespace-unaware) parser, but not read here: a DOCTYPE, or a
+    /// prefix without its `xmlns:` declaration. The construct, and the message.
+    Unsupported(&'static str, String),
+}
+
 /// Parses `text` (the file number `file`) into its root element.
 ///
 /// # Errors
-/// Not well-formed XML: roxmltree's message, which names the line and column.
-pub fn parse(text: &str, file: usize) -> Result<Element, String> {
+/// [`ParseError`].
+pub fn parse(text: &str, file: usize) -> Result<Element, ParseError> {
     let opts = roxmltree::ParsingOptions {
         allow_dtd: false,
         ..roxmltree::ParsingOptions::default()
     };
-    let doc = roxmltree::Document::parse_with_options(text, opts).map_err(|e| e.to_string())?;
+    let doc = roxmltree::Document::parse_with_options(text, opts).map_err(|e| match e {
+        roxmltree::Error::DtdDetected => {
+            ParseError::Unsupported("document type declarations", e.to_string())
+        }
+        roxmltree::Error::UnknownNamespace(..) => {
+            ParseError::Unsupported("undeclared namespace prefixes", e.to_string())
+        }
+        other => ParseError::Malformed(other.to_string()),
+    })?;
     Ok(element(&doc, doc.root_element(), file, true))
 }
 

@@ -297,6 +297,20 @@ fn errors_name_file_line_and_include_chain() {
     );
     let e = r.unwrap_err().to_string();
     assert!(e.starts_with("top.xacro: invalid XML"), "{e}");
+    // What Python's namespace-unaware parser reads and this one does not is "unsupported".
+    for (text, construct) in [
+        (
+            "<robot><sensor:camera/></robot>",
+            "undeclared namespace prefixes",
+        ),
+        ("<!DOCTYPE robot><robot/>", "document type declarations"),
+    ] {
+        let (_d, r) = expand_in(&[("top.xacro", text)], &Options::default());
+        match r {
+            Err(XacroError::Unsupported { construct: c, .. }) => assert_eq!(c, construct),
+            other => panic!("{text}: {other:?}"),
+        }
+    }
 }
 
 #[test]
