@@ -156,6 +156,10 @@ fn unsupported_constructs_are_named() {
         ("[x for x in q]", "comprehensions"),
         ("q[0:1]", "slices"),
         ("'%d' % a", "string formatting with %"),
+        (
+            "xacro.warning('x')",
+            "xacro's message, tokenize and abs_filename functions",
+        ),
     ] {
         assert_eq!(error(src).unsupported.as_deref(), Some(construct), "{src}");
     }

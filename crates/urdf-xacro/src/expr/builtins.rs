@@ -80,10 +80,6 @@ pub fn member(ns: &str, name: &str) -> Option<Value> {
         }
         ("xacro", "arg") => Some(Value::Builtin("xacro.arg")),
         ("xacro", "load_yaml" | "dotify" | "fatal") => global(name),
-        (
-            "xacro",
-            "message" | "warning" | "error" | "print_location" | "tokenize" | "abs_filename",
-        ) => None,
         _ => None,
     }
 }

@@ -161,6 +161,21 @@ fn eval(e: &Expr, names: &mut dyn Names) -> Result<Value, ExprError> {
         }
         Expr::Index(a, i) => index(&eval(a, names)?, &eval(i, names)?)?,
         Expr::Attr(a, name) => match eval(a, names)? {
+            Value::Builtin("xacro")
+                if matches!(
+                    name.as_str(),
+                    "message"
+                        | "warning"
+                        | "error"
+                        | "print_location"
+                        | "tokenize"
+                        | "abs_filename"
+                ) =>
+            {
+                return Err(ExprError::unsupported(
+                    "xacro's message, tokenize and abs_filename functions",
+                ))
+            }
             Value::Builtin(ns) => builtins::member(ns, name)
                 .ok_or_else(|| ExprError::new(format!("'{ns}' has no attribute '{name}'")))?,
             Value::Dict(d) => d
