@@ -19,6 +19,7 @@ use crate::output::check_destinations;
 use crate::render::Format;
 use crate::sheet::ConventionDoc;
 use crate::units::{AngleUnit, LengthUnit};
+use crate::xacro_flags::XacroCli;
 
 /// Denavit-Hartenberg parameters of serial manipulators: from URDFs, vendor DH sheets and
 /// measurements of the real arm.
@@ -34,7 +35,7 @@ enum Command {
     /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
     /// forward kinematics against the URDF at many joint values.
     #[command(
-        after_help = "EXAMPLES:\n  urdf-dh extract robot.urdf                               # root link to the arm's tip, standard DH, text\n  urdf-dh extract robot.urdf --tip tool0 --convention modified --angle-unit deg\n  urdf-dh extract robot.urdf --format yaml > robot-dh.yaml  # the sheet format, proved as written\n  xacro robot.urdf.xacro | urdf-dh extract - --tip flange --svg frames.svg"
+        after_help = "EXAMPLES:\n  urdf-dh extract robot.urdf                               # root link to the arm's tip, standard DH, text\n  urdf-dh extract robot.urdf --tip tool0 --convention modified --angle-unit deg\n  urdf-dh extract robot.urdf --format yaml > robot-dh.yaml  # the sheet format, proved as written\n  urdf-dh extract robot.urdf.xacro --xacro-arg arm:=gen3 --package arm_description=../arm_description"
     )]
     Extract(ExtractCli),
     /// Extract many chains of many URDFs in one process (a list of `ROBOT [BASE [TIP]]` lines),
@@ -188,10 +189,12 @@ impl ToleranceCli {
 
 #[derive(Debug, Args)]
 struct ExtractCli {
-    /// The robot: a URDF file, a .xacro file (needs `xacro` on PATH), or - for standard input.
+    /// The robot: a URDF file, a .xacro file (expanded natively), or - for standard input.
     robot: String,
     #[command(flatten)]
     chain: ChainCli,
+    #[command(flatten)]
+    xacro: XacroCli,
     /// DH convention of the table.
     #[arg(long, value_enum, default_value_t = ConventionDoc::Standard)]
     convention: ConventionDoc,
@@ -259,6 +262,8 @@ struct BatchCli {
     tol: ToleranceCli,
     #[command(flatten)]
     verify: VerifyCli,
+    #[command(flatten)]
+    xacro: XacroCli,
 }
 
 #[derive(Debug, Args)]
@@ -270,6 +275,8 @@ struct CheckCli {
     sheet: String,
     #[command(flatten)]
     chain: ChainCli,
+    #[command(flatten)]
+    xacro: XacroCli,
     /// Lengths that differ by less than this match (metres).
     #[arg(long, value_name = "M", default_value_t = CHECK_LINEAR, value_parser = guard::linear_tol)]
     linear_tol: f64,
@@ -356,9 +363,19 @@ where
     dispatch(cli, out, err)
 }
 
+/// Runs the command, then writes the warnings of the xacro expansions it made to `err`.
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
+    let result = dispatch_command(cli, out, err);
+    for w in dh_sheet::xacro::take_warnings() {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
+    result
+}
+
+fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {
+            a.xacro.apply()?;
             if let Some(svg) = &a.svg {
                 check_destinations(&[("ROBOT", &a.robot)], &[("--svg", svg)])?;
             }
@@ -379,6 +396,7 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             extract(&args, out, err)
         }
         Command::Check(a) => {
+            a.xacro.apply()?;
             let args = CheckArgs {
                 robot: a.robot,
                 sheet: a.sheet,
@@ -390,25 +408,28 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             };
             check(&args, out, err)
         }
-        Command::Batch(a) => batch(
-            &BatchArgs {
-                list: a.list,
-                conventions: match a.convention {
-                    Conventions::Standard => vec![dh_core::Convention::Standard],
-                    Conventions::Modified => vec![dh_core::Convention::Modified],
-                    Conventions::Both => {
-                        vec![dh_core::Convention::Standard, dh_core::Convention::Modified]
-                    }
+        Command::Batch(a) => {
+            a.xacro.apply()?;
+            batch(
+                &BatchArgs {
+                    list: a.list,
+                    conventions: match a.convention {
+                        Conventions::Standard => vec![dh_core::Convention::Standard],
+                        Conventions::Modified => vec![dh_core::Convention::Modified],
+                        Conventions::Both => {
+                            vec![dh_core::Convention::Standard, dh_core::Convention::Modified]
+                        }
+                    },
+                    length_unit: a.length_unit,
+                    angle_unit: a.angle_unit,
+                    tolerance: a.tol.tolerance()?,
+                    samples: a.verify.samples,
+                    seed: a.verify.seed,
                 },
-                length_unit: a.length_unit,
-                angle_unit: a.angle_unit,
-                tolerance: a.tol.tolerance()?,
-                samples: a.verify.samples,
-                seed: a.verify.seed,
-            },
-            out,
-            err,
-        ),
+                out,
+                err,
+            )
+        }
         Command::Convert(a) => convert(
             &ConvertArgs {
                 sheet: a.sheet,
@@ -436,10 +457,20 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             err,
         ),
         Command::Import(a) => import::import(&a.into_args()?, out, err),
-        Command::Calibrate(a) => run_calibrate(&a.into_args(), out, err),
-        Command::Predict(a) => run_predict(&a.into_args(), out, err),
-        Command::Compensate(a) => run_compensate(&a.into_args(), out, err),
+        Command::Calibrate(a) => {
+            a.xacro.apply()?;
+            run_calibrate(&a.into_args(), out, err)
+        }
+        Command::Predict(a) => {
+            a.xacro.apply()?;
+            run_predict(&a.into_args(), out, err)
+        }
+        Command::Compensate(a) => {
+            a.xacro.apply()?;
+            run_compensate(&a.into_args(), out, err)
+        }
         Command::Cpa(a) => {
+            a.xacro.apply()?;
             let args = a.into_args()?;
             if let Some(plot) = &args.plot {
                 let inputs: Vec<(&str, &str)> = [
@@ -453,7 +484,10 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
             }
             cpa::cpa(&args, out, err)
         }
-        Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
+        Command::Simulate(a) => {
+            a.xacro.apply()?;
+            simulate::simulate(&a.into_args(), out, err)
+        }
         Command::Completions { shell } => {
             use clap::CommandFactory;
             clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", out);

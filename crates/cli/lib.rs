@@ -19,6 +19,7 @@ pub mod progress;
 pub mod readback;
 pub mod stdout;
 pub mod svg;
+pub mod xacro_flags;
 
 // The sheet formats, their units and writers are the `dh-sheet` library's; the CLI keeps their
 // old paths (`urdf_dh::sheet`, `crate::units`, ...) for its commands and for callers of this

@@ -63,7 +63,7 @@ fn every_corpus_file_is_a_case() {
         .map(|a| a.to_string())
         .collect();
     let mut files = Vec::new();
-    for dir in ["urdf", "sheet", "csv"] {
+    for dir in ["urdf", "sheet", "csv", "xacro"] {
         for e in std::fs::read_dir(root().join("fixtures/invalid").join(dir)).unwrap() {
             let name = e.unwrap().file_name().to_string_lossy().into_owned();
             files.push(format!("fixtures/invalid/{dir}/{name}"));

@@ -27,3 +27,4 @@ mod tree;
 mod ur_deltas;
 mod writers;
 mod written;
+mod xacro;

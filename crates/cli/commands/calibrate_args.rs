@@ -49,6 +49,8 @@ pub struct CalibrateCli {
     /// Tip link of a URDF chain [default: the end of the longest run of moving joints].
     #[arg(long)]
     tip: Option<String>,
+    #[command(flatten)]
+    pub xacro: crate::xacro_flags::XacroCli,
     /// DH convention for a URDF model or the CPA start.
     #[arg(long, value_enum, default_value_t = ConventionDoc::Standard)]
     convention: ConventionDoc,

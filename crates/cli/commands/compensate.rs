@@ -33,6 +33,8 @@ pub struct CompensateCli {
     /// Tip link of a URDF nominal model.
     #[arg(long)]
     tip: Option<String>,
+    #[command(flatten)]
+    pub xacro: crate::xacro_flags::XacroCli,
     /// The calibrated model (`calibrate --out`), with the nominal model's joints.
     #[arg(long, value_name = "CALIBRATED")]
     model: String,

@@ -94,6 +94,8 @@ pub struct CpaCli {
     /// Tip link of a URDF model.
     #[arg(long)]
     tip: Option<String>,
+    #[command(flatten)]
+    pub xacro: crate::xacro_flags::XacroCli,
     /// DH convention of the extracted table (a sheet model brings its own).
     #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
     convention: crate::sheet::ConventionDoc,

@@ -41,6 +41,8 @@ pub struct PredictCli {
     /// Tip link of a URDF chain.
     #[arg(long)]
     tip: Option<String>,
+    #[command(flatten)]
+    pub xacro: crate::xacro_flags::XacroCli,
     /// Joint values: a CSV with one column per measured joint (a measurement file will do);
     /// other columns are ignored, `config` is carried over.
     #[arg(long, value_name = "Q.csv")]

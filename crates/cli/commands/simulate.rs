@@ -74,6 +74,8 @@ pub struct SimulateCli {
     /// Tip link of a URDF chain.
     #[arg(long)]
     tip: Option<String>,
+    #[command(flatten)]
+    pub xacro: crate::xacro_flags::XacroCli,
     /// DH convention for a URDF model.
     #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
     convention: crate::sheet::ConventionDoc,

@@ -4,7 +4,6 @@
 //! directories), with a hint where the user can do something ([`crate::error::Hinted`]).
 
 use std::path::Path;
-use std::process::Command;
 
 use anyhow::Result;
 use urdf_axes::{Chain, UrdfModel};
@@ -89,35 +88,31 @@ pub fn utf8_text(path: &str, mut bytes: Vec<u8>) -> Result<String> {
     })
 }
 
-/// Reads a robot description: a URDF, or a `.xacro` file expanded by the `xacro` command.
+/// Reads a robot description: a URDF, or a `.xacro` file expanded natively
+/// ([`crate::xacro::expand`], with the options set by [`crate::xacro::set_default_options`]).
 ///
 /// # Errors
-/// The file cannot be read; a `.xacro` file when `xacro` is not on PATH or fails.
+/// The file cannot be read; a `.xacro` file that does not expand (the message names the file
+/// and line).
 pub fn read_robot(path: &str) -> Result<Vec<u8>> {
+    if !path.ends_with(".xacro") {
+        return read_robot_bytes(path);
+    }
+    read_robot_with(path, &crate::xacro::default_options())
+}
+
+/// [`read_robot`] with the xacro options given (arguments, package folders).
+///
+/// # Errors
+/// As [`read_robot`].
+pub fn read_robot_with(path: &str, xacro: &crate::xacro::XacroOptions) -> Result<Vec<u8>> {
     if !path.ends_with(".xacro") {
         return read_robot_bytes(path);
     }
     if !Path::new(path).is_file() {
         anyhow::bail!("{path}: cannot read the file: no such file");
     }
-    let pipe = format!("xacro {path} | urdf-dh extract -");
-    let out = match Command::new("xacro").arg(path).output() {
-        Ok(out) => out,
-        Err(_) => {
-            return Err(hinted(
-                format!("{path}: a .xacro file needs the 'xacro' command, which is not on PATH"),
-                format!("install it with 'pip install xacro', or expand it yourself: {pipe}"),
-            ))
-        }
-    };
-    if !out.status.success() {
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        return Err(hinted(
-            format!("{path}: xacro failed: {}", stderr.trim()),
-            format!("try it by hand: {pipe}"),
-        ));
-    }
-    Ok(out.stdout)
+    crate::xacro::expand_with(path, xacro)
 }
 
 /// A display name for a path argument (`<stdin>` for `-`), without directories so that outputs

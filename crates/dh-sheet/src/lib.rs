@@ -23,6 +23,7 @@
 //! | [`text`] | escaping names for messages and tables |
 //! | [`error`] | [`SheetError`], every refusal, with its [`hint`](SheetError::hint); [`Hinted`](error::Hinted), a message with a hint |
 //! | [`input`] | reading robot files (URDF, `.xacro`, standard input) and a URDF's chain |
+//! | [`xacro`] | `.xacro` files expanded natively (arguments, package folders), Python's `xacro` only for a construct the native expansion refuses |
 //! | [`measured`] | measurement files in the canonical CSV layout ([`DataFile`](measured::DataFile), [`DataUnits`](measured::DataUnits)), effect labels, joint values beyond their limits |
 //! | [`calibrated`] | a calibrated model as `calibrate --out` writes it (device frame, targets, sessions, covariance), read back to predict |
 //! | [`predict`] | a calibrated model's target positions or tool poses at joint values, with their uncertainty |
@@ -85,6 +86,7 @@ pub mod ur;
 pub mod urdf_edit;
 pub mod urdf_writer;
 pub mod written;
+pub mod xacro;
 
 pub use check::{compare, CheckReport};
 pub use error::SheetError;

@@ -5,8 +5,9 @@ use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
 use dh_sheet::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
-use dh_sheet::input::{display_name, folder_of, load_chain_in, read_robot, read_text};
+use dh_sheet::input::{display_name, folder_of, load_chain_in, read_robot_with, read_text};
 use dh_sheet::poe::PoeDoc;
+use dh_sheet::xacro::XacroOptions;
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
 
@@ -18,15 +19,38 @@ type Matrix = [[f64; 4]; 4];
 /// Name of URDF text passed as a string, in error messages.
 const XML_NAME: &str = "<string>";
 
-/// The URDF bytes and their display name: XML text as given, or the file at `path`.
+/// The robot bytes, their display name and the folder of the file they came from: XML text as
+/// given, or the file at `path` (a `.xacro` file expanded natively with `xacro`'s arguments and
+/// package folders).
 fn robot_bytes(
     source: &str,
     is_xml: bool,
+    xacro: &XacroOptions,
 ) -> anyhow::Result<(Vec<u8>, String, Option<std::path::PathBuf>)> {
     if is_xml {
         Ok((source.as_bytes().to_vec(), XML_NAME.to_string(), None))
     } else {
-        Ok((read_robot(source)?, display_name(source), folder_of(source)))
+        Ok((
+            read_robot_with(source, xacro)?,
+            display_name(source),
+            folder_of(source),
+        ))
+    }
+}
+
+/// The xacro options of the keyword arguments `xacro_args` and `packages`.
+fn xacro_options(
+    args: Option<Vec<(String, String)>>,
+    packages: Option<Vec<(String, String)>>,
+) -> XacroOptions {
+    XacroOptions {
+        args: args.unwrap_or_default(),
+        packages: packages
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(n, d)| (n, d.into()))
+            .collect(),
+        max_bytes: None,
     }
 }
 
@@ -158,7 +182,7 @@ impl NativeTable {
 /// Extracts the DH table of a URDF chain and proves the YAML sheet it writes, as
 /// `urdf-dh extract --format yaml` does.
 #[pyfunction]
-#[pyo3(signature = (source, is_xml, base, tip, convention_name, samples, seed, linear, angular))]
+#[pyo3(signature = (source, is_xml, base, tip, convention_name, samples, seed, linear, angular, xacro_args=None, packages=None))]
 #[allow(clippy::too_many_arguments)]
 fn extract(
     py: Python<'_>,
@@ -171,9 +195,13 @@ fn extract(
     seed: u64,
     linear: f64,
     angular: f64,
+    xacro_args: Option<Vec<(String, String)>>,
+    packages: Option<Vec<(String, String)>>,
 ) -> PyResult<NativeTable> {
+    let xacro = xacro_options(xacro_args, packages);
     let run = || -> anyhow::Result<NativeTable> {
-        let (bytes, name, dir) = robot_bytes(source, is_xml)?;
+        let (bytes, name, dir) = robot_bytes(source, is_xml, &xacro)?;
+        let expansion_warnings = dh_sheet::xacro::take_warnings();
         let options = ExtractOptions {
             convention: convention(convention_name)?,
             length_unit: LengthUnit::M,
@@ -202,7 +230,10 @@ fn extract(
             yaml,
             sheet_json: serde_json::to_string(&ex.sheet)?,
             verification_json: serde_json::to_string(verification)?,
-            warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            warnings: expansion_warnings
+                .into_iter()
+                .chain(warnings.iter().map(|w| w.to_string()))
+                .collect(),
             links: (ex.chain.base().to_owned(), ex.chain.tip().to_owned()),
             table,
         })
@@ -213,7 +244,7 @@ fn extract(
 /// Compares a URDF chain with a DH sheet file as `urdf-dh check --format json` does; returns
 /// the report as JSON text.
 #[pyfunction]
-#[pyo3(signature = (source, is_xml, sheet, base, tip, linear=CHECK_LINEAR, angular=CHECK_ANGULAR))]
+#[pyo3(signature = (source, is_xml, sheet, base, tip, linear=CHECK_LINEAR, angular=CHECK_ANGULAR, xacro_args=None, packages=None))]
 #[allow(clippy::too_many_arguments)]
 fn check(
     py: Python<'_>,
@@ -224,9 +255,13 @@ fn check(
     tip: Option<String>,
     linear: f64,
     angular: f64,
+    xacro_args: Option<Vec<(String, String)>>,
+    packages: Option<Vec<(String, String)>>,
 ) -> PyResult<String> {
+    let xacro = xacro_options(xacro_args, packages);
     let run = || -> anyhow::Result<String> {
-        let (bytes, name, dir) = robot_bytes(source, is_xml)?;
+        let (bytes, name, dir) = robot_bytes(source, is_xml, &xacro)?;
+        dh_sheet::xacro::take_warnings();
         let (_, chain) = load_chain_in(
             &bytes,
             &name,

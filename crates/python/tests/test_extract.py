@@ -165,3 +165,15 @@ def test_check_finds_a_difference(tmp_path):
     r = urdf_dh.check(PANDA, p)
     assert not r.matches and r.verdict == "mismatch"
     assert any(d["parameter"] == "d" and d["joint"] == "panda_joint3" for d in r.differences), r.differences
+
+
+def test_xacro_expanded_natively_with_args_and_packages():
+    arm = FIXTURES / "xacro" / "demo_arm_description" / "urdf" / "arm.urdf.xacro"
+    pkgs = {"demo_arm_description": FIXTURES / "xacro" / "demo_arm_description"}
+    long = urdf_dh.extract(arm, xacro_args={"reach": "long"}, packages=pkgs)
+    short = urdf_dh.extract(arm, packages=pkgs)
+    assert [r.name for r in long.rows] == ["joint1", "joint2", "joint3"]
+    assert long.rows[1].a == pytest.approx(0.6, abs=1e-12)
+    assert short.rows[1].a == pytest.approx(0.45, abs=1e-12)
+    with pytest.raises(urdf_dh.UrdfDhError, match="package 'demo_arm_description' not found"):
+        urdf_dh.extract(arm)

@@ -29,6 +29,18 @@ macro_rules! urdf {
     };
 }
 
+macro_rules! xacro {
+    ($name:literal) => {
+        case(
+            concat!("xacro_", $name),
+            &[
+                "extract",
+                concat!("fixtures/invalid/xacro/", $name, ".urdf.xacro"),
+            ],
+        )
+    };
+}
+
 macro_rules! sheet {
     ($name:literal, $file:literal) => {
         case(
@@ -80,6 +92,12 @@ const VALID_SHEET: &str = "fixtures/invalid/sheet/valid_arm.yaml";
 const VALID_CSV: &str = "fixtures/invalid/csv/valid_arm.csv";
 
 pub(super) const CASES: &[Case] = &[
+    xacro!("undefined_property"),
+    xacro!("macro_recursion"),
+    xacro!("include_cycle"),
+    xacro!("missing_package"),
+    xacro!("division_by_zero"),
+    xacro!("undefined_argument"),
     // Not a URDF at all.
     urdf!("empty"),
     urdf!("not_xml"),

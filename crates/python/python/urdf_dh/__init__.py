@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import asdict, dataclass
-from typing import Any, Dict, List, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -73,6 +73,20 @@ class Row:
     lower: Optional[float]
     upper: Optional[float]
     mimic: Optional[Mimic]
+
+
+def _xacro(
+    xacro_args: Optional[Mapping[str, Any]], packages: Optional[Mapping[str, Any]]
+) -> "tuple[Optional[List[Tuple[str, str]]], Optional[List[Tuple[str, str]]]]":
+    """The ``xacro_args`` / ``packages`` keywords as the native functions take them: a bool
+    argument is written ``true``/``false`` (as xacro reads it), anything else as ``str()``."""
+
+    def text(v: Any) -> str:
+        return ("true" if v else "false") if isinstance(v, bool) else str(v)
+
+    args = None if xacro_args is None else [(str(k), text(v)) for k, v in xacro_args.items()]
+    pkgs = None if packages is None else [(str(k), os.fspath(v)) for k, v in packages.items()]
+    return args, pkgs
 
 
 def _source(path_or_xml: UrdfSource) -> "tuple[str, bool]":
@@ -200,13 +214,16 @@ def extract(
     seed: int = 0,
     linear_tolerance: float = _native.DEFAULT_LINEAR,
     angular_tolerance: float = _native.DEFAULT_ANGULAR,
+    xacro_args: Optional[Mapping[str, Any]] = None,
+    packages: Optional[Mapping[str, Any]] = None,
 ) -> Table:
     """Extracts the DH table of a URDF chain, as ``urdf-dh extract`` does.
 
     Args:
-        path_or_xml: a path (str or os.PathLike; ``.xacro`` needs the ``xacro`` command; an MJCF
-            file, recognised by its ``<mujoco>`` root, with its ``<include>`` files beside it), or
-            URDF or MJCF XML text (a string starting with ``<`` after whitespace).
+        path_or_xml: a path (str or os.PathLike; a ``.xacro`` file is expanded natively, without
+            Python's ``xacro``; an MJCF file, recognised by its ``<mujoco>`` root, with its
+            ``<include>`` files beside it), or URDF or MJCF XML text (a string starting with ``<``
+            after whitespace).
         base: base link (default: the root link).
         tip: tip link (default: the only leaf).
         convention: ``"standard"`` or ``"modified"``.
@@ -214,6 +231,10 @@ def extract(
         seed: seed of the sampler.
         linear_tolerance: metres, for the axis classification.
         angular_tolerance: radians, likewise.
+        xacro_args: arguments of a ``.xacro`` file, ``{"name": value}`` (``--xacro-arg
+            name:=value``).
+        packages: package folders for ``$(find NAME)``, ``{"NAME": path}`` (``--package
+            NAME=DIR``), searched before ROS_PACKAGE_PATH and AMENT_PREFIX_PATH.
 
     The table written as YAML is read back and its forward kinematics compared with the URDF's;
     ``Table.verification["passed"]`` says whether it stayed within the bound (the CLI exits 1
@@ -225,6 +246,7 @@ def extract(
             (the CLI's message; ``.hint`` its hint).
     """
     source, is_xml = _source(path_or_xml)
+    args, pkgs = _xacro(xacro_args, packages)
     native = _native.extract(
         source,
         is_xml,
@@ -235,6 +257,8 @@ def extract(
         int(seed),
         float(linear_tolerance),
         float(angular_tolerance),
+        args,
+        pkgs,
     )
     return Table(native)
 
@@ -276,15 +300,19 @@ def check(
     tip: Optional[str] = None,
     linear_tolerance: float = _native.CHECK_LINEAR,
     angular_tolerance: float = _native.CHECK_ANGULAR,
+    xacro_args: Optional[Mapping[str, Any]] = None,
+    packages: Optional[Mapping[str, Any]] = None,
 ) -> CheckReport:
     """Compares a URDF chain with a vendor DH sheet (a YAML/JSON sheet file), as
-    ``urdf-dh check`` does: names every joint and parameter that differs.
+    ``urdf-dh check`` does: names every joint and parameter that differs. ``xacro_args`` and
+    ``packages`` are those of :func:`extract`, for a ``.xacro`` robot.
 
     Raises:
         FileNotFoundError: a file does not exist.
         UrdfDhError: invalid URDF or sheet (the CLI's message).
     """
     source, is_xml = _source(urdf)
+    args, pkgs = _xacro(xacro_args, packages)
     text = _native.check(
         source,
         is_xml,
@@ -293,5 +321,7 @@ def check(
         tip,
         float(linear_tolerance),
         float(angular_tolerance),
+        args,
+        pkgs,
     )
     return CheckReport(json.loads(text))

@@ -57,6 +57,8 @@ def extract(
     seed: int,
     linear: float,
     angular: float,
+    xacro_args: Optional[List[Tuple[str, str]]] = ...,
+    packages: Optional[List[Tuple[str, str]]] = ...,
 ) -> NativeTable: ...
 def check(
     source: str,
@@ -66,6 +68,8 @@ def check(
     tip: Optional[str],
     linear: float = ...,
     angular: float = ...,
+    xacro_args: Optional[List[Tuple[str, str]]] = ...,
+    packages: Optional[List[Tuple[str, str]]] = ...,
 ) -> str: ...
 def run(argv: List[str]) -> Tuple[str, str, bool]: ...
 def calibrate(
