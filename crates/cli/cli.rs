@@ -211,12 +211,13 @@ struct ExtractCli {
     seed: u64,
     /// Also draw the DH frames (isometric and side view) into this SVG file (`-`: standard
     /// output, the table then goes to standard error).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = guard::svg_output)]
     svg: Option<String>,
     /// Joint values for the drawing, comma-separated, radians (metres for prismatic joints)
-    /// [default: all zero].
+    /// [default: all zero]; needs --svg.
     #[arg(
         long,
+        requires = "svg",
         value_name = "Q1,Q2,...",
         value_delimiter = ',',
         allow_hyphen_values = true,
@@ -287,7 +288,8 @@ where
     // or an argument cannot drive the terminal.
     let mut err = crate::guard::Escaping(err);
     let err: &mut dyn Write = &mut err;
-    let cli = match Cli::try_parse_from(args) {
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let cli = match parse(&args) {
         Ok(cli) => cli,
         Err(e) => {
             // Plain text: output may be a pipe or a log, and snapshots must not hold escape
@@ -295,6 +297,9 @@ where
             let mut text = e.render().to_string();
             if let Some(rest) = text.strip_prefix("error: ") {
                 text = format!("urdf-dh: error: {rest}");
+            }
+            if let Some(option) = similar_option(&args, &e) {
+                text.push_str(&format!("hint: did you mean '{option}'?\n"));
             }
             let code = e.exit_code();
             let sink: &mut dyn Write = if code == 0 { out } else { err };
@@ -341,14 +346,67 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let cli = Cli::try_parse_from(args).map_err(|e| {
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let cli = parse(&args).map_err(|e| {
         let text = e.render().to_string();
-        anyhow::anyhow!(
-            "{}",
-            text.strip_prefix("error: ").unwrap_or(&text).trim_end()
-        )
+        let message = text.strip_prefix("error: ").unwrap_or(&text).trim_end();
+        match similar_option(&args, &e) {
+            Some(option) => crate::error::hinted(message, format!("did you mean '{option}'?")),
+            None => anyhow::anyhow!("{message}"),
+        }
     })?;
     dispatch(cli, out, err)
+}
+
+/// The command line's definition: [`Cli`], every option that takes a value also taking a
+/// negative number (`--noise -1` then meets the option's own range check, "expected a length
+/// in [0, ...], found -1", instead of clap's "unexpected argument '-1'"; no option of urdf-dh
+/// is a digit).
+fn command() -> clap::Command {
+    use clap::CommandFactory;
+    Cli::command().mut_subcommands(|c| {
+        c.mut_args(|a| {
+            if a.get_action().takes_values() {
+                a.allow_negative_numbers(true)
+            } else {
+                a
+            }
+        })
+    })
+}
+
+/// Parses `args` (the program name first) with [`command`].
+fn parse(args: &[OsString]) -> Result<Cli, clap::Error> {
+    use clap::FromArgMatches;
+    let mut cmd = command();
+    let matches = cmd.try_get_matches_from_mut(args.iter().cloned())?;
+    Cli::from_arg_matches(&matches).map_err(|e| e.format(&mut cmd))
+}
+
+/// The long option of the subcommand in `args` closest to the unknown one `e` names, when
+/// clap suggested none (its similarity threshold misses a dropped letter in a short name:
+/// `--tp` for `--tip`): at most two edits away, and fewer edits than the option has letters.
+fn similar_option(args: &[OsString], e: &clap::Error) -> Option<String> {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    if e.kind() != ErrorKind::UnknownArgument || e.get(ContextKind::SuggestedArg).is_some() {
+        return None;
+    }
+    let Some(ContextValue::String(given)) = e.get(ContextKind::InvalidArg) else {
+        return None;
+    };
+    let given = given.strip_prefix("--")?.split('=').next()?;
+    let cmd = command();
+    let sub = args
+        .iter()
+        .skip(1)
+        .filter_map(|a| a.to_str())
+        .find_map(|a| cmd.find_subcommand(a))?;
+    sub.get_arguments()
+        .filter_map(clap::Arg::get_long)
+        .map(|long| (strsim::levenshtein(given, long), long))
+        .filter(|&(d, long)| d <= 2 && d < long.chars().count())
+        .min()
+        .map(|(_, long)| format!("--{long}"))
 }
 
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
