@@ -129,7 +129,7 @@ struct ConvertCli {
 struct VerifyCli {
     /// Random joint-value samples of the check of what is written (the zero pose is always the
     /// first).
-    #[arg(long, value_name = "N", default_value_t = 1000)]
+    #[arg(long, value_name = "N", default_value_t = 1000, value_parser = guard::samples)]
     samples: usize,
     /// Seed of the check's sampler.
     #[arg(long, value_name = "S", default_value_t = 0)]
@@ -307,7 +307,10 @@ where
             return if code == 0 { 0 } else { 2 };
         }
     };
-    match dispatch(cli, out, err) {
+    // Standard output is flushed before the exit code is decided: a result that did not reach
+    // it (a full disk, a closed pipe) is a failure, not a success.
+    let done = flushed(dispatch(cli, out, err), out);
+    match done {
         Ok(Outcome::Pass) => 0,
         Ok(Outcome::Differs) => 1,
         // The reader of stdout went away (`| head`): stop quietly, as other Unix tools do.
@@ -355,7 +358,7 @@ where
             None => anyhow::anyhow!("{message}"),
         }
     })?;
-    dispatch(cli, out, err)
+    flushed(dispatch(cli, out, err), out)
 }
 
 /// The command line's definition: [`Cli`], every option that takes a value also taking a
@@ -409,7 +412,25 @@ fn similar_option(args: &[OsString], e: &clap::Error) -> Option<String> {
         .map(|(_, long)| format!("--{long}"))
 }
 
+/// `outcome`, once `out` is flushed: an error when the flush fails (the message names standard
+/// output, see [`crate::stdout::Stdout`]).
+fn flushed(outcome: anyhow::Result<Outcome>, out: &mut dyn Write) -> anyhow::Result<Outcome> {
+    let outcome = outcome?;
+    out.flush()?;
+    Ok(outcome)
+}
+
+/// Runs one command, every input opened once ([`dh_sheet::input::reading_once`]: standard input
+/// and FIFOs can be read only once).
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
+    dh_sheet::input::reading_once(|| dispatch_command(cli, out, err))
+}
+
+fn dispatch_command(
+    cli: Cli,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {
             if let Some(svg) = &a.svg {
@@ -508,12 +529,17 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
         Command::Simulate(a) => simulate::simulate(&a.into_args(), out, err),
         Command::Completions { shell } => {
             use clap::CommandFactory;
-            clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", out);
+            // Into a buffer first: clap_complete panics on a failed write (`> /dev/full`).
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", &mut script);
+            out.write_all(&script)?;
             Ok(Outcome::Pass)
         }
         Command::Man => {
             use clap::CommandFactory;
-            clap_mangen::Man::new(Cli::command()).render(out)?;
+            let mut page = Vec::new();
+            clap_mangen::Man::new(Cli::command()).render(&mut page)?;
+            out.write_all(&page)?;
             Ok(Outcome::Pass)
         }
     }
