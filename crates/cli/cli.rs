@@ -135,7 +135,7 @@ struct ConvertCli {
 struct VerifyCli {
     /// Random joint-value samples of the check of what is written (the zero pose is always the
     /// first).
-    #[arg(long, value_name = "N", default_value_t = 1000)]
+    #[arg(long, value_name = "N", default_value_t = 1000, value_parser = guard::samples)]
     samples: usize,
     /// Seed of the check's sampler.
     #[arg(long, value_name = "S", default_value_t = 0)]
@@ -219,12 +219,13 @@ struct ExtractCli {
     seed: u64,
     /// Also draw the DH frames (isometric and side view) into this SVG file (`-`: standard
     /// output, the table then goes to standard error).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = guard::svg_output)]
     svg: Option<String>,
     /// Joint values for the drawing, comma-separated, radians (metres for prismatic joints)
-    /// [default: all zero].
+    /// [default: all zero]; needs --svg.
     #[arg(
         long,
+        requires = "svg",
         value_name = "Q1,Q2,...",
         value_delimiter = ',',
         allow_hyphen_values = true,
@@ -299,7 +300,8 @@ where
     // or an argument cannot drive the terminal.
     let mut err = crate::guard::Escaping(err);
     let err: &mut dyn Write = &mut err;
-    let cli = match Cli::try_parse_from(args) {
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let cli = match parse(&args) {
         Ok(cli) => cli,
         Err(e) => {
             // Plain text: output may be a pipe or a log, and snapshots must not hold escape
@@ -308,13 +310,19 @@ where
             if let Some(rest) = text.strip_prefix("error: ") {
                 text = format!("urdf-dh: error: {rest}");
             }
+            if let Some(option) = similar_option(&args, &e) {
+                text.push_str(&format!("hint: did you mean '{option}'?\n"));
+            }
             let code = e.exit_code();
             let sink: &mut dyn Write = if code == 0 { out } else { err };
             let _ = sink.write_all(text.as_bytes());
             return if code == 0 { 0 } else { 2 };
         }
     };
-    match dispatch(cli, out, err) {
+    // Standard output is flushed before the exit code is decided: a result that did not reach
+    // it (a full disk, a closed pipe) is a failure, not a success.
+    let done = flushed(dispatch(cli, out, err), out);
+    match done {
         Ok(Outcome::Pass) => 0,
         Ok(Outcome::Differs) => 1,
         // The reader of stdout went away (`| head`): stop quietly, as other Unix tools do.
@@ -353,26 +361,93 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let cli = Cli::try_parse_from(args).map_err(|e| {
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let cli = parse(&args).map_err(|e| {
         let text = e.render().to_string();
-        anyhow::anyhow!(
-            "{}",
-            text.strip_prefix("error: ").unwrap_or(&text).trim_end()
-        )
+        let message = text.strip_prefix("error: ").unwrap_or(&text).trim_end();
+        match similar_option(&args, &e) {
+            Some(option) => crate::error::hinted(message, format!("did you mean '{option}'?")),
+            None => anyhow::anyhow!("{message}"),
+        }
     })?;
-    dispatch(cli, out, err)
+    flushed(dispatch(cli, out, err), out)
 }
 
-/// Runs the command, then writes the warnings of the xacro expansions it made to `err`.
+/// The command line's definition: [`Cli`], every option that takes a value also taking a
+/// negative number (`--noise -1` then meets the option's own range check, "expected a length
+/// in [0, ...], found -1", instead of clap's "unexpected argument '-1'"; no option of urdf-dh
+/// is a digit).
+fn command() -> clap::Command {
+    use clap::CommandFactory;
+    Cli::command().mut_subcommands(|c| {
+        c.mut_args(|a| {
+            if a.get_action().takes_values() {
+                a.allow_negative_numbers(true)
+            } else {
+                a
+            }
+        })
+    })
+}
+
+/// Parses `args` (the program name first) with [`command`].
+fn parse(args: &[OsString]) -> Result<Cli, clap::Error> {
+    use clap::FromArgMatches;
+    let mut cmd = command();
+    let matches = cmd.try_get_matches_from_mut(args.iter().cloned())?;
+    Cli::from_arg_matches(&matches).map_err(|e| e.format(&mut cmd))
+}
+
+/// The long option of the subcommand in `args` closest to the unknown one `e` names, when
+/// clap suggested none (its similarity threshold misses a dropped letter in a short name:
+/// `--tp` for `--tip`): at most two edits away, and fewer edits than the option has letters.
+fn similar_option(args: &[OsString], e: &clap::Error) -> Option<String> {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    if e.kind() != ErrorKind::UnknownArgument || e.get(ContextKind::SuggestedArg).is_some() {
+        return None;
+    }
+    let Some(ContextValue::String(given)) = e.get(ContextKind::InvalidArg) else {
+        return None;
+    };
+    let given = given.strip_prefix("--")?.split('=').next()?;
+    let cmd = command();
+    let sub = args
+        .iter()
+        .skip(1)
+        .filter_map(|a| a.to_str())
+        .find_map(|a| cmd.find_subcommand(a))?;
+    sub.get_arguments()
+        .filter_map(clap::Arg::get_long)
+        .map(|long| (strsim::levenshtein(given, long), long))
+        .filter(|&(d, long)| d <= 2 && d < long.chars().count())
+        .min()
+        .map(|(_, long)| format!("--{long}"))
+}
+
+/// `outcome`, once `out` is flushed: an error when the flush fails (the message names standard
+/// output, see [`crate::stdout::Stdout`]).
+fn flushed(outcome: anyhow::Result<Outcome>, out: &mut dyn Write) -> anyhow::Result<Outcome> {
+    let outcome = outcome?;
+    out.flush()?;
+    Ok(outcome)
+}
+
+/// Runs one command, every input opened once ([`dh_sheet::input::reading_once`]: standard input
+/// and FIFOs can be read only once).
+/// The warnings of the xacro expansions the command made are written to `err` after it.
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
-    let result = dispatch_command(cli, out, err);
+    let result = dh_sheet::input::reading_once(|| dispatch_command(cli, out, err));
     for w in dh_sheet::xacro::take_warnings() {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     result
 }
 
-fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
+fn dispatch_command(
+    cli: Cli,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {
             a.xacro.apply()?;
@@ -490,12 +565,17 @@ fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyho
         }
         Command::Completions { shell } => {
             use clap::CommandFactory;
-            clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", out);
+            // Into a buffer first: clap_complete panics on a failed write (`> /dev/full`).
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "urdf-dh", &mut script);
+            out.write_all(&script)?;
             Ok(Outcome::Pass)
         }
         Command::Man => {
             use clap::CommandFactory;
-            clap_mangen::Man::new(Cli::command()).render(out)?;
+            let mut page = Vec::new();
+            clap_mangen::Man::new(Cli::command()).render(&mut page)?;
+            out.write_all(&page)?;
             Ok(Outcome::Pass)
         }
     }

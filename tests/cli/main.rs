@@ -12,6 +12,7 @@ mod cpa;
 mod default_tip;
 mod diagnosis;
 mod extract;
+mod hostile_names;
 mod import_columns;
 mod invalid;
 mod limits;

@@ -301,7 +301,7 @@ pub fn batch(args: &BatchArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resu
                 sheet,
                 error,
             };
-            writeln!(out, "{}", serde_json::to_string(&record)?)?;
+            writeln!(out, "{}", crate::guard::json_line(&record)?)?;
         }
     }
     writeln!(

@@ -90,11 +90,11 @@ pub struct CalibrateCli {
     format: CalibrateFormat,
     /// Write the calibrated model here: a DH sheet (.yaml, .json) or a URDF (.urdf); `-` writes
     /// a YAML sheet to standard output and the report to standard error.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::guard::model_output)]
     out: Option<String>,
     /// Write an SVG chart of the residuals per pose, before and after (`-`: standard output,
     /// the report then goes to standard error).
-    #[arg(long, value_name = "FILE.svg")]
+    #[arg(long, value_name = "FILE.svg", value_parser = crate::guard::svg_output)]
     plot: Option<String>,
     /// Link masses for the compliance effects: YAML with `links: [{joint, mass, com}]` (kg,
     /// m; `com_frame: base_at_zero` or `dh`) and optional `payloads`, `gravity` [default: a

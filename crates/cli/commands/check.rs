@@ -71,7 +71,7 @@ pub fn check(args: &CheckArgs, out: &mut dyn Write, err: &mut dyn Write) -> Resu
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     match args.format {
-        CheckFormat::Json => writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?,
+        CheckFormat::Json => writeln!(out, "{}", crate::guard::json_pretty(&report)?)?,
         CheckFormat::Text => {
             let title = format!(
                 "{} ({} -> {}) against {sheet_name}",

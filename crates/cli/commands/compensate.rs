@@ -56,7 +56,7 @@ pub struct CompensateCli {
     #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
     angle_unit: AngleUnit,
     /// The CSV to write (`-` or absent: standard output).
-    #[arg(long, value_name = "C.csv")]
+    #[arg(long, value_name = "C.csv", value_parser = crate::guard::csv_output)]
     out: Option<String>,
 }
 

@@ -117,7 +117,7 @@ pub struct CpaCli {
     /// Write a chart of each joint's measured minus commanded motion against the commanded
     /// value, with the fitted trend (SVG; - for standard output, the report then on standard
     /// error).
-    #[arg(long, value_name = "SVG")]
+    #[arg(long, value_name = "SVG", value_parser = crate::guard::svg_output)]
     plot: Option<String>,
 }
 

@@ -274,7 +274,7 @@ pub struct ImportCli {
     #[arg(required = true, value_name = "FILE")]
     files: Vec<String>,
     /// Write the CSV here (atomically) instead of standard output (`-` is standard output too).
-    #[arg(long, value_name = "D.csv")]
+    #[arg(long, value_name = "D.csv", value_parser = crate::guard::csv_output)]
     out: Option<String>,
 }
 

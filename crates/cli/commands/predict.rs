@@ -67,7 +67,7 @@ pub struct PredictCli {
     #[arg(long, value_enum, default_value_t = AngleUnit::Rad)]
     angle_unit: AngleUnit,
     /// The CSV to write (`-` or absent: standard output).
-    #[arg(long, value_name = "P.csv")]
+    #[arg(long, value_name = "P.csv", value_parser = crate::guard::csv_output)]
     out: Option<String>,
 }
 

@@ -11,7 +11,6 @@ use dh_sheet::simulation::simulate as run;
 pub use dh_sheet::simulation::{truth_path, SimulationRequest};
 
 use crate::error::{hinted, Outcome};
-use crate::input::display_name;
 use crate::output::check_destinations;
 
 /// Everything `simulate` needs: the library's request and the files to write.
@@ -41,8 +40,9 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         &[("--model", &args.request.model)],
         &[("--out", &args.out), ("--truth", &truth_file)],
     )?;
-    let out_name = display_name(&args.out);
-    let sim = run(&args.request, &out_name, &display_name(&truth_file), err)?;
+    // Outputs: `-` is standard output, not standard input.
+    let out_name = crate::guard::output_name(&args.out);
+    let sim = run(&args.request, &out_name, &crate::guard::output_name(&truth_file), err)?;
     let truth_text = sim.truth_yaml()?;
     crate::output::write_all_or_stdout(
         &[
@@ -57,7 +57,7 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         sim.data.samples.len(),
         sim.poses,
         sim.data.targets.len(),
-        display_name(&truth_file)
+        crate::guard::output_name(&truth_file)
     )?;
     Ok(Outcome::Pass)
 }
@@ -125,10 +125,10 @@ pub struct SimulateCli {
     #[arg(long, value_name = "S", default_value_t = 1)]
     seed: u64,
     /// The measurement CSV to write (`-`: standard output; --truth is then required).
-    #[arg(long, value_name = "D.csv")]
+    #[arg(long, value_name = "D.csv", value_parser = crate::guard::csv_output)]
     out: String,
     /// The truth file [default: D.truth.yaml beside --out].
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::guard::yaml_output)]
     truth: Option<String>,
 }
 

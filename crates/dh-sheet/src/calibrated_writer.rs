@@ -22,7 +22,6 @@ use nalgebra::{Isometry3, Vector3};
 use serde::Serialize;
 
 use crate::calibrated::CovarianceDoc;
-use crate::input::display_name;
 use crate::sheet::{EffectDoc, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
 use crate::urdf_writer::{check_urdf, urdf_of};
@@ -97,7 +96,7 @@ pub fn calibrated_text(
         sheet.calibration = Some(calibration);
         sheet.effects = (!effects.is_empty()).then_some(effects);
         if lower.ends_with(".json") {
-            serde_json::to_string_pretty(&sheet)? + "\n"
+            crate::text::json_pretty(&sheet)? + "\n"
         } else {
             serde_yaml::to_string(&sheet)?
         }
@@ -204,7 +203,7 @@ pub fn model_text(
         .with_context(|| {
             format!(
                 "{}: writing the calibrated model as an edit of the model URDF",
-                display_name(path)
+                crate::text::output_name(path)
             )
         })?,
         None => calibrated_text(
@@ -259,7 +258,7 @@ pub fn predict_proof(
     let Ok(fitted) = dh_calib::predict::Calibrated::from_report(report, &ctx) else {
         return Ok(proof);
     };
-    let name = display_name(path);
+    let name = crate::text::output_name(path);
     let back = crate::calibrated::calibrated_sheet(text, &name).with_context(|| {
         format!(
             "{name}: the calibrated sheet does not read back for predict (a defect of the writer)"

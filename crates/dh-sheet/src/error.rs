@@ -124,6 +124,17 @@ pub enum SheetError {
         /// What is wrong with it.
         error: Box<SheetError>,
     },
+    /// A `robot`, `source`, `base_link` or `tip_link` holding a control or bidi character (see
+    /// [`crate::text::label_problem`]): it would reach every table printed from the sheet.
+    #[error("{origin}: {key}: {problem}")]
+    BadLabel {
+        /// The file.
+        origin: String,
+        /// The key.
+        key: &'static str,
+        /// What is wrong, quoting the text.
+        problem: String,
+    },
     /// A bad `effects` entry.
     #[error("{origin}: effects: {problem}")]
     BadEffects {
@@ -332,9 +343,15 @@ pub fn hint_for(e: &anyhow::Error) -> Option<String> {
             "choose the tip with --tip, e.g. --tip {}",
             leaves.first().map_or("LINK", String::as_str)
         ),
-        urdf_axes::UrdfError::UnknownLink { role, .. } => {
-            format!("--{role} takes the name of a <link> of the URDF (not of a joint)")
-        }
+        urdf_axes::UrdfError::UnknownLink {
+            role,
+            link,
+            candidates,
+        } => match crate::text::normalisation_note(link, candidates.iter().map(String::as_str)) {
+            // Two names that print alike: say how they differ, not what --tip takes.
+            Some(note) => format!("{note}; give --{role} as the URDF spells it"),
+            None => format!("--{role} takes the name of a <link> of the URDF (not of a joint)"),
+        },
         urdf_axes::UrdfError::Disconnected {
             reversed: false,
             base,

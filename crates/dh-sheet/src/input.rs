@@ -116,9 +116,10 @@ pub fn read_robot_with(path: &str, xacro: &crate::xacro::XacroOptions) -> Result
 }
 
 /// A display name for a path argument (`<stdin>` for `-`), without directories so that outputs
-/// stay the same wherever the file lives, cut to [`crate::text::MAX_QUOTED`] characters (a
-/// path of 10^8 characters makes a message of a few hundred). Outputs are named by
-/// [`crate::text::output_name`] (`<stdout>` for `-`).
+/// stay the same wherever the file lives, as messages and reports quote names
+/// ([`crate::text::quote`]: control and bidi characters escaped, cut to
+/// [`crate::text::MAX_QUOTED`] characters, so that a path of 10^8 characters makes a message of
+/// a few hundred). Outputs are named by [`crate::text::output_name`] (`<stdout>` for `-`).
 pub fn display_name(path: &str) -> String {
     if path == "-" {
         return "<stdin>".into();
@@ -127,7 +128,7 @@ pub fn display_name(path: &str) -> String {
         .file_name()
         .map(|f| f.to_string_lossy())
         .unwrap_or(std::borrow::Cow::Borrowed(path));
-    crate::text::cut(&name).into_owned()
+    crate::text::quote(&name)
 }
 
 /// Loads the URDF and its chain.

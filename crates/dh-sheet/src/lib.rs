@@ -79,6 +79,7 @@ pub mod read_back;
 pub mod render;
 pub mod sheet;
 pub mod simulation;
+pub mod sniff;
 pub mod text;
 pub mod tree_sheet;
 pub mod units;

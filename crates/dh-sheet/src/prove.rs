@@ -181,7 +181,7 @@ fn verification_after(doc: &SheetDoc, format: Format, first: &str) -> Result<Opt
         Format::Json if last_key => {
             // `{ ... "warnings": [] }` and `{ "verification": { ... } }`, pretty-printed alike:
             // the key's lines go before the closing brace.
-            let tail = serde_json::to_string_pretty(&Tail { verification: v })?;
+            let tail = crate::text::json_pretty(&Tail { verification: v })?;
             match (first.strip_suffix("\n}\n"), tail.strip_prefix("{\n")) {
                 (Some(head), Some(key)) => Some(format!("{head},\n{key}\n")),
                 _ => None,

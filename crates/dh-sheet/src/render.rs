@@ -1,9 +1,15 @@
 //! Writing a DH sheet: a readable table, YAML, JSON, CSV and Markdown (lengths and angles in
 //! the sheet's own units). [`crate::read_back`] reads every one of them back.
+//!
+//! Every name the text, CSV and Markdown tables print goes through [`escape`], and JSON through
+//! [`crate::text::json_pretty`] (control and bidi characters as `\uXXXX`): the readers refuse
+//! such names, so a sheet read from a file prints unchanged, and a name that slipped past a
+//! reader still cannot drive the terminal the table is printed on.
 
 use std::fmt::Write as _;
 
 use crate::error::Result;
+use crate::text::escape;
 
 use crate::sheet::{ConventionDoc, JointDoc, JointType, SheetDoc};
 
@@ -44,7 +50,7 @@ pub fn render_sheet(doc: &SheetDoc, format: Format) -> Result<String> {
 pub fn render_sheet_at(doc: &SheetDoc, format: Format, extra: usize) -> Result<String> {
     Ok(match format {
         Format::Yaml => crate::sheet::write_in_parts(doc)?,
-        Format::Json => serde_json::to_string_pretty(doc)? + "\n",
+        Format::Json => crate::text::json_pretty(doc)? + "\n",
         Format::Text => text(doc, extra),
         Format::Csv => csv(doc),
         Format::Markdown => markdown(doc, extra),
@@ -94,7 +100,7 @@ fn coupling(doc: &SheetDoc, j: &JointDoc, extra: usize) -> String {
             format!(
                 "= {} * {} {} {}",
                 m.multiplier,
-                m.joint,
+                escape(&m.joint),
                 if m.offset < 0.0 { "-" } else { "+" },
                 num_at(m.offset.abs(), limit_unit(doc, j), extra)
             )
@@ -112,10 +118,13 @@ fn header_line(doc: &SheetDoc) -> String {
         }
     };
     let chain = match (&doc.base_link, &doc.tip_link) {
-        (Some(b), Some(t)) => format!(" ({b} -> {t})"),
+        (Some(b), Some(t)) => format!(" ({} -> {})", escape(b), escape(t)),
         _ => String::new(),
     };
-    format!("{}{chain}, {conv}", doc.robot.as_deref().unwrap_or("robot"))
+    format!(
+        "{}{chain}, {conv}",
+        escape(doc.robot.as_deref().unwrap_or("robot"))
+    )
 }
 
 fn text(doc: &SheetDoc, extra: usize) -> String {
@@ -166,8 +175,8 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
         None => format!("{name:<5} {what}: not given\n"),
     };
     s += &tilts_and_effects(doc, "", Some(extra));
-    let base_link = doc.base_link.as_deref().unwrap_or("base link");
-    let tip_link = doc.tip_link.as_deref().unwrap_or("tip link");
+    let base_link = escape(doc.base_link.as_deref().unwrap_or("base link"));
+    let tip_link = escape(doc.tip_link.as_deref().unwrap_or("tip link"));
     s += &pose("base", &format!("DH frame 0 in {base_link}"), &doc.base);
     s += &pose(
         "tool",
@@ -180,7 +189,7 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
             .iter()
             .map(|p| {
                 let [a, b] = &p.joints;
-                format!("{} -> {}", crate::text::escape(a), crate::text::escape(b))
+                format!("{} -> {}", escape(a), escape(b))
             })
             .collect();
         let w = crate::text::column_width(names.iter().map(String::as_str), 0);
@@ -200,7 +209,7 @@ fn text(doc: &SheetDoc, extra: usize) -> String {
         } else {
             let _ = writeln!(s, "warnings:");
             for w in warnings {
-                let _ = writeln!(s, "  - {w}");
+                let _ = writeln!(s, "  - {}", escape(w));
             }
         }
     }
@@ -223,7 +232,7 @@ const ROWS_PER_PART: usize = 2000;
 /// Row `i` (0-based) of the text table, its name column `name_w` wide (trailing spaces kept).
 fn row_line(doc: &SheetDoc, i: usize, j: &JointDoc, name_w: usize, extra: usize) -> String {
     let (kind, cells) = row_cells(doc, j, extra);
-    let name = crate::text::escape(&j.name);
+    let name = escape(&j.name);
     let mut s = format!("{:>3}  {:<name_w$}  {:<9}", i + 1, name, kind);
     for c in &cells {
         let _ = write!(s, "  {c:>13}");
@@ -287,7 +296,7 @@ fn tilts_and_effects(doc: &SheetDoc, prefix: &str, extra: Option<usize>) -> Stri
         .filter_map(|j| {
             j.beta.map(|b| {
                 let v = extra.map_or_else(|| b.to_string(), |k| num_at(b, a, k));
-                format!("{} {v} {a}", j.name)
+                format!("{} {v} {a}", escape(&j.name))
             })
         })
         .collect();
@@ -298,9 +307,9 @@ fn tilts_and_effects(doc: &SheetDoc, prefix: &str, extra: Option<usize>) -> Stri
         let _ = writeln!(
             s,
             "{prefix}effect {} = {:e} {}{}",
-            e.name,
+            escape(&e.name),
             e.value,
-            e.unit,
+            escape(&e.unit),
             e.std_error
                 .map(|u| format!(" +- {u:.1e}"))
                 .unwrap_or_default()
@@ -336,7 +345,7 @@ fn csv(doc: &SheetDoc) -> String {
         };
         let (mj, mm, mo) = match &j.mimic {
             Some(m) => (
-                m.joint.clone(),
+                escape(&m.joint).into_owned(),
                 m.multiplier.to_string(),
                 m.offset.to_string(),
             ),
@@ -345,7 +354,7 @@ fn csv(doc: &SheetDoc) -> String {
         let _ = writeln!(
             s,
             "{},{kind},{},{},{},{},{},{},{},{mm},{mo}",
-            csv_field(&j.name),
+            csv_field(&escape(&j.name)),
             j.a,
             j.alpha,
             j.d,
@@ -387,7 +396,7 @@ fn markdown(doc: &SheetDoc, extra: usize) -> String {
             s,
             "| {} | {} | {kind} | {theta} | {d} | {a} | {alpha} | {lower} | {upper} | {} |",
             i + 1,
-            md_cell(&j.name),
+            md_cell(&escape(&j.name)),
             md_cell(&coupling(doc, j, extra))
         );
     }

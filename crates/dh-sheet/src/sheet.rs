@@ -37,6 +37,7 @@ mod rows;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use parse::check_labels;
 pub use parse::{check_nesting, parse_doc};
 pub(crate) use rows::{check_mimics, coupled_of, pose_of, row_of};
 pub use rows::{Coupled, CoupledDoc};

@@ -25,6 +25,7 @@ use crate::measured::parse_effect;
 use crate::model::load_model_noting;
 use crate::ranges::MAX_SIM_SAMPLES;
 use crate::sheet::SheetDoc;
+use crate::text::escape;
 use crate::units::{AngleUnit, LengthUnit};
 
 /// Everything a simulation needs (metres and radians).
@@ -307,14 +308,16 @@ pub fn simulate(
 
     let out_name = data_name.to_string();
     let poses = data.samples.len() / (args.targets.max(1) * args.repeats.max(1));
+    // Names escaped: a line feed in a file name would end the comment line and make the rest of
+    // it the header (the reader then misses every joint column).
     let mut csv = format!(
         "# simulated by urdf-dh simulate from {} (seed {}, {} poses{}, noise {} m per axis); truth in {}\n",
-        model.origin,
+        escape(&model.origin),
         args.seed,
         poses,
         if args.cpa { " in CPA sweeps" } else { "" },
         args.noise,
-        truth_name
+        escape(truth_name)
     );
     csv.push_str(&write_measurements(&data));
     // What simulate writes, calibrate reads: a model whose points leave the reader's limits
@@ -332,10 +335,11 @@ pub fn simulate(
     })?;
 
     let mut sheet = SheetDoc::from_table(&truth.table, LengthUnit::M, AngleUnit::Rad);
-    sheet.robot = Some(format!("truth of {out_name}"));
+    // Escaped, as the sheet reader refuses control and bidi characters in these labels.
+    sheet.robot = Some(format!("truth of {}", escape(&out_name)));
     sheet.source = Some(format!(
         "simulated by urdf-dh simulate from {} with the errors below",
-        model.origin
+        escape(&model.origin)
     ));
     let section = TruthSection {
         data: out_name.clone(),

@@ -309,6 +309,13 @@ impl TreeSheet {
                 origin: origin.into(),
             });
         }
+        crate::sheet::check_labels(
+            [
+                ("robot", doc.robot.as_deref()),
+                ("source", doc.source.as_deref()),
+            ],
+            origin,
+        )?;
         let (lu, au) = (doc.length_unit, doc.angle_unit);
         let mut warnings = Vec::new();
         // Joint names seen so far, with how often, for the line of a repeat.

@@ -59,7 +59,7 @@ pub fn prove(
     links: (&str, &str),
     at: &Predictions<'_>,
 ) -> Result<WrittenDoc> {
-    let name = crate::input::display_name(path);
+    let name = crate::text::output_name(path);
     let lower = path.to_ascii_lowercase();
     let back = |q: &[f64]| -> Result<Isometry3<f64>> { Ok(fitted.fk(q)?) };
     let (written_fk, max_length): (Fk, f64) = if lower.ends_with(".urdf") {

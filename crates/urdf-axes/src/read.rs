@@ -30,13 +30,19 @@ fn parse_error(message: String, line: usize) -> UrdfError {
 ///
 /// # Errors
 /// [`UrdfError::Parse`] for a link or joint without a name, or a joint without `<parent>` or
-/// `<child>` (or their `link`): what defines the tree.
+/// `<child>` (or their `link`): what defines the tree; [`UrdfError::ControlCharacterInName`]
+/// for a robot name with a control or bidi character.
 pub(crate) fn read(doc: &Doc) -> Result<Robot, UrdfError> {
     let root = doc.root();
     let mut robot = Robot {
         name: root.and_then(|r| r.attr("name")).unwrap_or("").to_owned(),
         ..Robot::default()
     };
+    // The robot's name heads every table and sheet written from the file: refused as link and
+    // joint names are (`&#27;[2J` would clear the terminal of whoever prints the table).
+    if !robot.name.is_empty() {
+        crate::check::check_name("robot", &robot.name, root.map(|r| r.line))?;
+    }
     let infinite_by_default = version_at_least_1_2(root.and_then(|r| r.attr("version")));
     let children = root.map(|r| r.children.as_slice()).unwrap_or(&[]);
     let count = |name: &str| {

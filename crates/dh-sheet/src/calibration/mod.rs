@@ -189,9 +189,9 @@ impl Calibrated {
     /// Serialisation failures.
     pub fn json(&self) -> Result<String> {
         let text = match self {
-            Calibrated::Points(p) => serde_json::to_string_pretty(&p.calibration.doc)?,
-            Calibrated::Contacts(c) => serde_json::to_string_pretty(&c.calibration.doc)?,
-            Calibrated::Tree(t) => serde_json::to_string_pretty(&t.calibration.doc)?,
+            Calibrated::Points(p) => crate::text::json_pretty(&p.calibration.doc)?,
+            Calibrated::Contacts(c) => crate::text::json_pretty(&c.calibration.doc)?,
+            Calibrated::Tree(t) => crate::text::json_pretty(&t.calibration.doc)?,
         };
         Ok(text + "\n")
     }

@@ -165,7 +165,7 @@ impl Points {
             writeln!(
                 err,
                 "urdf-dh: warning: {}: a URDF cannot express the estimated effects {}; it holds the geometric part (write a sheet to keep them)",
-                display_name(path),
+                crate::text::output_name(path),
                 c.report
                     .selected_effects
                     .iter()

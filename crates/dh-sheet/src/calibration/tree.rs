@@ -284,7 +284,7 @@ pub(super) fn tree_bytes(
     };
     out.calibration = Some(serde_yaml::to_value(&section)?);
     Ok(if path.to_ascii_lowercase().ends_with(".json") {
-        serde_json::to_string_pretty(&out)? + "\n"
+        crate::text::json_pretty(&out)? + "\n"
     } else {
         serde_yaml::to_string(&out)?
     })

@@ -179,6 +179,15 @@ impl SheetDoc {
                 origin: origin.into(),
             });
         }
+        check_labels(
+            [
+                ("robot", self.robot.as_deref()),
+                ("source", self.source.as_deref()),
+                ("base_link", self.base_link.as_deref()),
+                ("tip_link", self.tip_link.as_deref()),
+            ],
+            origin,
+        )?;
         let (lu, au) = (self.length_unit, self.angle_unit);
         let mut warnings = Vec::new();
         let mut rows = Vec::with_capacity(self.joints.len());
@@ -216,6 +225,29 @@ impl SheetDoc {
             warnings,
         })
     }
+}
+
+/// Refuses a control or bidi character in a sheet's labels (`robot`, `source`, `base_link`,
+/// `tip_link`; `source` may hold line feeds and tabs), which every table printed from the sheet
+/// would carry to a terminal.
+///
+/// # Errors
+/// [`SheetError::BadLabel`] naming the key.
+pub(crate) fn check_labels<'a>(
+    labels: impl IntoIterator<Item = (&'static str, Option<&'a str>)>,
+    origin: &str,
+) -> Result<()> {
+    for (key, text) in labels {
+        let Some(text) = text else { continue };
+        if let Some(problem) = crate::text::label_problem(text, key == "source") {
+            return Err(SheetError::BadLabel {
+                origin: origin.into(),
+                key,
+                problem,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// A serial sheet's bad `base` or `tool`, said as such.

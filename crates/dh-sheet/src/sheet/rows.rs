@@ -192,10 +192,11 @@ pub(crate) fn effects_of(given: Option<Vec<EffectDoc>>, origin: &str) -> Result<
             origin: origin.into(),
             problem,
         };
-        if e.name.is_empty() || e.name.chars().any(char::is_control) {
+        // Control and bidi characters as for joint names: the name is printed in tables.
+        if e.name.is_empty() || e.name.chars().any(is_spoofing) {
             return Err(bad(format!(
                 "expected a printable effect name, found '{}'",
-                e.name.escape_debug()
+                escape(&e.name)
             )));
         }
         if !seen.insert(e.name.as_str()) {
