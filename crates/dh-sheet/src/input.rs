@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::hinted;
