@@ -115,6 +115,9 @@ fn read_file(path: &str, parallel_from: u64) -> std::io::Result<Vec<u8>> {
             }
         }
     }
+    // Elsewhere (WebAssembly, Windows) the file is read in one part.
+    #[cfg(not(unix))]
+    let _ = parallel_from;
     std::fs::read(path)
 }
 
