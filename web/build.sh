@@ -9,8 +9,8 @@
 # node and npm (the packages come from web/package-lock.json: npm ci). web/test.sh installs all
 # of them.
 #
-# Usage: bash web/build.sh            (release build of the wasm: small and fast)
-#        PROFILE=dev bash web/build.sh (quicker to compile while editing Rust)
+# Usage: bash web/build.sh              (release build of the wasm: small and fast)
+#        PROFILE=quick bash web/build.sh (while editing the library: no LTO, incremental)
 set -euo pipefail
 WEB="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 ROOT="$(cd "$WEB/.." && pwd)"
@@ -31,9 +31,8 @@ echo "build.sh: the library for wasm32-unknown-unknown ($PROFILE)" >&2
 # getrandom's browser backend (crypto.getRandomValues): see crates/wasm/Cargo.toml.
 RUSTFLAGS="${RUSTFLAGS:-} --cfg getrandom_backend=\"wasm_js\"" \
   cargo build --locked --manifest-path "$ROOT/crates/wasm/Cargo.toml" \
-  --target wasm32-unknown-unknown --target-dir "$TARGET_DIR" \
-  $([ "$PROFILE" = release ] && echo --release)
-OUT_PROFILE="$([ "$PROFILE" = release ] && echo release || echo debug)"
+  --target wasm32-unknown-unknown --target-dir "$TARGET_DIR" --profile "$PROFILE"
+OUT_PROFILE="$([ "$PROFILE" = dev ] && echo debug || echo "$PROFILE")"
 
 rm -rf "$BUILD/pkg" && mkdir -p "$BUILD/pkg"
 wasm-bindgen --target web --no-typescript --out-dir "$BUILD/pkg" \

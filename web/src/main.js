@@ -26,6 +26,16 @@ window.urdfDh = {
     wasm.check(urdfText, sheetText, JSON.stringify(options)),
   toUrdf: (sheetText, options = {}) => wasm.to_urdf(sheetText, JSON.stringify(options)),
   tree: (text, name = 'robot.urdf') => JSON.parse(wasm.tree(text, name)),
+  // Both forward kinematics of a chain at joint values q: {urdf, axes, dh, normals, dh_tip},
+  // poses as column-major 4x4 matrices in the base link frame (metres).
+  fk: (text, options, q) => {
+    const robot = new wasm.Robot(text, JSON.stringify(options || {}));
+    try {
+      return JSON.parse(robot.fk(new Float64Array(q)));
+    } finally {
+      robot.free();
+    }
+  },
   lastTiming: null,
   load: (text, name) => loadUrdf(text, name),
 };
@@ -74,7 +84,7 @@ function fillChainSelects(tree) {
     for (const [name, depth] of order) {
       const opt = document.createElement('option');
       opt.value = name;
-      opt.textContent = `${'\u00a0\u00a0'.repeat(depth)}${name}`;
+      opt.textContent = `${'\u00a0'.repeat(Math.min(depth, 8))}${name}`;
       sel.appendChild(opt);
     }
   }
@@ -165,7 +175,7 @@ function renderTable(sheet, title) {
   const L = sheet.length_unit;
   const A = sheet.angle_unit;
   const head = document.createElement('tr');
-  for (const h of ['#', 'joint', 'type', `theta [${A}]`, `d [${L}]`, `a [${L}]`, `alpha [${A}]`, 'lower', 'upper']) {
+  for (const h of ['#', 'joint', 'type', `theta [${A}]`, `d [${L}]`, `a [${L}]`, `alpha [${A}]`, `lower [${A}]`, `upper [${A}]`]) {
     const th = document.createElement('th');
     th.textContent = h;
     head.appendChild(th);
@@ -177,7 +187,8 @@ function renderTable(sheet, title) {
     const tr = document.createElement('tr');
     tr.dataset.joint = j.name;
     tr.dataset.index = String(i);
-    const unit = j.type === 'prismatic' ? L : A;
+    // Limits in the header's angle unit; a prismatic joint's in the length unit, said so.
+    const unit = j.type === 'prismatic' ? ` ${L}` : '';
     const cells = [
       ['index', String(i + 1)],
       ['name', j.name],
@@ -186,8 +197,8 @@ function renderTable(sheet, title) {
       ['d', fmt(j.d)],
       ['a', fmt(j.a)],
       ['alpha', fmt(j.alpha)],
-      ['lower', j.lower === undefined ? '' : `${fmt(j.lower)} ${unit}`],
-      ['upper', j.upper === undefined ? '' : `${fmt(j.upper)} ${unit}`],
+      ['lower', j.lower === undefined ? '' : `${fmt(j.lower)}${unit}`],
+      ['upper', j.upper === undefined ? '' : `${fmt(j.upper)}${unit}`],
     ];
     for (const [param, value] of cells) {
       const td = document.createElement('td');

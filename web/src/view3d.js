@@ -126,7 +126,7 @@ export class View3D {
     }
     this.items = items;
     this.grid.scale.setScalar(Math.max(0.5, size));
-    this.camera.position.set(1.5 * size, -1.9 * size, 1.1 * size);
+    this.camera.position.set(1.05 * size, -1.35 * size, 0.95 * size);
     this.controls.target.set(0, 0, size * 0.45);
     this.camera.near = size * 0.005;
     this.camera.far = size * 50;
@@ -151,8 +151,10 @@ export class View3D {
     }
     const half = this.size * 0.16;
     for (let i = 0; i < n; i++) {
-      const [px, py, pz, dx, dy, dz] = scene.axes[i];
-      const p = new THREE.Vector3(px, py, pz);
+      // Centred on the joint frame's origin (the child link frame's, which lies on the axis),
+      // not on the axis line's point nearest the base origin.
+      const [, , , dx, dy, dz] = scene.axes[i];
+      const p = origin(scene.urdf[i]);
       const d = new THREE.Vector3(dx, dy, dz);
       placeRod(it.axes[i], p.clone().addScaledVector(d, -half), p.clone().addScaledVector(d, half));
       const [ax, ay, az, bx, by, bz] = scene.normals[i];

@@ -194,6 +194,8 @@ async function main() {
   await test('the page loads and says a robot file stays on the machine', async () => {
     await page.goto(`${origin}/`);
     await page.waitForSelector('body[data-ready="true"]', { timeout: 20000 });
+    const ready = await page.evaluate(() => performance.now());
+    figures.push(`page load to ready (wasm compiled, gallery listed), as the test saw it: ${ready.toFixed(0)} ms`);
     const privacy = await page.getByTestId('privacy').textContent();
     assert(/never leaves this machine/.test(privacy), `privacy note: ${privacy}`);
   });
@@ -218,6 +220,7 @@ async function main() {
     const want = cliText.trimEnd().split('\n').pop();
     assertSameOutput(verdict, want, 'verdict');
     assert(/: PASS$/.test(verdict), `verdict: ${verdict}`);
+    if (SHOTS) await page.screenshot({ path: path.join(SHOTS, 'panda.png') });
     const title = await page.getByTestId('title').textContent();
     assertEqual(title, cliText.split('\n')[0], 'title line');
   });
@@ -234,6 +237,24 @@ async function main() {
     assert(m && Number(m[1]) < 1e-9, `tip gap after the move: ${gap}`);
     const after = await page.evaluate(() => document.querySelector('[data-testid="view3d"] canvas').toDataURL());
     assert(before !== after, 'the picture did not change');
+  });
+
+  await test('urdfDh.fk: the URDF and the DH table put the tip at the same pose', async () => {
+    const text = fs.readFileSync(pandaUrdf, 'utf8');
+    const worst = await page.evaluate((t) => {
+      let worst = 0;
+      for (let k = 0; k < 20; k++) {
+        const q = Array.from({ length: 7 }, (_, i) => Math.sin(3.7 * k + i) * 1.5);
+        for (const convention of ['standard', 'modified']) {
+          const s = window.urdfDh.fk(t, { convention }, q);
+          if (s.dh.length !== 8 || s.urdf.length !== 8 || s.axes.length !== 7 || s.normals.length !== 7) throw new Error('counts');
+          const u = s.urdf[7];
+          for (let e = 0; e < 16; e++) worst = Math.max(worst, Math.abs(u[e] - s.dh_tip[e]));
+        }
+      }
+      return worst;
+    }, text);
+    assert(worst < 1e-12, `tip poses differ by ${worst}`);
   });
 
   await test('click a row highlights it', async () => {
@@ -313,6 +334,7 @@ async function main() {
     const named = want.differences.filter((d) => d.joint && ['a', 'alpha', 'd', 'theta'].includes(d.parameter)).map((d) => `${d.joint} ${d.parameter}`);
     assert(named.length > 0, 'the CLI named no joint parameter');
     assertEqual(marked.join(', '), named.join(', '), 'highlighted cells');
+    if (SHOTS) await page.screenshot({ path: path.join(SHOTS, 'mismatch.png') });
   });
 
   await test('a broken URDF: the CLI\'s error on the page, no table', async () => {
