@@ -94,8 +94,13 @@ function fillChainSelects(tree) {
   }
 }
 
-async function loadUrdf(text, name) {
+async function loadUrdf(text, name, galleryButton = null) {
   await ready;
+  for (const b of $('gallery').children) b.classList.toggle('active', b === galleryButton);
+  if (!galleryButton) {
+    state.gallerySheet = null;
+    $('gallery-sheet').hidden = true;
+  }
   const t0 = performance.now();
   state.text = text;
   state.name = name;
@@ -420,10 +425,9 @@ async function loadGallery() {
     b.setAttribute('data-testid', `gallery-${item.name}`);
     b.addEventListener('click', async () => {
       const text = await (await fetch(item.urdf)).text();
+      await loadUrdf(text, 'robot.urdf', b);
       state.gallerySheet = item.sheet;
       $('gallery-sheet').hidden = !item.sheet;
-      for (const other of box.children) other.classList.toggle('active', other === b);
-      await loadUrdf(text, 'robot.urdf');
     });
     box.appendChild(b);
   }
@@ -433,8 +437,6 @@ function wire() {
   $('urdf-file').addEventListener('change', async (ev) => {
     const f = ev.target.files[0];
     if (!f) return;
-    state.gallerySheet = null;
-    $('gallery-sheet').hidden = true;
     await loadUrdf(await readFile(f), f.name);
   });
   const drop = $('drop');

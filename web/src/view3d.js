@@ -126,8 +126,15 @@ export class View3D {
     }
     this.items = items;
     this.grid.scale.setScalar(Math.max(0.5, size));
-    this.camera.position.set(1.05 * size, -1.35 * size, 0.95 * size);
-    this.controls.target.set(0, 0, size * 0.45);
+    // Frame the zero pose: its bounding sphere fills the view, seen from the front right.
+    const box = new THREE.Box3().setFromPoints([new THREE.Vector3(), ...scene.urdf.map(origin), ...scene.dh.map(origin)]);
+    const sphere = box.getBoundingSphere(new THREE.Sphere());
+    const radius = (Math.max(sphere.radius, 0.1) + size * 0.16) * 1.1;
+    const fov = THREE.MathUtils.degToRad(this.camera.fov);
+    const dist = radius / Math.sin(Math.min(fov, fov * this.camera.aspect) / 2);
+    const dir = new THREE.Vector3(1, -1.3, 0.75).normalize();
+    this.camera.position.copy(sphere.center).addScaledVector(dir, dist);
+    this.controls.target.copy(sphere.center);
     this.camera.near = size * 0.005;
     this.camera.far = size * 50;
     this.camera.updateProjectionMatrix();

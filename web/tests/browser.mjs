@@ -385,6 +385,11 @@ async function main() {
 
   if (SHOTS) {
     await page.locator('[data-testid="gallery"] button').first().click();
+    await page.waitForFunction(() => document.querySelector('[data-testid="gallery"] button.active') !== null);
+    await page.getByTestId('gallery-sheet').click();
+    await page.getByTestId('slider-1').fill('0.6');
+    await page.getByTestId('slider-2').fill('-0.5');
+    await page.locator('[data-testid="dh-table"] tbody tr').nth(1).click();
     await page.screenshot({ path: path.join(SHOTS, 'page.png') });
   }
 
