@@ -1,7 +1,6 @@
 //! `urdf-dh to-urdf`: a URDF whose kinematics equal a DH sheet (the writer and its proof are
 //! the `dh-sheet` library's, [`dh_sheet::urdf_writer`]).
 
-use std::fmt::Write as _;
 use std::io::Write;
 
 use anyhow::Result;
@@ -9,7 +8,7 @@ use anyhow::Result;
 use crate::error::Outcome;
 use crate::input::{display_name, read_text};
 use crate::sheet::Sheet;
-pub use dh_sheet::urdf_writer::{check_urdf, origin, prove_urdf, urdf_of, UrdfProof};
+pub use dh_sheet::urdf_writer::{check_urdf, origin, prove_urdf, urdf_of, write_proved, UrdfProof};
 
 /// Everything `to-urdf` needs.
 #[derive(Clone, Debug)]
@@ -42,32 +41,15 @@ pub fn to_urdf(args: &ToUrdfArgs, out: &mut dyn Write, err: &mut dyn Write) -> R
     if let Some(w) = sheet.effects_warning(&name, "a URDF holds the DH kinematics alone") {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
-    let robot = args
-        .name
-        .clone()
-        .or(sheet.robot.clone().filter(|n| !n.trim().is_empty()))
-        .unwrap_or_else(|| "robot".into());
-    check_urdf(&sheet.table, &robot, &args.base_link, &args.tip_link)?;
-    let mut text = urdf_of(&sheet.table, &robot, &args.base_link, &args.tip_link);
-    let proof = prove_urdf(
-        &text,
-        &sheet.table,
+    let (text, proof) = write_proved(
+        &sheet,
+        &name,
+        args.name.as_deref(),
         &args.base_link,
         &args.tip_link,
         args.samples,
         args.seed,
     )?;
-    let verdict = if proof.passed { "PASS" } else { "FAIL" };
-    let _ = writeln!(
-        text,
-        "<!-- verification of this URDF as written (extracted again): {} joint samples (seed {}) against {name}: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {verdict} -->",
-        proof.samples,
-        args.seed,
-        proof.deviation.0,
-        crate::units::bound_for_print(proof.bound.0),
-        proof.deviation.1,
-        crate::units::bound_for_print(proof.bound.1)
-    );
     out.write_all(text.as_bytes())?;
     if proof.passed {
         return Ok(Outcome::Pass);

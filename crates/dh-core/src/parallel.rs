@@ -7,6 +7,16 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+/// The threads this process may run work on: `available_parallelism` (1 when unknown), and 1 on
+/// WebAssembly without atomics (a browser's main thread), where spawning a thread fails at
+/// run time whatever the host machine has.
+pub fn threads() -> usize {
+    if cfg!(all(target_family = "wasm", not(target_feature = "atomics"))) {
+        return 1;
+    }
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// `work(0..count)` on up to `available_parallelism` threads (one thread when `count` is 1 or
 /// the machine has one core), each thread taking the next index as it finishes one; the results
 /// in index order, or the first error in that order. A panic in `work` reaches the caller, as
@@ -20,9 +30,7 @@ pub fn try_map<T: Send, E: Send>(
     work: impl Fn(usize) -> Result<T, E> + Sync,
     panicked: impl Fn() -> E,
 ) -> Result<Vec<T>, E> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(count);
+    let threads = threads().min(count);
     if threads <= 1 {
         return (0..count).map(work).collect();
     }
@@ -87,7 +95,31 @@ impl<T> Iterator for &Items<T> {
 /// then read the items in order ([`Items::next`], or `for item in items`), on several threads
 /// if it likes ([`on_each_core`]). A panic in either reaches the caller, as from any scoped
 /// thread.
+///
+/// Where threads cannot run ([`threads`] is 1 on WebAssembly without atomics, whose standard
+/// library compiles `std::thread::spawn` but fails it at run time), `produce` runs to its end
+/// first, every item waiting in an unbounded channel, then `consume`: the same items in the
+/// same order, without the memory bound.
 pub fn pipeline<T: Send, R>(
+    capacity: usize,
+    produce: impl FnOnce(&mut dyn FnMut(T) -> bool) + Send,
+    consume: impl FnOnce(&Items<T>) -> R,
+) -> R {
+    #[cfg(all(target_family = "wasm", not(target_feature = "atomics")))]
+    {
+        let _ = capacity;
+        let (tx, rx) = std::sync::mpsc::channel();
+        produce(&mut |item| tx.send(item).is_ok());
+        drop(tx);
+        consume(&Items { rx: Mutex::new(rx) })
+    }
+    #[cfg(not(all(target_family = "wasm", not(target_feature = "atomics"))))]
+    pipeline_on_threads(capacity, produce, consume)
+}
+
+/// [`pipeline`] with the producer on its own scoped thread.
+#[cfg(not(all(target_family = "wasm", not(target_feature = "atomics"))))]
+fn pipeline_on_threads<T: Send, R>(
     capacity: usize,
     produce: impl FnOnce(&mut dyn FnMut(T) -> bool) + Send,
     consume: impl FnOnce(&Items<T>) -> R,
@@ -108,7 +140,7 @@ pub fn pipeline<T: Send, R>(
 /// their input through a queue ([`Items`]) and keep their own state. A panic in `work` reaches
 /// the caller.
 pub fn on_each_core<V: Send>(work: impl Fn() -> V + Sync) -> Vec<V> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = threads();
     if threads <= 1 {
         return vec![work()];
     }

@@ -4,7 +4,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use crate::pose::{rot_x, rot_y, rot_z, trans_x, trans_z};
 use crate::CoreError;
@@ -299,6 +299,39 @@ impl DhTable {
             out.push(t);
         }
         Ok(out)
+    }
+
+    /// The common normals of the table at joint values `q`: for each row, the segment
+    /// `[start, end]` (base link frame, metres) between the axis of DH frame `i - 1` and that of
+    /// frame `i` (frames as [`DhTable::frames`]) along which the row's `a` is measured. Standard
+    /// convention: from the foot of frame `i`'s origin on `z(i-1)` to that origin; modified:
+    /// from frame `i - 1`'s origin to its foot on `z(i)`. A zero `a` gives a point.
+    ///
+    /// # Errors
+    /// [`CoreError::JointCount`] when `q` has the wrong length.
+    pub fn common_normals(&self, q: &[f64]) -> Result<Vec<[Vector3<f64>; 2]>, CoreError> {
+        let frames = self.frames(q)?;
+        // The foot of `p` on the z axis of `frame`.
+        let foot = |frame: &Isometry3<f64>, p: Vector3<f64>| {
+            let (o, z) = (frame.translation.vector, frame.rotation * Vector3::z());
+            o + z * (p - o).dot(&z)
+        };
+        Ok(frames
+            .windows(2)
+            .map(|w| {
+                let (from, to) = (&w[0], &w[1]);
+                match self.convention {
+                    Convention::Standard => {
+                        let end = to.translation.vector;
+                        [foot(from, end), end]
+                    }
+                    Convention::Modified => {
+                        let start = from.translation.vector;
+                        [start, foot(to, start)]
+                    }
+                }
+            })
+            .collect())
     }
 
     fn check_len(&self, q: &[f64]) -> Result<(), CoreError> {

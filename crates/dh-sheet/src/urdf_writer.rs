@@ -338,6 +338,42 @@ pub fn urdf_of(table: &DhTable, name: &str, base_link: &str, tip_link: &str) -> 
     s
 }
 
+/// What `urdf-dh to-urdf` writes for `sheet` (read from the file shown as `sheet_name`): the
+/// URDF of its table ([`urdf_of`]), named `name` (default: the sheet's `robot`, else `robot`),
+/// with the proof of what was written ([`prove_urdf`], `samples` joint-value samples drawn with
+/// `seed`) appended as a comment after the root element, and that proof.
+///
+/// # Errors
+/// Names the URDF cannot carry ([`check_urdf`]); a written URDF that does not read back.
+pub fn write_proved(
+    sheet: &crate::Sheet,
+    sheet_name: &str,
+    name: Option<&str>,
+    base_link: &str,
+    tip_link: &str,
+    samples: usize,
+    seed: u64,
+) -> Result<(String, UrdfProof)> {
+    let robot = name
+        .map(str::to_string)
+        .or(sheet.robot.clone().filter(|n| !n.trim().is_empty()))
+        .unwrap_or_else(|| "robot".into());
+    check_urdf(&sheet.table, &robot, base_link, tip_link)?;
+    let mut text = urdf_of(&sheet.table, &robot, base_link, tip_link);
+    let proof = prove_urdf(&text, &sheet.table, base_link, tip_link, samples, seed)?;
+    let verdict = if proof.passed { "PASS" } else { "FAIL" };
+    let _ = writeln!(
+        text,
+        "<!-- verification of this URDF as written (extracted again): {} joint samples (seed {seed}) against {sheet_name}: max position error {:.1e} m (bound {:.1e}), max orientation error {:.1e} rad (bound {:.1e}): {verdict} -->",
+        proof.samples,
+        proof.deviation.0,
+        crate::units::bound_for_print(proof.bound.0),
+        proof.deviation.1,
+        crate::units::bound_for_print(proof.bound.1)
+    );
+    Ok((text, proof))
+}
+
 /// The check of a written URDF: it is read back and extracted, and that table (with the
 /// written `<mimic>` couplings) is compared with the sheet by forward kinematics, within the
 /// extraction's bound, the written precision (15 decimals) and the float error of the sheet's

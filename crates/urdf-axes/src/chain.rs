@@ -351,6 +351,26 @@ impl Chain {
         Ok(lines)
     }
 
+    /// The URDF's own frames along the chain at joint values `q` (same order and units as
+    /// [`Chain::fk`]), in the base link frame: the child link frame of each moving joint after
+    /// its motion (fixed joints folded in, as in [`Chain::fk`]), then the tip link frame, which
+    /// is `fk(q)`. For drawing the links as the URDF places them.
+    ///
+    /// # Errors
+    /// [`UrdfError::JointCount`] when `q` has the wrong length.
+    pub fn link_poses(&self, q: &[f64]) -> Result<Vec<Isometry3<f64>>, UrdfError> {
+        self.check_len(q)?;
+        let mut t = Isometry3::identity();
+        let mut poses = Vec::with_capacity(self.segments.len() + 1);
+        for (seg, &qi) in self.segments.iter().zip(q) {
+            t *= seg.origin;
+            apply_motion(&mut t, seg, qi);
+            poses.push(t);
+        }
+        poses.push(t * self.tail);
+        Ok(poses)
+    }
+
     /// Names of the fixed joints between base and tip, folded into their neighbours, in chain
     /// order.
     pub fn folded_fixed(&self) -> &[String] {
@@ -399,6 +419,39 @@ mod tests {
         assert_relative_eq!(u.x, std::f64::consts::FRAC_1_SQRT_2, epsilon = 1e-15);
         let u = unit_axis([0.0, 0.0, -3.0]).unwrap();
         assert_relative_eq!(*u, -Vector3::z(), epsilon = 1e-15);
+    }
+
+    /// The child link frames sit on their joints' axes at any `q` (a joint frame's origin is
+    /// its child link's), the last pose is `fk(q)`, a fixed joint mid-chain is folded in.
+    #[test]
+    fn link_poses_follow_the_axes_and_end_at_the_tip() {
+        let urdf = r#"<robot name="r"><link name="b"/><link name="l1"/><link name="f"/>
+          <link name="l2"/><link name="t"/>
+          <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/>
+            <origin xyz="0 0 0.3" rpy="0.2 0 0"/><axis xyz="0 0 1"/>
+            <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+          <joint name="fx" type="fixed"><parent link="l1"/><child link="f"/>
+            <origin xyz="0.1 0 0" rpy="0 0.3 0"/></joint>
+          <joint name="j2" type="prismatic"><parent link="f"/><child link="l2"/>
+            <origin xyz="0 0.2 0"/><axis xyz="1 0 0"/>
+            <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+          <joint name="tt" type="fixed"><parent link="l2"/><child link="t"/>
+            <origin xyz="0 0 0.05"/></joint></robot>"#;
+        let model = UrdfModel::parse(urdf).unwrap();
+        let chain = model.chain(Some("b"), Some("t")).unwrap();
+        let q = [0.7, 0.25];
+        let poses = chain.link_poses(&q).unwrap();
+        assert_eq!(poses.len(), 3);
+        assert_relative_eq!(poses[2], chain.fk(&q), epsilon = 1e-15);
+        let lines = chain.axis_lines(&q).unwrap();
+        // j1's child frame: on j1's axis, at the joint origin (a rotation leaves it there).
+        assert!(lines[0].distance_to_point(&poses[0].translation.vector) < 1e-14);
+        assert_relative_eq!(poses[0].translation.vector, Vector3::new(0.0, 0.0, 0.3));
+        // j2 slides its child frame 0.25 m along its own axis from where the joint frame is.
+        let slid = poses[1].translation.vector - lines[1].direction() * 0.25;
+        assert!(lines[1].distance_to_point(&slid) < 1e-14);
+        assert!(lines[1].distance_to_point(&poses[1].translation.vector) < 1e-14);
+        assert!(chain.link_poses(&[0.0]).is_err());
     }
 
     #[test]

@@ -122,3 +122,34 @@ fn wrong_joint_count_is_an_error() {
         })
     );
 }
+
+/// Each common normal is as long as its row's `a`, perpendicular to the z axes of the two
+/// frames it joins, and ends on both axes; the same in the other convention.
+#[test]
+fn common_normals_are_the_rows_a_between_consecutive_axes() {
+    let q = [0.3, -0.7, 1.1, 0.2, -0.4, 0.05];
+    for table in [ur5(), ur5().to_convention(Convention::Modified)] {
+        let frames = table.frames(&q).unwrap();
+        let normals = table.common_normals(&q).unwrap();
+        assert_eq!(normals.len(), table.rows.len());
+        // In the modified convention row i's `a` is measured from frame i - 1: it holds what
+        // standard row i - 1 holds.
+        for (i, [start, end]) in normals.iter().enumerate() {
+            let (from, to) = (&frames[i], &frames[i + 1]);
+            let a = table.rows[i].a.abs();
+            assert!(((end - start).norm() - a).abs() < 1e-12, "row {i}: length");
+            let on_axis = |f: &Isometry3<f64>, p: &Vector3<f64>| {
+                let (o, z) = (f.translation.vector, f.rotation * Vector3::z());
+                ((p - o) - z * (p - o).dot(&z)).norm()
+            };
+            assert!(on_axis(from, start) < 1e-12, "row {i}: start on z(i-1)");
+            assert!(on_axis(to, end) < 1e-12, "row {i}: end on z(i)");
+            if a > 0.0 {
+                let dir = (end - start) / a;
+                assert!(dir.dot(&(from.rotation * Vector3::z())).abs() < 1e-12);
+                assert!(dir.dot(&(to.rotation * Vector3::z())).abs() < 1e-12);
+            }
+        }
+    }
+    assert!(ur5().common_normals(&[0.0]).is_err());
+}

@@ -1,0 +1,196 @@
+//! What the page's 3-D view draws: the URDF's frames along a chain and the DH frames of its
+//! table at the same joint values, both from the library (`urdf_axes::Chain::link_poses`,
+//! `dh_core::DhTable::frames`, `DhTable::common_normals`), in the base link frame, metres.
+//!
+//! Poses go to JavaScript as 4x4 homogeneous matrices in column-major order (16 numbers, as
+//! three.js's `Matrix4.fromArray` reads them).
+
+use anyhow::Context as _;
+use dh_core::{DhTable, JointKind};
+use dh_sheet::extract::extract_bytes;
+use nalgebra::Isometry3;
+use serde::Serialize;
+use urdf_axes::{Chain, UrdfModel};
+use wasm_bindgen::prelude::*;
+
+use crate::{js_error, ExtractOptionsDoc};
+
+/// A pose as 16 numbers, column-major.
+fn matrix(p: &Isometry3<f64>) -> Vec<f64> {
+    p.to_homogeneous().as_slice().to_vec()
+}
+
+/// One link of the tree.
+#[derive(Serialize)]
+struct LinkDoc<'a> {
+    name: &'a str,
+    parent: Option<&'a str>,
+    joint: Option<&'a str>,
+}
+
+/// The default chain.
+#[derive(Serialize)]
+struct ChainDoc<'a> {
+    base: &'a str,
+    tip: &'a str,
+}
+
+/// The tree of [`crate::tree`].
+#[derive(Serialize)]
+struct TreeDoc<'a> {
+    robot: &'a str,
+    root: &'a str,
+    links: Vec<LinkDoc<'a>>,
+    default: Option<ChainDoc<'a>>,
+    default_error: Option<String>,
+}
+
+/// See [`crate::tree`].
+pub(crate) fn tree(urdf: &[u8], name: &str) -> anyhow::Result<String> {
+    let model = UrdfModel::from_bytes(urdf).with_context(|| format!("{name}: invalid URDF"))?;
+    let links = model
+        .links()
+        .into_iter()
+        .map(|link| {
+            let parent = model.parent_joint(link);
+            LinkDoc {
+                name: link,
+                parent: parent.map(|p| p.1),
+                joint: parent.map(|p| p.0),
+            }
+        })
+        .collect();
+    let chain = model.chain(None, None);
+    let (default, default_error) = match &chain {
+        Ok(c) => (
+            Some(ChainDoc {
+                base: c.base(),
+                tip: c.tip(),
+            }),
+            None,
+        ),
+        Err(e) => (
+            None,
+            Some(format!(
+                "{:#}",
+                dh_sheet::input::chain_error(name, e.clone())
+            )),
+        ),
+    };
+    let doc = TreeDoc {
+        robot: model.robot_name(),
+        root: model.root_link(),
+        links,
+        default,
+        default_error,
+    };
+    Ok(serde_json::to_string(&doc)?)
+}
+
+/// One moving joint, for its slider.
+#[derive(Serialize)]
+struct JointDoc<'a> {
+    name: &'a str,
+    /// `revolute` (radians) or `prismatic` (metres).
+    kind: &'static str,
+    /// Lower limit, `null` for a continuous joint.
+    lower: Option<f64>,
+    /// Upper limit, `null` for a continuous joint.
+    upper: Option<f64>,
+}
+
+/// The scene at one set of joint values.
+#[derive(Serialize)]
+struct SceneDoc {
+    /// The URDF's child link frame of each moving joint, then the tip link frame.
+    urdf: Vec<Vec<f64>>,
+    /// Each joint axis at `q`: a point and the unit direction.
+    axes: Vec<[f64; 6]>,
+    /// DH frames `0..=n`.
+    dh: Vec<Vec<f64>>,
+    /// Each row's common normal: start and end points.
+    normals: Vec<[f64; 6]>,
+    /// The DH table's tip pose (`dh[n]` times the tool).
+    dh_tip: Vec<f64>,
+}
+
+/// A chain of a URDF and its DH table (SI units), extracted once for the sliders.
+#[wasm_bindgen]
+pub struct Robot {
+    chain: Chain,
+    table: DhTable,
+}
+
+#[wasm_bindgen]
+impl Robot {
+    /// Extracts the chain chosen by `options` (those of [`crate::extract`]; units and format
+    /// do not matter: the scene is in metres and radians).
+    ///
+    /// # Errors
+    /// As [`crate::extract`].
+    #[wasm_bindgen(constructor)]
+    pub fn new(urdf: &str, options: &str) -> Result<Robot, JsError> {
+        let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
+        let ex = extract_bytes(
+            urdf.as_bytes(),
+            &o.name,
+            o.base.as_deref(),
+            o.tip.as_deref(),
+            &o.options().map_err(js_error)?,
+        )
+        .map_err(js_error)?;
+        Ok(Robot {
+            chain: ex.chain,
+            table: ex.extraction.table,
+        })
+    }
+
+    /// The moving joints as JSON `[{name, kind, lower, upper}]`, in row order.
+    ///
+    /// # Errors
+    /// None expected (serialising plain data).
+    pub fn joints(&self) -> Result<String, JsError> {
+        let joints: Vec<JointDoc> = self
+            .chain
+            .axes()
+            .iter()
+            .map(|a| JointDoc {
+                name: &a.name,
+                kind: match a.kind {
+                    JointKind::Revolute => "revolute",
+                    JointKind::Prismatic => "prismatic",
+                },
+                lower: a.limits.map(|l| l.lower),
+                upper: a.limits.map(|l| l.upper),
+            })
+            .collect();
+        serde_json::to_string(&joints).map_err(|e| JsError::new(&e.to_string()))
+    }
+
+    /// Both forward kinematics at joint values `q` (one per row; radians, metres) as JSON
+    /// `{urdf, axes, dh, normals, dh_tip}` (see the module's documentation for the layout).
+    ///
+    /// # Errors
+    /// `q` of the wrong length or not finite.
+    pub fn fk(&self, q: &[f64]) -> Result<String, JsError> {
+        let run = || -> anyhow::Result<String> {
+            let urdf = self.chain.link_poses(q)?;
+            let axes = self.chain.axis_lines(q)?;
+            let dh = self.table.frames(q)?;
+            let normals = self.table.common_normals(q)?;
+            let dh_tip = self.table.fk(q)?;
+            let six = |a: nalgebra::Vector3<f64>, b: nalgebra::Vector3<f64>| {
+                [a.x, a.y, a.z, b.x, b.y, b.z]
+            };
+            let doc = SceneDoc {
+                urdf: urdf.iter().map(matrix).collect(),
+                axes: axes.iter().map(|l| six(l.point(), l.direction())).collect(),
+                dh: dh.iter().map(matrix).collect(),
+                normals: normals.iter().map(|[a, b]| six(*a, *b)).collect(),
+                dh_tip: matrix(&dh_tip),
+            };
+            Ok(serde_json::to_string(&doc)?)
+        };
+        run().map_err(js_error)
+    }
+}
