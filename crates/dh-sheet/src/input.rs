@@ -82,7 +82,8 @@ pub fn utf8_text(path: &str, mut bytes: Vec<u8>) -> Result<String> {
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
         hinted(
             format!(
-                "{path}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})"
+                "{}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})",
+                crate::text::quote(path)
             ),
             "convert the file to UTF-8, e.g. iconv -f latin1 -t utf-8 FILE > FILE.utf8",
         )
@@ -97,15 +98,16 @@ pub fn read_robot(path: &str) -> Result<Vec<u8>> {
     if !path.ends_with(".xacro") {
         return read_robot_bytes(path);
     }
+    let shown = crate::text::quote(path);
     if !Path::new(path).is_file() {
-        anyhow::bail!("{path}: cannot read the file: no such file");
+        anyhow::bail!("{shown}: cannot read the file: no such file");
     }
-    let pipe = format!("xacro {path} | urdf-dh extract -");
+    let pipe = format!("xacro {shown} | urdf-dh extract -");
     let out = match Command::new("xacro").arg(path).output() {
         Ok(out) => out,
         Err(_) => {
             return Err(hinted(
-                format!("{path}: a .xacro file needs the 'xacro' command, which is not on PATH"),
+                format!("{shown}: a .xacro file needs the 'xacro' command, which is not on PATH"),
                 format!("install it with 'pip install xacro', or expand it yourself: {pipe}"),
             ))
         }
@@ -113,7 +115,7 @@ pub fn read_robot(path: &str) -> Result<Vec<u8>> {
     if !out.status.success() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         return Err(hinted(
-            format!("{path}: xacro failed: {}", stderr.trim()),
+            format!("{shown}: xacro failed: {}", stderr.trim()),
             format!("try it by hand: {pipe}"),
         ));
     }
