@@ -482,6 +482,7 @@ fn usage_mistakes_get_a_word() {
         "{}",
         r.stderr
     );
+    assert!(!r.stderr.contains("to pass '--tp' as a value"), "{}", r.stderr);
 
     // Standard output is named as such.
     let r = run_in(
