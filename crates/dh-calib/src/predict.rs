@@ -361,11 +361,18 @@ impl Calibrated {
             let mut u = [0.0; 6];
             for row in rows {
                 let gr = &g[row * m..(row + 1) * m];
+                // g C gᵀ over the upper triangle of the symmetric C: Σ_j g_j (C_jj g_j +
+                // 2 Σ_{k>j} C_jk g_k), each column's tail contiguous; parameters that do not
+                // move this prediction (the other targets') skipped.
                 let mut sum = 0.0;
                 for (j, gj) in gr.iter().enumerate() {
-                    if *gj != 0.0 {
-                        sum += gj * p.matrix.column(j).dot(&DVectorView::from_slice(gr, m));
+                    if *gj == 0.0 {
+                        continue;
                     }
+                    let column = p.matrix.column(j);
+                    let tail = column.rows_range(j + 1..m);
+                    let cross = tail.dot(&DVectorView::from_slice(&gr[j + 1..], m - j - 1));
+                    sum += gj * (column[j] * gj + 2.0 * cross);
                 }
                 u[row] = sum.max(0.0).sqrt();
             }
