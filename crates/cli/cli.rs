@@ -311,6 +311,13 @@ where
                 text = format!("urdf-dh: error: {rest}");
             }
             if let Some(option) = similar_option(&args, &e) {
+                // clap's "to pass '--tpi' as a value, use '-- --tpi'" misleads when the option
+                // was mistyped: the hint says which one was meant.
+                if let Some(at) = text.find("\n  tip: to pass '") {
+                    if let Some(end) = text[at + 1..].find("\n\n") {
+                        text.replace_range(at + 1..at + 1 + end + 2, "");
+                    }
+                }
                 text.push_str(&format!("hint: did you mean '{option}'?\n"));
             }
             let code = e.exit_code();

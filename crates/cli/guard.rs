@@ -13,8 +13,8 @@ use std::io::Write;
 
 pub use dh_sheet::ranges::*;
 pub use dh_sheet::text::{
-    column_width, cut, escape, is_spoofing, json_line, json_pretty, name_problem, output_name, quote,
-    shorten, MAX_COLUMN,
+    column_width, cut, escape, is_spoofing, json_line, json_pretty, name_problem, output_name,
+    quote, shorten, MAX_COLUMN,
 };
 
 /// A writer that passes text on with every [`is_spoofing`] character but the line feed
@@ -37,8 +37,7 @@ impl Write for Escaping<'_> {
             return self.0.write(buf);
         }
         let escaped: Vec<Cow<'_, str>> = s.split('\n').map(escape).collect();
-        self.0
-            .write_all(shorten(&escaped.join("\n")).as_bytes())?;
+        self.0.write_all(shorten(&escaped.join("\n")).as_bytes())?;
         Ok(buf.len())
     }
 
@@ -81,7 +80,10 @@ fn output_named(path: &str, what: &str, accepted: &[&str]) -> Result<String, Str
         return Ok(path.into());
     }
     let p = std::path::Path::new(path);
-    let Some(ext) = p.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()) else {
+    let Some(ext) = p
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+    else {
         return Ok(path.into());
     };
     if accepted.contains(&ext.as_str()) {
@@ -180,7 +182,10 @@ mod tests {
         }
         let text = String::from_utf8(buf).unwrap();
         assert!(text.len() < 400, "{}", text.len());
-        assert!(text.starts_with("tip 'ttt") && text.ends_with("tt' not found\n"), "{text}");
+        assert!(
+            text.starts_with("tip 'ttt") && text.ends_with("tt' not found\n"),
+            "{text}"
+        );
         assert!(text.contains("characters cut"), "{text}");
     }
 
@@ -191,12 +196,19 @@ mod tests {
         assert_eq!(svg_output("chart").unwrap(), "chart");
         assert_eq!(svg_output("chart.v2.SVG").unwrap(), "chart.v2.SVG");
         let e = svg_output("chart.png").unwrap_err();
-        assert!(e.contains("ending in .svg") && e.contains("found '.png', which names a PNG image"), "{e}");
+        assert!(
+            e.contains("ending in .svg") && e.contains("found '.png', which names a PNG image"),
+            "{e}"
+        );
         assert!(e.ends_with("name it e.g. chart.svg"), "{e}");
         assert!(csv_output("p.txt").is_ok() && csv_output("p.dat").is_ok());
-        assert!(csv_output("p.yaml").unwrap_err().contains("writes a CSV table"));
+        assert!(csv_output("p.yaml")
+            .unwrap_err()
+            .contains("writes a CSV table"));
         assert!(model_output("m.urdf").is_ok() && model_output("m.json").is_ok());
-        assert!(model_output("m.txt").unwrap_err().contains("found '.txt', which names plain text"));
+        assert!(model_output("m.txt")
+            .unwrap_err()
+            .contains("found '.txt', which names plain text"));
         assert!(yaml_output("t.json").is_err());
     }
 

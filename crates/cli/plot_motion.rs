@@ -315,6 +315,7 @@ mod tests {
                 sinusoid: None,
                 combined: None,
             },
+            screen: dh_calib::cpa::SweepScreen::default(),
         }
     }
 

@@ -172,3 +172,94 @@ fn the_plot_draws_each_joints_motion_and_its_trend() {
     assert!(stderr.contains("--plot"), "{stderr}");
     assert_eq!(std::fs::read(&data).unwrap(), before);
 }
+
+/// The joint's axis as (point nearest the origin, direction) from `cpa --format json`.
+fn axes(doc: &Value) -> Vec<([f64; 3], [f64; 3])> {
+    let v = |a: &Value| -> [f64; 3] {
+        let a = a.as_array().unwrap();
+        [0, 1, 2].map(|k| a[k].as_f64().unwrap())
+    };
+    doc["cpa"]["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| (v(&j["axis"]["point"]), v(&j["axis"]["direction"])))
+        .collect()
+}
+
+#[test]
+fn a_point_a_metre_off_is_left_out_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("sweeps.csv").to_string_lossy().into_owned();
+    simulate(
+        "fixtures/robots/ur5/vendor.yaml",
+        "7",
+        &data,
+        &["--cpa", "--noise", "1e-5", "--targets", "3", "--seed", "4"],
+    );
+    let clean: Value = serde_json::from_str(&ok(&["cpa", &data, "--format", "json"])).unwrap();
+    for j in clean["cpa"]["joints"].as_array().unwrap() {
+        assert_eq!(j["screen"]["left_out"].as_array().unwrap().len(), 0, "{j}");
+        assert_eq!(j["screen"]["sound"], true, "{j}");
+    }
+    // One point of the elbow's sweep 1 m off along x (a lost beam's reflection).
+    let text = std::fs::read_to_string(&data).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let header: Vec<&str> = lines
+        .iter()
+        .find(|l| !l.starts_with('#'))
+        .unwrap()
+        .split(',')
+        .collect();
+    let col = |n: &str| header.iter().position(|c| *c == n).unwrap();
+    let clean_doc = &clean["cpa"];
+    let elbow = clean_doc["sweeps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["joint"] == "elbow_joint")
+        .unwrap();
+    let line = elbow["lines"][0].as_u64().unwrap() as usize + 4;
+    let mut cells: Vec<String> = lines[line - 1].split(',').map(String::from).collect();
+    let x: f64 = cells[col("x")].parse().unwrap();
+    cells[col("x")] = (x + 1.0).to_string();
+    let target = cells[col("target")].clone();
+    let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    out[line - 1] = cells.join(",");
+    let bad = dir.path().join("bad.csv").to_string_lossy().into_owned();
+    std::fs::write(&bad, out.join("\n") + "\n").unwrap();
+
+    let (code, stdout, stderr) = crate::common::exec(&["cpa", &bad, "--format", "json"]);
+    assert_eq!(code, 0, "{stderr}");
+    let doc: Value = serde_json::from_str(&stdout).unwrap();
+    for (k, (a, b)) in axes(&clean).iter().zip(axes(&doc)).enumerate() {
+        let d = |u: [f64; 3], v: [f64; 3]| {
+            ((u[0] - v[0]).powi(2) + (u[1] - v[1]).powi(2) + (u[2] - v[2]).powi(2)).sqrt()
+        };
+        // The clean fit less one clean point, at 10 um of noise: the same axis to within the
+        // noise (the point a metre off moved it by 0.3 m).
+        assert!(
+            d(a.0, b.0) < 5e-5 && d(a.1, b.1) < 5e-5,
+            "joint {k}: {a:?} {b:?}"
+        );
+    }
+    let joint = doc["cpa"]["joints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|j| j["name"] == "elbow_joint")
+        .unwrap();
+    let left = joint["screen"]["left_out"].as_array().unwrap();
+    assert_eq!(left.len(), 1, "{joint}");
+    assert_eq!(left[0]["line"], line, "{joint}");
+    assert_eq!(left[0]["target"], target.as_str(), "{joint}");
+    let distance = left[0]["distance"].as_f64().unwrap();
+    assert!((0.5..=1.0 + 1e-3).contains(&distance), "{distance}");
+    // The text report names it.
+    let text = ok(&["cpa", &bad]);
+    assert!(
+        text.contains("elbow_joint: 1 point(s) left out")
+            && text.contains(&format!("  line {line}, target {target}: ")),
+        "{text}"
+    );
+}

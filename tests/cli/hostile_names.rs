@@ -96,17 +96,31 @@ fn hostile_folder() -> tempfile::TempDir {
     std::fs::write(d.join("source.yaml"), with("source")).unwrap();
     std::fs::write(
         d.join("tip.yaml"),
-        format!("{}tip_link: {yaml_text}\nbase_link: base_link\n", with("none")),
+        format!(
+            "{}tip_link: {yaml_text}\nbase_link: base_link\n",
+            with("none")
+        ),
     )
     .unwrap();
     std::fs::write(
         d.join("effect.yaml"),
-        format!("{}effects:\n  - {{name: {yaml_text}, value: 1, unit: m}}\n", with("none")),
+        format!(
+            "{}effects:\n  - {{name: {yaml_text}, value: 1, unit: m}}\n",
+            with("none")
+        ),
     )
     .unwrap();
     let r = run_in(
         d,
-        &["simulate", "--model", "vendor.yaml", "--poses", "30", "--out", "d.csv"],
+        &[
+            "simulate",
+            "--model",
+            "vendor.yaml",
+            "--poses",
+            "30",
+            "--out",
+            "d.csv",
+        ],
     );
     assert_eq!(r.code, 0, "{}", r.stderr);
     std::fs::write(
@@ -129,25 +143,93 @@ fn no_hostile_name_reaches_the_terminal_raw() {
         vec!["extract", "robot.urdf", "--tip", &tip],
         vec!["extract", "robot.urdf", "--base", &tip, "--format", "yaml"],
         vec!["check", "esc.urdf", "--sheet", "vendor.yaml"],
-        vec!["check", "robot.urdf", "--sheet", "robot.yaml", "--format", "json"],
-        vec!["check", "robot.urdf", "--sheet", "vendor.yaml", "--tip", &tip],
-        vec!["convert", "robot.yaml", "--to", "modified", "--format", "text"],
-        vec!["convert", "source.yaml", "--to", "modified", "--format", "json"],
-        vec!["convert", "tip.yaml", "--to", "modified", "--format", "markdown"],
-        vec!["convert", "effect.yaml", "--to", "modified", "--format", "csv"],
+        vec![
+            "check",
+            "robot.urdf",
+            "--sheet",
+            "robot.yaml",
+            "--format",
+            "json",
+        ],
+        vec![
+            "check",
+            "robot.urdf",
+            "--sheet",
+            "vendor.yaml",
+            "--tip",
+            &tip,
+        ],
+        vec![
+            "convert",
+            "robot.yaml",
+            "--to",
+            "modified",
+            "--format",
+            "text",
+        ],
+        vec![
+            "convert",
+            "source.yaml",
+            "--to",
+            "modified",
+            "--format",
+            "json",
+        ],
+        vec![
+            "convert", "tip.yaml", "--to", "modified", "--format", "markdown",
+        ],
+        vec![
+            "convert",
+            "effect.yaml",
+            "--to",
+            "modified",
+            "--format",
+            "csv",
+        ],
         vec!["to-urdf", "robot.yaml"],
         vec!["to-urdf", "vendor.yaml", "--name", &name, "--samples", "10"],
-        vec!["to-urdf", "vendor.yaml", "--tip-link", &tip, "--samples", "10"],
+        vec![
+            "to-urdf",
+            "vendor.yaml",
+            "--tip-link",
+            &tip,
+            "--samples",
+            "10",
+        ],
         vec!["batch", "list.txt", "--samples", "10"],
         vec!["calibrate", "--model", "robot.yaml", "--data", "d.csv"],
-        vec!["calibrate", "--model", "effect.yaml", "--data", "d.csv", "--format", "json"],
+        vec![
+            "calibrate",
+            "--model",
+            "effect.yaml",
+            "--data",
+            "d.csv",
+            "--format",
+            "json",
+        ],
         vec!["calibrate", "--model", "esc.urdf", "--data", "d.csv"],
-        vec!["calibrate", "--model", "robot.urdf", "--tip", &tip, "--data", "d.csv"],
+        vec![
+            "calibrate",
+            "--model",
+            "robot.urdf",
+            "--tip",
+            &tip,
+            "--data",
+            "d.csv",
+        ],
         vec!["simulate", "--model", "robot.yaml", "--out", "s.csv"],
         vec!["simulate", "--model", "esc.urdf", "--out", "s.csv"],
         vec!["cpa", "d.csv", "--model", "robot.yaml"],
         vec!["predict", "--model", "robot.yaml", "--joints", "d.csv"],
-        vec!["compensate", "--nominal", "robot.yaml", "--model", "vendor.yaml", "--joints", "d.csv"],
+        vec![
+            "compensate",
+            "--nominal",
+            "robot.yaml",
+            "--model",
+            "vendor.yaml",
+            "--joints",
+            "d.csv",
+        ],
         vec!["import", "d.csv", "--joint-names", &name],
     ];
     for args in &runs {
@@ -163,7 +245,8 @@ fn hostile_robot_names_are_refused_where_they_are_read() {
     let r = run_in(d, &["extract", "esc.urdf"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
     assert!(
-        r.stderr.contains("esc.urdf: invalid URDF: robot '\\u{1b}[2Jx\\u{202e}y\\u{9b}1m'")
+        r.stderr
+            .contains("esc.urdf: invalid URDF: robot '\\u{1b}[2Jx\\u{202e}y\\u{9b}1m'")
             && r.stderr.contains("found U+001B at character 1"),
         "{}",
         r.stderr
@@ -200,12 +283,18 @@ fn batch_json_carries_a_hostile_tip_as_escapes_that_read_back() {
     let r = run_in(dir.path(), &["batch", "list.txt", "--samples", "10"]);
     assert_clean("batch", &r);
     let first = r.stdout.lines().next().expect("a line per chain");
-    assert!(first.contains("\\u202e") && first.contains("\\u001b") && first.contains("\\u009b"), "{first}");
+    assert!(
+        first.contains("\\u202e") && first.contains("\\u001b") && first.contains("\\u009b"),
+        "{first}"
+    );
     let v: serde_json::Value = serde_json::from_str(first).unwrap();
     assert_eq!(v["tip"], format!("tool0{HOSTILE}"));
     // The hostile URDF's line is refused, its error escaped in the JSON too.
     let second: serde_json::Value = serde_json::from_str(r.stdout.lines().nth(1).unwrap()).unwrap();
-    assert!(second["error"].as_str().unwrap().contains("robot '"), "{second}");
+    assert!(
+        second["error"].as_str().unwrap().contains("robot '"),
+        "{second}"
+    );
 }
 
 #[test]
@@ -213,16 +302,39 @@ fn a_model_file_name_with_a_line_feed_is_simulated_and_reads_back() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::copy(ur5().join("vendor.yaml"), d.join("a\nb.yaml")).unwrap();
-    let r = run_in(d, &["simulate", "--model", "a\nb.yaml", "--poses", "20", "--out", "x\u{202e}.csv"]);
+    let r = run_in(
+        d,
+        &[
+            "simulate",
+            "--model",
+            "a\nb.yaml",
+            "--poses",
+            "20",
+            "--out",
+            "x\u{202e}.csv",
+        ],
+    );
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert_clean("simulate", &r);
     let csv = std::fs::read_to_string(d.join("x\u{202e}.csv")).unwrap();
     let first = csv.lines().next().unwrap();
-    assert!(first.starts_with("# simulated by urdf-dh simulate from a\\u{a}b.yaml (seed 1, 20 poses"), "{first}");
+    assert!(
+        first.starts_with("# simulated by urdf-dh simulate from a\\u{a}b.yaml (seed 1, 20 poses"),
+        "{first}"
+    );
     let header = csv.lines().find(|l| !l.starts_with('#')).unwrap();
     assert!(header.starts_with("shoulder_pan_joint,"), "{csv}");
     // Both files read back: the data by calibrate, the truth as a sheet.
-    let r = run_in(d, &["calibrate", "--model", "x\u{202e}.truth.yaml", "--data", "x\u{202e}.csv"]);
+    let r = run_in(
+        d,
+        &[
+            "calibrate",
+            "--model",
+            "x\u{202e}.truth.yaml",
+            "--data",
+            "x\u{202e}.csv",
+        ],
+    );
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert_clean("calibrate", &r);
 }
@@ -231,21 +343,43 @@ fn a_model_file_name_with_a_line_feed_is_simulated_and_reads_back() {
 fn long_tips_and_paths_are_cut_in_messages() {
     let tip = format!("a{}z", "t".repeat(100_000));
     let robot = ur5().join("robot.urdf");
-    let r = run_in(&root(), &["extract", robot.to_str().unwrap(), "--tip", &tip]);
+    let r = run_in(
+        &root(),
+        &["extract", robot.to_str().unwrap(), "--tip", &tip],
+    );
     assert_eq!(r.code, 2);
     assert!(r.stderr.len() < 2_000, "{} bytes", r.stderr.len());
-    assert!(r.stderr.contains("tip link 'atttt") && r.stderr.contains("tttz'"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("tip link 'atttt") && r.stderr.contains("tttz'"),
+        "{}",
+        r.stderr
+    );
     // The quote that opens the name is part of the word cut: 100 002 characters less 157 kept.
-    assert!(r.stderr.contains("…(99845 characters cut)…"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("…(99845 characters cut)…"),
+        "{}",
+        r.stderr
+    );
     let path = format!("{}.urdf", "p".repeat(100_000));
     for args in [
         vec!["extract", path.as_str()],
         vec!["convert", path.as_str(), "--to", "modified"],
-        vec!["calibrate", "--model", path.as_str(), "--data", path.as_str()],
+        vec![
+            "calibrate",
+            "--model",
+            path.as_str(),
+            "--data",
+            path.as_str(),
+        ],
     ] {
         let r = run_in(&root(), &args);
         assert_eq!(r.code, 2, "{}", r.stderr);
-        assert!(r.stderr.len() < 2_000, "{}: {} bytes", args[0], r.stderr.len());
+        assert!(
+            r.stderr.len() < 2_000,
+            "{}: {} bytes",
+            args[0],
+            r.stderr.len()
+        );
         assert!(r.stderr.contains("characters cut)…pppp"), "{}", r.stderr);
     }
 }
@@ -280,6 +414,16 @@ fn usage_mistakes_get_a_word() {
     assert_eq!(r.code, 2);
     assert!(r.stderr.contains("--svg"), "{}", r.stderr);
 
+    // --arc shapes only the sweeps of --cpa.
+    let r = run_in(
+        d,
+        &[
+            "simulate", "--model", sheet, "--out", "d.csv", "--arc", "0.5",
+        ],
+    );
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("--cpa"), "{}", r.stderr);
+
     // An output's extension names another format.
     let r = run_in(d, &["extract", robot, "--svg", "frames.png"]);
     assert_eq!(r.code, 2);
@@ -289,26 +433,64 @@ fn usage_mistakes_get_a_word() {
         r.stderr
     );
     assert!(!d.join("frames.png").exists());
-    let r = run_in(d, &["calibrate", "--model", sheet, "--data", "d.csv", "--out", "m.txt"]);
+    let r = run_in(
+        d,
+        &[
+            "calibrate",
+            "--model",
+            sheet,
+            "--data",
+            "d.csv",
+            "--out",
+            "m.txt",
+        ],
+    );
     assert_eq!(r.code, 2);
-    assert!(r.stderr.contains("found '.txt', which names plain text"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("found '.txt', which names plain text"),
+        "{}",
+        r.stderr
+    );
     let r = run_in(d, &["simulate", "--model", sheet, "--out", "d.yaml"]);
     assert_eq!(r.code, 2);
-    assert!(r.stderr.contains("this option writes a CSV table"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("this option writes a CSV table"),
+        "{}",
+        r.stderr
+    );
 
     // A negative number meets the option's range, not clap's "unexpected argument".
-    let r = run_in(d, &["simulate", "--model", sheet, "--out", "d.csv", "--noise", "-1"]);
+    let r = run_in(
+        d,
+        &[
+            "simulate", "--model", sheet, "--out", "d.csv", "--noise", "-1",
+        ],
+    );
     assert_eq!(r.code, 2);
     assert!(!r.stderr.contains("unexpected argument"), "{}", r.stderr);
-    assert!(r.stderr.contains("'--noise <SIGMA>'") && r.stderr.contains("found -1"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("'--noise <SIGMA>'") && r.stderr.contains("found -1"),
+        "{}",
+        r.stderr
+    );
 
     // A typo gets the option meant.
     let r = run_in(d, &["extract", robot, "--tp", "tool0"]);
     assert_eq!(r.code, 2);
-    assert!(r.stderr.contains("hint: did you mean '--tip'?"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("hint: did you mean '--tip'?"),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stderr.contains("to pass '--tp' as a value"), "{}", r.stderr);
 
     // Standard output is named as such.
-    let r = run_in(d, &["simulate", "--model", sheet, "--poses", "5", "--out", "-", "--truth", "t.yaml"]);
+    let r = run_in(
+        d,
+        &[
+            "simulate", "--model", sheet, "--poses", "5", "--out", "-", "--truth", "t.yaml",
+        ],
+    );
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(r.stderr.starts_with("urdf-dh: <stdout>: "), "{}", r.stderr);
     assert!(!r.stderr.contains("<stdin>"), "{}", r.stderr);
@@ -319,12 +501,29 @@ fn usage_mistakes_get_a_word() {
     // Files that are not robots are named, with the command that reads them.
     let r = run_in(d, &["extract", sheet]);
     assert_eq!(r.code, 2);
-    assert!(r.stderr.contains("the file is a DH sheet (YAML or JSON)"), "{}", r.stderr);
-    assert!(r.stderr.contains("hint: a sheet is read by check"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("the file is a DH sheet (YAML or JSON)"),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        r.stderr.contains("hint: a sheet is read by check"),
+        "{}",
+        r.stderr
+    );
     let r = run_in(d, &["extract", "d.csv"]);
     assert_eq!(r.code, 2);
-    assert!(r.stderr.contains("the file is a measurement CSV"), "{}", r.stderr);
-    assert!(r.stderr.contains("urdf-dh calibrate --model MODEL --data FILE"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("the file is a measurement CSV"),
+        "{}",
+        r.stderr
+    );
+    assert!(
+        r.stderr
+            .contains("urdf-dh calibrate --model MODEL --data FILE"),
+        "{}",
+        r.stderr
+    );
     std::fs::write(d.join("p.png"), b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0").unwrap();
     let r = run_in(d, &["extract", "p.png"]);
     assert_eq!(r.code, 2);

@@ -91,11 +91,35 @@ fn an_output_that_is_an_input_or_another_output_is_a_usage_error() {
     for (what, (code, out, err)) in &runs {
         assert_eq!(*code, 2, "{what}: {err}");
         assert!(out.is_empty(), "{what}: {out}");
+        // An output named with another format's extension (calibrate --out d.csv, --svg
+        // a.urdf) is refused for its name first (guard::model_output and its siblings).
         assert!(
-            err.starts_with("urdf-dh: error: ") && err.contains("expected a file of its own"),
+            err.starts_with("urdf-dh: error: ")
+                && (err.contains("expected a file of its own")
+                    || err.contains("expected a file name ending in")),
             "{what}: {err}"
         );
     }
+    // The same clashes under names without an extension reach the check of clashes.
+    std::fs::hard_link(p.join("d.csv"), p.join("hard")).unwrap();
+    std::fs::hard_link(p.join("a.urdf"), p.join("arm")).unwrap();
+    for (what, (code, out, err)) in [
+        ("--out hard link, no extension", cal(&["--out", "hard"])),
+        (
+            "--plot = --out, no extension",
+            cal(&["--out", "r", "--plot", "./r"]),
+        ),
+        (
+            "--svg = robot, no extension",
+            exec_in(p, &["extract", "arm", "--svg", "./arm"]),
+        ),
+    ] {
+        assert_eq!(code, 2, "{what}: {err}");
+        assert!(out.is_empty(), "{what}: {out}");
+        assert!(err.contains("expected a file of its own"), "{what}: {err}");
+    }
+    std::fs::remove_file(p.join("hard")).unwrap();
+    std::fs::remove_file(p.join("arm")).unwrap();
     // Nothing was touched, nothing was added.
     assert_eq!(std::fs::read(p.join("d.csv")).unwrap(), data);
     assert_eq!(std::fs::read(p.join("a.urdf")).unwrap(), model);

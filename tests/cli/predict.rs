@@ -233,6 +233,18 @@ fn compensated_joint_values_bring_the_true_robot_to_the_nominal_goal() {
         assert!(report.contains(line), "{line}\n{report}");
     }
     let failed = ["p0", "p14", "p44", "p57"];
+    // Each row says whether it was compensated, and why not.
+    for row in table(Path::new(&out("corrected.csv"))) {
+        let want = match row["config"].as_str() {
+            "p14" => "beyond_limits",
+            "p44" | "p57" => "max_change",
+            "p0" => row["status"].as_str(),
+            _ => "compensated",
+        };
+        assert_eq!(row["status"], want, "{row:?}");
+    }
+    let statuses = table(Path::new(&out("corrected.csv")));
+    assert_ne!(statuses[0]["status"], "compensated");
 
     // Where the true robot's tool goes, at the commanded and the corrected values, against the
     // nominal goal.
@@ -305,6 +317,44 @@ fn compensated_joint_values_bring_the_true_robot_to_the_nominal_goal() {
         after < 2.0 * expected,
         "compensated {after} m against an uncertainty of {expected} m"
     );
+}
+
+#[test]
+fn joint_values_beyond_their_limits_are_predicted_with_a_warning_per_joint() {
+    let dir = tempfile::tempdir().unwrap();
+    let q = dir.path().join("q.csv");
+    let names = "shoulder_pan_joint,shoulder_lift_joint,elbow_joint,wrist_1_joint,wrist_2_joint,wrist_3_joint";
+    std::fs::write(
+        &q,
+        format!("{names}\n0,0,0,0,0,0\n20,0,0,0,0,0\n-7,0,7,0,0,0\n0,0,1,0,0,0\n"),
+    )
+    .unwrap();
+    let (code, out, err) = exec(&["predict", "--model", UR5, "--joints", q.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        out.lines().filter(|l| l.ends_with(",tool,line3")).count(),
+        1,
+        "{out}"
+    );
+    let limits = "[-6.283185307179586, 6.283185307179586] rad";
+    for line in [
+        format!("urdf-dh: warning: q.csv: joint 'shoulder_pan_joint' is outside its limits {limits} in 2 row(s), the first at line 3 (20 rad)"),
+        format!("urdf-dh: warning: q.csv: joint 'elbow_joint' is outside its limits {limits} in 1 row(s), the first at line 4 (7 rad)"),
+    ] {
+        assert!(err.contains(&line), "{line}\n{err}");
+    }
+    assert_eq!(err.matches("warning").count(), 2, "{err}");
+    // Within the limits: no warning.
+    let inside = dir.path().join("inside.csv");
+    std::fs::write(&inside, format!("{names}\n6.28,0,-6.28,0,0,0\n")).unwrap();
+    let (code, _, err) = exec(&[
+        "predict",
+        "--model",
+        UR5,
+        "--joints",
+        inside.to_str().unwrap(),
+    ]);
+    assert_eq!((code, err.contains("warning")), (0, false), "{err}");
 }
 
 #[test]

@@ -145,6 +145,8 @@ fn each_session_gets_its_frame_and_an_unseen_session_validates_at_the_noise_leve
         .map(|s| s["name"].as_str().unwrap())
         .collect();
     assert_eq!(written, ["s2", "s3"]);
+    // The first session's name, which a joint file's `session` column is checked against.
+    assert_eq!(sheet["calibration"]["first_session"].as_str(), Some("s1"));
 
     // The text report lists every session.
     let text = ok(&["calibrate", "--model", UR5, "--data", &data]);
@@ -216,7 +218,38 @@ fn each_session_gets_its_frame_and_an_unseen_session_validates_at_the_noise_leve
     .unwrap();
     let (code, _, err) = crate::common::exec(&["predict", "--model", &out, "--joints", &renamed]);
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("sessions 'a', 'b' are not in"), "{err}");
+    // The model names its first session: each unknown name is refused, with its line.
+    assert!(
+        err.contains("column 'session': 'a' is no session of"),
+        "{err}"
+    );
+    assert!(err.contains("expected one of 's1', 's2', 's3'"), "{err}");
+    // One unknown name among known ones was predicted in the first session's frame, silently.
+    let typo = path(dir.path(), "typo.csv");
+    std::fs::write(&typo, text_of(&data).replace(",s3\n", ",s9\n")).unwrap();
+    let (code, _, err) = crate::common::exec(&["predict", "--model", &out, "--joints", &typo]);
+    assert_eq!(code, 2, "{err}");
+    let first = text_of(&typo)
+        .lines()
+        .position(|l| l.ends_with(",s9"))
+        .unwrap()
+        + 1;
+    assert!(
+        err.contains(&format!(
+            "typo.csv: line {first}, column 'session': 's9' is no session of"
+        )),
+        "{err}"
+    );
+    // The first session named by --session is the model's own frame.
+    ok(&[
+        "predict",
+        "--model",
+        &out,
+        "--joints",
+        &data,
+        "--session",
+        "s1",
+    ]);
     let (code, _, err) = crate::common::exec(&[
         "predict",
         "--model",

@@ -144,7 +144,7 @@ pub fn compensate(
     };
     let (lu, au) = (args.units.length, args.units.angle);
     let mut text = format!(
-        "# compensated by urdf-dh compensate: {c_origin} reaching what {n_origin} reaches at the commanded values ({}); joints in {} ({} for prismatic), errors of the tool in the base link frame: position_* in {}, orientation_* in {}\n",
+        "# compensated by urdf-dh compensate: {c_origin} reaching what {n_origin} reaches at the commanded values ({}); joints in {} ({} for prismatic), errors of the tool in the base link frame: position_* in {}, orientation_* in {}; status: compensated, or why not (max_change, unreachable, no_convergence, beyond_limits: those rows hold the nearest values found, not a correction)\n",
         if args.position_only { "position only" } else { "position and orientation" },
         au.symbol(),
         lu.symbol(),
@@ -159,6 +159,7 @@ pub fn compensate(
             "orientation_before",
             "position_error",
             "orientation_error",
+            "status",
         ]
         .map(String::from),
     );
@@ -193,6 +194,7 @@ pub fn compensate(
         cells.push(cell(c.error_before.1 / au.radians()));
         cells.push(cell(c.position_error / lu.metres()));
         cells.push(cell(c.orientation_error / au.radians()));
+        cells.push(row.status().to_string());
         text.push_str(&cells.join(","));
         text.push('\n');
     }

@@ -77,7 +77,29 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         out
     };
     report_sink.write_all(report.as_bytes())?;
-    Ok(Outcome::Pass)
+    // Points left out are named in the report; a sweep whose screen left out too many (or did
+    // not settle) has no trustworthy axis.
+    let unsound: Vec<&str> = r
+        .result
+        .joints
+        .iter()
+        .filter(|j| !j.screen.sound())
+        .map(|j| j.name.as_str())
+        .collect();
+    if unsound.is_empty() {
+        Ok(Outcome::Pass)
+    } else {
+        writeln!(
+            err,
+            "urdf-dh: the fits of {} left out more than a quarter of their points: their axes are not to be trusted",
+            unsound
+                .iter()
+                .map(|n| format!("'{}'", crate::guard::escape(n)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )?;
+        Ok(Outcome::Differs)
+    }
 }
 
 /// Command-line arguments of `cpa`.

@@ -143,6 +143,15 @@ pub(crate) fn quoted(s: &str) -> String {
     }
 }
 
+/// Appends `s` to `t` as [`quoted`] writes it, without a copy when it needs no quotes.
+fn push_quoted(t: &mut String, s: &str) {
+    if s.contains([',', '"', '\n', '\r']) || s.trim() != s || s.starts_with('#') || s.is_empty() {
+        t.push_str(&quoted(s));
+    } else {
+        t.push_str(s);
+    }
+}
+
 /// Runs `predict`.
 ///
 /// # Errors
@@ -175,6 +184,9 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         &args.joints,
         &origin,
     )?;
+    for w in &predictions.warnings {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     let text = render(&model, &input, &predictions, args, &origin);
     let path = args.out.as_deref().unwrap_or(crate::output::STDIO);
     crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
@@ -273,43 +285,81 @@ fn render(
     }
     text.push_str(&header.join(","));
     text.push('\n');
-    let length = |v: f64| cell(v / lu.metres());
-    let angle = |v: f64| cell(v / au.radians());
-    for p in &predictions.predicted {
-        let Some(row) = input.rows.get(p.row) else {
-            continue;
-        };
-        let mut cells: Vec<String> = row
-            .q
-            .iter()
-            .zip(&input.prismatic)
-            .map(|(v, pr)| joint_cell(*v, *pr, units))
-            .collect();
-        cells.extend(p.position.iter().map(|v| length(*v)));
-        match p.rpy {
-            Some(rpy) => cells.extend(rpy.iter().map(|v| angle(*v))),
-            None if attitude => cells.extend([String::new(), String::new(), String::new()]),
-            None => {}
+    // Blocks of predictions written on every core, then joined in order.
+    const BLOCK: usize = 8192;
+    let all = &predictions.predicted;
+    let write_block = |b: usize| -> String {
+        let mut t = String::new();
+        let range = b * BLOCK..((b + 1) * BLOCK).min(all.len());
+        for p in &all[range] {
+            write_row(&mut t, p, input, units, attitude, sessions);
         }
-        cells.push(quoted(&p.target));
-        // The config, and the session when the file has them.
-        cells.push(quoted(
-            &row.config
-                .clone()
-                .unwrap_or_else(|| format!("line{}", row.line)),
-        ));
-        if sessions {
-            cells.push(row.session.as_deref().map(quoted).unwrap_or_default());
-        }
-        if let Some(u) = &p.uncertainty {
-            cells.extend(u.iter().take(3).map(|v| length(*v)));
-            cells.extend(u.iter().skip(3).map(|v| angle(*v)));
-            if attitude && u.len() == 3 {
-                cells.extend([String::new(), String::new(), String::new()]);
-            }
-        }
-        text.push_str(&cells.join(","));
-        text.push('\n');
+        t
+    };
+    let blocks = all.len().div_ceil(BLOCK);
+    match dh_core::parallel::map(blocks, write_block) {
+        Some(parts) => parts.iter().for_each(|p| text.push_str(p)),
+        // A lost block (a thread failed): write them here instead.
+        None => (0..blocks).for_each(|b| text.push_str(&write_block(b))),
     }
     text
+}
+
+/// Appends the CSV row of prediction `p` (of `input`'s row `p.row`) to `t`: the cells
+/// [`render`]'s header names, each number in its shortest round-trip form ([`cell`]).
+fn write_row(
+    t: &mut String,
+    p: &dh_sheet::predict::Predicted,
+    input: &JointInput,
+    units: DataUnits,
+    attitude: bool,
+    sessions: bool,
+) {
+    use std::fmt::Write as _;
+    let Some(row) = input.rows.get(p.row) else {
+        return;
+    };
+    let (lm, ar) = (units.length.metres(), units.angle.radians());
+    let mut first = true;
+    let mut num = |t: &mut String, v: f64| {
+        if !std::mem::take(&mut first) {
+            t.push(',');
+        }
+        let _ = write!(t, "{v:?}");
+    };
+    for (v, pr) in row.q.iter().zip(&input.prismatic) {
+        num(t, if *pr { v / lm } else { v / ar });
+    }
+    for v in p.position.iter() {
+        num(t, v / lm);
+    }
+    match p.rpy {
+        Some(rpy) => rpy.iter().for_each(|v| num(t, v / ar)),
+        None if attitude => t.push_str(",,,"),
+        None => {}
+    }
+    t.push(',');
+    push_quoted(t, &p.target);
+    // The config, and the session when the file has them.
+    t.push(',');
+    match &row.config {
+        Some(c) => push_quoted(t, c),
+        None => {
+            let _ = write!(t, "line{}", row.line);
+        }
+    }
+    if sessions {
+        t.push(',');
+        if let Some(s) = row.session.as_deref() {
+            push_quoted(t, s);
+        }
+    }
+    if let Some(u) = &p.uncertainty {
+        u.iter().take(3).for_each(|v| num(t, v / lm));
+        u.iter().skip(3).for_each(|v| num(t, v / ar));
+        if attitude && u.len() == 3 {
+            t.push_str(",,,");
+        }
+    }
+    t.push('\n');
 }

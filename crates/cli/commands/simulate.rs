@@ -42,7 +42,12 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
     )?;
     // Outputs: `-` is standard output, not standard input.
     let out_name = crate::guard::output_name(&args.out);
-    let sim = run(&args.request, &out_name, &crate::guard::output_name(&truth_file), err)?;
+    let sim = run(
+        &args.request,
+        &out_name,
+        &crate::guard::output_name(&truth_file),
+        err,
+    )?;
     let truth_text = sim.truth_yaml()?;
     crate::output::write_all_or_stdout(
         &[
@@ -94,8 +99,8 @@ pub struct SimulateCli {
     #[arg(long)]
     cpa: bool,
     /// Width of each CPA sweep (radians) [default: a quarter turn, or the narrowest joint
-    /// range].
-    #[arg(long, value_name = "RAD", value_parser = crate::guard::arc)]
+    /// range]; needs --cpa.
+    #[arg(long, value_name = "RAD", requires = "cpa", value_parser = crate::guard::arc)]
     arc: Option<f64>,
     /// An effect of the true robot, LABEL=VALUE (e.g. gear_ratio:elbow_joint=0.001); repeatable.
     #[arg(long = "effect", value_name = "LABEL=VALUE")]

@@ -26,6 +26,10 @@
 //!    arcs; the geometric fit does not (W. Gander, G. H. Golub, R. Strebel, "Least-squares
 //!    fitting of circles and ellipses", BIT 34, 1994; N. Chernov, *Circular and Linear
 //!    Regression*, CRC 2010, ch. 4-5).
+//!    The points a lost beam or a mistyped row put far off are left out first and named
+//!    ([`SweepScreen`]: `calibrate`'s outlier screen, [`crate::outliers`], on each target's
+//!    distance from its circle in units of the measurement noise); every later step fits
+//!    without them.
 //! 4. **Per joint**: the targets of a sweep ride on one rigid body, so their circles share one
 //!    axis. All targets are fitted together as concentric circles about a common axis (each with
 //!    its own radius and its own plane along the axis), minimising every point's orthogonal
@@ -120,5 +124,7 @@ mod joint_fit;
 use joint_fit::*;
 mod circle;
 pub use circle::*;
+mod screen;
+pub use screen::*;
 #[cfg(test)]
 mod tests;

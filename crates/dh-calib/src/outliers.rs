@@ -150,11 +150,18 @@ impl OutlierReport {
 
 /// The threshold on `‖r / s‖` that a `χ₃` variable exceeds with probability `level / n`.
 pub fn threshold(n: usize, level: f64) -> f64 {
+    threshold_in(n, level, 3.0)
+}
+
+/// [`threshold`] for a residual of `dof` components (a `χ` variable with `dof` degrees of
+/// freedom): a point's distance from a fitted circle has two, in its plane and across it
+/// ([`crate::cpa`]).
+pub fn threshold_in(n: usize, level: f64, dof: f64) -> f64 {
     let p = level / n.max(1) as f64;
     let (mut lo, mut hi) = (0.0f64, 100.0f64);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if stats::chi2_sf(mid * mid, 3.0) > p {
+        if stats::chi2_sf(mid * mid, dof) > p {
             lo = mid;
         } else {
             hi = mid;

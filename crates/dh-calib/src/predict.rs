@@ -18,24 +18,22 @@
 //! # Uncertainty
 //! `u = sqrt(diag(G C Gᵀ))`, first order: `C` is the covariance of the calibration's free
 //! parameters ([`Covariance`], `σ̂² (JᵀJ)⁺` of [`crate::fit`]) and `G` the prediction's
-//! derivative by those parameters, by central differences with steps that move the tip by
-//! [`DIFFERENCE_STEP`]. Parameters the data could not identify were held at nominal and add
+//! derivative by those parameters, analytic: the screw motion each parameter gives the chain
+//! ([`Model::frame_jacobian`], the calibration's own Jacobian), moved to the base link frame by
+//! the device frame's rotation and scale. Parameters the data could not identify were held at nominal and add
 //! nothing: the uncertainty is that of what was identified, in the frame it was identified in
 //! (a base frame error aliased with the device frame is in neither figure). Rotational
 //! uncertainties are about the axes of the prediction frame (radians), not roll-pitch-yaw.
 
+use std::ops::Range;
 use std::sync::Arc;
 
 use dh_core::DhTable;
-use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{DMatrix, DVectorView, Isometry3, UnitQuaternion, Vector3, Vector6};
 
 use crate::effects::{parse_label_in, EffectContext};
 use crate::fit::CalibError;
-use crate::model::{Effect, Model, ModelOptions};
-
-/// Tip motion (metres) of one central-difference step of a parameter: small against any
-/// calibrated error, large against rounding (relative error of the difference about 1e-10).
-pub const DIFFERENCE_STEP: f64 = 1e-6;
+use crate::model::{Block, Effect, EffectField, Model, ModelOptions, Observation, Observed};
 
 pub use crate::covariance::Covariance;
 
@@ -56,8 +54,8 @@ pub type EffectValues = (Arc<dyn Effect>, Vec<f64>);
 pub struct Calibrated {
     model: Model,
     x: Vec<f64>,
-    /// Model parameter index per covariance row, and the covariance.
-    covariance: Option<(Vec<usize>, DMatrix<f64>)>,
+    /// The covariance and the parameters it is of.
+    covariance: Option<Propagation>,
 }
 
 impl Calibrated {
@@ -184,7 +182,27 @@ impl Calibrated {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        self.covariance = Some((index, covariance.matrix.clone()));
+        let scale_effects: Vec<Range<usize>> = self
+            .model
+            .effects()
+            .into_iter()
+            .filter(|(e, _)| e.field() == EffectField::Scale)
+            .map(|(_, r)| r)
+            .collect();
+        let moves_device = index
+            .iter()
+            .map(|&i| {
+                matches!(
+                    self.model.parameters().get(i).map(|p| p.block),
+                    Some(Block::Device | Block::Session(_))
+                ) || scale_effects.iter().any(|r| r.contains(&i))
+            })
+            .collect();
+        self.covariance = Some(Propagation {
+            index,
+            matrix: covariance.matrix.clone(),
+            moves_device,
+        });
         Ok(self)
     }
 
@@ -244,13 +262,9 @@ impl Calibrated {
         target: usize,
         frame: Frame,
     ) -> Option<Vector3<f64>> {
-        let at = self.target_orientation(q, target, frame)?;
-        let g = self.derivative(3, |x| {
-            let r = (self.orientation_at(x, q, target, frame) * at.inverse()).scaled_axis();
-            [r.x, r.y, r.z, 0.0, 0.0, 0.0]
-        })?;
-        let u = self.propagate(&g)?;
-        Some(Vector3::new(u[0], u[1], u[2]))
+        self.model.target_orientation(target)?;
+        let u = self.propagate(q, Of::TargetFrame(target), frame, 3..6)?;
+        Some(Vector3::new(u[3], u[4], u[5]))
     }
 
     fn orientation_at(
@@ -290,65 +304,109 @@ impl Calibrated {
         target: usize,
         frame: Frame,
     ) -> Option<Vector3<f64>> {
-        let g = self.derivative(3, |x| {
-            let p = self.point_at(x, q, target, frame);
-            [p.x, p.y, p.z, 0.0, 0.0, 0.0]
-        })?;
-        let u = self.propagate(&g)?;
+        let u = self.propagate(q, Of::Point(target), frame, 0..3)?;
         Some(Vector3::new(u[0], u[1], u[2]))
     }
 
     /// Standard uncertainty of [`Calibrated::tool`]: position per axis (metres), then rotation
     /// about each axis of `frame` (radians); `None` without a covariance.
     pub fn tool_uncertainty(&self, q: &[f64], frame: Frame) -> Option<Vector6<f64>> {
-        let at = self.tool_at(&self.x, q, frame);
-        let g = self.derivative(6, |x| {
-            let t = self.tool_at(x, q, frame);
-            // The small rotation from the calibrated attitude, about the frame's axes.
-            let r = (t.rotation * at.rotation.inverse()).scaled_axis();
-            [
-                t.translation.x,
-                t.translation.y,
-                t.translation.z,
-                r.x,
-                r.y,
-                r.z,
-            ]
-        })?;
-        let u = self.propagate(&g)?;
+        let u = self.propagate(q, Of::Tool, frame, 0..6)?;
         Some(Vector6::from_column_slice(&u))
     }
 
-    /// `rows × m` derivative of `f` by the covariance's parameters.
-    fn derivative(&self, rows: usize, f: impl Fn(&[f64]) -> [f64; 6]) -> Option<DMatrix<f64>> {
-        let (index, _) = self.covariance.as_ref()?;
-        let scales = self.model.scales();
-        let mut g = DMatrix::zeros(rows, index.len());
-        let mut x = self.x.clone();
-        for (col, &i) in index.iter().enumerate() {
-            let h = DIFFERENCE_STEP / scales.get(i).copied().unwrap_or(1.0).max(f64::MIN_POSITIVE);
-            x[i] = self.x[i] + h;
-            let plus = f(&x);
-            x[i] = self.x[i] - h;
-            let minus = f(&x);
-            x[i] = self.x[i];
-            for r in 0..rows {
-                g[(r, col)] = (plus[r] - minus[r]) / (2.0 * h);
+    /// `sqrt(diag(G C Gᵀ))` for the rows `rows` of the derivative `G` (6 rows: position, then
+    /// rotation) of what `of` names, in `frame`; the rows not asked are zero.
+    fn propagate(&self, q: &[f64], of: Of, frame: Frame, rows: Range<usize>) -> Option<[f64; 6]> {
+        let p = self.covariance.as_ref()?;
+        let m = p.index.len();
+        let observation = match of {
+            Of::Point(target) => Observation::Point {
+                target,
+                point: Vector3::zeros(),
+            },
+            Of::TargetFrame(target) => Observation::TargetPose {
+                target,
+                pose: Box::new(Isometry3::identity()),
+                weight: 1.0,
+            },
+            Of::Tool => Observation::Pose(Box::new(Isometry3::identity())),
+        };
+        let obs = Observed::new(q.to_vec(), observation);
+        JACOBIAN.with(|g| {
+            let mut g = g.borrow_mut();
+            g.clear();
+            g.resize(6 * m, 0.0);
+            self.model.frame_jacobian(&self.x, &obs, &p.index, &mut g);
+            if frame == Frame::Base {
+                // p_base = R_deviceᵀ (p_device / s − t_device): the robot's parameters move the
+                // base-frame prediction by R_deviceᵀ ∂p / s (rotations by R_deviceᵀ ∂w), the
+                // device frame and its scale not at all.
+                let r = self.model.device_at(&self.x).rotation.inverse();
+                let s = self.model.scale_at(&self.x, q);
+                let s = if s == 0.0 { 1.0 } else { s };
+                for col in 0..m {
+                    for (first, divide) in [(0, s), (3, 1.0)] {
+                        let v = if p.moves_device[col] {
+                            Vector3::zeros()
+                        } else {
+                            r * Vector3::from_fn(|i, _| g[(first + i) * m + col]) / divide
+                        };
+                        for i in 0..3 {
+                            g[(first + i) * m + col] = v[i];
+                        }
+                    }
+                }
             }
-        }
-        Some(g)
+            let mut u = [0.0; 6];
+            for row in rows {
+                let gr = &g[row * m..(row + 1) * m];
+                // g C gᵀ over the upper triangle of the symmetric C: Σ_j g_j (C_jj g_j +
+                // 2 Σ_{k>j} C_jk g_k), each column's tail contiguous; parameters that do not
+                // move this prediction (the other targets') skipped.
+                let mut sum = 0.0;
+                for (j, gj) in gr.iter().enumerate() {
+                    if *gj == 0.0 {
+                        continue;
+                    }
+                    let column = p.matrix.column(j);
+                    let tail = column.rows_range(j + 1..m);
+                    let cross = tail.dot(&DVectorView::from_slice(&gr[j + 1..], m - j - 1));
+                    sum += gj * (column[j] * gj + 2.0 * cross);
+                }
+                u[row] = sum.max(0.0).sqrt();
+            }
+            Some(u)
+        })
     }
+}
 
-    /// `sqrt(diag(G C Gᵀ))`.
-    fn propagate(&self, g: &DMatrix<f64>) -> Option<Vec<f64>> {
-        let (_, c) = self.covariance.as_ref()?;
-        let gc = g * c;
-        Some(
-            (0..g.nrows())
-                .map(|r| gc.row(r).dot(&g.row(r)).max(0.0).sqrt())
-                .collect(),
-        )
-    }
+/// What a derivative is of.
+#[derive(Clone, Copy, Debug)]
+enum Of {
+    /// A target's position (its rotation rows are the tip's).
+    Point(usize),
+    /// A target's frame.
+    TargetFrame(usize),
+    /// The tip frame.
+    Tool,
+}
+
+thread_local! {
+    /// The derivative of [`Calibrated::propagate`], reused between calls on one thread.
+    static JACOBIAN: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The covariance as the model's parameters see it.
+#[derive(Clone, Debug)]
+struct Propagation {
+    /// Model parameter index per covariance row.
+    index: Vec<usize>,
+    /// The covariance.
+    matrix: DMatrix<f64>,
+    /// Per covariance row: the parameter moves the device frame or scales it (it moves no
+    /// base-frame prediction).
+    moves_device: Vec<bool>,
 }
 
 /// The effects of a written calibration: `values` are its effect parameters by name
@@ -507,6 +565,97 @@ mod tests {
         let bad = Covariance::new(vec!["j9.a".into()], DMatrix::from_element(1, 1, 1.0)).unwrap();
         let err = c.clone().with_covariance(&bad).unwrap_err().to_string();
         assert!(err.contains("j9.a"), "{err}");
+    }
+
+    /// `sqrt(diag(G C Gᵀ))` with `G` by central differences of `f` (steps of 1e-7 in every
+    /// parameter): what the analytic derivative must match.
+    fn numeric(c: &Calibrated, cov: &DMatrix<f64>, f: impl Fn(&[f64]) -> Vec<f64>) -> Vec<f64> {
+        let x0 = c.parameters().to_vec();
+        let n = x0.len();
+        let rows = f(&x0).len();
+        let mut g = DMatrix::zeros(rows, n);
+        for j in 0..n {
+            let (mut a, mut b) = (x0.clone(), x0.clone());
+            a[j] += 1e-7;
+            b[j] -= 1e-7;
+            let (fa, fb) = (f(&a), f(&b));
+            for r in 0..rows {
+                g[(r, j)] = (fa[r] - fb[r]) / 2e-7;
+            }
+        }
+        let gc = &g * cov;
+        (0..rows).map(|r| gc.row(r).dot(&g.row(r)).sqrt()).collect()
+    }
+
+    #[test]
+    fn analytic_uncertainty_matches_central_differences_in_both_frames() {
+        let t = table();
+        let ctx = EffectContext::serial(&t);
+        let effects = effects_from_parameters(
+            &[
+                ("gear_ratio:j2".to_string(), 0.01),
+                ("scale".to_string(), 2e-4),
+            ],
+            &ctx,
+        )
+        .unwrap();
+        let device = Isometry3::new(Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.3, -0.2, 0.9));
+        let targets = vec![
+            ("t".to_string(), Vector3::new(0.0, 0.05, 0.02)),
+            ("probe".to_string(), Vector3::new(0.03, 0.0, 0.04)),
+        ];
+        let rotation = UnitQuaternion::from_euler_angles(0.2, 0.4, -0.1);
+        let c = Calibrated::new(&t, &effects, &device, &targets)
+            .unwrap()
+            .with_target_rotations(&[None, Some(rotation)]);
+        // Every parameter of the model, correlated.
+        let names: Vec<String> = c
+            .model()
+            .parameters()
+            .iter()
+            .map(|p| p.name.clone())
+            .collect();
+        let n = names.len();
+        let a = DMatrix::from_fn(n, n, |i, j| ((i * 7 + j * 3) as f64).sin() * 1e-4);
+        let cov = &a * a.transpose() + DMatrix::identity(n, n) * 1e-9;
+        let c = c
+            .with_covariance(&Covariance::new(names, cov.clone()).unwrap())
+            .unwrap();
+        let q = [0.3, -0.7, 1.1];
+        for frame in [Frame::Device, Frame::Base] {
+            let close = |got: &[f64], want: &[f64]| {
+                for (g, w) in got.iter().zip(want) {
+                    assert!(
+                        (g - w).abs() <= 1e-6 * w.abs() + 1e-12,
+                        "{frame:?}: {got:?} vs {want:?}"
+                    );
+                }
+            };
+            for k in 0..2 {
+                let got = c.point_uncertainty(&q, k, frame).unwrap();
+                let want = numeric(&c, &cov, |x| {
+                    c.point_at(x, &q, k, frame).as_slice().to_vec()
+                });
+                close(got.as_slice(), &want);
+            }
+            let at = c.target_orientation(&q, 1, frame).unwrap();
+            let got = c.target_orientation_uncertainty(&q, 1, frame).unwrap();
+            let want = numeric(&c, &cov, |x| {
+                let r = (c.orientation_at(x, &q, 1, frame) * at.inverse()).scaled_axis();
+                r.as_slice().to_vec()
+            });
+            close(got.as_slice(), &want);
+            assert!(c.target_orientation_uncertainty(&q, 0, frame).is_none());
+            let at = c.tool(&q, frame);
+            let got = c.tool_uncertainty(&q, frame).unwrap();
+            let want = numeric(&c, &cov, |x| {
+                let p = c.tool_at(x, &q, frame);
+                let r = (p.rotation * at.rotation.inverse()).scaled_axis();
+                let v = p.translation.vector;
+                vec![v.x, v.y, v.z, r.x, r.y, r.z]
+            });
+            close(got.as_slice(), &want);
+        }
     }
 
     #[test]

@@ -33,6 +33,9 @@ pub struct CalibratedModel {
     /// The other measurement sessions' device frames `T_device_base` (the `calibration`
     /// section's `sessions`), by name; `calibrated` holds the first session's.
     pub sessions: Vec<(String, Isometry3<f64>)>,
+    /// The first session's name (whose frame `calibrated` holds), when the file gives it
+    /// (`calibrate --out` writes it with several sessions; older sheets lack it).
+    pub first_session: Option<String>,
     /// The covariance as the file holds it (every session's device frame in it).
     covariance: Option<Covariance>,
 }
@@ -54,6 +57,9 @@ impl CalibratedModel {
     /// # Errors
     /// As [`CalibratedModel::in_session`].
     pub fn for_session(&self, name: &str) -> Result<Calibrated> {
+        if self.first_session.as_deref() == Some(name) {
+            return Ok(self.calibrated.clone());
+        }
         let Some((_, device)) = self.sessions.iter().find(|(n, _)| n == name) else {
             anyhow::bail!(
                 "--session '{}': {}; the first session's frame is the model's device frame, used without --session",
@@ -171,6 +177,7 @@ fn assemble(
         has_device: robot.has_device,
         joints,
         sessions: robot.sessions,
+        first_session: robot.first_session,
         covariance: robot.covariance,
     })
 }

@@ -153,6 +153,9 @@ pub fn model_text(
     let calibration = CalibrationSection {
         summary: SectionSummary::of(doc),
         sessions: SessionDoc::frames(&doc.sessions),
+        first_session: (doc.sessions.len() > 1)
+            .then(|| doc.sessions.first().map(|s| s.name.clone()))
+            .flatten(),
         targets: doc.targets.clone(),
         effects: doc.estimated_effects(),
         covariance: report.covariance.as_ref().map(CovarianceDoc::of),
@@ -319,6 +322,10 @@ pub struct CalibrationSection {
     /// Every session's device frame but the first's (`device`), with several sessions.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub sessions: Vec<SessionFrameDoc>,
+    /// The first session's name (its frame is `device`), with several sessions: what a
+    /// prediction checks a joint file's `session` column against.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_session: Option<String>,
     /// The targets in the tip frame (m).
     pub targets: Vec<TargetDoc>,
     /// The estimated effects' values by label (SI units).

@@ -55,7 +55,30 @@ pub struct CompensatedRow {
     pub failure: Option<Failure>,
 }
 
+/// The `status` cell of a row that was compensated ([`CompensatedRow::status`]).
+pub const COMPENSATED: &str = "compensated";
+
+impl CompensatedRow {
+    /// The row's `status` as the written file gives it: [`COMPENSATED`], or the failure's
+    /// word ([`Failure::status`]), so that a program reading the file can keep the rows that
+    /// were corrected.
+    pub fn status(&self) -> &'static str {
+        self.failure.as_ref().map_or(COMPENSATED, Failure::status)
+    }
+}
+
 impl Failure {
+    /// One word for the failure, the `status` cell of its row: `max_change`, `unreachable`,
+    /// `no_convergence`, `beyond_limits`.
+    pub fn status(&self) -> &'static str {
+        match self {
+            Failure::MaxChange { .. } => "max_change",
+            Failure::Unreachable => "unreachable",
+            Failure::NoConvergence { .. } => "no_convergence",
+            Failure::BeyondLimits { .. } => "beyond_limits",
+        }
+    }
+
     /// The failure of `c`, a pose of the measured columns `columns`, or `None`.
     fn of(c: &Compensated, columns: &[String]) -> Option<Failure> {
         if !c.converged && !c.at_max_change.is_empty() {

@@ -81,7 +81,8 @@ pub fn utf8_text(path: &str, mut bytes: Vec<u8>) -> Result<String> {
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
         hinted(
             format!(
-                "{path}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})"
+                "{}: line {line}: expected UTF-8 text, found a byte that is not (offset {at})",
+                crate::text::quote(path)
             ),
             "convert the file to UTF-8, e.g. iconv -f latin1 -t utf-8 FILE > FILE.utf8",
         )
@@ -109,8 +110,9 @@ pub fn read_robot_with(path: &str, xacro: &crate::xacro::XacroOptions) -> Result
     if !path.ends_with(".xacro") {
         return read_robot_bytes(path);
     }
+    let shown = crate::text::quote(path);
     if !Path::new(path).is_file() {
-        anyhow::bail!("{path}: cannot read the file: no such file");
+        anyhow::bail!("{shown}: cannot read the file: no such file");
     }
     crate::xacro::expand_with(path, xacro)
 }

@@ -322,7 +322,8 @@ pub fn load_model(
         || deviation.max_orientation_error > extraction.bound.orientation
     {
         anyhow::bail!(
-            "{origin}: the DH table extracted from the URDF fails its own verification; run 'urdf-dh extract {path}' for details"
+            "{origin}: the DH table extracted from the URDF fails its own verification; run 'urdf-dh extract {}' for details",
+            crate::text::quote(path)
         );
     }
     Ok(LoadedModel {

@@ -169,6 +169,59 @@ pub struct Predictions {
     pub has_attitude: bool,
     /// One per joint row and target, in row order.
     pub predicted: Vec<Predicted>,
+    /// What the caller should be told (the CLI prints them as `urdf-dh: warning:` lines, the
+    /// Python package as warnings): joint values outside their joints' limits
+    /// ([`limit_warnings`]).
+    pub warnings: Vec<String>,
+}
+
+/// One warning per joint (table row) whose value leaves its limits at some rows of `input`:
+/// the joint, its limits, how many rows and the first (its line in `joints_name` and value).
+/// A prediction there extrapolates the calibration to where the robot cannot go, which is
+/// allowed (a model can be asked anything) but rarely meant: a value in degrees read as
+/// radians, a wrong column. Radians, or metres for a prismatic joint.
+pub fn limit_warnings(
+    model: &CalibratedModel,
+    input: &JointInput,
+    joints_name: &str,
+) -> Vec<String> {
+    let table = &model.loaded.table;
+    // Per table row: rows outside, and the first (line, value).
+    let mut outside: Vec<(usize, Option<(usize, f64)>)> = vec![(0, None); table.rows.len()];
+    if table.rows.iter().all(|r| r.limits.is_none()) {
+        return Vec::new();
+    }
+    for row in &input.rows {
+        let values = model.joints.rows(&row.q);
+        for ((r, v), o) in table.rows.iter().zip(&values).zip(outside.iter_mut()) {
+            if r.limits
+                .as_ref()
+                .is_some_and(|l| *v < l.lower || *v > l.upper)
+            {
+                o.0 += 1;
+                o.1.get_or_insert((row.line, *v));
+            }
+        }
+    }
+    table
+        .rows
+        .iter()
+        .zip(&outside)
+        .filter_map(|(r, (count, first))| {
+            let (l, (line, value)) = (r.limits.as_ref()?, (*first)?);
+            let unit = match r.kind {
+                JointKind::Prismatic => "m",
+                JointKind::Revolute => "rad",
+            };
+            Some(format!(
+                "{}: joint '{}' is outside its limits [{}, {}] {unit} in {count} row(s), the first at line {line} ({value} {unit}): the prediction extrapolates the calibration to where the robot cannot go",
+                display_name(joints_name),
+                escape(&r.name),
+                l.lower,
+                l.upper,
+            ))
+        })
+        .collect()
 }
 
 /// Predicts with `model` (in `frame`, see [`frame_of`]) at the joint rows of `input` (read
@@ -226,9 +279,10 @@ pub fn predict(
     if tool && wanted.len() > 1 {
         anyhow::bail!("--targets: expected target names or 'tool', found both");
     }
-    // Per row: the targets' indices and names.
-    let mut plan: Vec<Vec<(usize, String)>> = Vec::with_capacity(input.rows.len());
+    // The targets' indices and names: one per row (each row's own), or the same for every row.
+    let mut plan: Vec<(usize, String)> = Vec::new();
     if per_row {
+        plan.reserve(input.rows.len());
         for r in &input.rows {
             let t = r.target.clone().unwrap_or_default();
             let k = index_of(&t).with_context(|| {
@@ -238,53 +292,46 @@ pub fn predict(
                     r.line
                 )
             })?;
-            plan.push(vec![(k, t)]);
+            plan.push((k, t));
         }
     } else if !tool {
-        let mut indices = Vec::new();
         for t in &wanted {
-            indices.push((index_of(t).context("--targets")?, t.clone()));
-        }
-        plan = vec![indices; input.rows.len()];
-    }
-    let (frames, row_frame) = session_frames(model, input, frame, session, joints_name, origin)?;
-    let mut predicted = Vec::new();
-    for (i, row) in input.rows.iter().enumerate() {
-        let c = &frames[row_frame.get(i).copied().unwrap_or(0)];
-        let q = model.joints.rows(&row.q);
-        if tool {
-            let pose = c.tool(&q, frame);
-            let (xyz, rpy) = dh_core::pose::to_xyz_rpy(&pose);
-            predicted.push(Predicted {
-                row: i,
-                target: TOOL.into(),
-                position: Vector3::from(xyz),
-                rpy: Some(rpy),
-                uncertainty: c.tool_uncertainty(&q, frame).map(|u| u.as_slice().to_vec()),
-            });
-        } else {
-            for (k, name) in plan.get(i).into_iter().flatten() {
-                // A 6-DoF target's orientation (and its uncertainty) follows its position.
-                let rotation = c.target_orientation(&q, *k, frame);
-                let mut uncertainty = c
-                    .point_uncertainty(&q, *k, frame)
-                    .map(|u| u.as_slice().to_vec());
-                if let (Some(u), Some(r)) = (
-                    uncertainty.as_mut(),
-                    c.target_orientation_uncertainty(&q, *k, frame),
-                ) {
-                    u.extend(r.iter());
-                }
-                predicted.push(Predicted {
-                    row: i,
-                    target: name.clone(),
-                    position: c.point(&q, *k, frame),
-                    rpy: rotation.map(|r| dh_core::pose::rpy_of(&r.to_rotation_matrix())),
-                    uncertainty,
-                });
-            }
+            plan.push((index_of(t).context("--targets")?, t.clone()));
         }
     }
+    let (frames, row_frame, mut warnings) =
+        session_frames(model, input, frame, session, joints_name, origin)?;
+    warnings.extend(limit_warnings(model, input, joints_name));
+    // Blocks of rows on every core (each row depends on its own values alone).
+    let blocks = input.rows.len().div_ceil(BLOCK_ROWS);
+    let predict_block = |b: usize| -> Vec<Predicted> {
+        let rows = b * BLOCK_ROWS..((b + 1) * BLOCK_ROWS).min(input.rows.len());
+        let per = if per_row || tool { 1 } else { plan.len() };
+        let mut out = Vec::with_capacity(rows.len() * per);
+        for i in rows {
+            let c = &frames[row_frame.get(i).copied().unwrap_or(0)];
+            let targets: &[(usize, String)] = if per_row {
+                plan.get(i).map_or(&[], std::slice::from_ref)
+            } else {
+                &plan
+            };
+            predict_row(
+                c,
+                frame,
+                &model.joints.rows(&input.rows[i].q),
+                i,
+                tool,
+                targets,
+                &mut out,
+            );
+        }
+        out
+    };
+    let predicted: Vec<Predicted> = dh_core::parallel::map(blocks, predict_block)
+        .ok_or_else(|| anyhow::anyhow!("a block of predictions was lost (a thread failed)"))?
+        .into_iter()
+        .flatten()
+        .collect();
     Ok(Predictions {
         frame,
         wanted: if tool {
@@ -298,14 +345,71 @@ pub fn predict(
         has_uncertainty: model.calibrated.has_covariance(),
         has_attitude: predicted.iter().any(|p| p.rpy.is_some()),
         predicted,
+        warnings,
     })
 }
 
-/// The robot each row is predicted with: `frames[row_frame[i]]` for row `i`. Without a session
-/// asked, in the device frame, a joint file with a `session` column (a measurement file of
-/// several sessions) has each row predicted from its own session's device frame: the model's
-/// `sessions`, and the model's device frame for the first session, whose name the model does
-/// not hold (so at most one of the file's sessions may be missing from the model).
+/// Rows predicted per block of work on one core ([`predict`]).
+const BLOCK_ROWS: usize = 4096;
+
+/// The predictions of one row `i` (row values `q`) by `c` in `frame`: the tool pose, or the
+/// `targets` (index, name), appended to `out`.
+fn predict_row(
+    c: &Calibrated,
+    frame: Frame,
+    q: &[f64],
+    i: usize,
+    tool: bool,
+    targets: &[(usize, String)],
+    out: &mut Vec<Predicted>,
+) {
+    if tool {
+        let pose = c.tool(q, frame);
+        let (xyz, rpy) = dh_core::pose::to_xyz_rpy(&pose);
+        out.push(Predicted {
+            row: i,
+            target: TOOL.into(),
+            position: Vector3::from(xyz),
+            rpy: Some(rpy),
+            uncertainty: c.tool_uncertainty(q, frame).map(|u| u.as_slice().to_vec()),
+        });
+        return;
+    }
+    for (k, name) in targets {
+        // A 6-DoF target's orientation (and its uncertainty) follows its position.
+        let rotation = c.target_orientation(q, *k, frame);
+        let mut uncertainty = c
+            .point_uncertainty(q, *k, frame)
+            .map(|u| u.as_slice().to_vec());
+        if let (Some(u), Some(r)) = (
+            uncertainty.as_mut(),
+            c.target_orientation_uncertainty(q, *k, frame),
+        ) {
+            u.extend(r.iter());
+        }
+        out.push(Predicted {
+            row: i,
+            target: name.clone(),
+            position: c.point(q, *k, frame),
+            rpy: rotation.map(|r| dh_core::pose::rpy_of(&r.to_rotation_matrix())),
+            uncertainty,
+        });
+    }
+}
+
+/// The robot each row is predicted with: `frames[row_frame[i]]` for row `i`, and the warnings
+/// to show. Without a session asked, in the device frame, a joint file with a `session` column
+/// (a measurement file of several sessions) has each row predicted from its own session's
+/// device frame: the model's first session (its `device`) or one of its other `sessions`.
+///
+/// A name the model does not hold is refused, naming it, its first line and the sessions the
+/// model has: predicted in another session's frame it would be silently wrong by the distance
+/// between the two frames. A sheet written before the first session's name was kept
+/// (`first_session`) leaves one name unmatched: it is taken as the first, with a warning.
+///
+/// # Errors
+/// A session the model does not hold (see above); several sessions in the file of a model
+/// calibrated on one.
 fn session_frames(
     model: &CalibratedModel,
     input: &JointInput,
@@ -313,43 +417,83 @@ fn session_frames(
     session: Option<&str>,
     joints_name: &str,
     origin: &str,
-) -> Result<(Vec<Calibrated>, Vec<usize>)> {
+) -> Result<(Vec<Calibrated>, Vec<usize>, Vec<String>)> {
     let first = vec![model.calibrated.clone()];
-    let mut names: Vec<&str> = Vec::new();
+    // Each name with its first line.
+    let mut names: Vec<(&str, usize)> = Vec::new();
     for r in &input.rows {
         if let Some(s) = r.session.as_deref() {
-            if !names.contains(&s) {
-                names.push(s);
+            if !names.iter().any(|(n, _)| *n == s) {
+                names.push((s, r.line));
             }
         }
     }
-    if session.is_some() || frame == Frame::Base || names.is_empty() || model.sessions.is_empty() {
-        return Ok((first, vec![0; input.rows.len()]));
+    if session.is_some() || frame == Frame::Base || names.is_empty() {
+        return Ok((first, vec![0; input.rows.len()], Vec::new()));
     }
-    let unknown: Vec<&str> = names
+    let file = display_name(joints_name);
+    let quoted = |v: &[&str]| {
+        v.iter()
+            .map(|n| format!("'{}'", escape(n)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let known: Vec<&str> = model
+        .first_session
+        .as_deref()
+        .into_iter()
+        .chain(model.sessions.iter().map(|(n, _)| n.as_str()))
+        .collect();
+    let unknown: Vec<(&str, usize)> = names
         .iter()
         .copied()
-        .filter(|n| !model.sessions.iter().any(|(m, _)| m == n))
+        .filter(|(n, _)| !known.contains(n))
         .collect();
-    if unknown.len() > 1 {
-        return Err(hinted(
-            format!(
-                "{}: sessions {} are not in {origin}, which holds the first session's device frame and those of {}: at most one of the file's sessions can be the first",
-                display_name(joints_name),
-                unknown
-                    .iter()
-                    .map(|n| format!("'{}'", escape(n)))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                model.session_list()
-            ),
-            "predict every row from one session's frame with --session NAME (or without it, the first's)",
+    let mut warnings = Vec::new();
+    // The name taken as the first session's, when the model does not give it.
+    let mut assumed_first: Option<&str> = None;
+    if model.sessions.is_empty() && model.first_session.is_none() {
+        // A model of one session: the file's one name is it.
+        if names.len() > 1 {
+            let all: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
+            return Err(hinted(
+                format!(
+                    "{file}: line {}: the file has sessions {}, but {origin} was calibrated on one measurement session",
+                    names[1].1,
+                    quoted(&all)
+                ),
+                "predict every row in the model's device frame with --session left out and one session's rows, or calibrate on every session",
+            ));
+        }
+        return Ok((first, vec![0; input.rows.len()], Vec::new()));
+    }
+    if let Some(&(name, line)) = unknown.first() {
+        if model.first_session.is_some() || unknown.len() > 1 {
+            return Err(hinted(
+                format!(
+                    "{file}: line {line}, column 'session': {} is no session of {origin}; expected one of {}",
+                    quoted(&[name]),
+                    if model.first_session.is_some() {
+                        quoted(&known)
+                    } else {
+                        format!("{} and the first session's, which the model does not name ({} not in it: at most one can be the first)", quoted(&known), quoted(&unknown.iter().map(|(n, _)| *n).collect::<Vec<_>>()))
+                    }
+                ),
+                "a session's rows are predicted from that session's device frame: name the sessions as in the calibration's data, or predict every row from one session with --session NAME",
+            ));
+        }
+        warnings.push(format!(
+            "{file}: session '{}' (first at line {line}) is not named in {origin}, which names {} and holds the first session's frame without its name: '{}' is taken as the first session",
+            escape(name),
+            quoted(&known),
+            escape(name)
         ));
+        assumed_first = Some(name);
     }
     let mut frames = first;
     let mut index: Vec<(&str, usize)> = Vec::new();
-    for n in names {
-        if unknown.contains(&n) {
+    for &(n, _) in &names {
+        if Some(n) == assumed_first || Some(n) == model.first_session.as_deref() {
             index.push((n, 0));
         } else {
             frames.push(model.for_session(n)?);
@@ -366,5 +510,5 @@ fn session_frames(
                 .map_or(0, |(_, k)| *k)
         })
         .collect();
-    Ok((frames, row_frame))
+    Ok((frames, row_frame, warnings))
 }

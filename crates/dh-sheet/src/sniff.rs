@@ -46,17 +46,24 @@ pub fn not_a_robot(bytes: &[u8]) -> Option<Sniffed> {
                    measured.csv",
         });
     }
-    let text = std::str::from_utf8(head).ok().or_else(|| {
-        // A cut in the middle of a character at the end of the head is not binary.
-        let valid = std::str::from_utf8(head).err()?.valid_up_to();
-        (head.len() - valid < 4 && head.len() == LOOKED_AT)
-            .then(|| std::str::from_utf8(&head[..valid]).ok())?
-    });
-    let Some(text) = text else {
-        // UTF-16 and other encodings have their own messages (the reader's "expected utf-8").
-        let nul = head.iter().filter(|&&b| b == 0).count();
-        let utf16 = head.starts_with(b"\xff\xfe") || head.starts_with(b"\xfe\xff");
-        return (nul * 4 > head.len() && !utf16).then(|| binary("a binary file"));
+    // NUL bytes: binary, unless they fill every other byte (UTF-16 text, which the reader's
+    // own message names).
+    let zeros_at = |k: usize| head.iter().skip(k).step_by(2).filter(|&&b| b == 0).count();
+    let half = head.len() / 2;
+    let utf16 = head.starts_with(b"\xff\xfe")
+        || head.starts_with(b"\xfe\xff")
+        || (half > 0 && (zeros_at(0) * 10 >= half * 9 || zeros_at(1) * 10 >= half * 9));
+    if head.contains(&0) && !utf16 {
+        return Some(binary("a binary file"));
+    }
+    let text = match std::str::from_utf8(head) {
+        Ok(text) => text,
+        // A character cut at the end of the head is not a fault of the file.
+        Err(e) if head.len() == LOOKED_AT && head.len() - e.valid_up_to() < 4 => {
+            std::str::from_utf8(&head[..e.valid_up_to()]).unwrap_or_default()
+        }
+        // Latin-1, UTF-16: the reader's own message says what to do.
+        Err(_) => return None,
     };
     if text.trim_start().starts_with('<') {
         return None;
@@ -119,16 +126,29 @@ mod tests {
             "a PNG image"
         );
         assert_eq!(
-            not_a_robot(b"MATLAB 5.0 MAT-file, Platform: GLNXA64").unwrap().what,
+            not_a_robot(b"MATLAB 5.0 MAT-file, Platform: GLNXA64")
+                .unwrap()
+                .what,
             "a MATLAB .mat file"
         );
-        assert_eq!(not_a_robot(&[0u8, 1, 0, 2, 0, 0, 7, 0]).unwrap().what, "a binary file");
-        let sheet = "# UR5\nrobot: ur5\nconvention: standard\nlength_unit: m\njoints:\n  - {name: a}\n";
+        assert_eq!(
+            not_a_robot(&[0u8, 1, 0, 2, 0, 0, 7, 0]).unwrap().what,
+            "a binary file"
+        );
+        let sheet =
+            "# UR5\nrobot: ur5\nconvention: standard\nlength_unit: m\njoints:\n  - {name: a}\n";
         let s = not_a_robot(sheet.as_bytes()).unwrap();
         assert_eq!(s.what, "a DH sheet (YAML or JSON)");
-        assert!(s.hint.contains("urdf-dh check ROBOT.urdf --sheet FILE"), "{}", s.hint);
+        assert!(
+            s.hint.contains("urdf-dh check ROBOT.urdf --sheet FILE"),
+            "{}",
+            s.hint
+        );
         let json = "{\n  \"convention\": \"standard\",\n  \"joints\": []\n}\n";
-        assert_eq!(not_a_robot(json.as_bytes()).unwrap().what, "a DH sheet (YAML or JSON)");
+        assert_eq!(
+            not_a_robot(json.as_bytes()).unwrap().what,
+            "a DH sheet (YAML or JSON)"
+        );
         let csv = "# simulated\nj1,j2,x,y,z,target\n0,0,1,2,3,t1\n";
         let s = not_a_robot(csv.as_bytes()).unwrap();
         assert_eq!(s.what, "a measurement CSV");
@@ -137,12 +157,16 @@ mod tests {
 
     #[test]
     fn urdfs_and_unknown_text_are_not_named() {
-        assert_eq!(not_a_robot(b"<?xml version=\"1.0\"?>\n<robot name=\"r\"/>"), None);
+        assert_eq!(
+            not_a_robot(b"<?xml version=\"1.0\"?>\n<robot name=\"r\"/>"),
+            None
+        );
         assert_eq!(not_a_robot(b"  <robot name=\"r\">"), None);
         assert_eq!(not_a_robot(b"hello world\n"), None);
         assert_eq!(not_a_robot(b""), None);
         // UTF-16 text is left to the reader's own message.
         assert_eq!(not_a_robot(b"\xff\xfe<\0r\0o\0"), None);
+        assert_eq!(not_a_robot(b"<\0r\0o\0b\0o\0t\0"), None);
         // Latin-1 text is not binary.
         assert_eq!(not_a_robot(b"<robot name=\"gel\xe4nk\">"), None);
     }

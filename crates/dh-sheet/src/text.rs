@@ -297,13 +297,19 @@ mod tests {
         let long = format!("/a{}/robot.urdf", "x".repeat(100_000));
         let c = cut(&long);
         assert!(c.chars().count() < MAX_QUOTED + 40, "{}", c.len());
-        assert!(c.starts_with("/axxx") && c.ends_with("xx/robot.urdf"), "{c}");
+        assert!(
+            c.starts_with("/axxx") && c.ends_with("xx/robot.urdf"),
+            "{c}"
+        );
         let n = long.chars().count() - MAX_QUOTED;
         assert!(c.contains(&format!("…({n} characters cut)…")), "{c}");
         assert!(matches!(cut("short"), Cow::Borrowed("short")));
         // Characters, not bytes: a cut never splits a code point.
         let wide = "é".repeat(1000);
-        assert_eq!(cut_to(&wide, 10), format!("ééééé…(990 characters cut)…ééééé"));
+        assert_eq!(
+            cut_to(&wide, 10),
+            format!("ééééé…(990 characters cut)…ééééé")
+        );
     }
 
     #[test]
@@ -324,9 +330,15 @@ mod tests {
     fn names_differing_in_normalisation_are_told_apart() {
         let (nfc, nfd) = ("caf\u{e9}", "cafe\u{301}");
         let note = normalisation_note(nfc, ["base", nfd]).unwrap();
-        assert!(note.contains("differ only in Unicode normalisation"), "{note}");
+        assert!(
+            note.contains("differ only in Unicode normalisation"),
+            "{note}"
+        );
         assert!(note.contains("NFC (U+0063 U+0061 U+0066 U+00E9)"), "{note}");
-        assert!(note.contains("NFD (U+0063 U+0061 U+0066 U+0065 U+0301)"), "{note}");
+        assert!(
+            note.contains("NFD (U+0063 U+0061 U+0066 U+0065 U+0301)"),
+            "{note}"
+        );
         assert_eq!(normalisation_note(nfc, [nfc, nfd]), None);
         assert_eq!(normalisation_note("cafe", [nfd]), None);
     }
@@ -335,8 +347,18 @@ mod tests {
     fn json_escapes_spoofing_characters_and_reads_back() {
         let names = vec!["a\u{1b}[2J", "b\u{202e}c", "d\u{85}\u{7f}", "plain é"];
         let pretty = json_pretty(&names).unwrap();
-        assert_eq!(pretty, serde_json::to_string_pretty(&names).unwrap().replace('\u{202e}', "\\u202e").replace('\u{85}', "\\u0085").replace('\u{7f}', "\\u007f"));
-        assert!(!pretty.chars().any(|c| c != '\n' && is_spoofing(c)), "{pretty}");
+        assert_eq!(
+            pretty,
+            serde_json::to_string_pretty(&names)
+                .unwrap()
+                .replace('\u{202e}', "\\u202e")
+                .replace('\u{85}', "\\u0085")
+                .replace('\u{7f}', "\\u007f")
+        );
+        assert!(
+            !pretty.chars().any(|c| c != '\n' && is_spoofing(c)),
+            "{pretty}"
+        );
         let back: Vec<String> = serde_json::from_str(&pretty).unwrap();
         assert_eq!(back, names);
         let line = json_line(&names).unwrap();
@@ -349,7 +371,9 @@ mod tests {
     fn labels_allow_line_feeds_only_where_multiline() {
         assert_eq!(label_problem("UR5 (CB3)", false), None);
         assert_eq!(label_problem("", false), None);
-        assert!(label_problem("a\u{202e}b", false).unwrap().contains("U+202E at character 2"));
+        assert!(label_problem("a\u{202e}b", false)
+            .unwrap()
+            .contains("U+202E at character 2"));
         assert_eq!(label_problem("line\nnext", true), None);
         assert!(label_problem("line\nnext", false).is_some());
         assert!(label_problem("\u{1b}[2J", true).unwrap().contains("U+001B"));

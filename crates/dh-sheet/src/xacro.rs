@@ -137,6 +137,7 @@ fn external(path: &str, options: &XacroOptions, why: &str) -> Result<Vec<u8>> {
             cmd.env("ROS_PACKAGE_PATH", joined);
         }
     }
+    let path = crate::text::quote(path);
     let out = cmd.output().map_err(|_| {
         hinted(
             format!("{why}, and the 'xacro' command is not on PATH"),

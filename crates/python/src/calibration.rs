@@ -287,6 +287,7 @@ fn predict(
             &joints_name,
             &origin,
         )?;
+        warnings.extend(p.warnings.iter().cloned());
         let (l, a) = (units.length.metres(), units.angle.radians());
         let row = |i: usize| input.rows.get(i);
         let sessions = input.rows.iter().any(|r| r.session.is_some()).then(|| {

@@ -115,6 +115,33 @@ pub(super) fn text(doc: &CpaDoc, sheet: &SheetDoc) -> String {
         s,
         "  (motion: measured minus commanded joint motion, mean removed; slope: measured = (1 + slope) x commanded)"
     );
+    for j in &doc.joints {
+        let sc = &j.screen;
+        if sc.left_out.is_empty() && sc.sound {
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{}: {} point(s) left out of the fits (farther than {:.1} x {} {} from their circles){}",
+            crate::guard::escape(&j.name),
+            sc.left_out.len(),
+            sc.threshold,
+            l(sc.scale),
+            lu.symbol(),
+            if sc.sound { "" } else { "; too many to trust the fit: the sweep is not a circle" }
+        );
+        for o in &sc.left_out {
+            let _ = writeln!(
+                s,
+                "  line {}, target {}: {} {} off ({:.1} x the scale)",
+                o.line,
+                crate::guard::escape(&o.target),
+                l(o.distance),
+                lu.symbol(),
+                o.sigmas
+            );
+        }
+    }
     if !doc.pairs.is_empty() {
         let _ = writeln!(s, "axis pairs, nominal -> measured:");
         for p in &doc.pairs {

@@ -68,7 +68,7 @@ pub fn analyse(m: &Measurements, opts: &CpaOptions) -> Result<CpaResult, CpaErro
 
     let mut joints = Vec::with_capacity(n);
     for (j, &c) in chosen.iter().enumerate() {
-        joints.push(fit_sweep(m, &poses, &sweeps[c], c, kinds[j], opts)?);
+        joints.push(fit_screened(m, &poses, &sweeps[c], c, kinds[j], opts)?);
     }
 
     // Serial joint variables: a follower of a used coupled sweep is q_f − k q_lead.

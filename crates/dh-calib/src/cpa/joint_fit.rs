@@ -5,6 +5,7 @@
 
 use super::*;
 
+/// Fits `sweep`'s joint without the samples `skip` (sorted indices; see `screen`).
 pub(super) fn fit_sweep(
     m: &Measurements,
     poses: &[Pose],
@@ -12,8 +13,9 @@ pub(super) fn fit_sweep(
     index: usize,
     kind: JointKind,
     opts: &CpaOptions,
+    skip: &[usize],
 ) -> Result<JointCpa, CpaError> {
-    let groups = groups(m, poses, sweep);
+    let groups = groups(m, poses, sweep, skip);
     if groups.is_empty() {
         return Err(CpaError::Degenerate {
             joint: sweep.name.clone(),
@@ -170,6 +172,7 @@ pub(super) fn fit_revolute(
         plane_rms: Some(rms(axial.iter().copied())),
         span: sweep.span,
         motion,
+        screen: SweepScreen::default(),
     })
 }
 
@@ -288,6 +291,7 @@ pub(super) fn fit_prismatic(
         plane_rms: None,
         span: sweep.span,
         motion,
+        screen: SweepScreen::default(),
     })
 }
 
@@ -414,7 +418,7 @@ pub(super) fn tip_pose(
             Ok(frame(origin, perpendicular(&z), z))
         }
         JointKind::Revolute => {
-            let groups = groups(m, poses, sweep);
+            let groups = groups(m, poses, sweep, &joint.screen.samples());
             let far = joint.targets.iter().enumerate().max_by(|a, b| {
                 a.1.radius
                     .unwrap_or(0.0)

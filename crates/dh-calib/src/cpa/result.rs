@@ -158,6 +158,9 @@ pub struct JointCpa {
     pub span: f64,
     /// Commanded against measured motion.
     pub motion: MotionCheck,
+    /// The outlier screen of the sweep: the points left out of every figure above, named
+    /// (see the `screen` step of the module docs).
+    pub screen: SweepScreen,
 }
 
 /// The result of [`analyse`].

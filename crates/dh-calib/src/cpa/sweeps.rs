@@ -134,9 +134,11 @@ pub(super) fn describe(sweeps: &[Sweep], kinds: &[JointKind]) -> String {
 /// Groups of one sweep: per target, (target index, per pose: (commanded lead value, points)).
 pub(super) type Groups = Vec<(usize, Vec<(f64, Vec<Vector3<f64>>)>)>;
 
-pub(super) fn groups(m: &Measurements, poses: &[Pose], sweep: &Sweep) -> Groups {
+/// The sweep's points per target and pose, without the samples `skip` (sorted indices).
+pub(super) fn groups(m: &Measurements, poses: &[Pose], sweep: &Sweep, skip: &[usize]) -> Groups {
     let mut out: Groups = Vec::new();
-    let in_sweep = |i: &usize| sweep.samples.binary_search(i).is_ok();
+    let in_sweep =
+        |i: &usize| sweep.samples.binary_search(i).is_ok() && skip.binary_search(i).is_err();
     for pose in poses {
         let members: Vec<usize> = pose.samples.iter().copied().filter(in_sweep).collect();
         if members.is_empty() {

@@ -88,13 +88,37 @@ impl Model {
             SCRATCH.with(|scratch| {
                 let mut scratch = scratch.borrow_mut();
                 let Scratch { starts, grad } = &mut *scratch;
-                self.jacobian_with(x, obs, columns, residuals, jacobian, prepared, starts, grad);
+                let work = (starts, grad);
+                self.jacobian_with(x, obs, columns, residuals, jacobian, prepared, work, false);
             })
         });
     }
 
-    /// [`Model::jacobian`] on a prepared chain, with its work space (reused between calls on
-    /// one thread).
+    /// The derivative of an observation's frame by the parameters `columns` (row-major,
+    /// `6 × columns.len()`): rows 0-2 the position in the device frame (metres per unit of
+    /// the parameter, the device scale applied), rows 3-5 the small rotation about the device
+    /// frame's axes (radians per unit), unweighted. `obs` is a [`Observation::TargetPose`] (a
+    /// target's frame; a point target's is the tip's orientation) or an
+    /// [`Observation::Pose`] (the tip frame); its measured pose is not used. What a
+    /// prediction's uncertainty propagates ([`crate::predict`]); the same screw motions as
+    /// [`Model::jacobian`]. A [`Observation::Point`]'s rotation rows are the tip's.
+    pub fn frame_jacobian(&self, x: &[f64], obs: &Observed, columns: &[usize], out: &mut [f64]) {
+        let chain = self.observation_chain(obs);
+        let mut residuals = [0.0; 6];
+        out.fill(0.0);
+        self.with_prepared(x, chain, obs.session, |prepared| {
+            SCRATCH.with(|scratch| {
+                let mut scratch = scratch.borrow_mut();
+                let Scratch { starts, grad } = &mut *scratch;
+                let work = (starts, grad);
+                self.jacobian_with(x, obs, columns, &mut residuals, out, prepared, work, true);
+            })
+        });
+    }
+
+    /// [`Model::jacobian`] on a prepared chain, with its work space (frames at the steps'
+    /// starts and an effect's gradient, reused between calls on one thread); `raw`: the
+    /// rotation rows are the plain rotation derivative ([`Model::frame_jacobian`]).
     #[allow(clippy::too_many_arguments)]
     fn jacobian_with(
         &self,
@@ -104,8 +128,8 @@ impl Model {
         residuals: &mut [f64],
         jacobian: &mut [f64],
         prepared: &PreparedChain,
-        starts: &mut Vec<Frame>,
-        grad: &mut Vec<f64>,
+        (starts, grad): (&mut Vec<Frame>, &mut Vec<f64>),
+        raw: bool,
     ) {
         let f = prepared.frame(self, x, &obs.q, &obs.context, Some(starts));
         let scale = self.scale_factor(x, &obs.q, &obs.context);
@@ -122,6 +146,7 @@ impl Model {
             ),
         };
         let jl_inv = match weight {
+            _ if raw => Matrix3::identity(),
             Some(w) => left_jacobian_inverse(&phi) * w,
             None => Matrix3::zeros(),
         };
@@ -192,7 +217,7 @@ impl Model {
             for i in 0..3 {
                 jacobian[i * nc + k] = dp[i] * scale;
             }
-            if rows == 6 {
+            if rows == 6 || raw {
                 let dr = jl_inv * dw;
                 for i in 0..3 {
                     jacobian[(3 + i) * nc + k] = dr[i];

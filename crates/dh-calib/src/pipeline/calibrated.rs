@@ -116,6 +116,10 @@ pub struct CalibrationRecord {
     /// Every measurement session's device frame but the first's (`device`).
     #[serde(default)]
     pub sessions: Vec<SessionRecord>,
+    /// The first session's name, with several sessions (sheets written before it was kept
+    /// lack it).
+    #[serde(default)]
+    pub first_session: Option<String>,
 }
 
 /// What a prediction reads of a `simulate` truth file's `truth` section: the simulated robot's
@@ -140,6 +144,7 @@ impl TruthRecord {
     /// The truth as a calibration section without covariance, and its effect values.
     pub fn into_calibration(self) -> (CalibrationRecord, Vec<(String, f64)>) {
         let record = CalibrationRecord {
+            first_session: self.sessions.first().map(|(n, _)| n.clone()),
             device: self.device,
             targets: self.targets,
             covariance: None,
@@ -200,6 +205,8 @@ pub struct CalibratedRobot {
     pub has_device: bool,
     /// The other measurement sessions' device frames `T_device_base`, by name.
     pub sessions: Vec<(String, Isometry3<f64>)>,
+    /// The first session's name, when the record gives it.
+    pub first_session: Option<String>,
     /// The covariance as the record holds it (every session's device frame in it).
     pub covariance: Option<Covariance>,
 }
@@ -262,6 +269,7 @@ impl CalibratedRobot {
             calibrated,
             has_device: record.device.is_some(),
             sessions,
+            first_session: record.first_session.clone(),
             covariance,
         })
     }

@@ -71,6 +71,22 @@ pub(super) fn joint_doc(j: &JointCpa) -> JointCpaDoc {
                 axis_tilt: t.axis_tilt,
             })
             .collect(),
+        screen: ScreenDoc {
+            scale: j.screen.scale,
+            threshold: j.screen.threshold,
+            left_out: j
+                .screen
+                .left_out
+                .iter()
+                .map(|o| LeftOutDoc {
+                    line: o.line,
+                    target: o.target.clone(),
+                    distance: o.distance,
+                    sigmas: o.sigmas,
+                })
+                .collect(),
+            sound: j.screen.sound(),
+        },
     }
 }
 

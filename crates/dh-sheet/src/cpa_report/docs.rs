@@ -101,6 +101,35 @@ pub struct JointCpaDoc {
     pub motion: MotionDoc,
     /// The targets' own circles.
     pub targets: Vec<TargetCircleDoc>,
+    /// The outlier screen of the sweep ([`dh_calib::cpa::SweepScreen`]).
+    pub screen: ScreenDoc,
+}
+
+/// The outlier screen of one sweep: the points left out of its fits, and whether the result
+/// can be trusted.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScreenDoc {
+    /// Scale of the distances (metres): the known noise or the robust estimate, the larger.
+    pub scale: f64,
+    /// Threshold on distance / scale.
+    pub threshold: f64,
+    /// The points left out, in file order.
+    pub left_out: Vec<LeftOutDoc>,
+    /// The screen settled and left out at most a quarter of the sweep's points.
+    pub sound: bool,
+}
+
+/// One point left out of a sweep's fits.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LeftOutDoc {
+    /// 1-based line of the sample in the data file.
+    pub line: usize,
+    /// Target name.
+    pub target: String,
+    /// Distance from its target's fitted circle (metres; line for a prismatic joint).
+    pub distance: f64,
+    /// The same in units of the scale.
+    pub sigmas: f64,
 }
 
 /// A consecutive pair of axes, nominal against measured.

@@ -119,7 +119,9 @@ pub fn read_capped(path: &str, limit: usize) -> Result<std::result::Result<Vec<u
             .context("standard input: cannot read it")?;
         (buf, None)
     } else {
-        read_opened(path, limit).with_context(|| format!("{path}: cannot read the file"))?
+        // Quoted (escaped, cut): a path of 10^8 characters makes a message of a few hundred.
+        read_opened(path, limit)
+            .with_context(|| format!("{}: cannot read the file", crate::text::quote(path)))?
     };
     if let Some(key) = key {
         KEPT.with(|k| {
