@@ -1,6 +1,7 @@
 //! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
 mod batch;
+mod bounds;
 mod calibrate;
 mod check;
 mod check_cases;

@@ -44,6 +44,7 @@ class NativeTable:
     def sheet_json(self) -> str: ...
     def verification_json(self) -> str: ...
     def warnings(self) -> List[str]: ...
+    def failure(self) -> Optional[str]: ...
     def fk(self, q: List[float]) -> Matrix: ...
 
 def extract(
@@ -52,10 +53,10 @@ def extract(
     base: Optional[str],
     tip: Optional[str],
     convention_name: str,
-    samples: int,
-    seed: int,
-    linear: float,
-    angular: float,
+    samples: str,
+    seed: str,
+    linear: str,
+    angular: str,
 ) -> NativeTable: ...
 def check(
     source: str,
@@ -63,8 +64,8 @@ def check(
     sheet: str,
     base: Optional[str],
     tip: Optional[str],
-    linear: float = ...,
-    angular: float = ...,
+    linear: str,
+    angular: str,
 ) -> str: ...
 def run(argv: List[str]) -> Tuple[str, str, bool]: ...
 def calibrate(
