@@ -15,6 +15,8 @@ mod diagnosis;
 mod extract;
 mod hostile_names;
 mod import_columns;
+mod import_hardening;
+mod import_writes;
 mod invalid;
 mod limits;
 mod measured;
