@@ -86,8 +86,8 @@ where
     crate::ranges::check_samples(source.samples, source.table.rows.len())
         .map_err(|e| anyhow!("samples: {e}"))?;
     let size = source.table.size();
-    // `!(<=)`: a size that is NaN (a table with a non-finite value) is no provable size either.
-    if !(size <= MAX_PROVABLE_SIZE) {
+    // A size that is NaN (a table with a non-finite value) is no provable size either.
+    if size.is_nan() || size > MAX_PROVABLE_SIZE {
         bail!(
             "the chain spans {size:.3e} m (lengths, offsets and prismatic travel): beyond {MAX_PROVABLE_SIZE:e} m \
              no table can be proved to {} m in double precision",
