@@ -25,6 +25,7 @@ mod pose6;
 mod predict;
 mod roundtrip;
 mod sessions;
+mod special_files;
 mod tree;
 mod writers;
 mod written;
