@@ -1,6 +1,7 @@
 //! End-to-end tests of the `urdf-dh` binary: exit code, stdout and stderr together.
 
 mod batch;
+mod bounds;
 mod calibrate;
 mod check;
 mod check_cases;
@@ -14,6 +15,8 @@ mod diagnosis;
 mod extract;
 mod hostile_names;
 mod import_columns;
+mod import_hardening;
+mod import_writes;
 mod invalid;
 mod limits;
 mod measured;
@@ -24,6 +27,7 @@ mod predict;
 mod roundtrip;
 mod sdf;
 mod sessions;
+mod special_files;
 mod tree;
 mod ur_deltas;
 mod writers;

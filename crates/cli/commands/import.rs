@@ -5,9 +5,10 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dh_calib::csv::write_measurements;
+use dh_calib::csv::{joint_name_problem, write_measurements, DataError};
 use dh_calib::data::Split;
 use dh_calib::import::{import as import_layout, mukca, Layout, Source};
+use dh_sheet::text::escape;
 
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_table, read_text};
@@ -62,12 +63,15 @@ fn placements(dir: &Path) -> Result<Vec<(String, String)>> {
 }
 
 /// The files named by `args`: directories expanded to their files (sorted), each with its file
-/// name and text (a MATLAB `.mat` file as the CSV text of its variables, see [`read_table`]). Files that are not UTF-8 text inside a directory are skipped (datasets ship
-/// images and archives beside their data). A MUKCa placement directory (with `hole_0.csv` and
-/// `hole_1.csv`), or a robot directory of them, gives its placement files named
-/// `<placement>/<file>`.
-fn gather(args: &[String], err: &mut dyn Write) -> Result<Vec<(String, String)>> {
-    let mut out = Vec::new();
+/// name and text (a MATLAB `.mat` file as the CSV text of its variables, see [`read_table`]),
+/// and what a directory held that was not read, named with the reason. Files that are not
+/// UTF-8 text inside a directory are left out (datasets ship images and archives beside their
+/// data), as are subdirectories and special files (a FIFO is never opened); the list of what
+/// was left out is for the message when no layout fits. A MUKCa placement directory (with
+/// `hole_0.csv` and `hole_1.csv`), or a robot directory of them, gives its placement files
+/// named `<placement>/<file>`.
+fn gather(args: &[String], err: &mut dyn Write) -> Result<Gathered> {
+    let mut out = Gathered::default();
     for a in args {
         let p = Path::new(a);
         let mukca = if p.is_dir() {
@@ -76,25 +80,56 @@ fn gather(args: &[String], err: &mut dyn Write) -> Result<Vec<(String, String)>>
             Vec::new()
         };
         if !mukca.is_empty() {
-            out.extend(mukca);
+            out.files.extend(mukca);
         } else if p.is_dir() {
             let mut entries: Vec<_> = std::fs::read_dir(p)
-                .with_context(|| format!("{a}: cannot read the directory"))?
+                .with_context(|| format!("{}: cannot read the directory", escape(a)))?
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file())
                 .collect();
             entries.sort();
             for e in entries {
                 let path = e.to_string_lossy().into_owned();
-                if let Ok(text) = read_table(&path, err) {
-                    out.push((display_name(&path), text));
+                let name = display_name(&path);
+                if e.is_dir() {
+                    out.left_out
+                        .push(format!("'{}' (a directory)", escape(&name)));
+                } else if !e.is_file() {
+                    out.left_out
+                        .push(format!("'{}' (not a regular file)", escape(&name)));
+                } else {
+                    match read_table(&path, err) {
+                        Ok(text) => out.files.push((name, text)),
+                        Err(e) => out.left_out.push(format!(
+                            "'{}' ({})",
+                            escape(&name),
+                            first_line(&format!("{e:#}"))
+                        )),
+                    }
                 }
             }
         } else {
-            out.push((display_name(a), read_table(a, err)?));
+            out.files.push((display_name(a), read_table(a, err)?));
         }
     }
     Ok(out)
+}
+
+/// The files [`gather`] read, and what it left out.
+#[derive(Default)]
+struct Gathered {
+    /// (file name, text).
+    files: Vec<(String, String)>,
+    /// `'name' (why)` for each directory entry not read.
+    left_out: Vec<String>,
+}
+
+/// The first line of a message, at most 120 characters (a reason in a list).
+fn first_line(text: &str) -> String {
+    let line = text.lines().next().unwrap_or("");
+    match line.char_indices().nth(120) {
+        Some((k, _)) => format!("{}...", &line[..k]),
+        None => line.to_string(),
+    }
 }
 
 /// Runs `import`.
@@ -110,19 +145,28 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
     if let Some(map) = &args.columns {
         let path = &args.files[0];
         let text = read_table(path, err)?;
-        let (data, notes) = dh_calib::import::columns::parse(&text, map)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", display_name(path)))?;
+        let name = escape(&display_name(path)).into_owned();
+        let (data, notes) = dh_calib::import::columns::parse(&text, map).map_err(|e| {
+            let message = format!("{name}: {e}");
+            match e {
+                DataError::Incomplete { .. } => hinted(
+                    message,
+                    "--skip-incomplete leaves out the rows with an empty or NaN number (a warning counts them)",
+                ),
+                _ => anyhow::anyhow!(message),
+            }
+        })?;
         for n in notes {
-            writeln!(err, "urdf-dh: warning: {}: {n}", display_name(path))?;
+            writeln!(err, "urdf-dh: warning: {name}: {n}")?;
         }
         let header = format!(
-            "# imported by urdf-dh import --layout columns from {}\n# metres and radians; points in the measuring device's frame\n",
-            display_name(path)
+            "# imported by urdf-dh import --layout columns from {name}\n# metres and radians; points in the measuring device's frame\n"
         );
         return write_import(args, &data, header, out, err);
     }
-    let files = gather(&args.files, err)?;
+    let Gathered { files, left_out } = gather(&args.files, err)?;
     let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+    let shown: Vec<String> = names.iter().map(|n| escape(n).into_owned()).collect();
     let layouts = || {
         Layout::ALL
             .iter()
@@ -135,15 +179,49 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
     };
     let layout = match args.layout {
         Some(l) => l,
-        None => Layout::detect(&names).ok_or_else(|| {
-            hinted(
-                format!(
-                    "cannot tell the dataset's layout from the file names {}",
-                    names.join(", ")
-                ),
-                format!("name it with --layout: {}", layouts()),
-            )
-        })?,
+        None => match Layout::detect_all(&names).as_slice() {
+            [one] => *one,
+            [] => {
+                let found = match (names.is_empty(), left_out.is_empty()) {
+                    (true, true) => "cannot tell the dataset's layout: found no file".to_string(),
+                    (true, false) => format!(
+                        "cannot tell the dataset's layout: found no file it could read, only {}",
+                        left_out.join(", ")
+                    ),
+                    (false, true) => format!(
+                        "cannot tell the dataset's layout from the file names {}",
+                        shown.join(", ")
+                    ),
+                    (false, false) => format!(
+                        "cannot tell the dataset's layout from the file names {} (left out: {})",
+                        shown.join(", "),
+                        left_out.join(", ")
+                    ),
+                };
+                return Err(hinted(
+                    found,
+                    format!("name it with --layout: {}", layouts()),
+                ));
+            }
+            several => {
+                let fits: Vec<String> = several
+                    .iter()
+                    .map(|l| {
+                        let f: Vec<&str> = l
+                            .files()
+                            .iter()
+                            .filter(|f| f.required)
+                            .map(|f| f.name)
+                            .collect();
+                        format!("{l} ({})", f.join(", "))
+                    })
+                    .collect();
+                return Err(hinted(
+                    format!("the files fit more than one layout: {}", fits.join("; ")),
+                    "name the dataset's layout with --layout, or give only its files",
+                ));
+            }
+        },
     };
     let sources: Vec<Source<'_>> = files
         .iter()
@@ -169,7 +247,7 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
     })?;
     let header = format!(
         "# imported by urdf-dh import --layout {layout} from {}\n# metres and radians; points in the measuring device's frame\n",
-        names.join(" ")
+        shown.join(" ")
     );
     write_import(args, &data, header, out, err)
 }
@@ -230,8 +308,16 @@ pub struct ImportCli {
     #[arg(long, value_name = "COL")]
     target: Option<String>,
     /// `--layout columns`: the point's standard deviation column (its length unit).
-    #[arg(long, value_name = "COL")]
+    #[arg(long, value_name = "COL", conflicts_with = "sigma_axes")]
     sigma: Option<String>,
+    /// `--layout columns`: the point's standard deviation per axis: the x, y, z columns (its
+    /// length unit), written as sx, sy, sz.
+    #[arg(long, value_name = "COLS")]
+    sigma_axes: Option<String>,
+    /// `--layout columns`: leave out the rows with an empty or NaN joint, coordinate or sigma
+    /// (poses the device did not log); a warning counts them and names the first.
+    #[arg(long)]
+    skip_incomplete: bool,
     /// `--layout columns`: the pose identifier column (repeats of a pose share it).
     #[arg(long, value_name = "COL")]
     config: Option<String>,
@@ -315,6 +401,8 @@ impl ImportCli {
         use dh_calib::import::columns::{ColumnMap, ColumnRef, OrientationMap, RotationColumns};
         let given_columns = self.joints.is_some()
             || self.points.is_some()
+            || self.sigma_axes.is_some()
+            || self.skip_incomplete
             || self.quaternion.is_some()
             || self.rpy.is_some()
             || self.sigma_rot.is_some();
@@ -370,7 +458,7 @@ impl ImportCli {
                 };
                 let orientation = match (rotation, one("--sigma-rot", &self.sigma_rot)?) {
                     (Some(rotation), Some(sigma)) => {
-                        if self.sigma.is_none() {
+                        if self.sigma.is_none() && self.sigma_axes.is_none() {
                             return Err(hinted(
                                 "--quaternion/--rpy: expected --sigma as well (the position sigma weighs the angle against the position), found none".to_string(),
                                 "urdf-dh import --layout columns --joints 1-6 --points 7-9 --sigma 10 --quaternion 11-14 --sigma-rot 15 export.csv",
@@ -395,9 +483,39 @@ impl ImportCli {
                         self.files.len()
                     );
                 }
+                if !self.joint_names.is_empty() {
+                    if let Some(problem) = joint_name_problem(&self.joint_names) {
+                        return Err(hinted(
+                            format!(
+                                "--joint-names: expected names the measurement CSV can hold (distinct, none a reserved column, no control or bidi characters), found {problem}"
+                            ),
+                            format!(
+                                "the reserved columns are {}",
+                                dh_calib::csv::RESERVED_COLUMNS.join(", ")
+                            ),
+                        ));
+                    }
+                }
+                if let Some(p) = self.prismatic.iter().find(|p| p.trim().is_empty()) {
+                    anyhow::bail!("--prismatic: expected joint names, found '{}'", escape(p));
+                }
+                let sigma_axes = match &self.sigma_axes {
+                    None => None,
+                    Some(_) => Some(
+                        <[ColumnRef; 3]>::try_from(list("--sigma-axes", &self.sigma_axes)?)
+                            .map_err(|c| {
+                                anyhow::anyhow!(
+                                    "--sigma-axes: expected 3 columns (sx, sy, sz), found {}",
+                                    c.len()
+                                )
+                            })?,
+                    ),
+                };
                 Some(ColumnMap {
                     joints: list("--joints", &self.joints)?,
                     joint_names: self.joint_names,
+                    sigma_axes,
+                    skip_incomplete: self.skip_incomplete,
                     point,
                     target: one("--target", &self.target)?,
                     sigma: one("--sigma", &self.sigma)?,
@@ -418,7 +536,7 @@ impl ImportCli {
             }
             _ if given_columns => {
                 return Err(hinted(
-                    "--joints/--points/--quaternion/--rpy/--sigma-rot: expected --layout columns, found another layout".to_string(),
+                    "--joints/--points/--sigma-axes/--skip-incomplete/--quaternion/--rpy/--sigma-rot: expected --layout columns, found another layout".to_string(),
                     "column options map your own export: urdf-dh import --layout columns --joints 1-6 --points 7-9 export.csv",
                 ))
             }

@@ -10,6 +10,13 @@ pub use compact_str::CompactString;
 
 use nalgebra::{UnitQuaternion, Vector3};
 
+/// Smallest standard deviation a measurement may carry: 1e-9 (metres for a point's `sigma`,
+/// radians for `sigma_rot`). A nanometre is below the noise of every measuring device, and
+/// residuals over it keep the chi-square of the verdict finite (a sigma of 1e-300 made it
+/// infinite, and an infinite statistic drew the verdict "model complete"). The readers refuse
+/// a smaller non-zero value (0 is floored, see [`crate::csv::SIGMA_FLOOR`]).
+pub const MIN_SIGMA: f64 = 1e-9;
+
 /// Which part of the data a sample belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Split {

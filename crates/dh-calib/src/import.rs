@@ -181,22 +181,30 @@ impl Layout {
 
     /// The layout whose required files are all among `names` (file names; a name
     /// `<directory>/<file>` counts as `<file>`), the first in [`Layout::ALL`] order; `None`
-    /// when no layout fits.
+    /// when no layout fits. [`Layout::detect_all`] says when several fit.
     pub fn detect(names: &[&str]) -> Option<Layout> {
-        Layout::ALL.into_iter().find(|layout| {
-            layout
-                .files()
-                .iter()
-                .filter(|f| f.required)
-                .all(|f| match f.name.strip_prefix('*') {
-                    Some(ext) => names.iter().any(|n| n.ends_with(ext)),
-                    None => names.iter().any(|n| {
-                        n.rsplit('/')
-                            .next()
-                            .is_some_and(|base| same_file(base, f.name))
-                    }),
+        Layout::detect_all(names).into_iter().next()
+    }
+
+    /// Every layout whose required files are all among `names`, in [`Layout::ALL`] order: a
+    /// folder holding two datasets' files fits two layouts, and taking the first would drop
+    /// the other without a word.
+    pub fn detect_all(names: &[&str]) -> Vec<Layout> {
+        Layout::ALL
+            .into_iter()
+            .filter(|layout| {
+                layout.files().iter().filter(|f| f.required).all(|f| {
+                    match f.name.strip_prefix('*') {
+                        Some(ext) => names.iter().any(|n| n.ends_with(ext)),
+                        None => names.iter().any(|n| {
+                            n.rsplit('/')
+                                .next()
+                                .is_some_and(|base| same_file(base, f.name))
+                        }),
+                    }
                 })
-        })
+            })
+            .collect()
     }
 }
 
@@ -375,6 +383,10 @@ mod tests {
         );
         assert_eq!(Layout::detect(&["flat.yaml"]), Some(Layout::Hilti));
         assert_eq!(Layout::detect(&["CaliPosition.csv"]), None);
+        assert_eq!(
+            Layout::detect_all(&["calibration_dataset.csv", "N1N2N3Jval.csv"]),
+            vec![Layout::Innopolis, Layout::Boby]
+        );
         assert_eq!(
             Layout::detect(&["front/hole_0.csv", "front/hole_1.csv", "SOURCE.md"]),
             Some(Layout::Mukca)

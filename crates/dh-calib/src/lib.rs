@@ -55,4 +55,5 @@ mod stats;
 mod test_robots;
 pub mod tree;
 
+pub use data::MIN_SIGMA;
 pub use fit::CalibError;

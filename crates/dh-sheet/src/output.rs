@@ -111,7 +111,7 @@ fn destination(target: &Path, shown: &str) -> Result<Destination> {
     Ok(Destination::Special)
 }
 
-fn commit(files: &[(&Path, &[u8])], mut stdout: Option<&mut dyn Write>) -> Result<()> {
+fn commit(files: &[(&Path, &[u8])], stdout: Option<&mut dyn Write>) -> Result<()> {
     let mut staged = Vec::with_capacity(files.len());
     let mut special = Vec::new();
     let mut piped = Vec::new();
@@ -127,7 +127,7 @@ fn commit(files: &[(&Path, &[u8])], mut stdout: Option<&mut dyn Write>) -> Resul
             Destination::Special => special.push((target, shown, *bytes)),
         }
     }
-    if let Some(out) = stdout.as_deref_mut() {
+    if let Some(out) = stdout {
         let written = (|| -> std::io::Result<()> {
             for bytes in &piped {
                 out.write_all(bytes)?;

@@ -72,8 +72,9 @@ pub struct Source<'a, F> {
 /// A base or tool the document leaves out (free) is taken from `free` when comparing.
 ///
 /// # Errors
-/// A written text that does not read back as the same table twice (a writer bug), or rows that
-/// differ from the source's in number.
+/// A sample count outside [`crate::ranges::check_samples`]'s range (zero samples prove
+/// nothing), a written text that does not read back as the same table twice (a writer bug), or
+/// rows that differ from the source's in number.
 pub fn prove<F>(
     doc: &mut SheetDoc,
     format: Format,
@@ -83,8 +84,11 @@ pub fn prove<F>(
 where
     F: FnMut(&[f64]) -> Isometry3<f64> + Send,
 {
+    crate::ranges::check_samples(source.samples, source.table.rows.len())
+        .map_err(|e| anyhow!("samples: {e}"))?;
     let size = source.table.size();
-    if size > MAX_PROVABLE_SIZE {
+    // A size that is NaN (a table with a non-finite value) is no provable size either.
+    if size.is_nan() || size > MAX_PROVABLE_SIZE {
         bail!(
             "the chain spans {size:.3e} m (lengths, offsets and prismatic travel): beyond {MAX_PROVABLE_SIZE:e} m \
              no table can be proved to {} m in double precision",

@@ -365,6 +365,14 @@ pub fn simulate(
         effects: applied,
     };
     sheet.truth = Some(serde_yaml::to_value(&section)?);
+    // What simulate writes as the truth, the sheet reader reads: planted errors the reader
+    // refuses (a tilt beta beyond a right angle) are refused here, not when the truth is read.
+    crate::Sheet::parse(&serde_yaml::to_string(&sheet)?, truth_name).map_err(|e| {
+        hinted(
+            format!("simulate: the true model would not read back: {e:#}"),
+            "plant errors a DH sheet can hold (a tilt beta within 1.5707963 rad, 90 degrees)",
+        )
+    })?;
     Ok(Simulated {
         data,
         csv,

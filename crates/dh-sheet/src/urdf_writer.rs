@@ -393,7 +393,8 @@ pub struct UrdfProof {
 /// Proves `text` (a URDF written from `table`) by extracting it.
 ///
 /// # Errors
-/// A written URDF that does not read back (a writer bug, or names the URDF reader refuses).
+/// A sample count outside [`crate::ranges::check_samples`]'s range, or a written URDF that
+/// does not read back (a writer bug, or names the URDF reader refuses).
 pub fn prove_urdf(
     text: &str,
     table: &DhTable,
@@ -402,6 +403,8 @@ pub fn prove_urdf(
     samples: usize,
     seed: u64,
 ) -> Result<UrdfProof> {
+    crate::ranges::check_samples(samples, table.rows.len())
+        .map_err(|e| anyhow::anyhow!("samples: {e}"))?;
     let model = urdf_axes::UrdfModel::parse(text)
         .map_err(|e| anyhow::anyhow!("the written URDF does not read back: {e}"))?;
     let chain = model

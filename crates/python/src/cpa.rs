@@ -9,7 +9,7 @@ use dh_sheet::render::{render_sheet, Format};
 use pyo3::prelude::*;
 
 use crate::calibration::{arrays, units, ArraysIn};
-use crate::to_py;
+use crate::{ranged_f64, to_py};
 
 /// Runs the circle-point analysis of `data` (arrays, or None to read the file `data_name`,
 /// which otherwise only names them in messages) with `model` (None: the data's joint columns,
@@ -44,8 +44,11 @@ fn cpa(
                     anyhow::bail!("convention: expected 'standard' or 'modified', found '{other}'")
                 }
             },
-            tolerance: Tolerance::new(linear_tol, angular_tol)
-                .map_err(|e| anyhow::anyhow!("{e}"))?,
+            tolerance: Tolerance::new(
+                ranged_f64("linear_tol", linear_tol, dh_sheet::ranges::linear_tol)?,
+                ranged_f64("angular_tol", angular_tol, dh_sheet::ranges::angular_tol)?,
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?,
             units: units(length_unit, angle_unit)?,
             given: data.map(arrays).transpose()?,
         };

@@ -46,6 +46,27 @@ pub(crate) fn to_py(py: Python<'_>, e: anyhow::Error) -> PyErr {
     err
 }
 
+/// A number argument checked by the command line's own range of it ([`dh_sheet::ranges`]),
+/// the error naming the Python argument `name`: `samples: expected a number of samples in [1,
+/// 1000000], found 0`.
+pub(crate) fn ranged<T>(
+    name: &str,
+    value: &str,
+    guard: fn(&str) -> Result<T, String>,
+) -> anyhow::Result<T> {
+    guard(value).map_err(|e| anyhow::anyhow!("{name}: {e}"))
+}
+
+/// [`ranged`] for a float Python handed over as a number (written as Rust reads it back:
+/// `NaN`, `inf` and every finite value round-trip).
+pub(crate) fn ranged_f64(
+    name: &str,
+    value: f64,
+    guard: fn(&str) -> Result<f64, String>,
+) -> anyhow::Result<f64> {
+    ranged(name, &format!("{value:?}"), guard)
+}
+
 /// The native module.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {

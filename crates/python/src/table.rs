@@ -11,7 +11,7 @@ use dh_sheet::xacro::XacroOptions;
 use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
 
-use crate::to_py;
+use crate::{ranged, ranged_f64, to_py};
 
 /// A 4x4 homogeneous matrix, row-major.
 type Matrix = [[f64; 4]; 4];
@@ -91,6 +91,8 @@ struct NativeTable {
     warnings: Vec<String>,
     /// Base and tip link of the chain.
     links: (String, String),
+    /// The CLI's error line when the proof failed (without `urdf-dh: error: `), else `None`.
+    failure: Option<String>,
 }
 
 #[pymethods]
@@ -169,13 +171,26 @@ impl NativeTable {
         self.warnings.clone()
     }
 
+    /// The message `urdf-dh extract` prints when the proof failed (it then exits 1), or None.
+    fn failure(&self) -> Option<String> {
+        self.failure.clone()
+    }
+
     /// Forward kinematics: the tip link in the base link frame at joint values `q` (one per
-    /// row, radians or metres).
+    /// row, radians or metres), each a finite number within the range of `--q`
+    /// ([`dh_sheet::ranges::joint_value`]).
     fn fk(&self, py: Python<'_>, q: Vec<f64>) -> PyResult<Matrix> {
-        self.table
-            .fk(&q)
-            .map(|t| homogeneous(&t))
-            .map_err(|e| to_py(py, anyhow::Error::new(e).context("fk")))
+        let run = || -> anyhow::Result<Matrix> {
+            for (row, v) in self.table.rows.iter().zip(&q) {
+                ranged_f64(
+                    &format!("fk: joint '{}'", row.name),
+                    *v,
+                    dh_sheet::ranges::joint_value,
+                )?;
+            }
+            Ok(homogeneous(&self.table.fk(&q).context("fk")?))
+        };
+        run().map_err(|e| to_py(py, e))
     }
 }
 
@@ -191,22 +206,29 @@ fn extract(
     base: Option<String>,
     tip: Option<String>,
     convention_name: &str,
-    samples: usize,
-    seed: u64,
-    linear: f64,
-    angular: f64,
+    samples: &str,
+    seed: &str,
+    linear: &str,
+    angular: &str,
     xacro_args: Option<Vec<(String, String)>>,
     packages: Option<Vec<(String, String)>>,
 ) -> PyResult<NativeTable> {
     let xacro = xacro_options(xacro_args, packages);
     let run = || -> anyhow::Result<NativeTable> {
+        // The command line's ranges, before any file is read (as clap checks them first).
+        let samples = ranged("samples", samples, dh_sheet::ranges::samples)?;
+        let seed = ranged("seed", seed, dh_sheet::ranges::seed)?;
+        let tolerance = Tolerance::new(
+            ranged("linear_tolerance", linear, dh_sheet::ranges::linear_tol)?,
+            ranged("angular_tolerance", angular, dh_sheet::ranges::angular_tol)?,
+        )?;
         let (bytes, name, dir) = robot_bytes(source, is_xml, &xacro)?;
         let expansion_warnings = dh_sheet::xacro::take_warnings();
         let options = ExtractOptions {
             convention: convention(convention_name)?,
             length_unit: LengthUnit::M,
             angle_unit: AngleUnit::Rad,
-            tolerance: Tolerance::new(linear, angular)?,
+            tolerance,
         };
         let mut ex = extract_bytes_in(
             &bytes,
@@ -216,7 +238,7 @@ fn extract(
             tip.as_deref(),
             &options,
         )?;
-        let (yaml, _passed) = prove_extracted(&mut ex, Format::Yaml, samples, seed)?;
+        let (yaml, passed) = prove_extracted(&mut ex, Format::Yaml, samples, seed)?;
         let verification = ex
             .sheet
             .verification
@@ -236,6 +258,13 @@ fn extract(
                 .collect(),
             links: (ex.chain.base().to_owned(), ex.chain.tip().to_owned()),
             table,
+            failure: (!passed).then(|| {
+                let line =
+                    dh_sheet::prove::failure_line("the table", "the URDF", Some(verification));
+                line.strip_prefix("urdf-dh: error: ")
+                    .unwrap_or(&line)
+                    .to_string()
+            }),
         })
     };
     py.detach(run).map_err(|e| to_py(py, e))
@@ -244,7 +273,7 @@ fn extract(
 /// Compares a URDF chain with a DH sheet file as `urdf-dh check --format json` does; returns
 /// the report as JSON text.
 #[pyfunction]
-#[pyo3(signature = (source, is_xml, sheet, base, tip, linear=CHECK_LINEAR, angular=CHECK_ANGULAR, xacro_args=None, packages=None))]
+#[pyo3(signature = (source, is_xml, sheet, base, tip, linear, angular, xacro_args=None, packages=None))]
 #[allow(clippy::too_many_arguments)]
 fn check(
     py: Python<'_>,
@@ -253,13 +282,17 @@ fn check(
     sheet: &str,
     base: Option<String>,
     tip: Option<String>,
-    linear: f64,
-    angular: f64,
+    linear: &str,
+    angular: &str,
     xacro_args: Option<Vec<(String, String)>>,
     packages: Option<Vec<(String, String)>>,
 ) -> PyResult<String> {
     let xacro = xacro_options(xacro_args, packages);
     let run = || -> anyhow::Result<String> {
+        let (linear, angular) = (
+            ranged("linear_tolerance", linear, dh_sheet::ranges::linear_tol)?,
+            ranged("angular_tolerance", angular, dh_sheet::ranges::angular_tol)?,
+        );
         let (bytes, name, dir) = robot_bytes(source, is_xml, &xacro)?;
         dh_sheet::xacro::take_warnings();
         let (_, chain) = load_chain_in(

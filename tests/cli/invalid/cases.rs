@@ -230,6 +230,21 @@ pub(super) const CASES: &[Case] = &[
     sheet!("spherical_joint", "spherical_joint.yaml"),
     sheet!("short_pose", "short_pose.yaml"),
     sheet!("mimic_itself", "mimic_itself.yaml"),
+    sheet!("mimic_cycle", "mimic_cycle.yaml"),
+    // An angle beyond a turn is read as the same angle within half a turn, with a warning,
+    // and the converted table proves (999999 rad failed the proofs of convert and to-urdf).
+    warns(
+        "sheet_theta_beyond_a_turn",
+        &[
+            "convert",
+            "fixtures/invalid/sheet/theta_beyond_a_turn.yaml",
+            "--to",
+            "modified",
+            "--format",
+            "csv",
+        ],
+        0,
+    ),
     sheet!("alias_bomb", "alias_bomb.yaml"),
     sheet!(
         "control_character_in_name",
@@ -329,6 +344,8 @@ pub(super) const CASES: &[Case] = &[
     csv!("bidi_in_target"),
     csv!("nul_in_config"),
     csv!("huge_sigma"),
+    csv!("tiny_sigma"),
+    csv!("subnormal_sigma"),
     csv!("target_per_row"),
     case(
         "csv_huge_mm_coordinate",
@@ -418,6 +435,42 @@ pub(super) const CASES: &[Case] = &[
             VALID_CSV,
             "--sigma",
             "1e200",
+        ],
+    ),
+    case(
+        "arg_tiny_sigma",
+        &[
+            "calibrate",
+            "--model",
+            VALID_ARM,
+            "--data",
+            VALID_CSV,
+            "--sigma",
+            "1e-300",
+        ],
+    ),
+    // A proof of no sample is no proof: every proof's count is in [1, 1e6].
+    case(
+        "arg_samples_zero_convert",
+        &["convert", VALID_SHEET, "--to", "modified", "--samples", "0"],
+    ),
+    case(
+        "arg_samples_zero_to_urdf",
+        &["to-urdf", VALID_SHEET, "--samples", "0"],
+    ),
+    case(
+        "arg_samples_zero_batch",
+        &["batch", "fixtures/invalid/never_read.txt", "--samples", "0"],
+    ),
+    case(
+        "arg_samples_too_many_convert",
+        &[
+            "convert",
+            VALID_SHEET,
+            "--to",
+            "modified",
+            "--samples",
+            "1000000001",
         ],
     ),
     case(

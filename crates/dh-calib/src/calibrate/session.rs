@@ -527,7 +527,19 @@ impl<'a> Session<'a> {
         let model = &self.model;
         let x = last.x.clone();
         let mut notes = self.notes.clone();
-        let noise_floor = noise_floor(&self.prep, self.options, last.free.len());
+        let noise_floor = match floor_or_why(&self.prep, self.options, last.free.len()) {
+            Ok(f) => Some(f),
+            Err(NoFloor::IdenticalRepeats(per_axis)) => {
+                notes.push(format!(
+                    "the noise floor cannot be estimated: the repeated poses are identical \
+                     (pure error {per_axis:.1e} m per axis, below {:e} m), copies of one record \
+                     rather than repeated measurements; give --sigma or a sigma column",
+                    crate::MIN_SIGMA
+                ));
+                None
+            }
+            Err(NoFloor::Unknown) => None,
+        };
         let mut parameters = estimates(model, &x, last, self.device_nominal, &self.targets_nominal);
         let hidden_names: Vec<&str> = model
             .parameters()

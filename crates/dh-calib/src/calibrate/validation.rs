@@ -341,14 +341,36 @@ fn trained_on_others(parts: &[fit::GramSum], fold: usize) -> Option<fit::Factor>
     sum.factor()
 }
 
+/// The noise floor of a fit with `p` free parameters, or `None` ([`floor_or_why`] says why).
+#[cfg(test)]
 pub(super) fn noise_floor(
     prep: &Prepared,
     options: &CalibrationOptions,
     p: usize,
 ) -> Option<NoiseFloor> {
+    floor_or_why(prep, options, p).ok()
+}
+
+/// Why a fit has no noise floor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum NoFloor {
+    /// No known sigma and no repeated poses.
+    Unknown,
+    /// Repeated poses whose pure error (metres per axis) is below [`crate::MIN_SIGMA`]: copies
+    /// of one record, not repeated measurements; no floor can be estimated from them.
+    IdenticalRepeats(f64),
+}
+
+/// The noise floor of a fit with `p` free parameters: from the `sigma` option, the samples'
+/// own sigmas, or the pooled pure error of repeated poses; [`NoFloor`] says why there is none.
+pub(super) fn floor_or_why(
+    prep: &Prepared,
+    options: &CalibrationOptions,
+    p: usize,
+) -> Result<NoiseFloor, NoFloor> {
     let n = prep.cal.len();
     if n == 0 {
-        return None;
+        return Err(NoFloor::Unknown);
     }
     let (e2, source) = if let Some(s) = options.sigma {
         (3.0 * s * s, NoiseSource::Given)
@@ -372,7 +394,12 @@ pub(super) fn noise_floor(
             count += 1;
         }
         if dof == 0 {
-            return None;
+            return Err(NoFloor::Unknown);
+        }
+        // `ss / dof` is the expected squared 3-D error of one point: 3 sigma² per axis.
+        let per_axis = (ss / dof as f64 / 3.0).sqrt();
+        if per_axis < crate::MIN_SIGMA {
+            return Err(NoFloor::IdenticalRepeats(per_axis));
         }
         (ss / dof as f64, NoiseSource::Repeats { groups: count, dof })
     };
@@ -389,7 +416,7 @@ pub(super) fn noise_floor(
     let angle = &prep.sigmas_rot;
     let angle_rms = (!angle.is_empty())
         .then(|| (angle.iter().map(|s| s * s).sum::<f64>() / angle.len() as f64 * factor).sqrt());
-    Some(NoiseFloor {
+    Ok(NoiseFloor {
         rms: (e2 * factor).sqrt(),
         sigma: (e2 / 3.0).sqrt(),
         source,

@@ -43,7 +43,12 @@ pub(crate) fn verdict_with(
 ) -> Verdict {
     let test = residual_test_in(session, fit, alpha, Some(res));
     let structure = structure_checks(session, fit, alpha, res);
-    let ratio = floor.filter(|f| f.rms > 0.0).map(|f| rms / f.rms);
+    // No ratio to a floor that is not a physical noise (a floor of 1e-17 m from identical
+    // copies of one record gave "233348038164 x the floor").
+    let ratio = floor
+        .filter(|f| f.rms.is_finite() && f.rms >= crate::MIN_SIGMA)
+        .map(|f| rms / f.rms)
+        .filter(|r| r.is_finite());
     let complete = (test.kind != NoiseTest::None).then_some(!test.significant);
     let summary = match (complete, ratio) {
         (Some(true), _) => "model complete".to_string(),
@@ -66,6 +71,15 @@ pub(crate) fn verdict_with(
         )
     };
     match complete {
+        None if test.summary.starts_with(IDENTICAL_REPEATS) => notes.push(
+            "no test of the final model is possible: copies of one record are not repeated \
+             measurements (give --sigma or a sigma column)"
+                .into(),
+        ),
+        None if test.summary.starts_with(NOT_FINITE) => notes.push(format!(
+            "no test of the final model is possible: {}",
+            test.summary
+        )),
         None => notes.push(
             "no test of the final model is possible: no known sigma and no repeated poses \
              (give --sigma or repeat poses under one config)"
@@ -91,6 +105,26 @@ pub(crate) fn verdict_with(
         summary,
         structure,
         notes,
+    }
+}
+
+/// How the summary of a residual test begins when the repeated poses are identical (a pure
+/// error below [`crate::MIN_SIGMA`] per axis): no noise floor can be estimated from them.
+const IDENTICAL_REPEATS: &str = "the repeated poses are identical";
+
+/// How the summary of a residual test begins when its statistic is not a finite number.
+const NOT_FINITE: &str = "the statistic is not a finite number";
+
+/// The test that is not made: `summary` says why (held-out error decides).
+fn no_test(summary: String) -> ResidualTest {
+    ResidualTest {
+        kind: NoiseTest::None,
+        statistic: None,
+        dof: (0.0, 0.0),
+        p_value: None,
+        noise_rms: None,
+        significant: true,
+        summary,
     }
 }
 
@@ -185,6 +219,14 @@ fn residual_test_in(
         let pv = stats::chi2_sf(chi2, dof);
         let n = session.prep.cal.len();
         let noise = ((0..n).map(|i| known.at(i).norm_squared()).sum::<f64>() / n as f64).sqrt();
+        // No verdict from a statistic that is not a number: the readers hold every sigma to
+        // at least MIN_SIGMA, so this is a guard, not a path input takes.
+        if !(chi2.is_finite() && pv.is_finite()) {
+            return no_test(format!(
+                "{NOT_FINITE} (chi-square {chi2} against the known noise of {noise:e} m RMS): \
+                 held-out error decides"
+            ));
+        }
         return ResidualTest {
             kind: NoiseTest::KnownSigma,
             statistic: Some(chi2),
@@ -201,9 +243,24 @@ fn residual_test_in(
         let df_lof = dof - df_pe as f64;
         let ss_lof = (fit.ssr - ss_pe).max(0.0);
         let noise = (3.0 * ss_pe / df_pe as f64).sqrt();
+        // Per-axis standard deviation of the repeats (`df_pe` counts 3 per repeat).
+        let per_axis = (ss_pe / df_pe as f64).sqrt();
+        if per_axis < crate::MIN_SIGMA {
+            return no_test(format!(
+                "{IDENTICAL_REPEATS} (pure error {per_axis:.1e} m per axis, below {:e} m): \
+                 the noise floor cannot be estimated from them, held-out error decides",
+                crate::MIN_SIGMA
+            ));
+        }
         if df_lof >= 1.0 {
-            let f = (ss_lof / df_lof) / (ss_pe / df_pe as f64).max(1e-300);
+            let f = (ss_lof / df_lof) / (ss_pe / df_pe as f64);
             let pv = stats::f_sf(f, df_lof, df_pe as f64);
+            if !(f.is_finite() && pv.is_finite()) {
+                return no_test(format!(
+                    "{NOT_FINITE} (lack of fit F = {f} against the pure error of repeats): \
+                     held-out error decides"
+                ));
+            }
             return ResidualTest {
                 kind: NoiseTest::PureError,
                 statistic: Some(f),
@@ -217,17 +274,11 @@ fn residual_test_in(
             };
         }
     }
-    ResidualTest {
-        kind: NoiseTest::None,
-        statistic: None,
-        dof: (0.0, 0.0),
-        p_value: None,
-        noise_rms: None,
-        significant: true,
-        summary: "no independent noise estimate (no known sigma, no repeated poses): held-out \
-                  error decides"
+    no_test(
+        "no independent noise estimate (no known sigma, no repeated poses): held-out error \
+         decides"
             .into(),
-    }
+    )
 }
 
 /// The residual's structure at `fit` (step 5 of the verdict), given the position residuals

@@ -254,6 +254,15 @@ impl Measurements {
                         "a standard deviation > 0",
                         format!("{v}"),
                     )),
+                    v if length(v) < crate::MIN_SIGMA => Err(array_error(
+                        row,
+                        column,
+                        format!(
+                            "a standard deviation of 0 (floored) or at least {:e} m",
+                            crate::MIN_SIGMA
+                        ),
+                        format!("{v}"),
+                    )),
                     v if length(v) > MAX_PLAUSIBLE_METRES => Err(array_error(
                         row,
                         column,
@@ -389,7 +398,7 @@ fn orientation_row(
         array_error(
             i,
             "sigma_rot",
-            "a standard deviation >= 0 and <= 1 rad for an orientation",
+            super::orientation::sigma_rot_expected(s, "for an orientation"),
             format!("{s}"),
         )
     })?;

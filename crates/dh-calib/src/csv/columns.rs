@@ -56,6 +56,11 @@ pub(super) fn header_columns(
 ) -> Result<Columns, DataError> {
     let line = header.line;
     let names = &header.fields;
+    if let [only] = names.as_slice() {
+        if let Some(found) = [';', '\t'].into_iter().find(|c| only.contains(*c)) {
+            return Err(DataError::Separator { line, found });
+        }
+    }
     if let Some(joint) = joint_names
         .iter()
         .find(|j| RESERVED_COLUMNS.contains(&j.as_str()))

@@ -220,6 +220,39 @@ pub enum DataError {
         /// The names of the files given.
         given: Vec<String>,
     },
+    /// A text that is not UTF-8 lines: UTF-16 without a byte-order mark, CR-only line ends.
+    #[error("expected UTF-8 text with LF or CRLF line ends, found {found}; convert it: {convert}")]
+    Encoding {
+        /// What the text is.
+        found: String,
+        /// The command that converts it (`FILE` standing for the file).
+        convert: String,
+    },
+    /// A header that is one column holding another separator: an export for another reader
+    /// (`;`-separated, tab-separated).
+    #[error(
+        "line {line}: expected columns separated by ',', found {} (the header is one column); \
+         an export with its own separator, units and column names reads with \
+         urdf-dh import --layout columns",
+        separator_name(*.found)
+    )]
+    Separator {
+        /// Header line.
+        line: usize,
+        /// The separator the header holds.
+        found: char,
+    },
+    /// A cell with no value where a number is needed: empty or NaN (a value the device did
+    /// not log).
+    #[error("line {line}, column '{column}': expected a number, found {} (a value not logged)", if .text.is_empty() { "an empty cell".to_string() } else { format!("'{}'", .text) })]
+    Incomplete {
+        /// The row's line.
+        line: usize,
+        /// Column name.
+        column: String,
+        /// The cell's text.
+        text: String,
+    },
     /// An error inside one file of a multi-file dataset.
     #[error("{file}: {source}")]
     InFile {
@@ -228,6 +261,15 @@ pub enum DataError {
         /// The error.
         source: Box<DataError>,
     },
+}
+
+/// A separator as a message names it.
+fn separator_name(c: char) -> &'static str {
+    match c {
+        ';' => "';'",
+        '\t' => "tabs",
+        _ => "another separator",
+    }
 }
 
 /// `'a', 'b', 'c'`, or `none`.

@@ -125,18 +125,30 @@ pub(super) fn orientation_cells<'a>(
     let sigma = number(cell(s), line, name(s))?;
     let (sigma, floored) = floored_sigma_rot(sigma).ok_or_else(|| DataError::Format {
         line,
-        expected: format!(
-            "a standard deviation >= 0 and <= {MAX_SIGMA_ROT} rad in column 'sigma_rot'"
-        ),
+        expected: sigma_rot_expected(sigma, "in column 'sigma_rot'"),
         found: format!("'{}'", cell(s)),
     })?;
     Ok(Some((Orientation { rotation, sigma }, floored)))
 }
 
+/// What a refused `sigma_rot` should have been (`place`: where it is): a positive value below
+/// [`crate::MIN_SIGMA`] is told so, any other the whole range.
+pub(crate) fn sigma_rot_expected(sigma: f64, place: &str) -> String {
+    if sigma > 0.0 && sigma < crate::MIN_SIGMA {
+        format!(
+            "a standard deviation of 0 (floored) or at least {:e} rad {place}",
+            crate::MIN_SIGMA
+        )
+    } else {
+        format!("a standard deviation >= 0 and <= {MAX_SIGMA_ROT} rad {place}")
+    }
+}
+
 /// A `sigma_rot` (radians) as the fit takes it, and whether it was 0 and floored at
-/// [`SIGMA_ROT_FLOOR`]; `None` when it is not in `[0, 1]` rad (negative, NaN, above a radian).
+/// [`SIGMA_ROT_FLOOR`]; `None` when it is neither 0 nor in `[MIN_SIGMA, 1]` rad (negative,
+/// NaN, below a nanoradian, above a radian: see [`crate::MIN_SIGMA`]).
 pub(crate) fn floored_sigma_rot(sigma: f64) -> Option<(f64, bool)> {
-    if !(0.0..=MAX_SIGMA_ROT).contains(&sigma) {
+    if !(sigma == 0.0 || (crate::MIN_SIGMA..=MAX_SIGMA_ROT).contains(&sigma)) {
         return None;
     }
     Some(if sigma == 0.0 {
@@ -144,4 +156,21 @@ pub(crate) fn floored_sigma_rot(sigma: f64) -> Option<(f64, bool)> {
     } else {
         (sigma, false)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `sigma_rot` is 0 (floored) or in [1e-9, 1] rad: a subnormal or 1e-300 would make the
+    /// chi-square infinite (issue 30).
+    #[test]
+    fn sigma_rot_is_zero_or_at_least_a_nanoradian() {
+        assert_eq!(floored_sigma_rot(0.0), Some((SIGMA_ROT_FLOOR, true)));
+        assert_eq!(floored_sigma_rot(1e-9), Some((1e-9, false)));
+        assert_eq!(floored_sigma_rot(1.0), Some((1.0, false)));
+        for bad in [1e-300, 5e-324, 9.9e-10, -1e-6, 1.5, f64::NAN] {
+            assert_eq!(floored_sigma_rot(bad), None, "{bad}");
+        }
+    }
 }

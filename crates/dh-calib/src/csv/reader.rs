@@ -336,6 +336,17 @@ impl RowReader<'_> {
                     text: text.into(),
                 });
             }
+            if length(value) < crate::MIN_SIGMA {
+                return Err(DataError::Format {
+                    line,
+                    expected: format!(
+                        "a standard deviation of 0 (floored) or at least {:e} m in column '{}'",
+                        crate::MIN_SIGMA,
+                        name(col)
+                    ),
+                    found: format!("'{text}'"),
+                });
+            }
             if length(value) > MAX_PLAUSIBLE_METRES {
                 return Err(DataError::Format {
                     line,
@@ -439,5 +450,40 @@ pub(crate) fn parse_split(text: &str) -> Option<Split> {
         "train" | "calibration" => Some(Split::Calibration),
         "test" | "validation" => Some(Split::Validation),
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod sigma_tests {
+    use super::*;
+
+    /// Sigma cells of 1e-300 or a subnormal are refused naming line and column (their
+    /// chi-square was infinite and the verdict "model complete"); 1e-9 m is read, and so is
+    /// 2e-6 mm (2e-9 m), while 5e-7 mm (5e-10 m) is not.
+    #[test]
+    fn sigmas_below_a_nanometre_are_refused() {
+        let names = vec!["j1".to_string()];
+        let read = |sigma: &str, unit: LengthUnit| {
+            let text = format!("j1,x,y,z,target,sx,sy,sz\n0.1,1,2,3,t,1e-5,{sigma},1e-5\n");
+            let opts = CsvOptions {
+                length_unit: unit,
+                angle_unit: AngleUnit::Radian,
+                prismatic: Vec::new(),
+            };
+            parse_measurements(&text, &names, &opts)
+        };
+        for tiny in ["1e-300", "5e-324", "9e-10"] {
+            let e = read(tiny, LengthUnit::Metre).unwrap_err().to_string();
+            assert!(
+                e.contains("line 2")
+                    && e.contains("at least 1e-9 m in column 'sy'")
+                    && e.contains(&format!("'{tiny}'")),
+                "{e}"
+            );
+        }
+        let m = read("1e-9", LengthUnit::Metre).unwrap();
+        assert_eq!(m.samples[0].sigma.unwrap().y, 1e-9);
+        assert!(read("2e-6", LengthUnit::Millimetre).is_ok());
+        assert!(read("5e-7", LengthUnit::Millimetre).is_err());
     }
 }

@@ -30,16 +30,21 @@ pub(crate) struct Records<'a> {
     pub(super) lines: std::iter::Peekable<std::iter::Enumerate<std::str::Split<'a, char>>>,
     pub(super) delimiter: char,
     pub(super) comments: bool,
+    /// A text that is not UTF-8 lines as a CSV needs them ([`encoding_problem`]): the first
+    /// record is this error.
+    pub(super) refused: Option<DataError>,
 }
 
 impl<'a> Records<'a> {
     /// The records of `text` (see [`records`]).
     pub(crate) fn new(text: &'a str, delimiter: char, comments: bool) -> Self {
-        Self::lines_of(
+        let mut records = Self::lines_of(
             text.strip_prefix('\u{feff}').unwrap_or(text),
             delimiter,
             comments,
-        )
+        );
+        records.refused = encoding_problem(text);
+        records
     }
 
     /// The records of `text` as lines of a longer text (a byte-order mark kept, line numbers
@@ -49,6 +54,7 @@ impl<'a> Records<'a> {
             lines: text.split('\n').enumerate().peekable(),
             delimiter,
             comments,
+            refused: None,
         }
     }
 }
@@ -57,6 +63,12 @@ impl Iterator for Records<'_> {
     type Item = Result<Record, DataError>;
 
     fn next(&mut self) -> Option<Self::Item> {
+        if let Some(e) = self.refused.take() {
+            // Nothing after the refusal: the text is not read as lines at all.
+            self.lines = "".split('\n').enumerate().peekable();
+            self.lines.next();
+            return Some(Err(e));
+        }
         let delimiter = self.delimiter;
         loop {
             let (index, raw) = self.lines.next()?;
@@ -115,6 +127,49 @@ impl Iterator for Records<'_> {
             return Some(Ok(Record { line, fields }));
         }
     }
+}
+
+/// How many bytes at the start of a text [`encoding_problem`] looks at for the zero bytes of
+/// UTF-16: such a text has one every other byte from the start, and a look at the start only
+/// keeps a 2 GB file's check instant.
+const ENCODING_PROBE_BYTES: usize = 4096;
+
+/// Why `text` cannot be read as CSV lines, with how to convert it: UTF-16 text without a
+/// byte-order mark (its ASCII characters are valid UTF-8, each followed or preceded by a zero
+/// byte, which the reader would report as control characters U+0000), or line ends that are
+/// CR alone (old Mac OS: the whole file one line). `None` for ordinary text.
+pub(crate) fn encoding_problem(text: &str) -> Option<DataError> {
+    let probe = &text.as_bytes()[..text.len().min(ENCODING_PROBE_BYTES)];
+    let zeros = |parity: usize| {
+        probe
+            .iter()
+            .skip(parity)
+            .step_by(2)
+            .filter(|b| **b == 0)
+            .count()
+    };
+    let (even, odd) = (zeros(0), zeros(1));
+    let half = probe.len() / 2;
+    // Mostly ASCII UTF-16: zeros at nearly every odd (little-endian) or even (big-endian)
+    // position, none at the other.
+    if half >= 2 && (odd.max(even) * 4 >= half * 3) {
+        let order = if odd > even { "le" } else { "be" };
+        return Some(DataError::Encoding {
+            found: format!(
+                "UTF-16{} text without a byte-order mark (a zero byte beside every character)",
+                order.to_uppercase()
+            ),
+            convert: format!("iconv -f utf-16{order} -t utf-8 FILE > FILE-utf8.csv"),
+        });
+    }
+    if !text.contains('\n') && text.trim_end_matches('\r').contains('\r') {
+        return Some(DataError::Encoding {
+            found: "lines ending in CR alone (old Mac OS line ends), so the file is one line"
+                .into(),
+            convert: "tr '\\r' '\\n' < FILE > FILE-lf.csv".into(),
+        });
+    }
+    None
 }
 
 /// A cell being read.

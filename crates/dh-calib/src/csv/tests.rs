@@ -325,3 +325,58 @@ fn the_cells_trim_is_str_trim() {
         }
     }
 }
+
+/// UTF-16 without a byte-order mark is valid UTF-8 (a zero byte beside each ASCII character):
+/// it is named with the command that converts it, not reported as a control character U+0000.
+/// CR-only line ends (old Mac OS) make the file one line: named the same way.
+#[test]
+fn utf16_and_cr_only_texts_are_named_with_their_conversion() {
+    let csv = "joint_1,x,y,z\n0.1,1,2,3\n";
+    let joints = names(&["joint_1"]);
+    let le: String = csv.chars().flat_map(|c| [c, '\0']).collect();
+    let be: String = csv.chars().flat_map(|c| ['\0', c]).collect();
+    for (text, order) in [(le, "le"), (be, "be")] {
+        let e = parse_measurements(&text, &joints, &CsvOptions::default()).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains(&format!("found UTF-16{}", order.to_uppercase()))
+                && e.contains(&format!("iconv -f utf-16{order} -t utf-8")),
+            "{e}"
+        );
+    }
+    let cr = csv.replace('\n', "\r");
+    let e = parse_measurements(&cr, &joints, &CsvOptions::default()).unwrap_err();
+    assert!(
+        e.to_string().contains("CR alone (old Mac OS line ends)")
+            && e.to_string().contains("tr '\\r' '\\n'"),
+        "{e}"
+    );
+    // CRLF and a last line without an end read as before.
+    let crlf = csv.replace('\n', "\r\n");
+    assert_eq!(
+        parse_measurements(&crlf, &joints, &CsvOptions::default())
+            .unwrap()
+            .samples
+            .len(),
+        1
+    );
+    assert!(parse_measurements(
+        "joint_1,x,y,z\r\n0.1,1,2,3",
+        &joints,
+        &CsvOptions::default()
+    )
+    .is_ok());
+}
+
+/// A `;`-separated export given as a measurement file is pointed to `import --layout columns`.
+#[test]
+fn a_semicolon_export_is_pointed_to_the_columns_import() {
+    let text = "joint_1;x;y;z\n0.1;1;2;3\n";
+    let e = parse_measurements(text, &names(&["joint_1"]), &CsvOptions::default()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "line 1: expected columns separated by ',', found ';' (the header is one column); an \
+         export with its own separator, units and column names reads with urdf-dh import \
+         --layout columns"
+    );
+}

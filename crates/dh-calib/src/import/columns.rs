@@ -17,13 +17,32 @@
 use nalgebra::Vector3;
 
 use crate::csv::{
-    check_name, number, parse_split, DataError, Records, MAX_PLAUSIBLE_METRES as MAX_METRES,
+    check_name, parse_split, DataError, Records, MAX_PLAUSIBLE_METRES as MAX_METRES,
     MAX_PLAUSIBLE_RADIANS as MAX_RADIANS, SIGMA_FLOOR,
 };
 use crate::data::{Measurements, Sample, Split};
 
+mod copies;
 pub mod orientation;
+mod resolve;
 pub use orientation::{OrientationMap, RotationColumns};
+use resolve::{Header, Sigma};
+
+/// Most columns a range in a column list may span (`1-65536`): far more than any export has,
+/// and a bound on what a list allocates before the file's own width is known (a range
+/// `1-100000000000` was 2.4 TB of column numbers). Columns beyond the file's width are refused
+/// when the file is read.
+pub const MAX_COLUMNS: usize = 1 << 16;
+
+/// Smallest non-zero standard deviation (metres): a nanometre, below every device's noise, the
+/// bound `calibrate --sigma` and the canonical reader hold sigmas to (`dh_calib::MIN_SIGMA`,
+/// issue 30; 0 is floored at [`SIGMA_FLOOR`] instead).
+const MIN_SIGMA_METRES: f64 = 1e-9;
+
+/// Largest standard deviation in the file's length unit, as `calibrate --sigma` takes it
+/// (1 m in mm, 1 km in m; `dh_sheet::ranges::MAX_SIGMA`); in metres it must also be within the
+/// canonical reader's 100 m.
+pub const MAX_SIGMA_IN_UNIT: f64 = 1000.0;
 
 /// A column by 1-based number or by header name.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -57,6 +76,11 @@ impl ColumnRef {
                     return Err(format!("expected columns numbered from 1, found '{item}'"))
                 }
                 (Ok(n), _) => out.push(ColumnRef::Number(n)),
+                (_, Some((a, b))) if b >= MAX_COLUMNS.saturating_add(a) => {
+                    return Err(format!(
+                        "expected a range of at most {MAX_COLUMNS} columns, found '{item}'"
+                    ));
+                }
                 (_, Some((a, b))) if a <= b => out.extend((a..=b).map(ColumnRef::Number)),
                 (_, Some(_)) => {
                     return Err(format!("expected a range low-high, found '{item}'"));
@@ -82,6 +106,12 @@ pub struct ColumnMap {
     pub target: Option<ColumnRef>,
     /// The isotropic standard deviation column.
     pub sigma: Option<ColumnRef>,
+    /// The per-axis standard deviation columns of `x`, `y`, `z` (written as `sx`, `sy`,
+    /// `sz`); not with [`ColumnMap::sigma`].
+    pub sigma_axes: Option<[ColumnRef; 3]>,
+    /// Rows with a joint, coordinate or sigma cell that is empty or NaN (a pose the device did
+    /// not log) are left out and counted in a note, instead of refused.
+    pub skip_incomplete: bool,
     /// The pose identifier column (repeats share it).
     pub config: Option<ColumnRef>,
     /// The split column (`calibration`/`train` or `validation`/`test`).
@@ -120,14 +150,18 @@ fn detect_delimiter(text: &str) -> char {
 
 /// Reads `text` laid out as `map` says (see the [module docs](self)), with the warnings a
 /// reader should see: standard deviations of 0 floored at [`SIGMA_FLOOR`], as the canonical
-/// reader floors them.
+/// reader floors them; rows left out as incomplete ([`ColumnMap::skip_incomplete`]); rows that
+/// are identical copies of an earlier row, counted once (an export that repeats a record
+/// would otherwise show repeated measurements without scatter).
 ///
 /// # Errors
 /// A [`DataError`] naming the line and column: no data rows, a column that is not there (by
-/// number or name), a cell that is not a finite number, a negative standard deviation, values
-/// that look like another unit, an unknown split, a name with control or bidi characters.
+/// number or name) or that two header columns name, a column in two roles, joint names the
+/// measurement CSV cannot hold, a prismatic joint that is not a joint, a cell that is not a
+/// finite number ([`DataError::Incomplete`] for an empty or NaN one), a standard deviation
+/// that is negative or outside its range, values that look like another unit, an unknown
+/// split, a name with control or bidi characters.
 pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>), DataError> {
-    let mut zero_sigmas: Vec<usize> = Vec::new();
     let delimiter = map.delimiter.unwrap_or_else(|| detect_delimiter(text));
     let mut rows = Records::new(text, delimiter, true).peekable();
     let header = if map.header {
@@ -139,6 +173,11 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         }
         Some(h)
     } else {
+        if let Some(Err(_)) = rows.peek() {
+            if let Some(Err(e)) = rows.next() {
+                return Err(e);
+            }
+        }
         None
     };
     let width = match (&header, rows.peek()) {
@@ -146,87 +185,20 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
         (None, Some(Ok(r))) => r.fields.len(),
         _ => 0,
     };
-    let header_line = header.as_ref().map_or(1, |h| h.line);
-    let resolve = |c: &ColumnRef| -> Result<usize, DataError> {
-        match c {
-            ColumnRef::Number(n) if *n <= width => Ok(n - 1),
-            ColumnRef::Number(n) => Err(DataError::Format {
-                line: header_line,
-                expected: format!("a column {n} (the file has {width})"),
-                found: "none".into(),
-            }),
-            ColumnRef::Name(name) => header
-                .as_ref()
-                .and_then(|h| h.fields.iter().position(|f| f == name))
-                .ok_or_else(|| DataError::Format {
-                    line: header_line,
-                    expected: format!("a column named '{name}'"),
-                    found: match &header {
-                        Some(h) => format!("the columns {}", h.fields.join(", ")),
-                        None => "no header line (name columns by number)".into(),
-                    },
-                }),
-        }
+    let header = Header {
+        record: header.as_ref(),
+        width,
+        line: header.as_ref().map_or(1, |h| h.line),
     };
-    let joints: Vec<usize> = map.joints.iter().map(resolve).collect::<Result<_, _>>()?;
-    if joints.is_empty() {
-        return Err(DataError::Content {
-            expected: "at least one joint column".into(),
-            found: "none".into(),
-        });
-    }
-    let point = [
-        resolve(&map.point[0])?,
-        resolve(&map.point[1])?,
-        resolve(&map.point[2])?,
-    ];
-    let optional = |c: &Option<ColumnRef>| c.as_ref().map(resolve).transpose();
-    let (target_col, sigma_col, config_col, set_col) = (
-        optional(&map.target)?,
-        optional(&map.sigma)?,
-        optional(&map.config)?,
-        optional(&map.set)?,
-    );
-    let session_col = optional(&map.session)?;
-    let orientation_cols = match &map.orientation {
-        None => None,
-        Some(_) if sigma_col.is_none() => {
-            return Err(DataError::Content {
-                expected: "a sigma column with orientation columns (the position sigma weighs                            the angle against the position)"
-                    .into(),
-                found: "none".into(),
-            })
-        }
-        Some(o) => Some(o.resolve(&resolve)?),
-    };
-    let joint_names: Vec<String> = if !map.joint_names.is_empty() {
-        if map.joint_names.len() != joints.len() {
-            return Err(DataError::Content {
-                expected: format!("{} joint names, one per joint column", joints.len()),
-                found: format!("{}", map.joint_names.len()),
-            });
-        }
-        map.joint_names.clone()
-    } else {
-        joints
-            .iter()
-            .enumerate()
-            .map(|(k, &c)| match &header {
-                Some(h) => h.fields[c].clone(),
-                None => format!("joint_{}", k + 1),
-            })
-            .collect()
-    };
-    let column_name = |c: usize| match &header {
-        Some(h) => h.fields.get(c).cloned().unwrap_or_default(),
-        None => format!("{}", c + 1),
-    };
+    let cols = map.resolve(&header)?;
+    let column_name = |c: usize| header.name(c);
     let mut m = Measurements {
         sessions: Vec::new(),
-        joint_names: joint_names.clone(),
+        joint_names: cols.joint_names.clone(),
         targets: Vec::new(),
         samples: Vec::new(),
     };
+    let (mut zero_sigmas, mut skipped) = (Vec::new(), Vec::new());
     for row in rows {
         let row = row?;
         let line = row.line;
@@ -238,10 +210,27 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             });
         }
         let cell = |c: usize| row.fields[c].as_str();
-        let mut q = Vec::with_capacity(joints.len());
-        for (k, &c) in joints.iter().enumerate() {
+        // A pose the device did not log: an empty or NaN number cell.
+        let numeric = cols.joints.iter().chain(&cols.point).copied().chain(
+            cols.sigma
+                .columns()
+                .into_iter()
+                .filter(|_| !matches!(cols.sigma, Sigma::Isotropic(c) if cell(c).is_empty())),
+        );
+        if let Some(c) = numeric.into_iter().find(|&c| missing(cell(c))) {
+            if map.skip_incomplete {
+                skipped.push((line, column_name(c)));
+                continue;
+            }
+            return Err(DataError::Incomplete {
+                line,
+                column: column_name(c),
+                text: cell(c).to_string(),
+            });
+        }
+        let mut q = Vec::with_capacity(cols.joints.len());
+        for (&c, &prismatic) in cols.joints.iter().zip(&cols.prismatic) {
             let v = number(cell(c), line, &column_name(c))?;
-            let prismatic = map.prismatic.contains(&joint_names[k]);
             let (value, limit, unit) = if prismatic {
                 (v * map.length_scale, MAX_METRES, "m")
             } else {
@@ -260,7 +249,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             q.push(value);
         }
         let mut p = Vector3::zeros();
-        for (k, &c) in point.iter().enumerate() {
+        for (k, &c) in cols.point.iter().enumerate() {
             p[k] = number(cell(c), line, &column_name(c))? * map.length_scale;
             if p[k].abs() > MAX_METRES {
                 return Err(DataError::Format {
@@ -273,7 +262,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
                 });
             }
         }
-        let target_name = match target_col {
+        let target_name = match cols.target {
             Some(c) => {
                 check_name(cell(c), line, &column_name(c))?;
                 cell(c).to_string()
@@ -287,37 +276,31 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
                 m.targets.len() - 1
             }
         };
-        let sigma = match sigma_col {
-            Some(c) if !cell(c).is_empty() => {
-                let s = number(cell(c), line, &column_name(c))?;
-                if s < 0.0 {
-                    return Err(DataError::Format {
-                        line,
-                        expected: format!(
-                            "a standard deviation >= 0 in column '{}'",
-                            column_name(c)
-                        ),
-                        found: format!("'{}'", cell(c)),
-                    });
-                }
-                let s = if s == 0.0 {
+        let mut sigma_of = |c: usize| -> Result<f64, DataError> {
+            let s = sigma_value(cell(c), line, &column_name(c), map.length_scale)?;
+            if s == 0.0 {
+                if zero_sigmas.last() != Some(&line) {
                     zero_sigmas.push(line);
-                    SIGMA_FLOOR
-                } else {
-                    s * map.length_scale
-                };
-                Some(Vector3::repeat(s))
+                }
+                return Ok(SIGMA_FLOOR);
+            }
+            Ok(s)
+        };
+        let sigma = match cols.sigma {
+            Sigma::Isotropic(c) if !cell(c).is_empty() => Some(Vector3::repeat(sigma_of(c)?)),
+            Sigma::PerAxis([a, b, c]) => {
+                Some(Vector3::new(sigma_of(a)?, sigma_of(b)?, sigma_of(c)?))
             }
             _ => None,
         };
-        let config = match config_col {
+        let config = match cols.config {
             Some(c) if !cell(c).is_empty() => {
                 check_name(cell(c), line, &column_name(c))?;
                 Some(cell(c).into())
             }
             _ => None,
         };
-        let split = match set_col {
+        let split = match cols.set {
             Some(c) if !cell(c).is_empty() => {
                 parse_split(cell(c)).ok_or_else(|| DataError::Format {
                     line,
@@ -330,7 +313,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             }
             _ => Split::Calibration,
         };
-        let session = match session_col {
+        let session = match cols.session {
             None => 0,
             Some(c) if cell(c).is_empty() => {
                 return Err(DataError::Format {
@@ -350,16 +333,21 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
                 }
             }
         };
-        let orientation = match &orientation_cols {
+        let orientation = match &cols.orientation {
             Some(o) => o.cells(line, &cell, &column_name, map.angle_scale)?,
             None => None,
         };
-        if let (Some(_), None, Some(c)) = (&orientation, sigma, sigma_col) {
+        if let (Some(_), None) = (&orientation, sigma) {
             return Err(DataError::Format {
                 line,
                 expected: format!(
-                    "a standard deviation in column '{}' for a row with an orientation",
-                    column_name(c)
+                    "a standard deviation in column {} for a row with an orientation",
+                    cols.sigma
+                        .columns()
+                        .iter()
+                        .map(|&c| format!("'{}'", column_name(c)))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ),
                 found: "an empty cell".into(),
             });
@@ -377,26 +365,71 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             socket: None,
         });
     }
+    let copies = copies::drop_copies(&mut m.samples);
     if m.samples.is_empty() {
         return Err(DataError::Empty {
-            found: if map.header {
-                "only a header"
-            } else {
-                "an empty file"
+            found: match (skipped.first(), map.header) {
+                (Some(_), _) => "only incomplete rows",
+                (None, true) => "only a header",
+                (None, false) => "an empty file",
             },
         });
     }
-    let notes = zero_sigmas
-        .first()
-        .map(|first| {
-            format!(
-                "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
-                zero_sigmas.len()
-            )
-        })
-        .into_iter()
-        .collect();
+    let mut notes = Vec::new();
+    if let Some(first) = zero_sigmas.first() {
+        notes.push(format!(
+            "{} sample(s) give a standard deviation of 0 (first at line {first}; a rounded export?): floored at {SIGMA_FLOOR:e} m",
+            zero_sigmas.len()
+        ));
+    }
+    if let Some((line, column)) = skipped.first() {
+        notes.push(format!(
+            "{} incomplete row(s) left out (an empty or NaN number: a pose the device did not log; the first at line {line}, column '{column}')",
+            skipped.len()
+        ));
+    }
+    if let Some((line, of)) = copies.first() {
+        notes.push(format!(
+            "{} row(s) are identical copies of an earlier row, each record counted once (the first: line {line}, a copy of line {of}; an export that repeats a record, not repeated measurements)",
+            copies.len()
+        ));
+    }
     Ok((m, notes))
+}
+
+/// Whether a number cell holds no value: empty, or NaN as exports write it.
+fn missing(cell: &str) -> bool {
+    cell.is_empty() || cell.eq_ignore_ascii_case("nan") || cell.eq_ignore_ascii_case("-nan")
+}
+
+/// A finite number from a cell, the error naming the line and column.
+fn number(text: &str, line: usize, column: &str) -> Result<f64, DataError> {
+    crate::csv::number(text, line, column)
+}
+
+/// A standard deviation cell in metres: 0 (the caller floors it), or within
+/// [`MIN_SIGMA_METRES`] m and [`MAX_SIGMA_IN_UNIT`] in the file's unit and at most 100 m.
+///
+/// # Errors
+/// [`DataError::Format`] naming the range, or a cell that is not a finite number.
+fn sigma_value(text: &str, line: usize, column: &str, scale: f64) -> Result<f64, DataError> {
+    let s = number(text, line, column)?;
+    if s == 0.0 {
+        return Ok(0.0);
+    }
+    let metres = s * scale;
+    if !(0.0..=MAX_SIGMA_IN_UNIT).contains(&s) || !(MIN_SIGMA_METRES..=MAX_METRES).contains(&metres)
+    {
+        return Err(DataError::Format {
+            line,
+            expected: format!(
+                "a standard deviation of 0 (floored) or in [{:e} m, {MAX_SIGMA_IN_UNIT}] in the length unit (at most {MAX_METRES} m) in column '{column}'",
+                MIN_SIGMA_METRES
+            ),
+            found: format!("'{text}'"),
+        });
+    }
+    Ok(metres)
 }
 
 #[cfg(test)]
@@ -414,6 +447,8 @@ mod tests {
             ],
             target: None,
             sigma: None,
+            sigma_axes: None,
+            skip_incomplete: false,
             config: None,
             set: None,
             session: None,
@@ -501,5 +536,148 @@ mod tests {
             e.to_string().contains("line 2") && e.to_string().contains("session"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn names_the_csv_cannot_hold_are_refused() {
+        let text = "x,y,X,Y,Z\n0,0,1,2,3\n";
+        // The header's names `x`, `y` would head the joint columns beside the point's `x, y`.
+        let e = parse(text, &map()).unwrap_err().to_string();
+        assert!(
+            e.contains("'x', the name of a reserved column") && e.contains("header's names"),
+            "{e}"
+        );
+        for (names, found) in [
+            (["a", "a"], "'a' twice"),
+            (["a", "e\u{1b}[2J"], "U+001B"),
+            (["t\u{202e}1", "b"], "U+202E"),
+            (["a", "sigma"], "'sigma', the name of a reserved column"),
+        ] {
+            let mut m = map();
+            m.joint_names = names.iter().map(|n| n.to_string()).collect();
+            let e = parse("a,b,X,Y,Z\n0,0,1,2,3\n", &m).unwrap_err().to_string();
+            assert!(e.contains(found), "{names:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_column_in_two_roles_or_named_twice_is_refused() {
+        let mut m = map();
+        m.sigma = Some(ColumnRef::Number(5));
+        let e = parse("a,b,X,Y,Z\n0,0,1,2,3\n", &m).unwrap_err().to_string();
+        assert!(e.contains("column 5 ('Z') as point z and as sigma"), "{e}");
+        let mut m = map();
+        m.joints = vec![ColumnRef::Number(1), ColumnRef::Number(1)];
+        m.joint_names = vec!["j1".into(), "j2".into()];
+        let e = parse("a,b,X,Y,Z\n0,0,1,2,3\n", &m).unwrap_err().to_string();
+        assert!(e.contains("as joint 1 and as joint 2"), "{e}");
+        let mut m = map();
+        m.point[0] = ColumnRef::Name("X".into());
+        let e = parse("a,b,X,X,Z\n0,0,1,2,3\n", &m).unwrap_err().to_string();
+        assert!(
+            e.contains("one column named 'X'") && e.contains("columns 3 and 4"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_prismatic_joint_must_be_a_joint() {
+        let mut m = map();
+        m.prismatic = vec!["A9".into()];
+        let e = parse("A1,A2,X,Y,Z\n0,0,1,2,3\n", &m)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("prismatic joints among the joints 'A1', 'A2'") && e.contains("'A9'"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn sigmas_are_held_to_the_sigma_options_range() {
+        let mut m = map();
+        m.sigma = Some(ColumnRef::Number(6));
+        for bad in ["1e300", "1001", "1e-10", "-1"] {
+            let text = format!("a,b,x,y,z,s\n0,0,1,2,3,{bad}\n").replace("x,y,z", "X,Y,Z");
+            let e = parse(&text, &m).unwrap_err().to_string();
+            assert!(
+                e.contains("a standard deviation of 0 (floored) or in"),
+                "{bad}: {e}"
+            );
+        }
+        // 1000 mm (1 m) is the largest; in metres the canonical reader's 100 m is the cap.
+        let (d, _) = parse("a,b,X,Y,Z,s\n0,0,1,2,3,1000\n", &m).unwrap();
+        assert_eq!(d.samples[0].sigma.unwrap().x, 1.0);
+        m.length_scale = 1.0;
+        assert!(parse("a,b,X,Y,Z,s\n0,0,1,2,3,101\n", &m).is_err());
+    }
+
+    #[test]
+    fn per_axis_sigmas_incomplete_rows_and_copies() {
+        let mut m = map();
+        m.sigma_axes = Some([
+            ColumnRef::Number(6),
+            ColumnRef::Number(7),
+            ColumnRef::Number(8),
+        ]);
+        m.config = Some(ColumnRef::Number(9));
+        let text = "a,b,X,Y,Z,sx,sy,sz,id\n\
+                    0,0,1,2,3,0.01,0.02,0.03,p1\n\
+                    0,0,1,2,3,0.01,0.02,0.03,p1\n\
+                    1,0,NaN,NaN,NaN,NaN,NaN,NaN,p2\n\
+                    1,0,1,2,3,0.01,0.02,0.03,p2\n\
+                    1,0,1,2,3,0.01,0.02,0.03,p2\n\
+                    1,0,1,2,3.001,0.01,0.02,0.03,p2\n";
+        let e = parse(text, &m).unwrap_err();
+        assert!(matches!(e, DataError::Incomplete { line: 4, .. }), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "line 4, column 'X': expected a number, found 'NaN' (a value not logged)"
+        );
+        m.skip_incomplete = true;
+        let (d, notes) = parse(text, &m).unwrap();
+        let sigma = d.samples[0].sigma.unwrap();
+        assert!(
+            (sigma - Vector3::new(1e-5, 2e-5, 3e-5)).norm() < 1e-20,
+            "{sigma}"
+        );
+        // Line 3 copies line 2 and line 6 copies line 5; line 7 differs by 1 µm: kept.
+        let lines: Vec<usize> = d.samples.iter().map(|s| s.line).collect();
+        assert_eq!(lines, [2, 5, 7]);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].starts_with("1 incomplete row(s) left out")
+                && notes[0].contains("line 4, column 'X'"),
+            "{notes:?}"
+        );
+        assert!(
+            notes[1].starts_with("2 row(s) are identical copies")
+                && notes[1].contains("line 3, a copy of line 2"),
+            "{notes:?}"
+        );
+        // The canonical CSV carries the per-axis sigmas as sx, sy, sz and reads back equal.
+        let written = crate::csv::write_measurements(&d);
+        assert!(written.contains(",sx,sy,sz"), "{written}");
+        let back = crate::csv::parse_measurements(
+            &written,
+            &d.joint_names,
+            &crate::csv::CsvOptions::default(),
+        )
+        .unwrap();
+        for (a, b) in back.samples.iter().zip(&d.samples) {
+            assert_eq!((&a.q, a.point, a.sigma), (&b.q, b.point, b.sigma));
+        }
+        let e = parse("a,b,X,Y,Z,sx,sy,sz,id\n0,0,NaN,1,1,1,1,1,p\n", &m).unwrap_err();
+        assert!(e.to_string().contains("only incomplete rows"), "{e}");
+    }
+
+    #[test]
+    fn a_range_of_columns_is_bounded_before_it_is_allocated() {
+        let e = ColumnRef::parse_list("1-100000000000").unwrap_err();
+        assert!(e.contains("at most 65536 columns"), "{e}");
+        let mut m = map();
+        m.joints = ColumnRef::parse_list("1-60000").unwrap();
+        let e = parse("a,b,X,Y,Z\n0,0,1,2,3\n", &m).unwrap_err().to_string();
+        assert!(e.contains("a column 6 (the file has 5)"), "{e}");
     }
 }

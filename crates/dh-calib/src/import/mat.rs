@@ -27,6 +27,10 @@ use crate::csv::DataError;
 /// doubles (nearly a million rows of nine columns).
 pub const MAX_EXPANDED_BYTES: usize = 64 << 20;
 
+/// Most values a variable may declare: as many doubles as [`MAX_EXPANDED_BYTES`] holds (a
+/// variable of 1-byte integers could otherwise become eight times its size as doubles).
+pub const MAX_VALUES: usize = MAX_EXPANDED_BYTES / 8;
+
 /// The 116-character description a level-5 file starts with begins with this text.
 const MAGIC: &[u8] = b"MATLAB 5.0 MAT-file";
 
@@ -132,19 +136,24 @@ fn element(order: Order, b: &[u8], top: bool) -> Result<(u32, &[u8], &[u8]), Dat
         return Ok((kind, &b[4..4 + size], &b[8..]));
     }
     let size = order.u32(&b[4..8]) as usize;
-    let data = b.get(8..8 + size).ok_or_else(|| {
-        bad(
-            format!("{size} bytes of data after an element's tag"),
-            format!("{} (the file is truncated)", b.len() - 8),
-        )
-    })?;
-    // Compressed elements are not padded; every other one ends on an 8-byte boundary.
+    let data = size
+        .checked_add(8)
+        .and_then(|end| b.get(8..end))
+        .ok_or_else(|| {
+            bad(
+                format!("{size} bytes of data after an element's tag"),
+                format!("{} (the file is truncated)", b.len() - 8),
+            )
+        })?;
+    // Compressed elements are not padded; every other one ends on an 8-byte boundary. The
+    // data fit in the file, so these sums stay far below usize::MAX.
     let padded = if top && first == 15 {
         size
     } else {
-        size.div_ceil(8) * 8
+        size.div_ceil(8).saturating_mul(8)
     };
-    Ok((first, data, b.get(8 + padded..).unwrap_or(&[])))
+    let rest = padded.checked_add(8).and_then(|start| b.get(start..));
+    Ok((first, data, rest.unwrap_or(&[])))
 }
 
 /// Reads the numeric variables of a level-5 file (see the [module docs](self)); the notes name
@@ -173,7 +182,7 @@ pub fn variables(bytes: &[u8]) -> Result<(Vec<Variable>, Vec<String>), DataError
             ))
         }
     };
-    let (mut out, mut notes, mut expanded) = (Vec::new(), Vec::new(), 0usize);
+    let (mut out, mut notes, mut expanded, mut values) = (Vec::new(), Vec::new(), 0usize, 0usize);
     let mut rest = &bytes[128..];
     while rest.len() >= 8 {
         let (kind, data, next) = element(order, rest, true)?;
@@ -203,12 +212,68 @@ pub fn variables(bytes: &[u8]) -> Result<(Vec<Variable>, Vec<String>), DataError
             continue; // not an array (miMATRIX)
         }
         match matrix(order, data)? {
-            Ok(v) => out.push(v),
+            Ok(v) => {
+                values += v.values.len();
+                if values > MAX_VALUES {
+                    return Err(bad(
+                        format!("variables of at most {MAX_VALUES} values in all"),
+                        "more (export so large a set as CSV)",
+                    ));
+                }
+                out.push(v);
+            }
             Err(note) => notes.push(note),
         }
     }
     Ok((out, notes))
 }
+
+/// A variable's name as MATLAB allows it: a letter, then letters, digits or `_` (at most 63
+/// characters; `namelengthmax`). Names become CSV column names, so nothing else passes: a
+/// comma or a quote would split or merge the header's columns, a control character would
+/// reach the terminal.
+///
+/// # Errors
+/// [`DataError::Content`] quoting the name, its unprintable characters as `\u{..}` and the
+/// first character that is not allowed as U+XXXX.
+fn variable_name(bytes: &[u8]) -> Result<String, DataError> {
+    let name = String::from_utf8_lossy(bytes).into_owned();
+    let allowed =
+        |k: usize, c: char| c.is_ascii_alphabetic() || k > 0 && (c.is_ascii_digit() || c == '_');
+    let wrong = name.chars().enumerate().find(|&(k, c)| !allowed(k, c));
+    match wrong {
+        None if !name.is_empty() && name.len() <= MAX_NAME => Ok(name),
+        _ => {
+            let shown: String = name
+                .chars()
+                .take(MAX_NAME)
+                .flat_map(|c| {
+                    if crate::csv::is_spoofing(c) {
+                        format!("\\u{{{:x}}}", u32::from(c))
+                            .chars()
+                            .collect::<Vec<_>>()
+                    } else {
+                        vec![c]
+                    }
+                })
+                .collect();
+            let what = match wrong {
+                Some((k, c)) => format!("U+{:04X} at character {}", u32::from(c), k + 1),
+                None if name.is_empty() => "an empty name".into(),
+                None => format!("{} characters", name.chars().count()),
+            };
+            Err(bad(
+                format!(
+                    "MATLAB variable names (a letter, then letters, digits or _, at most {MAX_NAME} characters)"
+                ),
+                format!("'{shown}' ({what})"),
+            ))
+        }
+    }
+}
+
+/// Longest MATLAB variable name (`namelengthmax`).
+const MAX_NAME: usize = 63;
 
 /// One `miMATRIX` element: a real numeric 2-D variable, or a note saying why it is left out.
 fn matrix(order: Order, b: &[u8]) -> Result<Result<Variable, String>, DataError> {
@@ -224,7 +289,7 @@ fn matrix(order: Order, b: &[u8]) -> Result<Result<Variable, String>, DataError>
         .map(|c| order.u32(c) as usize)
         .collect();
     let (_, name, b) = element(order, b, false)?;
-    let name = String::from_utf8_lossy(name).into_owned();
+    let name = variable_name(name)?;
     let shape = dims
         .iter()
         .map(ToString::to_string)
@@ -241,16 +306,24 @@ fn matrix(order: Order, b: &[u8]) -> Result<Result<Variable, String>, DataError>
     }
     let (rows, cols) = (dims[0], dims[1]);
     let (kind, real, _) = element(order, b, false)?;
-    let count = rows
-        .checked_mul(cols)
-        .ok_or_else(|| bad("array dimensions", shape.clone()))?;
     let Some(size) = type_size(kind) else {
         return Err(bad(
             format!("numeric data in '{name}'"),
             format!("type {kind}"),
         ));
     };
-    if real.len() != count * size {
+    // Every declared size is checked before anything is allocated: a few bytes can declare
+    // 2^31 x 2^30 values, whose byte count wraps around in unchecked arithmetic.
+    let count = rows
+        .checked_mul(cols)
+        .filter(|&n| n <= MAX_VALUES)
+        .ok_or_else(|| {
+            bad(
+                format!("a variable of at most {MAX_VALUES} values"),
+                format!("'{name}' declared as {shape}"),
+            )
+        })?;
+    if Some(real.len()) != count.checked_mul(size) {
         return Err(bad(
             format!("{count} values in '{name}' ({shape})"),
             format!("{} bytes of {size}", real.len()),
@@ -298,12 +371,29 @@ pub fn to_csv(bytes: &[u8]) -> Result<(String, Vec<String>), DataError> {
             v.name, v.rows, v.cols
         ));
     }
-    let mut header = Vec::new();
+    let mut header: Vec<String> = Vec::new();
+    // Which variable each column comes from, to name both when two columns share a name.
+    let mut origin: Vec<&str> = Vec::new();
     for v in &used {
-        if v.cols == 1 {
-            header.push(v.name.clone());
+        let names: Vec<String> = if v.cols == 1 {
+            vec![v.name.clone()]
         } else {
-            header.extend((1..=v.cols).map(|k| format!("{}_{k}", v.name)));
+            (1..=v.cols).map(|k| format!("{}_{k}", v.name)).collect()
+        };
+        for n in names {
+            if let Some(k) = header.iter().position(|h| *h == n) {
+                let found = if origin[k] == v.name {
+                    format!("'{}' twice (a reader would take the first)", v.name)
+                } else {
+                    format!(
+                        "a column '{n}' from both '{}' and '{}' (column k of a matrix M is M_k)",
+                        origin[k], v.name
+                    )
+                };
+                return Err(bad("variables whose columns have distinct names", found));
+            }
+            header.push(n);
+            origin.push(&v.name);
         }
     }
     let mut text = header.join(",");
@@ -434,5 +524,49 @@ mod tests {
         assert!(e.to_string().contains("a numeric variable"), "{e}");
         let e = to_csv(b"x,y\n1,2\n").unwrap_err();
         assert!(e.to_string().contains("another kind of file"), "{e}");
+    }
+
+    #[test]
+    fn declared_sizes_are_checked_before_anything_is_allocated() {
+        // 2^31 x 2^30 doubles declared in a few bytes: the byte count wraps to 0 unchecked.
+        let m = double(true, "q", 1 << 31, 1 << 30, &[]);
+        let e = to_csv(&file(true, &[m])).unwrap_err().to_string();
+        assert!(
+            e.contains("a variable of at most")
+                && e.contains("'q' declared as 2147483648x1073741824"),
+            "{e}"
+        );
+        // A tag declaring 4 GiB of data in a short file: truncated, not read past the end.
+        let mut tag = 14u32.to_le_bytes().to_vec();
+        tag.extend(u32::MAX.to_le_bytes());
+        let e = to_csv(&file(true, &[tag])).unwrap_err().to_string();
+        assert!(e.contains("the file is truncated"), "{e}");
+    }
+
+    #[test]
+    fn names_that_are_not_matlab_names_or_repeat_are_refused() {
+        let e = to_csv(&file(true, &[double(true, "A,x", 2, 1, &[1.0, 2.0])]))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("MATLAB variable names") && e.contains("'A,x' (U+002C at character 2)"),
+            "{e}"
+        );
+        let e = to_csv(&file(true, &[double(true, "q\u{1b}", 2, 1, &[1.0, 2.0])]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'q\\u{1b}' (U+001B at character 2)"), "{e}");
+        let twice = [
+            double(true, "q", 2, 1, &[1.0, 2.0]),
+            double(true, "q", 2, 1, &[3.0, 4.0]),
+        ];
+        let e = to_csv(&file(true, &twice)).unwrap_err().to_string();
+        assert!(e.contains("'q' twice"), "{e}");
+        let clash = [
+            double(true, "q", 2, 2, &[1.0, 2.0, 3.0, 4.0]),
+            double(true, "q_1", 2, 1, &[3.0, 4.0]),
+        ];
+        let e = to_csv(&file(true, &clash)).unwrap_err().to_string();
+        assert!(e.contains("a column 'q_1' from both 'q' and 'q_1'"), "{e}");
     }
 }

@@ -45,14 +45,20 @@ pub fn pipeline_options(
     }
 }
 
-/// Refuses a `sigma` that is not a positive length.
+/// Refuses a `sigma` outside [`crate::ranges::sigma`]'s range (in the files' length unit), or
+/// below [`crate::ranges::MIN_SIGMA`] metres once converted (1e-9 mm is below a nanometre).
 ///
 /// # Errors
 /// That `sigma`.
 pub fn check_sigma(args: &CalibrationRequest) -> Result<()> {
     if let Some(s) = args.sigma {
-        if !(s.is_finite() && s > 0.0) {
-            anyhow::bail!("--sigma: expected a positive length, found {s}");
+        crate::ranges::sigma(&s.to_string()).map_err(|e| anyhow::anyhow!("--sigma: {e}"))?;
+        let metres = s * args.units.length.metres();
+        if metres < crate::ranges::MIN_SIGMA {
+            anyhow::bail!(
+                "--sigma: expected a standard deviation of at least {:e} m, found {s} ({metres:e} m)",
+                crate::ranges::MIN_SIGMA
+            );
         }
     }
     Ok(())

@@ -144,6 +144,8 @@ pub(crate) fn row_of(
             j.name, j.alpha, j.theta
         ));
     }
+    let alpha = angle_of(j.alpha, angle_unit, "alpha", &j.name, origin, warnings);
+    let theta = angle_of(j.theta, angle_unit, "theta", &j.name, origin, warnings);
     let mimic = match &j.mimic {
         Some(m) => {
             if !m.multiplier.is_finite()
@@ -167,13 +169,62 @@ pub(crate) fn row_of(
         name: j.name.clone(),
         kind,
         a: j.a * lu,
-        alpha: j.alpha * au,
+        alpha,
         d: j.d * lu,
-        theta: j.theta * au,
+        theta,
         beta: j.beta.map_or(0.0, |b| b * au),
         limits,
         mimic,
     })
+}
+
+/// `2 pi - TAU`: the part of a turn a double's `TAU` leaves out (radians), so that a wrap by
+/// `k` turns subtracts `k (TAU + TAU_LO)`, within 1e-16 rad of `k` exact turns for every angle
+/// a sheet may hold ([`MAX_ANGLE`]; Cody and Waite's two-part constant).
+const TAU_LO: f64 = 2.449_293_598_294_706_4e-16;
+
+/// A DH angle (`alpha`, `theta`) of a sheet in radians, wrapped to `(-pi, pi]` when it is more
+/// than a turn (`|v| > 360°`, `|v| > 2 pi rad`), with a warning naming the joint and field:
+/// a sheet's angle is an angle, and a written table holds it to 1e-12 rad, which a value of
+/// 999999 rad cannot be written to (the proofs of `convert` and `to-urdf` failed on it).
+/// Angles within a turn are kept as given (a sheet's 270° or -180° stays so). Degrees wrap
+/// exactly (`rem_euclid(360)`); radians within 1e-16 rad of the exact wrap ([`TAU_LO`]).
+pub(crate) fn angle_of(
+    v: f64,
+    unit: AngleUnit,
+    field: &str,
+    joint: &str,
+    origin: &str,
+    warnings: &mut Vec<String>,
+) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let wrapped = match unit {
+        AngleUnit::Deg if v.abs() > 360.0 => {
+            let r = v.rem_euclid(360.0);
+            (if r > 180.0 { r - 360.0 } else { r }) * unit.radians()
+        }
+        AngleUnit::Rad if v.abs() > TAU => {
+            let k = (v / TAU).round();
+            let mut r = (-k).mul_add(TAU_LO, (-k).mul_add(TAU, v));
+            if r > PI {
+                r = (r - TAU) - TAU_LO;
+            } else if r <= -PI {
+                r = (r + TAU) + TAU_LO;
+            }
+            r
+        }
+        _ => return v * unit.radians(),
+    };
+    let shown = match unit {
+        AngleUnit::Deg => wrapped.to_degrees(),
+        AngleUnit::Rad => wrapped,
+    };
+    warnings.push(format!(
+        "{origin}: joint '{joint}': {field} = {v} {} is more than a turn: read as {shown:.12} {} (the same angle, within half a turn)",
+        unit.symbol(),
+        unit.symbol()
+    ));
+    wrapped
 }
 
 /// The largest tilt a row may carry (radians): a Hayati tilt is a small correction of a
@@ -260,11 +311,14 @@ pub(crate) fn pose_of(
     }
 }
 
-/// Refuses a row that mimics itself; warns of a mimic whose driver is no row of `rows`.
+/// Refuses a row that mimics itself and rows whose mimics form a cycle (each follows the next,
+/// the last the first: no joint of the cycle moves on its own, as the URDF reader refuses);
+/// warns of a mimic whose driver is no row of `rows`.
 ///
 /// # Errors
-/// A row that mimics itself.
+/// A row that mimics itself, or the first row (in order) of a cycle, naming the cycle.
 pub(crate) fn check_mimics(rows: &[DhRow], origin: &str, warnings: &mut Vec<String>) -> Result<()> {
+    check_mimic_cycles(rows, origin)?;
     for r in rows {
         let Some(m) = &r.mimic else { continue };
         if m.joint == r.name {
@@ -281,6 +335,67 @@ pub(crate) fn check_mimics(rows: &[DhRow], origin: &str, warnings: &mut Vec<Stri
                 m.joint,
                 rows.iter().map(|d| format!("'{}'", d.name)).collect::<Vec<_>>().join(", ")
             ));
+        }
+    }
+    Ok(())
+}
+
+/// The first mimic cycle of `rows`, as [`check_mimics`] refuses it. Each row is walked once
+/// (a 100 000-joint mimic chain is a linear pass): a walk stops at a row already finished.
+fn check_mimic_cycles(rows: &[DhRow], origin: &str) -> Result<()> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum State {
+        New,
+        OnWalk,
+        Done,
+    }
+    let index: std::collections::HashMap<&str, usize> = rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (r.name.as_str(), i))
+        .collect();
+    let driver = |i: usize| {
+        rows[i]
+            .mimic
+            .as_ref()
+            .and_then(|m| index.get(m.joint.as_str()).copied())
+            // A row that follows itself is refused by its own message.
+            .filter(|&d| d != i)
+    };
+    let mut state = vec![State::New; rows.len()];
+    let mut walk: Vec<usize> = Vec::new();
+    for start in 0..rows.len() {
+        walk.clear();
+        let mut at = Some(start);
+        while let Some(i) = at {
+            match state[i] {
+                State::Done => break,
+                State::OnWalk => {
+                    let first = walk.iter().position(|&w| w == i).unwrap_or(0);
+                    let mut names: Vec<&str> = walk[first..]
+                        .iter()
+                        .map(|&w| rows[w].name.as_str())
+                        .collect();
+                    names.push(rows[i].name.as_str());
+                    return Err(SheetError::BadJoint {
+                        origin: origin.into(),
+                        joint: rows[i].name.clone(),
+                        problem: format!(
+                            "mimic: expected drivers that end at a joint that mimics none, found \
+                             a cycle {}",
+                            names.join(" -> ")
+                        ),
+                    });
+                }
+                State::New => {
+                    state[i] = State::OnWalk;
+                    walk.push(i);
+                    at = driver(i);
+                }
+            }
+        }
+        for &w in &walk {
+            state[w] = State::Done;
         }
     }
     Ok(())

@@ -125,3 +125,127 @@ fn a_bad_transform_says_which_in_one_message() {
         "reading the base transform: s.yaml: base: xyz and rpy must be finite numbers"
     );
 }
+
+/// A sheet of `n` revolute rows named `j1..jn`, row `i` carrying `extra(i)` (a mimic, ...).
+fn rows_sheet(n: usize, unit: &str, theta: &str, extra: impl Fn(usize) -> String) -> String {
+    let mut s = format!("convention: standard\nlength_unit: m\nangle_unit: {unit}\njoints:\n");
+    for i in 1..=n {
+        let t = if i == 1 { theta } else { "0" };
+        s.push_str(&format!(
+            "  - {{name: j{i}, type: revolute, a: 0.1, alpha: 0.5, d: 0, theta: {t}{}}}\n",
+            extra(i)
+        ));
+    }
+    s
+}
+
+#[test]
+fn mimic_cycles_are_refused_naming_the_cycle() {
+    // j1 -> j2 -> j3 -> j1; j4 follows the cycle from outside.
+    let text = rows_sheet(4, "rad", "0", |i| match i {
+        1 => ", mimic: {joint: j2}".into(),
+        2 => ", mimic: {joint: j3}".into(),
+        3 => ", mimic: {joint: j1}".into(),
+        _ => ", mimic: {joint: j1}".into(),
+    });
+    let e = Sheet::parse(&text, "c.yaml").unwrap_err().to_string();
+    assert!(
+        e.contains("joint 'j1': mimic: expected drivers that end at a joint that mimics none, found a cycle j1 -> j2 -> j3 -> j1"),
+        "{e}"
+    );
+    // A cycle reached from a row before it is named from its own first row.
+    let text = rows_sheet(3, "rad", "0", |i| match i {
+        1 => ", mimic: {joint: j2}".into(),
+        2 => ", mimic: {joint: j3}".into(),
+        _ => ", mimic: {joint: j2}".into(),
+    });
+    let e = Sheet::parse(&text, "c.yaml").unwrap_err().to_string();
+    assert!(e.contains("found a cycle j2 -> j3 -> j2"), "{e}");
+}
+
+#[test]
+fn a_long_reverse_mimic_chain_is_no_cycle_and_reads_in_one_pass() {
+    // Each joint follows the next (the last moves on its own): 20 000 rows, a linear walk.
+    let n = 20_000;
+    let text = rows_sheet(n, "rad", "0", |i| {
+        if i < n {
+            format!(", mimic: {{joint: j{}}}", i + 1)
+        } else {
+            String::new()
+        }
+    });
+    let s = Sheet::parse(&text, "chain.yaml").unwrap();
+    assert_eq!(s.table.rows.len(), n);
+    assert_eq!(s.table.rows[0].mimic.as_ref().unwrap().joint, "j2");
+}
+
+#[test]
+fn angles_beyond_a_turn_are_wrapped_with_a_warning() {
+    // 999999 rad: within 1e-15 rad of the exact wrap, -1.357564167085735044 rad (60-digit
+    // arithmetic); its sine and cosine are those of 999999 (libm reduces exactly).
+    let s = Sheet::parse(&rows_sheet(2, "rad", "999999", |_| String::new()), "w.yaml").unwrap();
+    let t = s.table.rows[0].theta;
+    assert!((t - -1.357_564_167_085_735).abs() < 1e-15, "{t}");
+    assert!((t.sin() - 999_999f64.sin()).abs() < 1e-15);
+    assert!((t.cos() - 999_999f64.cos()).abs() < 1e-15);
+    let w = s.warnings.join("\n");
+    assert!(
+        w.contains(
+            "joint 'j1': theta = 999999 rad is more than a turn: read as -1.357564167086 rad"
+        ),
+        "{w}"
+    );
+    // Negative, and in degrees (exact): -1e6 deg is -280 deg = 80 deg.
+    let s = Sheet::parse(
+        &rows_sheet(1, "rad", "-999999.5", |_| String::new()),
+        "w.yaml",
+    )
+    .unwrap();
+    assert!((s.table.rows[0].theta - 0.857_564_167_085_735).abs() < 1e-15);
+    let s = Sheet::parse(
+        &rows_sheet(1, "deg", "-1000000", |_| String::new()),
+        "w.yaml",
+    )
+    .unwrap();
+    assert!((s.table.rows[0].theta - 80f64.to_radians()).abs() < 1e-15);
+    assert!(s
+        .warnings
+        .join("\n")
+        .contains("read as 80.000000000000 deg"));
+    // Within a turn: kept as written, no warning (270 deg stays 270 deg, -180 stays -180).
+    for (unit, v, si) in [
+        ("deg", "270", 270f64.to_radians()),
+        ("deg", "-180", -std::f64::consts::PI),
+        ("rad", "6.2", 6.2),
+    ] {
+        let s = Sheet::parse(&rows_sheet(1, unit, v, |_| String::new()), "w.yaml").unwrap();
+        assert_eq!(s.table.rows[0].theta, si, "{unit} {v}");
+        assert!(!s.warnings.iter().any(|w| w.contains("more than a turn")));
+    }
+    // Every wrapped angle lies in (-pi, pi] and is the same angle.
+    for v in [
+        7.0,
+        -7.0,
+        1e3,
+        -1e3,
+        123_456.789,
+        999_999.999,
+        -999_999.999,
+        3.0 * std::f64::consts::PI,
+    ] {
+        let s = Sheet::parse(
+            &rows_sheet(1, "rad", &format!("{v}"), |_| String::new()),
+            "w.yaml",
+        )
+        .unwrap();
+        let t = s.table.rows[0].theta;
+        assert!(
+            t > -std::f64::consts::PI && t <= std::f64::consts::PI,
+            "{v}: {t}"
+        );
+        assert!(
+            (t.sin() - v.sin()).abs() < 1e-12 && (t.cos() - v.cos()).abs() < 1e-12,
+            "{v}: {t}"
+        );
+    }
+}

@@ -34,6 +34,7 @@ __all__ = [
     "Simulation",
     "Table",
     "UrdfDhError",
+    "VerificationFailed",
     "calibrate",
     "check",
     "compensate",
@@ -133,9 +134,11 @@ class Table:
         (radians for revolute, metres for prismatic rows).
 
         Raises:
-            UrdfDhError: ``q`` does not have one value per row.
+            UrdfDhError: ``q`` does not have one value per row, holds a value that is not a
+                finite real number within ``urdf-dh extract --q``'s range ([-100, 100]), or is
+                complex (its imaginary part would be dropped).
         """
-        values = np.asarray(q, dtype=float).reshape(-1).tolist()
+        values = _real_values(q, "fk: q").tolist()
         return np.array(self._native.fk(values))
 
     def to_yaml(self) -> str:
@@ -205,6 +208,45 @@ class Table:
         )
 
 
+def _real_values(values: Any, what: str) -> np.ndarray:
+    """``values`` as a flat float64 array; complex values are refused rather than cut to their
+    real part (numpy's ``astype(float)`` drops the imaginary part with only a warning)."""
+    array = np.asarray(values)
+    if np.iscomplexobj(array):
+        raise UrdfDhError(f"{what}: expected real numbers, found complex values (dtype {array.dtype})")
+    try:
+        return np.asarray(array, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as e:
+        raise UrdfDhError(f"{what}: expected numbers, found {array.dtype} values: {e}") from None
+
+
+def _count(value: Any) -> str:
+    """An integer argument as the text the command line's range parser reads (``1.5`` or
+    ``True`` stay visibly what they are, and are refused there)."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
+        return str(int(value))
+    return repr(value)
+
+
+def _number(value: Any, what: str) -> str:
+    """A float argument as the text the command line's range parser reads (``5`` as ``5``,
+    as the CLI echoes it); a complex or non-numeric value is refused with the argument named."""
+    if isinstance(value, (complex, np.complexfloating)):
+        raise UrdfDhError(f"{what}: expected a real number, found {value!r}")
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise UrdfDhError(f"{what}: expected a number, found {value!r}")
+    return repr(value.item() if isinstance(value, (np.integer, np.floating)) else value)
+
+
+class VerificationFailed(UrdfDhError):  # type: ignore[misc, valid-type]
+    """The extracted table, written as YAML and read back, strays from the URDF beyond its
+    bound (``urdf-dh extract`` prints the table and exits 1). The message is the CLI's error
+    line; ``.table`` holds the :class:`Table` (with ``verification["passed"]`` False) for
+    inspection."""
+
+    table: "Table"
+
+
 def extract(
     path_or_xml: UrdfSource,
     base: Optional[str] = None,
@@ -227,7 +269,8 @@ def extract(
         base: base link (default: the root link).
         tip: tip link (default: the only leaf).
         convention: ``"standard"`` or ``"modified"``.
-        samples: random joint-value samples of the verification.
+        samples: random joint-value samples of the verification, in [1, 1000000] (a chain of
+            more than 10 joints: at most 1e7 joint evaluations in all), as ``--samples``.
         seed: seed of the sampler.
         linear_tolerance: metres, for the axis classification.
         angular_tolerance: radians, likewise.
@@ -237,13 +280,15 @@ def extract(
             NAME=DIR``), searched before ROS_PACKAGE_PATH and AMENT_PREFIX_PATH.
 
     The table written as YAML is read back and its forward kinematics compared with the URDF's;
-    ``Table.verification["passed"]`` says whether it stayed within the bound (the CLI exits 1
-    when it did not).
+    ``Table.verification`` holds the figures. A table that strays beyond the bound is not
+    returned: :class:`VerificationFailed` is raised (the CLI exits 1), carrying it as ``.table``.
 
     Raises:
         FileNotFoundError: the file does not exist.
-        UrdfDhError: invalid URDF, unknown or ambiguous base/tip, a chain without moving joints
-            (the CLI's message; ``.hint`` its hint).
+        UrdfDhError: invalid URDF, unknown or ambiguous base/tip, a chain without moving joints,
+            an argument outside the CLI's range (``samples``, the tolerances: the CLI's message;
+            ``.hint`` its hint).
+        VerificationFailed: the verification failed (a subclass of UrdfDhError).
     """
     source, is_xml = _source(path_or_xml)
     args, pkgs = _xacro(xacro_args, packages)
@@ -253,14 +298,20 @@ def extract(
         base,
         tip,
         convention,
-        int(samples),
-        int(seed),
-        float(linear_tolerance),
-        float(angular_tolerance),
+        _count(samples),
+        _count(seed),
+        _number(linear_tolerance, "linear_tolerance"),
+        _number(angular_tolerance, "angular_tolerance"),
         args,
         pkgs,
     )
-    return Table(native)
+    table = Table(native)
+    failure = native.failure()
+    if failure is not None:
+        error = VerificationFailed(failure)
+        error.table = table
+        raise error
+    return table
 
 
 class CheckReport:
@@ -319,8 +370,8 @@ def check(
         os.fspath(sheet),
         base,
         tip,
-        float(linear_tolerance),
-        float(angular_tolerance),
+        _number(linear_tolerance, "linear_tolerance"),
+        _number(angular_tolerance, "angular_tolerance"),
         args,
         pkgs,
     )

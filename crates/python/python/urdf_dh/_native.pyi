@@ -45,6 +45,7 @@ class NativeTable:
     def verification_json(self) -> str: ...
     def warnings(self) -> List[str]: ...
     def poe_json(self) -> str: ...
+    def failure(self) -> Optional[str]: ...
     def fk(self, q: List[float]) -> Matrix: ...
 
 def extract(
@@ -53,10 +54,10 @@ def extract(
     base: Optional[str],
     tip: Optional[str],
     convention_name: str,
-    samples: int,
-    seed: int,
-    linear: float,
-    angular: float,
+    samples: str,
+    seed: str,
+    linear: str,
+    angular: str,
     xacro_args: Optional[List[Tuple[str, str]]] = ...,
     packages: Optional[List[Tuple[str, str]]] = ...,
 ) -> NativeTable: ...
@@ -66,8 +67,8 @@ def check(
     sheet: str,
     base: Optional[str],
     tip: Optional[str],
-    linear: float = ...,
-    angular: float = ...,
+    linear: str,
+    angular: str,
     xacro_args: Optional[List[Tuple[str, str]]] = ...,
     packages: Optional[List[Tuple[str, str]]] = ...,
 ) -> str: ...

@@ -76,6 +76,23 @@ impl OrientationMap {
 }
 
 impl Resolved {
+    /// Each column with its role, for the check that no column has two.
+    pub(super) fn roles(&self) -> Vec<(usize, String)> {
+        let names: &[&str] = if self.quaternion {
+            &["qw", "qx", "qy", "qz"]
+        } else {
+            &["roll", "pitch", "yaw"]
+        };
+        let mut out: Vec<(usize, String)> = self
+            .rotation
+            .iter()
+            .zip(names)
+            .map(|(&c, n)| (c, format!("orientation {n}")))
+            .collect();
+        out.push((self.sigma, "sigma_rot".into()));
+        out
+    }
+
     /// The orientation of the row at `line` (`None` when its rotation cells are all empty),
     /// `cell` giving a cell by column index, `name` a column's name for messages,
     /// `angle_scale` the radians per unit of roll, pitch, yaw and `sigma_rot`.
@@ -178,6 +195,8 @@ mod tests {
             ],
             target: None,
             sigma: Some(ColumnRef::Number(6)),
+            sigma_axes: None,
+            skip_incomplete: false,
             config: None,
             set: None,
             session: None,
