@@ -49,7 +49,7 @@ impl Write for Escaping<'_> {
 /// File name extensions of formats a user may mean, each with what it names: an output option
 /// whose file name ends in one of these but writes another format is refused
 /// ([`svg_output`] and its siblings); an extension not listed here is the user's choice.
-const KNOWN_EXTENSIONS: &[(&str, &str)] = &[
+pub const KNOWN_EXTENSIONS: &[(&str, &str)] = &[
     ("svg", "an SVG drawing"),
     ("png", "a PNG image"),
     ("jpg", "a JPEG image"),
@@ -106,7 +106,9 @@ fn output_named(path: &str, what: &str, accepted: &[&str]) -> Result<String, Str
     ))
 }
 
-/// An output option that writes an SVG drawing (`--svg`, `--plot`); see [`output_named`].
+/// An output option that writes an SVG drawing (`--svg`, `--plot`): refused when its
+/// extension names another format of [`KNOWN_EXTENSIONS`] (`--plot chart.png`), accepted
+/// when it has none or an unknown one.
 ///
 /// # Errors
 /// A file name whose extension names another format.
@@ -115,7 +117,7 @@ pub fn svg_output(path: &str) -> Result<String, String> {
 }
 
 /// An output option that writes a measurement or joint CSV (`--out` of `predict`,
-/// `compensate`, `simulate`, `import`); see [`output_named`].
+/// `compensate`, `simulate`, `import`), accepted as [`svg_output`] accepts an SVG.
 ///
 /// # Errors
 /// A file name whose extension names another format.
@@ -123,7 +125,8 @@ pub fn csv_output(path: &str) -> Result<String, String> {
     output_named(path, "a CSV table", &["csv", "txt"])
 }
 
-/// An output option that writes a YAML sheet (`simulate --truth`); see [`output_named`].
+/// An output option that writes a YAML sheet (`simulate --truth`), accepted as
+/// [`svg_output`] accepts an SVG.
 ///
 /// # Errors
 /// A file name whose extension names another format.
@@ -132,7 +135,7 @@ pub fn yaml_output(path: &str) -> Result<String, String> {
 }
 
 /// `calibrate --out`: the calibrated model, whose format its extension chooses (`.urdf` a URDF,
-/// `.json` a JSON sheet, else a YAML sheet); see [`output_named`].
+/// `.json` a JSON sheet, else a YAML sheet), accepted as [`svg_output`] accepts an SVG.
 ///
 /// # Errors
 /// A file name whose extension names another format.
