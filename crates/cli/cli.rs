@@ -450,11 +450,7 @@ fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Resul
     result
 }
 
-fn dispatch_command(
-    cli: Cli,
-    out: &mut dyn Write,
-    err: &mut dyn Write,
-) -> anyhow::Result<Outcome> {
+fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {
             a.xacro.apply()?;

@@ -482,7 +482,11 @@ fn usage_mistakes_get_a_word() {
         "{}",
         r.stderr
     );
-    assert!(!r.stderr.contains("to pass '--tp' as a value"), "{}", r.stderr);
+    assert!(
+        !r.stderr.contains("to pass '--tp' as a value"),
+        "{}",
+        r.stderr
+    );
 
     // Standard output is named as such.
     let r = run_in(

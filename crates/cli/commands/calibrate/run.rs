@@ -100,7 +100,10 @@ pub fn calibrate(
         let written = crate::output::write_all_or_stdout(&files, out);
         match (&calibrated, &request.out) {
             (Calibrated::Tree(_), Some(path)) => written.with_context(|| {
-                format!("writing the calibrated tree to {}", crate::guard::output_name(path))
+                format!(
+                    "writing the calibrated tree to {}",
+                    crate::guard::output_name(path)
+                )
             })?,
             _ => written?,
         }
