@@ -60,6 +60,18 @@ pub fn was_closed() -> bool {
     {
         use std::os::fd::AsFd;
         use std::os::unix::fs::{FileTypeExt, MetadataExt};
+        /// /dev/null's device number, makedev(1, 3), fixed by Linux's devices.txt.
+        const DEV_NULL: u64 = (1 << 8) | 3;
+        // One fstat for every run; /proc is read only when standard output is /dev/null.
+        let Ok(fd) = std::io::stdout().as_fd().try_clone_to_owned() else {
+            return true;
+        };
+        let Ok(out) = std::fs::File::from(fd).metadata() else {
+            return false;
+        };
+        if !out.file_type().is_char_device() || out.rdev() != DEV_NULL {
+            return false;
+        }
         let Ok(info) = std::fs::read_to_string("/proc/self/fdinfo/1") else {
             return false;
         };
@@ -68,19 +80,7 @@ pub fn was_closed() -> bool {
             .find_map(|l| l.strip_prefix("flags:"))
             .and_then(|f| u32::from_str_radix(f.trim(), 8).ok());
         // O_ACCMODE = 3, O_RDWR = 2.
-        if flags.is_none_or(|f| f & 3 != 2) {
-            return false;
-        }
-        let Ok(fd) = std::io::stdout().as_fd().try_clone_to_owned() else {
-            return true;
-        };
-        let (Ok(out), Ok(null)) = (
-            std::fs::File::from(fd).metadata(),
-            std::fs::metadata("/dev/null"),
-        ) else {
-            return false;
-        };
-        out.file_type().is_char_device() && out.rdev() == null.rdev()
+        flags.is_some_and(|f| f & 3 == 2)
     }
     #[cfg(not(target_os = "linux"))]
     {
