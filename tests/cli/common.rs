@@ -221,3 +221,16 @@ pub fn simulate(model: &str, poses: &str, out: &str, options: &[&str]) -> String
     args.extend_from_slice(options);
     ok(&args)
 }
+
+/// Runs the CLI in process (no binary, no child process): (exit code, stdout, stderr).
+pub fn cli(args: &[&str]) -> (i32, String, String) {
+    let (mut out, mut err) = (Vec::new(), Vec::new());
+    let mut argv = vec!["urdf-dh"];
+    argv.extend_from_slice(args);
+    let code = urdf_dh::cli::run(argv, &mut out, &mut err);
+    (
+        code,
+        String::from_utf8_lossy(&out).into_owned(),
+        String::from_utf8_lossy(&err).into_owned(),
+    )
+}

@@ -7,18 +7,7 @@
 
 use proptest::prelude::*;
 
-/// Runs the CLI in-process: (exit code, stdout, stderr).
-fn cli(args: &[&str]) -> (i32, String, String) {
-    let (mut out, mut err) = (Vec::new(), Vec::new());
-    let mut argv = vec!["urdf-dh"];
-    argv.extend_from_slice(args);
-    let code = urdf_dh::cli::run(argv, &mut out, &mut err);
-    (
-        code,
-        String::from_utf8_lossy(&out).into_owned(),
-        String::from_utf8_lossy(&err).into_owned(),
-    )
-}
+use crate::common::cli;
 
 /// A name a user's export may hold.
 fn name() -> impl Strategy<Value = String> {

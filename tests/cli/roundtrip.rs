@@ -4,7 +4,7 @@
 //! `extract` gives the same table; `convert` to the other convention and back is the identity.
 //! Needs ../shared; skips with a reason without it.
 
-use crate::common::{corpus_chains, robot_dirs, skip_without_shared};
+use crate::common::{cli, corpus_chains, robot_dirs, skip_without_shared};
 
 /// Joint-value samples per check: enough to catch a wrong table, few enough for 558 tables.
 const SAMPLES: &str = "100";
@@ -12,19 +12,6 @@ const SAMPLES: &str = "100";
 const SAME_LENGTH: f64 = 1e-9;
 /// ... and every angle to this (radians).
 const SAME_ANGLE: f64 = 1e-9;
-
-/// Runs the CLI in process; returns (exit code, stdout, stderr).
-fn cli(args: &[&str]) -> (i32, String, String) {
-    let (mut out, mut err) = (Vec::new(), Vec::new());
-    let mut argv = vec!["urdf-dh"];
-    argv.extend_from_slice(args);
-    let code = urdf_dh::cli::run(argv, &mut out, &mut err);
-    (
-        code,
-        String::from_utf8_lossy(&out).into_owned(),
-        String::from_utf8_lossy(&err).into_owned(),
-    )
-}
 
 /// `t` with the pair of DH values that a change of convention moves into a transform folded
 /// into it: a standard table's last `a`, `alpha` into the tool; a modified table's first `alpha`,

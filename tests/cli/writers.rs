@@ -5,19 +5,7 @@
 
 use proptest::prelude::*;
 
-/// Runs the CLI in-process: (exit code, stdout, stderr).
-fn cli(args: &[&str]) -> (i32, String, String) {
-    let mut out = Vec::new();
-    let mut err = Vec::new();
-    let mut argv = vec!["urdf-dh"];
-    argv.extend_from_slice(args);
-    let code = urdf_dh::cli::run(argv, &mut out, &mut err);
-    (
-        code,
-        String::from_utf8_lossy(&out).into_owned(),
-        String::from_utf8_lossy(&err).into_owned(),
-    )
-}
+use crate::common::cli;
 
 /// A name a sheet or an option may give: plain ones, and the ones that clash with what
 /// `to-urdf` derives (`<joint>_link`, `<tip>_joint`) or that readers refuse (TAB, ESC, a bidi

@@ -77,6 +77,15 @@ pub(crate) struct Origin {
     pub rpy: [f64; 3],
 }
 
+impl Origin {
+    /// The pose `p` as URDF `xyz`/`rpy` ([`dh_core::pose::to_xyz_rpy`], exact at gimbal lock
+    /// to a few 1e-16 rad): how the MJCF and SDFormat readers write their poses.
+    pub(crate) fn of(p: &nalgebra::Isometry3<f64>) -> Origin {
+        let (xyz, rpy) = dh_core::pose::to_xyz_rpy(p);
+        Origin { xyz, rpy }
+    }
+}
+
 /// `<mimic>` with the URDF defaults filled in.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct MimicSpec {
@@ -104,6 +113,35 @@ pub(crate) struct Joint {
     pub mimic_line: Option<usize>,
     /// The first fault of the joint's own content (an error when it is on the chosen chain).
     pub fault: Option<UrdfError>,
+}
+
+impl Joint {
+    /// A fixed joint a reader adds to carry a pose (an MJCF anchor or weld, an SDFormat joint
+    /// frame off its child link): written at `line` of the source, its child at `child_line`.
+    pub(crate) fn fixed(
+        name: String,
+        line: usize,
+        parent: String,
+        child: String,
+        child_line: usize,
+        origin: Origin,
+    ) -> Joint {
+        Joint {
+            name,
+            line,
+            kind: Some(JointType::Fixed),
+            parent,
+            parent_line: line,
+            child,
+            child_line,
+            origin,
+            axis: [1.0, 0.0, 0.0],
+            limit: None,
+            mimic: None,
+            mimic_line: None,
+            fault: None,
+        }
+    }
 }
 
 /// A link's `<inertial>`: mass (kg) and centre of mass (metres, in the link frame).

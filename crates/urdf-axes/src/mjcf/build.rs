@@ -203,7 +203,7 @@ impl<'c> Builder<'c> {
                 frame: joint_frame,
                 after,
             } = self.joint(j, frame, cc, &name, parent, k, count)?;
-            joint.origin = origin(&(pending * joint_frame));
+            joint.origin = Origin::of(&(pending * joint_frame));
             let last = k + 1 == count;
             let child = if last && after.is_none() {
                 name.clone()
@@ -225,12 +225,13 @@ impl<'c> Builder<'c> {
         }
         if count == 0 || prev != name {
             let prefix = if count == 0 { "weld" } else { "anchor" };
-            self.robot.joints.push(fixed(
+            self.robot.joints.push(Joint::fixed(
                 format!("{prefix}:{name}"),
                 b.line,
                 prev,
                 name.clone(),
-                origin(&pending),
+                b.line,
+                Origin::of(&pending),
             ));
         }
         for (child, frame, cc) in bodies {
@@ -303,15 +304,14 @@ impl<'c> Builder<'c> {
             Some(v) => numbers::<1>(j, "ref", v)?[0],
             None => 0.0,
         };
-        let mut joint = fixed(
+        let mut joint = Joint::fixed(
             name.clone(),
             j.line,
             String::new(),
             String::new(),
+            j.line,
             Origin::default(),
         );
-        joint.parent_line = j.line;
-        joint.child_line = j.line;
         let anchor = (pos.coords != Vector3::zeros()).then_some(pos.coords);
         let (kind, reference, after) = match kind {
             "hinge" | "slide" => {
@@ -491,31 +491,5 @@ impl<'c> Builder<'c> {
             joint.mimic_line = Some(e.line);
         }
         Ok(())
-    }
-}
-
-/// A pose as URDF `xyz`/`rpy` ([`dh_core::pose::to_xyz_rpy`], exact at gimbal lock to a few
-/// 1e-16 rad, see the tests of this module).
-fn origin(pose: &Isometry3<f64>) -> Origin {
-    let (xyz, rpy) = dh_core::pose::to_xyz_rpy(pose);
-    Origin { xyz, rpy }
-}
-
-/// A fixed joint.
-fn fixed(name: String, line: usize, parent: String, child: String, origin: Origin) -> Joint {
-    Joint {
-        name,
-        line,
-        kind: Some(JointType::Fixed),
-        parent,
-        parent_line: line,
-        child,
-        child_line: line,
-        origin,
-        axis: [1.0, 0.0, 0.0],
-        limit: None,
-        mimic: None,
-        mimic_line: None,
-        fault: None,
     }
 }

@@ -219,7 +219,7 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
             parent_line: j.parent_line,
             child: child.clone(),
             child_line: j.child_line,
-            origin: origin_of(&(x_p.inverse() * x_c)),
+            origin: Origin::of(&(x_p.inverse() * x_c)),
             axis: [1.0, 0.0, 0.0],
             limit,
             mimic: None,
@@ -241,16 +241,16 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
                 inertial: Ok(None),
             });
             joint.child = frame_link.clone();
-            joint.origin = origin_of(&(x_p.inverse() * x_j));
+            joint.origin = Origin::of(&(x_p.inverse() * x_j));
             joint.axis = (x_j.rotation.inverse() * axis_world).into();
             robot.joints.push(joint);
-            robot.joints.push(fixed(
+            robot.joints.push(Joint::fixed(
                 format!("{}#child", j.name),
                 line_of(j.node),
                 frame_link,
                 child,
                 j.child_line,
-                origin_of(&offset.inverse()),
+                Origin::of(&offset.inverse()),
             ));
         }
     }
@@ -277,13 +277,13 @@ pub(crate) fn read(text: &str) -> Result<Robot, UrdfError> {
         );
         for l in free {
             let line = graph.get(&l).map_or(0, |f| f.line);
-            let mut j = fixed(
+            let mut j = Joint::fixed(
                 format!("{l}#free"),
                 line,
                 "world".into(),
                 l.clone(),
                 line,
-                origin_of(&world_pose(&l)),
+                Origin::of(&world_pose(&l)),
             );
             j.kind = Some(JointType::Floating);
             robot.joints.push(j);
@@ -337,36 +337,6 @@ fn tree_joints(ends: &[(String, String)], links: &[&str]) -> Vec<bool> {
         }
     }
     keep
-}
-
-fn origin_of(p: &Isometry3<f64>) -> Origin {
-    let (xyz, rpy) = dh_core::pose::to_xyz_rpy(p);
-    Origin { xyz, rpy }
-}
-
-fn fixed(
-    name: String,
-    line: usize,
-    parent: String,
-    child: String,
-    child_line: usize,
-    origin: Origin,
-) -> Joint {
-    Joint {
-        name,
-        line,
-        kind: Some(JointType::Fixed),
-        parent,
-        parent_line: line,
-        child,
-        child_line,
-        origin,
-        axis: [1.0, 0.0, 0.0],
-        limit: None,
-        mimic: None,
-        mimic_line: None,
-        fault: None,
-    }
 }
 
 type Content = (
