@@ -6,7 +6,7 @@
 //!
 //! The ranges are documented in README.md ("Bad input"); each parser's error names the range,
 //! and clap prefixes it with the option, so `--sigma 1e200` reads
-//! `invalid value '1e200' for '--sigma <SIGMA>': expected a length in (0, 1000], found 1e200`.
+//! `invalid value '1e200' for '--sigma <SIGMA>': expected a length in [1e-9, 1000], found 1e200`.
 
 use std::borrow::Cow;
 use std::io::Write;
