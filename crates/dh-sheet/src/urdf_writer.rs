@@ -42,6 +42,17 @@ fn raw_origins(table: &DhTable) -> (Vec<Isometry3<f64>>, Isometry3<f64>) {
     (origins, before * table.tool)
 }
 
+/// The link frames in the base link frame: the running products of the joint `origins`.
+fn frames_of(origins: &[Isometry3<f64>]) -> Vec<Isometry3<f64>> {
+    origins
+        .iter()
+        .scan(Isometry3::identity(), |pose, o| {
+            *pose *= o;
+            Some(*pose)
+        })
+        .collect()
+}
+
 /// For each row: whether its axis is within [`PARALLEL_RUN_ANGLE`] of the previous row's.
 fn parallel_to_previous(frames: &[Isometry3<f64>]) -> Vec<bool> {
     let mut out = vec![false; frames.len()];
@@ -60,12 +71,7 @@ fn parallel_to_previous(frames: &[Isometry3<f64>]) -> Vec<bool> {
 /// is defined by its axes), and the base and tool offsets.
 pub fn arm_size(table: &DhTable) -> f64 {
     let (origins, _) = raw_origins(table);
-    let mut frames = Vec::with_capacity(origins.len());
-    let mut pose = Isometry3::identity();
-    for o in &origins {
-        pose *= o;
-        frames.push(pose);
-    }
+    let frames = frames_of(&origins);
     let parallel = parallel_to_previous(&frames);
     let in_run = |k: usize| {
         parallel.get(k).copied().unwrap_or(false) || parallel.get(k + 1).copied().unwrap_or(false)
@@ -95,12 +101,7 @@ pub fn arm_size(table: &DhTable) -> f64 {
 pub fn joint_origins(table: &DhTable) -> (Vec<Isometry3<f64>>, Isometry3<f64>) {
     let (origins, tip) = raw_origins(table);
     let size = arm_size(table);
-    let mut frames = Vec::with_capacity(origins.len());
-    let mut pose = Isometry3::identity();
-    for o in &origins {
-        pose *= o;
-        frames.push(pose);
-    }
+    let frames = frames_of(&origins);
     let parallel = parallel_to_previous(&frames);
     // Slides s_k of each link frame, and its placed origin (base link frame).
     let mut slides = vec![0.0; origins.len()];
