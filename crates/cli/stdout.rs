@@ -8,6 +8,8 @@
 
 use std::io::Write;
 
+use dh_sheet::output::StdoutError;
+
 /// The process's standard output, for [`crate::cli::run`]: write errors carry the words
 /// "standard output" (their kind kept, so a closed pipe still ends the run quietly), and a
 /// standard output that was closed refuses every write.
@@ -23,14 +25,14 @@ impl<W: Write> Stdout<W> {
     }
 
     fn refuse(&self) -> std::io::Error {
-        std::io::Error::other(
-            "standard output is closed (the shell's >&-), so the output would be lost; redirect it to a file or /dev/null",
-        )
+        std::io::Error::other(StdoutError(
+            "standard output is closed (the shell's >&-), so the output would be lost; redirect it to a file or /dev/null".to_string(),
+        ))
     }
 }
 
 fn named(e: std::io::Error) -> std::io::Error {
-    std::io::Error::new(e.kind(), format!("standard output: {e}"))
+    std::io::Error::new(e.kind(), StdoutError(format!("standard output: {e}")))
 }
 
 impl<W: Write> Write for Stdout<W> {

@@ -148,10 +148,23 @@ fn commit(files: &[(&Path, &[u8])], stdout: Option<&mut dyn Write>) -> Result<()
     Ok(())
 }
 
-/// A failed write to standard output as an error that names it once (a writer may name it
-/// already, as the CLI's does).
+/// An error of standard output whose message already names it ("standard output: ..."): what
+/// a writer that stands for the process's standard output returns (the CLI's does), so that a
+/// message names it once.
+#[derive(Debug)]
+pub struct StdoutError(pub String);
+
+impl std::fmt::Display for StdoutError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for StdoutError {}
+
+/// A failed write to standard output as an error that names it once.
 fn named_stdout(e: std::io::Error) -> anyhow::Error {
-    if e.to_string().starts_with("standard output") {
+    if e.get_ref().is_some_and(|inner| inner.is::<StdoutError>()) {
         anyhow::Error::new(e)
     } else {
         anyhow::Error::new(e).context("standard output: cannot write the output")

@@ -15,7 +15,7 @@ mod options;
 mod scene;
 
 use anyhow::Context as _;
-use dh_sheet::extract::{default_samples, extract_bytes, prove_extracted};
+use dh_sheet::extract::{default_samples, extract_bytes, prove_extracted, Extracted};
 use dh_sheet::input::{load_chain_bytes, urdf_warnings};
 use dh_sheet::Sheet;
 use wasm_bindgen::prelude::*;
@@ -50,14 +50,19 @@ pub fn extract(urdf: &str, options: &str) -> Result<String, JsError> {
     run_extract(urdf.as_bytes(), &o).map_err(js_error)
 }
 
-fn run_extract(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<String> {
-    let mut ex = extract_bytes(
+/// The extraction `options` describe, as `urdf-dh extract` makes it before its proof.
+fn extracted(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<Extracted> {
+    extract_bytes(
         urdf,
         &o.name,
         o.base.as_deref(),
         o.tip.as_deref(),
         &o.options()?,
-    )?;
+    )
+}
+
+fn run_extract(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<String> {
+    let mut ex = extracted(urdf, o)?;
     let samples = o
         .samples
         .unwrap_or_else(|| default_samples(ex.extraction.table.rows.len()));
@@ -73,14 +78,7 @@ fn run_extract(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<String> {
 #[wasm_bindgen]
 pub fn extract_warnings(urdf: &str, options: &str) -> Result<String, JsError> {
     let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
-    let ex = extract_bytes(
-        urdf.as_bytes(),
-        &o.name,
-        o.base.as_deref(),
-        o.tip.as_deref(),
-        &o.options().map_err(js_error)?,
-    )
-    .map_err(js_error)?;
+    let ex = extracted(urdf.as_bytes(), &o).map_err(js_error)?;
     let all: Vec<String> = ex
         .urdf_warnings
         .iter()

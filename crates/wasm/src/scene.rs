@@ -7,7 +7,6 @@
 
 use anyhow::Context as _;
 use dh_core::{DhTable, JointKind};
-use dh_sheet::extract::extract_bytes;
 use nalgebra::Isometry3;
 use serde::Serialize;
 use urdf_axes::{Chain, UrdfModel};
@@ -131,14 +130,7 @@ impl Robot {
     #[wasm_bindgen(constructor)]
     pub fn new(urdf: &str, options: &str) -> Result<Robot, JsError> {
         let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
-        let ex = extract_bytes(
-            urdf.as_bytes(),
-            &o.name,
-            o.base.as_deref(),
-            o.tip.as_deref(),
-            &o.options().map_err(js_error)?,
-        )
-        .map_err(js_error)?;
+        let ex = crate::extracted(urdf.as_bytes(), &o).map_err(js_error)?;
         Ok(Robot {
             chain: ex.chain,
             table: ex.extraction.table,

@@ -10,7 +10,8 @@
 //!   [`reading_once`] (every command of the CLI and the Python package runs inside one), the
 //!   bytes of every input that is not a regular file are kept, so a second read of the same input
 //!   (a model read for its sheet and again for its inertials) gets the same bytes without a second
-//!   open. Regular files are read again: they can be, and a large measurement file is not kept.
+//!   open. Regular files are read again: they can be; and only text inputs are kept (data
+//!   inputs, up to [`MAX_DATA_BYTES`], are read once by every command).
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -123,7 +124,10 @@ pub fn read_capped(path: &str, limit: usize) -> Result<std::result::Result<Vec<u
         read_opened(path, limit)
             .with_context(|| format!("{}: cannot read the file", crate::text::quote(path)))?
     };
-    if let Some(key) = key {
+    // Only text inputs are kept: they are the ones a command looks at twice (a model read for
+    // its kind, then as a model). A data input is read once, and keeping a copy would double
+    // the memory of a measurement file piped in.
+    if let Some(key) = key.filter(|_| limit <= MAX_TEXT_BYTES) {
         KEPT.with(|k| {
             if let Some(m) = k.borrow_mut().as_mut() {
                 m.insert(key, Rc::new(bytes.clone()));
