@@ -1,4 +1,4 @@
-//! A calibrated model as `predict` and `compensate` read it: the `dh-sheet` library's
-//! [`dh_sheet::calibrated`], re-exported here under its old path.
+//! A calibrated model as `predict` and `compensate` read it: the `dh-workflows` library's
+//! [`dh_workflows::calibrated`], re-exported here under its old path.
 
-pub use dh_sheet::calibrated::*;
+pub use dh_workflows::calibrated::*;

@@ -439,12 +439,12 @@ fn flushed(outcome: anyhow::Result<Outcome>, out: &mut dyn Write) -> anyhow::Res
     Ok(outcome)
 }
 
-/// Runs one command, every input opened once ([`dh_sheet::input::reading_once`]: standard input
+/// Runs one command, every input opened once ([`dh_workflows::input::reading_once`]: standard input
 /// and FIFOs can be read only once).
 /// The warnings of the xacro expansions the command made are written to `err` after it.
 fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
-    let result = dh_sheet::input::reading_once(|| dispatch_command(cli, out, err));
-    for w in dh_sheet::xacro::take_warnings() {
+    let result = dh_workflows::input::reading_once(|| dispatch_command(cli, out, err));
+    for w in dh_workflows::xacro::take_warnings() {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     result

@@ -1,6 +1,6 @@
 //! Errors the CLI reports with a hint, and the exit-code contract.
 
-pub use dh_sheet::error::{hint_for, hinted, Hinted};
+pub use dh_workflows::error::{hint_for, hinted, Hinted};
 
 /// What a successful run found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! Guards against hostile input at the command line's edges: one escaping rule for every name
 //! the tool prints, one test for names the readers refuse, capped column widths for text
 //! tables, and the value parsers (with their ranges) of the numeric options, which are the
-//! `dh-sheet` library's ([`dh_sheet::ranges`]) so that library and Python callers get the same
+//! `dh-workflows` library's ([`dh_workflows::ranges`]) so that library and Python callers get the same
 //! checks.
 //!
 //! The ranges are documented in README.md ("Bad input"); each parser's error names the range,
@@ -11,14 +11,14 @@
 use std::borrow::Cow;
 use std::io::Write;
 
-pub use dh_sheet::ranges::*;
-pub use dh_sheet::text::{
+pub use dh_workflows::ranges::*;
+pub use dh_workflows::text::{
     column_width, cut, escape, is_spoofing, json_line, json_pretty, name_problem, output_name,
     quote, shorten, MAX_COLUMN,
 };
 
 /// A writer that passes text on with every [`is_spoofing`] character but the line feed
-/// [`escape`]d and every word longer than [`dh_sheet::text::MAX_QUOTED`] characters [`cut`]
+/// [`escape`]d and every word longer than [`dh_workflows::text::MAX_QUOTED`] characters [`cut`]
 /// ([`shorten`]): standard error goes through it, so no message, warning or usage text can put
 /// a raw escape sequence or bidi override on the user's terminal, or fill it with a 100 000
 /// character path, whatever it quotes.

@@ -1,5 +1,5 @@
 //! The `urdf-dh` command line: files, options and printing around the `dh-core`, `urdf-axes`,
-//! `dh-calib` and `dh-sheet` libraries. The binary is a thin `main` over [`cli::run`].
+//! `dh-calib` and `dh-workflows` libraries. The binary is a thin `main` over [`cli::run`].
 #![cfg_attr(
     not(test),
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
@@ -21,7 +21,7 @@ pub mod stdout;
 pub mod svg;
 pub mod xacro_flags;
 
-// The sheet formats, their units and writers are the `dh-sheet` library's; the CLI keeps their
+// The sheet formats, their units and writers are the `dh-workflows` library's; the CLI keeps their
 // old paths (`urdf_dh::sheet`, `crate::units`, ...) for its commands and for callers of this
 // crate.
-pub use dh_sheet::{render, sheet, tree_sheet, units};
+pub use dh_workflows::{render, sheet, tree_sheet, units};

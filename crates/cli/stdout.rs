@@ -8,7 +8,7 @@
 
 use std::io::Write;
 
-use dh_sheet::output::StdoutError;
+use dh_workflows::output::StdoutError;
 
 /// The process's standard output, for [`crate::cli::run`]: write errors carry the words
 /// "standard output" (their kind kept, so a closed pipe still ends the run quietly), and a

@@ -1,6 +1,6 @@
 //! The options of every command that reads a robot file, for `.xacro` files: `--xacro-arg
 //! NAME:=VALUE` and `--package NAME=DIR`, handed to the native expansion
-//! ([`dh_sheet::xacro`]).
+//! ([`dh_workflows::xacro`]).
 
 use clap::Args;
 
@@ -21,8 +21,8 @@ impl XacroCli {
     ///
     /// # Errors
     /// A malformed `--xacro-arg` or `--package`.
-    pub fn options(&self) -> anyhow::Result<dh_sheet::xacro::XacroOptions> {
-        let mut o = dh_sheet::xacro::XacroOptions::default();
+    pub fn options(&self) -> anyhow::Result<dh_workflows::xacro::XacroOptions> {
+        let mut o = dh_workflows::xacro::XacroOptions::default();
         for a in &self.xacro_args {
             o.add_arg(a)
                 .map_err(|e| anyhow::anyhow!("--xacro-arg: {e}"))?;
@@ -39,7 +39,7 @@ impl XacroCli {
     /// # Errors
     /// As [`XacroCli::options`].
     pub fn apply(&self) -> anyhow::Result<()> {
-        dh_sheet::xacro::set_default_options(self.options()?);
+        dh_workflows::xacro::set_default_options(self.options()?);
         Ok(())
     }
 }

@@ -37,7 +37,12 @@ fuzz_target!(|data: &[u8]| {
         return;
     };
     for s in &m.samples {
-        assert!(s.q.iter().all(|v| v.is_finite()), "{layout}: line {}: q {:?}", s.line, s.q);
+        assert!(
+            s.q.iter().all(|v| v.is_finite()),
+            "{layout}: line {}: q {:?}",
+            s.line,
+            s.q
+        );
         assert!(
             s.point.iter().all(|v| v.is_finite()),
             "{layout}: line {}: point {:?}",

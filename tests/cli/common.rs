@@ -187,7 +187,7 @@ pub fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
         .collect()
 }
 
-/// Asserts that the library's calibration ([`dh_sheet::calibration::run`]) of `model` against
+/// Asserts that the library's calibration ([`dh_workflows::calibration::run`]) of `model` against
 /// `data` (with `validate`) gives the JSON report the command line printed (`json`) and, when
 /// `out` names the file the command line wrote, the same calibrated model, byte for byte.
 pub fn assert_library_calibrates_as_the_cli(
@@ -197,11 +197,11 @@ pub fn assert_library_calibrates_as_the_cli(
     out: Option<&str>,
     json: &str,
 ) {
-    let mut request = dh_sheet::calibration::CalibrationRequest::new(Some(model.into()), data);
+    let mut request = dh_workflows::calibration::CalibrationRequest::new(Some(model.into()), data);
     request.validate = validate.map(Into::into);
     request.out = out.map(Into::into);
     let mut warnings = Vec::new();
-    let mut calibrated = dh_sheet::calibration::run(&request, &mut warnings).unwrap();
+    let mut calibrated = dh_workflows::calibration::run(&request, &mut warnings).unwrap();
     if let Some(path) = out {
         let written = calibrated
             .model_file(path, Some(model), &mut warnings)

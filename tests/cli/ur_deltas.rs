@@ -2,8 +2,8 @@
 //! `to-urdf` of what it writes, on the project's own simulated UR3 calibration
 //! (fixtures/ur/calibration.conf, metre-scale cancelling d like a real UR3's).
 
-use dh_sheet::sheet::Sheet;
-use dh_sheet::ur;
+use dh_workflows::sheet::Sheet;
+use dh_workflows::ur;
 
 use crate::common::{root, run};
 

@@ -167,8 +167,12 @@ fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
     let path = entries[0].path.to_string_lossy().into_owned();
     let name = display_name(&path);
     let model = read_robot(&path).and_then(|bytes| {
-        dh_sheet::input::read_model(&bytes, &name, dh_sheet::input::folder_of(&path).as_deref())
-            .map_err(|e| anyhow::anyhow!("{e:#}"))
+        dh_workflows::input::read_model(
+            &bytes,
+            &name,
+            dh_workflows::input::folder_of(&path).as_deref(),
+        )
+        .map_err(|e| anyhow::anyhow!("{e:#}"))
     });
     entries
         .iter()

@@ -9,7 +9,7 @@
 //!
 //! # Layout
 //! The calibration itself (inputs, the serial, contact and tree paths, the calibrated model
-//! proved as written) is the library's [`dh_sheet::calibration`]; its inputs are re-exported
+//! proved as written) is the library's [`dh_workflows::calibration`]; its inputs are re-exported
 //! here. The arguments and documents this command shares with `crate::commands::sockets` and
 //! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args` and
 //! `crate::commands::calibrate_doc`, re-exported here; the run (files and rendering) is in
@@ -37,11 +37,11 @@ use crate::measured::{DataUnits, LoadedModel};
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::progress::PipelineProgress;
 use crate::units::{AngleUnit, LengthUnit};
-use dh_sheet::calibrated_writer::row_values;
+use dh_workflows::calibrated_writer::row_values;
 
 pub use super::calibrate_args::*;
 pub use super::calibrate_doc::*;
-pub use dh_sheet::calibration::{self as calibration, Calibrated, Inputs, Loaded};
+pub use dh_workflows::calibration::{self as calibration, Calibrated, Inputs, Loaded};
 
 // The submodules import what they use through `use super::*`: the imports above and each
 // other's items, re-exported here.

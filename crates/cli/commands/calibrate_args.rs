@@ -10,7 +10,7 @@ use crate::sheet::ConventionDoc;
 use crate::units::{AngleUnit, LengthUnit};
 
 pub use dh_calib::pipeline::EffectsChoice;
-pub use dh_sheet::calibration::{CalibrationRequest, GivenData};
+pub use dh_workflows::calibration::{CalibrationRequest, GivenData};
 
 /// Output format of `calibrate`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -25,7 +25,7 @@ pub enum CalibrateFormat {
 /// Everything `calibrate` needs: the library's request and how the command line renders it.
 #[derive(Clone, Debug)]
 pub struct CalibrateArgs {
-    /// The calibration itself ([`dh_sheet::calibration`]).
+    /// The calibration itself ([`dh_workflows::calibration`]).
     pub request: CalibrationRequest,
     /// Output format.
     pub format: CalibrateFormat,
@@ -77,7 +77,7 @@ pub struct CalibrateCli {
     #[arg(long, value_name = "SIGMA", value_parser = crate::guard::sigma)]
     sigma: Option<f64>,
     /// Folds of the cross-validation.
-    #[arg(long, value_name = "K", default_value_t = dh_sheet::calibration::DEFAULT_FOLDS, value_parser = crate::guard::folds)]
+    #[arg(long, value_name = "K", default_value_t = dh_workflows::calibration::DEFAULT_FOLDS, value_parser = crate::guard::folds)]
     folds: usize,
     /// Length unit of the measurement files and --sigma (reports are in metres).
     #[arg(long, value_enum, default_value_t = LengthUnit::M)]
@@ -122,7 +122,7 @@ pub struct CalibrateCli {
     payload: Option<Vec<f64>>,
     /// Most effects --effects auto adds before it stops (a guard; the run's notes say when it
     /// stopped the selection).
-    #[arg(long, value_name = "N", default_value_t = dh_sheet::calibration::DEFAULT_MAX_EFFECTS, value_parser = crate::guard::max_effects)]
+    #[arg(long, value_name = "N", default_value_t = dh_workflows::calibration::DEFAULT_MAX_EFFECTS, value_parser = crate::guard::max_effects)]
     max_effects: usize,
     /// Significance level of every test of the diagnosis: an effect enters when its F test
     /// passes at ALPHA divided by the number of candidates and its held-out gain is

@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 
 pub use dh_calib::pipeline::{SessionDoc, SessionFrameDoc};
-pub use dh_sheet::calibrated_writer::read_back_deviation;
+pub use dh_workflows::calibrated_writer::read_back_deviation;
 
 /// The frames of every session but the first (whose frame the sheet's `device` holds).
 pub fn frames(docs: &[SessionDoc]) -> Vec<SessionFrameDoc> {

@@ -1,13 +1,13 @@
 //! The report of `urdf-dh calibrate` on a tree sheet (see [`crate::tree_sheet`]): every chain
 //! of the tree fitted at once, each measured target on the branch it names (the run and the
-//! calibrated tree sheet are the library's, `dh_sheet::calibration`).
+//! calibrated tree sheet are the library's, `dh_workflows::calibration`).
 //!
 //! The steps, validation, effects and report are those of a serial model; the text adds a
 //! `tree` section saying which parameters, targets and mount belong to the trunk and to each
 //! branch.
 
 pub use dh_calib::pipeline::{TableDoc, TreeCalibrationDoc};
-use dh_sheet::calibration::Tree;
+use dh_workflows::calibration::Tree;
 
 use crate::commands::calibrate::text_for;
 

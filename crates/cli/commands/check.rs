@@ -1,8 +1,8 @@
 //! `urdf-dh check`: does a URDF match a vendor's DH sheet? If not, which joint and which
-//! parameter differ? Reads the files, runs `dh_sheet::check::compare` and renders its report
+//! parameter differ? Reads the files, runs `dh_workflows::check::compare` and renders its report
 //! (text, or the JSON contract of the README).
 //!
-//! Two independent answers are combined (see `dh_sheet::check`):
+//! Two independent answers are combined (see `dh_workflows::check`):
 //! 1. the row-by-row equivalence walk of `dh_core::equivalence`, which sees through the
 //!    representation freedoms (x signs, common-normal placement, convention, units) and names
 //!    every difference;
@@ -15,8 +15,8 @@ use std::io::Write;
 
 use anyhow::Result;
 use dh_core::Tolerance;
-use dh_sheet::check::kind_name;
-pub use dh_sheet::check::{
+use dh_workflows::check::kind_name;
+pub use dh_workflows::check::{
     compare, CheckReport, CheckTolerances, DifferenceDoc, CHECK_ANGULAR, CHECK_LINEAR,
 };
 

@@ -11,7 +11,7 @@ use std::path::Path;
 use anyhow::Result;
 use dh_calib::compensate::CompensateOptions;
 use dh_core::Convention;
-use dh_sheet::compensate::{failed_poses, same_joints};
+use dh_workflows::compensate::{failed_poses, same_joints};
 
 use crate::calibrated::load_calibrated;
 use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
@@ -169,7 +169,7 @@ pub fn compensate(
         (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut sum_before = 0.0;
     let mut sum_after = 0.0;
-    let rows = dh_sheet::compensate::compensate(&nominal.table, &model, &input, &options)?;
+    let rows = dh_workflows::compensate::compensate(&nominal.table, &model, &input, &options)?;
     let failed = failed_poses(&rows, args.max_change, lu, au);
     for (row, given) in rows.iter().zip(&input.rows) {
         let c = &row.result;

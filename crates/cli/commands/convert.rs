@@ -12,12 +12,12 @@ use crate::readback::{failure_line, prove, Isometry3Pair, Source};
 use crate::render::{render_sheet, Format};
 use crate::sheet::{Sheet, SheetDoc};
 use crate::units::{AngleUnit, LengthUnit};
-use dh_sheet::ur;
+use dh_workflows::ur;
 
 /// Everything `convert` needs.
 #[derive(Clone, Debug)]
 pub struct ConvertArgs {
-    /// Sheet path, `-`, or the name of a shipped nominal table ([`dh_sheet::ur::nominal`]).
+    /// Sheet path, `-`, or the name of a shipped nominal table ([`dh_workflows::ur::nominal`]).
     pub sheet: String,
     /// A UR controller's `calibration.conf`, whose deltas calibrate the sheet.
     pub deltas: Option<String>,

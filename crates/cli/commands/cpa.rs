@@ -5,7 +5,7 @@
 //!
 //! # Layout
 //! The analysis, its document and the comparison with a nominal model are the library's
-//! [`dh_sheet::cpa_report`] (re-exported here); the text report is in `text`, the chart in
+//! [`dh_workflows::cpa_report`] (re-exported here); the text report is in `text`, the chart in
 //! `crate::plot_motion`.
 
 use std::io::Write;
@@ -13,8 +13,8 @@ use std::path::Path;
 
 use anyhow::Result;
 pub use dh_calib::cpa::{CPA_ANGULAR, CPA_LINEAR};
-use dh_sheet::cpa_report::cpa as run;
-pub use dh_sheet::cpa_report::*;
+use dh_workflows::cpa_report::cpa as run;
+pub use dh_workflows::cpa_report::*;
 
 use crate::error::Outcome;
 use crate::input::display_name;
@@ -37,7 +37,7 @@ pub enum CpaFormat {
 /// Everything `cpa` needs: the library's request and how the command line renders it.
 #[derive(Clone, Debug)]
 pub struct CpaArgs {
-    /// The analysis ([`dh_sheet::cpa_report`]).
+    /// The analysis ([`dh_workflows::cpa_report`]).
     pub request: CpaRequest,
     /// Output format.
     pub format: CpaFormat,

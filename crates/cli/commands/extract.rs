@@ -1,5 +1,5 @@
 //! `urdf-dh extract`: URDF -> DH table in either convention, proved by forward kinematics.
-//! The extraction and its proof are the `dh-sheet` library's ([`dh_sheet::extract`]); this
+//! The extraction and its proof are the `dh-workflows` library's ([`dh_workflows::extract`]); this
 //! command reads the file, draws the frames (`--svg`) and prints.
 
 use std::path::Path;
@@ -14,7 +14,7 @@ pub use crate::input::{chain_error, load_chain, load_chain_bytes, urdf_warnings}
 use crate::readback::failure_line;
 use crate::render::Format;
 use crate::units::{AngleUnit, LengthUnit};
-pub use dh_sheet::extract::{
+pub use dh_workflows::extract::{
     default_samples, extract_bytes, extract_bytes_in, extract_chain, prove_extracted,
     prove_extracted_with, ExtractOptions, Extracted,
 };
@@ -57,7 +57,7 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
     extract_bytes_in(
         &bytes,
         &display_name(&args.path),
-        dh_sheet::input::folder_of(&args.path).as_deref(),
+        dh_workflows::input::folder_of(&args.path).as_deref(),
         args.base.as_deref(),
         args.tip.as_deref(),
         &args.options(),

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use dh_calib::csv::{joint_name_problem, write_measurements, DataError};
 use dh_calib::data::Split;
 use dh_calib::import::{import as import_layout, mukca, Layout, Source};
-use dh_sheet::text::escape;
+use dh_workflows::text::escape;
 
 use crate::error::{hinted, Outcome};
 use crate::input::{display_name, read_table, read_text};

@@ -2,7 +2,7 @@
 //! ([`calibrate_args`]) and documents ([`calibrate_doc`]), which its contact report
 //! ([`sockets`]) and tree report ([`calibrate_tree`]) use too, and its findings
 //! ([`calibrate_findings`]) and sessions ([`calibrate_sessions`]). What `calibrate` reads and
-//! runs is the library's `dh_sheet::calibration`.
+//! runs is the library's `dh_workflows::calibration`.
 
 pub mod batch;
 pub mod calibrate;
@@ -21,11 +21,11 @@ pub mod predict;
 pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
-/// The calibrated URDF as a minimal edit of the user's own (the `dh-sheet` library's).
+/// The calibrated URDF as a minimal edit of the user's own (the `dh-workflows` library's).
 pub mod urdf_edit {
-    pub use dh_sheet::urdf_edit::*;
+    pub use dh_workflows::urdf_edit::*;
 }
-/// The proof of a calibrated model as written (the `dh-sheet` library's).
+/// The proof of a calibrated model as written (the `dh-workflows` library's).
 pub mod written {
-    pub use dh_sheet::written::*;
+    pub use dh_workflows::written::*;
 }

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use dh_calib::predict::Frame;
-use dh_sheet::predict::{frame_of, Predictions, Wanted};
+use dh_workflows::predict::{frame_of, Predictions, Wanted};
 
 use crate::calibrated::{load_calibrated, CalibratedModel};
 use crate::error::Outcome;
@@ -118,7 +118,7 @@ impl PredictCli {
     }
 }
 
-pub use dh_sheet::predict::{read_joints, JointInput, TOOL};
+pub use dh_workflows::predict::{read_joints, JointInput, TOOL};
 
 /// A number as the output writes it: shortest round-trip form.
 pub(crate) fn cell(v: f64) -> String {
@@ -175,7 +175,7 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
-    let predictions = dh_sheet::predict::predict(
+    let predictions = dh_workflows::predict::predict(
         &model,
         frame,
         &input,
@@ -309,7 +309,7 @@ fn render(
 /// [`render`]'s header names, each number in its shortest round-trip form ([`cell`]).
 fn write_row(
     t: &mut String,
-    p: &dh_sheet::predict::Predicted,
+    p: &dh_workflows::predict::Predicted,
     input: &JointInput,
     units: DataUnits,
     attitude: bool,

@@ -1,5 +1,5 @@
 //! `urdf-dh simulate`: measurements of a model with known errors, for trying `calibrate` and
-//! `cpa` where the truth is known (the library's [`dh_sheet::simulation`]). Writes the
+//! `cpa` where the truth is known (the library's [`dh_workflows::simulation`]). Writes the
 //! canonical measurement CSV and, beside it, a truth file: the true DH sheet with a `truth`
 //! section (device frame, targets, errors, effects, noise, seed).
 
@@ -7,8 +7,8 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-use dh_sheet::simulation::simulate as run;
-pub use dh_sheet::simulation::{truth_path, SimulationRequest};
+use dh_workflows::simulation::simulate as run;
+pub use dh_workflows::simulation::{truth_path, SimulationRequest};
 
 use crate::error::{hinted, Outcome};
 use crate::output::check_destinations;
@@ -16,7 +16,7 @@ use crate::output::check_destinations;
 /// Everything `simulate` needs: the library's request and the files to write.
 #[derive(Clone, Debug)]
 pub struct SimulateArgs {
-    /// The simulation ([`dh_sheet::simulation`]).
+    /// The simulation ([`dh_workflows::simulation`]).
     pub request: SimulationRequest,
     /// The CSV to write.
     pub out: String,

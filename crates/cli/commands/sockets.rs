@@ -1,6 +1,6 @@
 //! The report of `urdf-dh calibrate` on contact data (a `socket` column, e.g. `urdf-dh import
 //! --layout mukca`): unknown socket centres instead of measured points, see `dh_calib::socket`;
-//! the run and the calibrated model are the library's (`dh_sheet::calibration`).
+//! the run and the calibrated model are the library's (`dh_workflows::calibration`).
 //!
 //! `text` renders the report; `chart` (`--plot`) draws each contact's distance to its
 //! socket's modelled mean, as given and after the last step.

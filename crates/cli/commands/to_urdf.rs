@@ -1,5 +1,5 @@
 //! `urdf-dh to-urdf`: a URDF whose kinematics equal a DH sheet (the writer and its proof are
-//! the `dh-sheet` library's, [`dh_sheet::urdf_writer`]).
+//! the `dh-workflows` library's, [`dh_workflows::urdf_writer`]).
 
 use std::io::Write;
 
@@ -8,7 +8,9 @@ use anyhow::Result;
 use crate::error::Outcome;
 use crate::input::{display_name, read_text};
 use crate::sheet::Sheet;
-pub use dh_sheet::urdf_writer::{check_urdf, origin, prove_urdf, urdf_of, write_proved, UrdfProof};
+pub use dh_workflows::urdf_writer::{
+    check_urdf, origin, prove_urdf, urdf_of, write_proved, UrdfProof,
+};
 
 /// Everything `to-urdf` needs.
 #[derive(Clone, Debug)]

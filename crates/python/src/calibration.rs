@@ -1,6 +1,6 @@
 //! Calibration from measured points and using its result: `calibrate` (the library's
-//! `dh_sheet::calibration`, which the command line runs too), `predict` and `compensate` (the
-//! library's `dh_sheet::predict` and `dh_sheet::compensate`, returning numbers), in process and without
+//! `dh_workflows::calibration`, which the command line runs too), `predict` and `compensate` (the
+//! library's `dh_workflows::predict` and `dh_workflows::compensate`, returning numbers), in process and without
 //! files: measurements and joint values cross as arrays ([`ArraysIn`], read by `dh_calib::csv::SampleArrays` with the
 //! CSV reader's checks), or as a file path. Also `measured_joints` and the generic `run`.
 //!
@@ -14,18 +14,18 @@ use dh_calib::csv::SampleArrays;
 use dh_calib::pipeline::EffectsChoice;
 use dh_calib::predict::Frame;
 use dh_core::Convention;
-use dh_sheet::calibrated::{load_calibrated, CalibratedModel};
-use dh_sheet::calibration::{
+use dh_workflows::calibrated::{load_calibrated, CalibratedModel};
+use dh_workflows::calibration::{
     self as calibration, CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFECTS,
 };
-use dh_sheet::compensate::{failed_poses, same_joints};
-use dh_sheet::input::display_name;
-use dh_sheet::measured::DataUnits;
-use dh_sheet::model::load_model;
-use dh_sheet::output::{write_all, STDIO};
-use dh_sheet::predict::{frame_of, read_joints};
-use dh_sheet::ranges;
-use dh_sheet::units::{AngleUnit, LengthUnit};
+use dh_workflows::compensate::{failed_poses, same_joints};
+use dh_workflows::input::display_name;
+use dh_workflows::measured::DataUnits;
+use dh_workflows::model::load_model;
+use dh_workflows::output::{write_all, STDIO};
+use dh_workflows::predict::{frame_of, read_joints};
+use dh_workflows::ranges;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use pyo3::prelude::*;
 use urdf_dh_cli::error::Outcome;
 
@@ -145,7 +145,7 @@ fn calibrate(
     out: Option<String>,
 ) -> PyResult<(String, String, bool)> {
     let go = || -> anyhow::Result<(String, String, bool)> {
-        use dh_sheet::ranges as guard;
+        use dh_workflows::ranges as guard;
         let given = match data {
             Some(d) => Some(GivenData {
                 data: arrays(d)?,
@@ -251,7 +251,7 @@ type PredictOut = (
 );
 
 /// A calibrated model's target positions or tool poses at joint values
-/// ([`dh_sheet::predict::predict`], as `urdf-dh predict` computes them); `joints` are arrays,
+/// ([`dh_workflows::predict::predict`], as `urdf-dh predict` computes them); `joints` are arrays,
 /// or None to read the file `joints_name`.
 #[pyfunction]
 #[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit))]
@@ -278,7 +278,7 @@ fn predict(
         warnings.splice(0..0, first);
         let given = joints.map(arrays).transpose()?;
         let input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
-        let p = dh_sheet::predict::predict(
+        let p = dh_workflows::predict::predict(
             &calibrated,
             frame,
             &input,
@@ -358,7 +358,7 @@ fn predict(
 /// poses not compensated (`config (line N): why`), and the warnings.
 type CompensateOut = (Vec<Vec<f64>>, Vec<[f64; 4]>, Vec<String>, Vec<String>);
 
-/// Corrected joint values ([`dh_sheet::compensate::compensate`], as `urdf-dh compensate`
+/// Corrected joint values ([`dh_workflows::compensate::compensate`], as `urdf-dh compensate`
 /// computes them); `joints` are arrays, or None to read the file `joints_name`.
 #[pyfunction]
 #[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit))]
@@ -399,8 +399,12 @@ fn compensate(
             max_change,
             ..CompensateOptions::default()
         };
-        let rows =
-            dh_sheet::compensate::compensate(&nominal_model.table, &calibrated, &input, &options)?;
+        let rows = dh_workflows::compensate::compensate(
+            &nominal_model.table,
+            &calibrated,
+            &input,
+            &options,
+        )?;
         let (l, a) = (units.length.metres(), units.angle.radians());
         let q = rows
             .iter()
@@ -457,7 +461,7 @@ fn measured_joints(
     tip: Option<String>,
 ) -> PyResult<Vec<String>> {
     let go = || -> anyhow::Result<Vec<String>> {
-        let m = dh_sheet::model::load_model(
+        let m = dh_workflows::model::load_model(
             model,
             base.as_deref(),
             tip.as_deref(),

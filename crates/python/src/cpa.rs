@@ -1,11 +1,11 @@
 //! `cpa`: circle-point analysis of measurements in which one joint moves at a time, as
-//! `urdf-dh cpa` runs it (the library's `dh_sheet::cpa_report`), the measurements as a file or
+//! `urdf-dh cpa` runs it (the library's `dh_workflows::cpa_report`), the measurements as a file or
 //! as arrays. Returns the extracted table as a sheet with the report as its `cpa` section, as
 //! JSON (for Python) and YAML (what `cpa --format yaml` prints), in metres and radians.
 
 use dh_core::{Convention, Tolerance};
-use dh_sheet::cpa_report::{cpa as run, CpaRequest};
-use dh_sheet::render::{render_sheet, Format};
+use dh_workflows::cpa_report::{cpa as run, CpaRequest};
+use dh_workflows::render::{render_sheet, Format};
 use pyo3::prelude::*;
 
 use crate::calibration::{arrays, units, ArraysIn};
@@ -45,8 +45,12 @@ fn cpa(
                 }
             },
             tolerance: Tolerance::new(
-                ranged_f64("linear_tol", linear_tol, dh_sheet::ranges::linear_tol)?,
-                ranged_f64("angular_tol", angular_tol, dh_sheet::ranges::angular_tol)?,
+                ranged_f64("linear_tol", linear_tol, dh_workflows::ranges::linear_tol)?,
+                ranged_f64(
+                    "angular_tol",
+                    angular_tol,
+                    dh_workflows::ranges::angular_tol,
+                )?,
             )
             .map_err(|e| anyhow::anyhow!("{e}"))?,
             units: units(length_unit, angle_unit)?,

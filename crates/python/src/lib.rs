@@ -1,11 +1,11 @@
 //! `urdf_dh._native`: the Python face of the `urdf-dh` library, thin on purpose.
 //!
 //! Every computation is the library's: extraction and its proof and `check`'s comparison
-//! (`table`: `dh_sheet::extract`, `dh_sheet::check`), prediction and compensation
-//! (`calibration`: `dh_sheet::predict`, `dh_sheet::compensate`), and calibration
-//! (`dh_sheet::calibration`, which reads the files or arrays and runs serial, tree and contact
+//! (`table`: `dh_workflows::extract`, `dh_workflows::check`), prediction and compensation
+//! (`calibration`: `dh_workflows::predict`, `dh_workflows::compensate`), and calibration
+//! (`dh_workflows::calibration`, which reads the files or arrays and runs serial, tree and contact
 //! data through `dh_calib::pipeline`), simulated measurements (`simulation`:
-//! `dh_sheet::simulation`) and circle-point analysis (`cpa`: `dh_sheet::cpa_report`), with measurements and joint values handed over as
+//! `dh_workflows::simulation`) and circle-point analysis (`cpa`: `dh_workflows::cpa_report`), with measurements and joint values handed over as
 //! arrays, no files; this crate only converts arguments and results. Poses cross as 4x4
 //! homogeneous matrices (nested lists, row-major; metres and radians), which the pure-Python
 //! package turns into numpy arrays. Errors carry the CLI's message (`{e:#}`, the whole context
@@ -39,14 +39,14 @@ pub(crate) fn to_py(py: Python<'_>, e: anyhow::Error) -> PyErr {
         return PyFileNotFoundError::new_err(message);
     }
     let err = UrdfDhError::new_err(message);
-    let hint = dh_sheet::error::hint_for(&e);
+    let hint = dh_workflows::error::hint_for(&e);
     // Setting an attribute on a fresh exception object cannot fail in practice; if it does, the
     // exception still carries the message, and `hint` falls back to the class attribute.
     let _ = err.value(py).setattr("hint", hint);
     err
 }
 
-/// A number argument checked by the command line's own range of it ([`dh_sheet::ranges`]),
+/// A number argument checked by the command line's own range of it ([`dh_workflows::ranges`]),
 /// the error naming the Python argument `name`: `samples: expected a number of samples in [1,
 /// 1000000], found 0`.
 pub(crate) fn ranged<T>(

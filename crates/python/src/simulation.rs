@@ -1,5 +1,5 @@
 //! `simulate`: measurements of a model with planted errors and effects, as
-//! `urdf-dh simulate` makes them (the library's `dh_sheet::simulation`), returned as text: the
+//! `urdf-dh simulate` makes them (the library's `dh_workflows::simulation`), returned as text: the
 //! measurement CSV and the truth sheet (JSON for Python, YAML as the command line writes it).
 //!
 //! Also `write_outputs`, the command line's way of writing files (never over an input, all or
@@ -10,9 +10,9 @@
 use std::path::Path;
 
 use dh_core::Convention;
-use dh_sheet::output::{check_destinations, write_all};
-use dh_sheet::ranges as guard;
-use dh_sheet::simulation::{simulate as run, SimulationRequest};
+use dh_workflows::output::{check_destinations, write_all};
+use dh_workflows::ranges as guard;
+use dh_workflows::simulation::{simulate as run, SimulationRequest};
 use pyo3::prelude::*;
 
 use crate::to_py;
@@ -91,7 +91,7 @@ fn simulate(
 
 /// Writes `outputs` (argument name, path, text) as the command line writes its outputs: none
 /// may be one of `inputs` (argument name, path) however spelled, each folder must exist, and
-/// all are written or none (`dh_sheet::output`).
+/// all are written or none (`dh_workflows::output`).
 #[pyfunction]
 fn write_outputs(
     py: Python<'_>,

@@ -3,12 +3,12 @@
 
 use anyhow::Context;
 use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
-use dh_sheet::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
-use dh_sheet::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
-use dh_sheet::input::{display_name, folder_of, load_chain_in, read_robot_with, read_text};
-use dh_sheet::poe::PoeDoc;
-use dh_sheet::xacro::XacroOptions;
-use dh_sheet::{AngleUnit, Format, LengthUnit, Sheet};
+use dh_workflows::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
+use dh_workflows::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
+use dh_workflows::input::{display_name, folder_of, load_chain_in, read_robot_with, read_text};
+use dh_workflows::poe::PoeDoc;
+use dh_workflows::xacro::XacroOptions;
+use dh_workflows::{AngleUnit, Format, LengthUnit, Sheet};
 use pyo3::prelude::*;
 
 use crate::{ranged, ranged_f64, to_py};
@@ -156,7 +156,7 @@ impl NativeTable {
         &self.verification_json
     }
 
-    /// The table's product-of-exponentials form as JSON (`dh_sheet::poe::PoeDoc`: screws in
+    /// The table's product-of-exponentials form as JSON (`dh_workflows::poe::PoeDoc`: screws in
     /// the base frame at zero and the tip's home pose), at full precision.
     fn poe_json(&self, py: Python<'_>) -> PyResult<String> {
         let run = || -> anyhow::Result<String> {
@@ -178,14 +178,14 @@ impl NativeTable {
 
     /// Forward kinematics: the tip link in the base link frame at joint values `q` (one per
     /// row, radians or metres), each a finite number within the range of `--q`
-    /// ([`dh_sheet::ranges::joint_value`]).
+    /// ([`dh_workflows::ranges::joint_value`]).
     fn fk(&self, py: Python<'_>, q: Vec<f64>) -> PyResult<Matrix> {
         let run = || -> anyhow::Result<Matrix> {
             for (row, v) in self.table.rows.iter().zip(&q) {
                 ranged_f64(
                     &format!("fk: joint '{}'", row.name),
                     *v,
-                    dh_sheet::ranges::joint_value,
+                    dh_workflows::ranges::joint_value,
                 )?;
             }
             Ok(homogeneous(&self.table.fk(&q).context("fk")?))
@@ -216,14 +216,18 @@ fn extract(
     let xacro = xacro_options(xacro_args, packages);
     let run = || -> anyhow::Result<NativeTable> {
         // The command line's ranges, before any file is read (as clap checks them first).
-        let samples = ranged("samples", samples, dh_sheet::ranges::samples)?;
-        let seed = ranged("seed", seed, dh_sheet::ranges::seed)?;
+        let samples = ranged("samples", samples, dh_workflows::ranges::samples)?;
+        let seed = ranged("seed", seed, dh_workflows::ranges::seed)?;
         let tolerance = Tolerance::new(
-            ranged("linear_tolerance", linear, dh_sheet::ranges::linear_tol)?,
-            ranged("angular_tolerance", angular, dh_sheet::ranges::angular_tol)?,
+            ranged("linear_tolerance", linear, dh_workflows::ranges::linear_tol)?,
+            ranged(
+                "angular_tolerance",
+                angular,
+                dh_workflows::ranges::angular_tol,
+            )?,
         )?;
         let (bytes, name, dir) = robot_bytes(source, is_xml, &xacro)?;
-        let expansion_warnings = dh_sheet::xacro::take_warnings();
+        let expansion_warnings = dh_workflows::xacro::take_warnings();
         let options = ExtractOptions {
             convention: convention(convention_name)?,
             length_unit: LengthUnit::M,
@@ -260,7 +264,7 @@ fn extract(
             table,
             failure: (!passed).then(|| {
                 let line =
-                    dh_sheet::prove::failure_line("the table", "the URDF", Some(verification));
+                    dh_workflows::prove::failure_line("the table", "the URDF", Some(verification));
                 line.strip_prefix("urdf-dh: error: ")
                     .unwrap_or(&line)
                     .to_string()
@@ -290,11 +294,15 @@ fn check(
     let xacro = xacro_options(xacro_args, packages);
     let run = || -> anyhow::Result<String> {
         let (linear, angular) = (
-            ranged("linear_tolerance", linear, dh_sheet::ranges::linear_tol)?,
-            ranged("angular_tolerance", angular, dh_sheet::ranges::angular_tol)?,
+            ranged("linear_tolerance", linear, dh_workflows::ranges::linear_tol)?,
+            ranged(
+                "angular_tolerance",
+                angular,
+                dh_workflows::ranges::angular_tol,
+            )?,
         );
         let (bytes, name, dir) = robot_bytes(source, is_xml, &xacro)?;
-        dh_sheet::xacro::take_warnings();
+        dh_workflows::xacro::take_warnings();
         let (_, chain) = load_chain_in(
             &bytes,
             &name,

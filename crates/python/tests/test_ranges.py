@@ -1,4 +1,4 @@
-"""Every Python entry point takes the CLI's ranges (dh_sheet::ranges) with the CLI's messages,
+"""Every Python entry point takes the CLI's ranges (dh_workflows::ranges) with the CLI's messages,
 and no failed verification or NaN passes silently (issue 30, class 9)."""
 
 import subprocess

@@ -1,5 +1,5 @@
 //! WebAssembly bindings of urdf-dh for the web page (`web/`): a face like the CLI and the Python
-//! package, with no domain logic of its own. Each function calls the `dh-sheet` entry points
+//! package, with no domain logic of its own. Each function calls the `dh-workflows` entry points
 //! that `urdf-dh extract`, `check` and `to-urdf` call, and returns the text those commands
 //! print on standard output, byte for byte; [`Robot`] adds the forward kinematics of the URDF
 //! and of its DH table for the page's 3-D view.
@@ -15,9 +15,9 @@ mod options;
 mod scene;
 
 use anyhow::Context as _;
-use dh_sheet::extract::{default_samples, extract_bytes, prove_extracted, Extracted};
-use dh_sheet::input::{load_chain_bytes, urdf_warnings};
-use dh_sheet::Sheet;
+use dh_workflows::extract::{default_samples, extract_bytes, prove_extracted, Extracted};
+use dh_workflows::input::{load_chain_bytes, urdf_warnings};
+use dh_workflows::Sheet;
 use wasm_bindgen::prelude::*;
 
 pub use options::{CheckOptions, ExtractOptionsDoc, ToUrdfOptions};
@@ -26,7 +26,7 @@ pub use scene::Robot;
 /// An anyhow error as a JavaScript `Error`, its causes joined as the CLI prints them after
 /// `urdf-dh: error: `, and the CLI's `hint:` line after a line feed where it gives one.
 fn js_error(e: anyhow::Error) -> JsError {
-    match dh_sheet::error::hint_for(&e) {
+    match dh_workflows::error::hint_for(&e) {
         Some(hint) => JsError::new(&format!("{e:#}\nhint: {hint}")),
         None => JsError::new(&format!("{e:#}")),
     }
@@ -122,7 +122,7 @@ fn run_check(urdf: &[u8], sheet: &str, o: &CheckOptions) -> anyhow::Result<(Stri
     let mut warnings = urdf_warnings(&o.name, &model, &chain);
     let sheet = Sheet::parse(sheet, &o.sheet_name)?;
     warnings.extend(sheet.effects_warning(&o.sheet_name, "check compares the DH kinematics alone"));
-    let report = dh_sheet::compare(&chain, &sheet, o.tolerance()?)?;
+    let report = dh_workflows::compare(&chain, &sheet, o.tolerance()?)?;
     let json = serde_json::to_string_pretty(&report).context("writing the report")? + "\n";
     Ok((json, warnings))
 }
@@ -141,7 +141,7 @@ pub fn to_urdf(sheet: &str, options: &str) -> Result<String, JsError> {
     let o = ToUrdfOptions::parse(options).map_err(js_error)?;
     let run = || -> anyhow::Result<String> {
         let sheet = Sheet::parse(sheet, &o.sheet_name)?;
-        let (text, _proof) = dh_sheet::urdf_writer::write_proved(
+        let (text, _proof) = dh_workflows::urdf_writer::write_proved(
             &sheet,
             &o.sheet_name,
             o.name.as_deref(),

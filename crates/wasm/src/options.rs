@@ -4,10 +4,10 @@
 
 use anyhow::{bail, Result};
 use dh_core::Tolerance;
-use dh_sheet::check::{CHECK_ANGULAR, CHECK_LINEAR};
-use dh_sheet::extract::ExtractOptions;
-use dh_sheet::sheet::ConventionDoc;
-use dh_sheet::{AngleUnit, Format, LengthUnit};
+use dh_workflows::check::{CHECK_ANGULAR, CHECK_LINEAR};
+use dh_workflows::extract::ExtractOptions;
+use dh_workflows::sheet::ConventionDoc;
+use dh_workflows::{AngleUnit, Format, LengthUnit};
 use serde::de::DeserializeOwned;
 use serde::Deserialize;
 

@@ -72,7 +72,7 @@ pub(crate) fn tree(urdf: &[u8], name: &str) -> anyhow::Result<String> {
             None,
             Some(format!(
                 "{:#}",
-                dh_sheet::input::chain_error(name, e.clone())
+                dh_workflows::input::chain_error(name, e.clone())
             )),
         ),
     };

@@ -1,5 +1,5 @@
 //! Running `calibrate`: [`calibrate`] loads and fits through the library
-//! ([`dh_sheet::calibration`]: points, contacts or a tree), then writes the calibrated model and
+//! ([`dh_workflows::calibration`]: points, contacts or a tree), then writes the calibrated model and
 //! the chart (all or nothing) and renders the report (the contact and tree reports in
 //! `crate::commands::sockets` and `crate::commands::calibrate_tree`).
 

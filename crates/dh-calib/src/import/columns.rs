@@ -40,7 +40,7 @@ pub const MAX_COLUMNS: usize = 1 << 16;
 const MIN_SIGMA_METRES: f64 = 1e-9;
 
 /// Largest standard deviation in the file's length unit, as `calibrate --sigma` takes it
-/// (1 m in mm, 1 km in m; `dh_sheet::ranges::MAX_SIGMA`); in metres it must also be within the
+/// (1 m in mm, 1 km in m; `dh_workflows::ranges::MAX_SIGMA`); in metres it must also be within the
 /// canonical reader's 100 m.
 pub const MAX_SIGMA_IN_UNIT: f64 = 1000.0;
 

@@ -7,8 +7,8 @@
 //! frame and `tool` the tip link frame in the last DH frame; the sheet is in the units asked for.
 //!
 //! ```
-//! use dh_sheet::extract::{extract_bytes, prove_extracted, ExtractOptions};
-//! use dh_sheet::Format;
+//! use dh_workflows::extract::{extract_bytes, prove_extracted, ExtractOptions};
+//! use dh_workflows::Format;
 //!
 //! let urdf = br#"<robot name="r"><link name="base"/><link name="l1"/><link name="l2"/>
 //!   <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>

@@ -1,7 +1,11 @@
-//! DH sheets: the file formats that carry a Denavit–Hartenberg table (a robot vendor's sheet,
-//! what `urdf-dh extract` writes, a calibrated model), their units and validation, and `check`'s
-//! comparison of a URDF chain with a sheet. What the `urdf-dh` command line reads and writes, a
-//! Rust caller reads and writes here, with the same checks and the same messages.
+//! What urdf-dh reads, writes and runs, for every caller: the one library layer its faces (the
+//! command line, the Python package, the web page) call. Whole workflows (extract and check
+//! with their proofs, convert, simulate, circle-point analysis, calibrate, predict, compensate)
+//! and the file formats they read and write (DH sheets as a vendor or `urdf-dh extract` writes
+//! them, tree sheets, measurement files, calibrated models, URDF/xacro/MJCF/SDFormat inputs).
+//! What the `urdf-dh` command line reads and writes, a Rust caller reads and writes here, with
+//! the same checks and the same messages. The geometry ([`dh_core`]) and the fitting
+//! ([`dh_calib`]) below it are re-exported where a caller needs their types.
 //!
 //! Where each concept lives:
 //!
@@ -40,7 +44,7 @@
 //! `base` is DH frame 0 in the base link frame, `tool` the tip link frame in the last DH frame.
 //!
 //! ```
-//! use dh_sheet::{render_sheet, Format, Sheet, SheetDoc};
+//! use dh_workflows::{render_sheet, Format, Sheet, SheetDoc};
 //!
 //! let text = "convention: standard\nlength_unit: mm\nangle_unit: deg\njoints:\n  \
 //!             - {name: j1, type: revolute, a: 180, alpha: -90, d: 400, theta: 0}\n";
@@ -49,7 +53,7 @@
 //! let doc = SheetDoc::from_table(&sheet.table, sheet.length_unit, sheet.angle_unit);
 //! let yaml = render_sheet(&doc, Format::Yaml)?;
 //! assert_eq!(Sheet::parse(&yaml, "written")?.table.rows[0].name, "j1");
-//! # Ok::<(), dh_sheet::SheetError>(())
+//! # Ok::<(), dh_workflows::SheetError>(())
 //! ```
 //!
 //! The optional feature `clap` derives `clap::ValueEnum` for the unit, convention and format

@@ -13,7 +13,7 @@
 //! frames as in `dh_calib::pipeline` (device frame, base link frame, tip frame).
 //!
 //! ```no_run
-//! use dh_sheet::calibration::{run, CalibrationRequest};
+//! use dh_workflows::calibration::{run, CalibrationRequest};
 //!
 //! let mut request = CalibrationRequest::new(Some("robot.urdf".into()), "points.csv");
 //! request.effects = "auto".parse().expect("a choice");

@@ -1,13 +1,13 @@
-//! The model loader of the measured-data commands (`dh_sheet::model::load_model`) on the UR5
+//! The model loader of the measured-data commands (`dh_workflows::model::load_model`) on the UR5
 //! fixture: the URDF chain extracted and verified, and the vendor sheet, give the same joints and
 //! the same forward kinematics; the refusals keep the command line's words and hints.
 
 use std::path::PathBuf;
 
 use dh_core::Convention;
-use dh_sheet::error::Hinted;
-use dh_sheet::model::load_model;
-use dh_sheet::{AngleUnit, LengthUnit};
+use dh_workflows::error::Hinted;
+use dh_workflows::model::load_model;
+use dh_workflows::{AngleUnit, LengthUnit};
 
 fn fixture(path: &str) -> String {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -51,7 +51,7 @@ fn a_urdf_and_its_vendor_sheet_load_as_the_same_robot() {
     // The URDF's table is its chain's verified extraction: the same tip pose as the URDF's own
     // forward kinematics; the sheet's is the vendor's numbers as read.
     let (_, chain) =
-        dh_sheet::input::load_chain(&fixture("robots/ur5/robot.urdf"), None, Some("tool0"))
+        dh_workflows::input::load_chain(&fixture("robots/ur5/robot.urdf"), None, Some("tool0"))
             .unwrap();
     let q = [0.3, -1.1, 0.9, -0.4, 1.2, 0.5];
     let a = urdf.table.fk(&q).unwrap();
@@ -59,7 +59,7 @@ fn a_urdf_and_its_vendor_sheet_load_as_the_same_robot() {
     let gap = (a.translation.vector - b.translation.vector).norm();
     assert!(gap < 1e-9, "{gap}");
     let text = std::fs::read_to_string(fixture("robots/ur5/vendor.yaml")).unwrap();
-    let read = dh_sheet::Sheet::parse(&text, "vendor.yaml").unwrap();
+    let read = dh_workflows::Sheet::parse(&text, "vendor.yaml").unwrap();
     assert_eq!(sheet.table, read.table);
 }
 

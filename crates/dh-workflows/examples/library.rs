@@ -2,15 +2,15 @@
 //! a URDF's DH table proved as written, a simulated measurement set with planted errors, and
 //! its calibration with the calibrated model proved as written.
 //!
-//!     cargo run -p dh-sheet --example library     (from the repository root)
+//!     cargo run -p dh-workflows --example library     (from the repository root)
 
 #![allow(clippy::print_stdout)] // an example prints what it shows
 
 use dh_core::Convention;
-use dh_sheet::calibration::{self, CalibrationRequest};
-use dh_sheet::extract::{extract_bytes, prove_extracted, ExtractOptions};
-use dh_sheet::simulation::{simulate, SimulationRequest};
-use dh_sheet::Format;
+use dh_workflows::calibration::{self, CalibrationRequest};
+use dh_workflows::extract::{extract_bytes, prove_extracted, ExtractOptions};
+use dh_workflows::simulation::{simulate, SimulationRequest};
+use dh_workflows::Format;
 
 fn main() -> anyhow::Result<()> {
     let mut warnings = Vec::new(); // `urdf-dh: warning:` lines, as the CLI prints them

@@ -4,9 +4,9 @@
 use std::path::PathBuf;
 
 use dh_core::Tolerance;
-use dh_sheet::check::{CHECK_ANGULAR, CHECK_LINEAR};
-use dh_sheet::read_back::read_back;
-use dh_sheet::{compare, parse_doc, render_sheet, Format, Sheet, SheetDoc, SheetError};
+use dh_workflows::check::{CHECK_ANGULAR, CHECK_LINEAR};
+use dh_workflows::read_back::read_back;
+use dh_workflows::{compare, parse_doc, render_sheet, Format, Sheet, SheetDoc, SheetError};
 
 fn fixture(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
