@@ -8,7 +8,10 @@
 //! angles in radians; joint values in metres and radians ([`JointInput`]).
 
 use anyhow::Result;
-use dh_calib::compensate::{compensate as solve, CompensateOptions, Compensated};
+use dh_calib::compensate::{compensate as solve, Compensated};
+/// The inverse kinematics' options, and the default largest change of a joint value from the
+/// commanded one (radians or metres).
+pub use dh_calib::compensate::{CompensateOptions, DEFAULT_MAX_CHANGE};
 use dh_core::DhTable;
 
 use crate::calibrated::CalibratedModel;

@@ -6,7 +6,9 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use urdf_axes::{Chain, UrdfModel};
+/// A robot file's model and the chain read from it (`urdf_axes`'s), as [`load_chain`] returns
+/// them.
+pub use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::hinted;
 

@@ -4,8 +4,10 @@
 //! and the file formats they read and write (DH sheets as a vendor or `urdf-dh extract` writes
 //! them, tree sheets, measurement files, calibrated models, URDF/xacro/MJCF/SDFormat inputs).
 //! What the `urdf-dh` command line reads and writes, a Rust caller reads and writes here, with
-//! the same checks and the same messages. The geometry ([`dh_core`]) and the fitting
-//! ([`dh_calib`]) below it are re-exported where a caller needs their types.
+//! the same checks and the same messages. The geometry (`dh_core`) and the fitting
+//! (`dh_calib`) below it are re-exported where a caller needs their types: [`geometry`], [`fit`],
+//! and beside the workflow that uses them ([`input`], [`import`], [`cpa_report`], [`predict`],
+//! [`compensate`], [`measured`]); a face needs no other library crate.
 //!
 //! Where each concept lives:
 //!
@@ -37,6 +39,9 @@
 //! | [`output`] | writing files all or nothing (staged, synced, renamed), `-` for standard output, and refusing an output that is an input |
 //! | [`cpa_report`] | circle-point analysis as `cpa` runs it: the table the measured axes make, as a sheet, and the report's document (sweeps, circles, commanded against measured motion, the comparison with a nominal model) |
 //! | [`simulation`] | simulated measurements of a model with planted errors and effects, the CSV and the truth sheet `simulate` writes |
+//! | [`import`] | published datasets as their authors left them (the importers), and data tables read as text or MATLAB `.mat` |
+//! | [`geometry`] | the geometry's types a face names (DH tables, conventions, tolerances, lines), `dh_core`'s |
+//! | [`fit`] | the fitting's types a face names (measurements, effects, progress, the report's documents), `dh_calib`'s |
 //! | [`model`] | the robot model of the measured-data commands: a URDF chain extracted and verified, or a DH sheet ([`load_model`](model::load_model)) |
 //!
 //! Frames and units: a sheet's numbers are in its own `length_unit` and `angle_unit`; every
@@ -71,6 +76,9 @@ pub mod compensate;
 pub mod cpa_report;
 pub mod error;
 pub mod extract;
+pub mod fit;
+pub mod geometry;
+pub mod import;
 pub mod input;
 pub mod measured;
 pub mod model;

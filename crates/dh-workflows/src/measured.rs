@@ -16,6 +16,8 @@ use crate::units::{AngleUnit, LengthUnit};
 
 /// Columns of the canonical CSV that are not joints (the format's own list).
 pub use dh_calib::csv::RESERVED_COLUMNS;
+/// Measurements and joint values handed over as arrays instead of a file.
+pub use dh_calib::csv::SampleArrays;
 
 /// Units of a measurement file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -15,7 +15,9 @@
 use anyhow::{Context, Result};
 use dh_calib::csv::SampleArrays;
 use dh_calib::joints::JointRow;
-use dh_calib::predict::{Calibrated, Frame};
+use dh_calib::predict::Calibrated;
+/// The frame predictions are in: the measuring device's or the robot's base link frame.
+pub use dh_calib::predict::Frame;
 use dh_core::JointKind;
 use nalgebra::Vector3;
 

@@ -15,7 +15,7 @@
 use std::io::Write;
 
 use anyhow::Result;
-use dh_calib::cpa::{analyse, CpaOptions, CpaResult, JointCpa};
+use dh_calib::cpa::{analyse, CpaOptions, CpaResult};
 use dh_calib::model::NEAR_PARALLEL;
 use dh_core::{classify, Convention, DhTable, JointKind, Line, Tolerance};
 use nalgebra::Isometry3;
@@ -32,6 +32,12 @@ use crate::units::{AngleUnit, LengthUnit};
 // other's items, re-exported here.
 mod docs;
 pub use docs::*;
+
+// The analysis's own types a face shows (`dh_calib::cpa`'s): each joint's sweeps and circle,
+// its commanded against measured motion, and the default tolerances of `cpa`.
+pub use dh_calib::cpa::{
+    JointCpa, LinearTrend, MotionCheck, PoseResidual, SweepScreen, CPA_ANGULAR, CPA_LINEAR,
+};
 mod compare;
 use compare::*;
 
