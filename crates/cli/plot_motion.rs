@@ -1,6 +1,6 @@
 //! The SVG chart of `cpa --plot`: per joint, the measured minus commanded motion of each pose of
 //! its sweep against the commanded joint value, with the trend the analysis fitted
-//! (`dh_calib::cpa::MotionCheck`: a gear ratio is a slope, an eccentric output a once-per-turn
+//! ([`MotionCheck`]: a gear ratio is a slope, an eccentric output a once-per-turn
 //! sine), and the joint's circle-fit quality in its title.
 //!
 //! Units: revolute joints are drawn in degrees (x) and microradians (y), prismatic joints in
@@ -9,8 +9,8 @@
 
 use std::fmt::Write as _;
 
-use dh_calib::cpa::{JointCpa, MotionCheck};
-use dh_core::JointKind;
+use dh_workflows::cpa_report::{JointCpa, MotionCheck};
+use dh_workflows::geometry::JointKind;
 
 use crate::plot::{c, nice_step, significant, svg_open, tick_label, xml};
 
@@ -291,8 +291,8 @@ fn panel(s: &mut String, joint: &JointCpa, top: f64, plot_w: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use dh_calib::cpa::{LinearTrend, PoseResidual};
-    use dh_core::Line;
+    use dh_workflows::cpa_report::{LinearTrend, PoseResidual, SweepScreen};
+    use dh_workflows::geometry::Line;
 
     fn joint(poses: Vec<PoseResidual>, linear: Option<LinearTrend>) -> JointCpa {
         JointCpa {
@@ -315,7 +315,7 @@ mod tests {
                 sinusoid: None,
                 combined: None,
             },
-            screen: dh_calib::cpa::SweepScreen::default(),
+            screen: SweepScreen::default(),
         }
     }
 

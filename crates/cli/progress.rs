@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use dh_workflows::fit::Plan;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Runs shorter than this draw nothing.
@@ -65,14 +66,14 @@ impl Drop for Progress {
     }
 }
 
-/// The pipeline's progress (`dh_calib::pipeline::Progress`) on a terminal: when the fit
+/// The pipeline's progress ([`dh_workflows::fit::Progress`]) on a terminal: when the fit
 /// starts, a notice on standard error for a long run (`notice`, `None` for none) and the
 /// spinner of [`Progress`] (`label`); cleared when the fit is over, or when this is dropped.
 pub struct PipelineProgress<'a> {
     err: &'a mut dyn std::io::Write,
     quiet: bool,
-    notice: &'a dyn Fn(&dh_calib::pipeline::Plan) -> Option<String>,
-    label: &'a dyn Fn(&dh_calib::pipeline::Plan) -> String,
+    notice: &'a dyn Fn(&Plan) -> Option<String>,
+    label: &'a dyn Fn(&Plan) -> String,
     line: Option<Progress>,
     failed: Option<std::io::Error>,
 }
@@ -83,8 +84,8 @@ impl<'a> PipelineProgress<'a> {
     pub fn new(
         err: &'a mut dyn std::io::Write,
         quiet: bool,
-        notice: &'a dyn Fn(&dh_calib::pipeline::Plan) -> Option<String>,
-        label: &'a dyn Fn(&dh_calib::pipeline::Plan) -> String,
+        notice: &'a dyn Fn(&Plan) -> Option<String>,
+        label: &'a dyn Fn(&Plan) -> String,
     ) -> Self {
         Self {
             err,
@@ -105,8 +106,8 @@ impl<'a> PipelineProgress<'a> {
     }
 }
 
-impl dh_calib::pipeline::Progress for PipelineProgress<'_> {
-    fn started(&mut self, plan: &dh_calib::pipeline::Plan) {
+impl dh_workflows::fit::Progress for PipelineProgress<'_> {
+    fn started(&mut self, plan: &Plan) {
         if let Some(n) = (self.notice)(plan) {
             if let Err(e) = writeln!(self.err, "{n}") {
                 self.failed.get_or_insert(e);

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use dh_core::{Convention, DhTable};
+use dh_workflows::geometry::{Convention, DhTable, JointKind};
 use nalgebra::{Isometry3, Point3, Vector3};
 
 /// Panel size (SVG user units) of each view.
@@ -59,7 +59,7 @@ fn scene(table: &DhTable, q: &[f64]) -> Option<Scene> {
         let f = &frames[i];
         let z = f.rotation * Vector3::z();
         let d = row.d
-            + if row.kind == dh_core::JointKind::Prismatic {
+            + if row.kind == JointKind::Prismatic {
                 q[i]
             } else {
                 0.0

@@ -12,10 +12,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{bail, Result};
-use dh_core::{Convention, Tolerance};
+use dh_workflows::geometry::{Convention, Tolerance};
+use dh_workflows::input::Chain;
 use nalgebra::Isometry3;
 use serde::Serialize;
-use urdf_axes::Chain;
 
 use crate::commands::extract::{extract_chain, prove_extracted_with, ExtractOptions};
 use crate::error::Outcome;

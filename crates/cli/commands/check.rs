@@ -14,11 +14,11 @@
 use std::io::Write;
 
 use anyhow::Result;
-use dh_core::Tolerance;
 use dh_workflows::check::kind_name;
 pub use dh_workflows::check::{
     compare, CheckReport, CheckTolerances, DifferenceDoc, CHECK_ANGULAR, CHECK_LINEAR,
 };
+use dh_workflows::geometry::Tolerance;
 
 use crate::error::Outcome;
 use crate::input::load_chain;

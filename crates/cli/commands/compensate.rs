@@ -1,5 +1,5 @@
 //! `urdf-dh compensate`: the joint values with which the calibrated robot puts its tool where
-//! the nominal model puts it at the commanded values (`dh_calib::compensate`), with the error
+//! the nominal model puts it at the commanded values (`dh_workflows::compensate`), with the error
 //! that remains per pose.
 //!
 //! The output is a joint-value CSV in the input's units (readable by `predict` and
@@ -9,9 +9,8 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-use dh_calib::compensate::CompensateOptions;
-use dh_core::Convention;
-use dh_workflows::compensate::{failed_poses, same_joints};
+use dh_workflows::compensate::{failed_poses, same_joints, CompensateOptions, DEFAULT_MAX_CHANGE};
+use dh_workflows::geometry::Convention;
 
 use crate::calibrated::load_calibrated;
 use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
@@ -83,7 +82,7 @@ pub struct CompensateArgs {
     pub out: Option<String>,
     /// Joint values a library caller hands over as arrays instead of the file `joints` (which
     /// then only names them in messages); `None` on the command line.
-    pub given: Option<dh_calib::csv::SampleArrays>,
+    pub given: Option<dh_workflows::measured::SampleArrays>,
 }
 
 impl CompensateCli {
@@ -96,9 +95,7 @@ impl CompensateCli {
             model: self.model,
             joints: self.joints,
             position_only: self.position_only,
-            max_change: self
-                .max_change
-                .unwrap_or(dh_calib::compensate::DEFAULT_MAX_CHANGE),
+            max_change: self.max_change.unwrap_or(DEFAULT_MAX_CHANGE),
             units: DataUnits {
                 length: self.length_unit,
                 angle: self.angle_unit,

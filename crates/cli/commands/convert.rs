@@ -3,7 +3,7 @@
 use std::io::Write;
 
 use anyhow::Result;
-use dh_core::{Bound, Convention};
+use dh_workflows::geometry::{Bound, Convention};
 use nalgebra::Isometry3;
 
 use crate::error::Outcome;

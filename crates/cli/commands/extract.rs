@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use anyhow::Result;
-use dh_core::{Convention, Tolerance};
+use dh_workflows::geometry::{Convention, Tolerance};
 
 use crate::error::Outcome;
 use crate::input::{display_name, read_robot};

@@ -5,13 +5,16 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dh_calib::csv::{joint_name_problem, write_measurements, DataError};
-use dh_calib::data::Split;
-use dh_calib::import::{import as import_layout, mukca, Layout, Source};
+use dh_workflows::fit::{Measurements, Split};
+use dh_workflows::import::{
+    import as import_layout, joint_name_problem, mukca, parse_columns, write_measurements,
+    ColumnMap, DataError, Layout, Source,
+};
+use dh_workflows::measured::RESERVED_COLUMNS;
 use dh_workflows::text::escape;
 
 use crate::error::{hinted, Outcome};
-use crate::input::{display_name, read_table, read_text};
+use crate::input::{display_name, read_text};
 use crate::output::check_destinations;
 
 /// Everything `import` needs.
@@ -20,7 +23,7 @@ pub struct ImportArgs {
     /// The dataset's layout; `None` detects it from the file names.
     pub layout: Option<Layout>,
     /// `--layout columns`: the user's own export, read by this column map (one file).
-    pub columns: Option<dh_calib::import::columns::ColumnMap>,
+    pub columns: Option<ColumnMap>,
     /// The dataset's files (a directory stands for every file in it).
     pub files: Vec<String>,
     /// Where to write the CSV; `None` is standard output.
@@ -29,6 +32,16 @@ pub struct ImportArgs {
 
 /// The ball-in-socket files of a MUKCa placement directory.
 const PLACEMENT_FILES: [&str; 2] = [mukca::HOLE_0, mukca::HOLE_1];
+
+/// A data table's text ([`dh_workflows::import::read_table`]), what a `.mat` file's reading left
+/// out warned on `err`.
+fn read_table(path: &str, err: &mut dyn Write) -> Result<String> {
+    let (text, notes) = dh_workflows::import::read_table(path)?;
+    for n in notes {
+        writeln!(err, "urdf-dh: warning: {n}")?;
+    }
+    Ok(text)
+}
 
 /// The MUKCa placement files in `dir` (named `<dir name>/<file>`), or in its subdirectories when
 /// it is a robot's directory (named `<subdirectory>/<file>`); empty when it is neither.
@@ -63,7 +76,8 @@ fn placements(dir: &Path) -> Result<Vec<(String, String)>> {
 }
 
 /// The files named by `args`: directories expanded to their files (sorted), each with its file
-/// name and text (a MATLAB `.mat` file as the CSV text of its variables, see [`read_table`]),
+/// name and text (a MATLAB `.mat` file as the CSV text of its variables, see
+/// [`dh_workflows::import::read_table`]),
 /// and what a directory held that was not read, named with the reason. Files that are not
 /// UTF-8 text inside a directory are left out (datasets ship images and archives beside their
 /// data), as are subdirectories and special files (a FIFO is never opened); the list of what
@@ -146,7 +160,7 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
         let path = &args.files[0];
         let text = read_table(path, err)?;
         let name = escape(&display_name(path)).into_owned();
-        let (data, notes) = dh_calib::import::columns::parse(&text, map).map_err(|e| {
+        let (data, notes) = parse_columns(&text, map).map_err(|e| {
             let message = format!("{name}: {e}");
             match e {
                 DataError::Incomplete { .. } => hinted(
@@ -256,7 +270,7 @@ pub fn import(args: &ImportArgs, out: &mut dyn Write, err: &mut dyn Write) -> Re
 /// with a summary on standard error.
 fn write_import(
     args: &ImportArgs,
-    data: &dh_calib::data::Measurements,
+    data: &Measurements,
     header: String,
     out: &mut dyn Write,
     err: &mut dyn Write,
@@ -398,7 +412,7 @@ impl ImportCli {
     /// Column options without `--layout columns`, or `--layout columns` without `--joints` and
     /// `--points` (three columns), or a malformed column list.
     pub fn into_args(self) -> Result<ImportArgs> {
-        use dh_calib::import::columns::{ColumnMap, ColumnRef, OrientationMap, RotationColumns};
+        use dh_workflows::import::{ColumnRef, OrientationMap, RotationColumns};
         let given_columns = self.joints.is_some()
             || self.points.is_some()
             || self.sigma_axes.is_some()
@@ -491,7 +505,7 @@ impl ImportCli {
                             ),
                             format!(
                                 "the reserved columns are {}",
-                                dh_calib::csv::RESERVED_COLUMNS.join(", ")
+                                RESERVED_COLUMNS.join(", ")
                             ),
                         ));
                     }

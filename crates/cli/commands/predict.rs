@@ -1,6 +1,6 @@
 //! `urdf-dh predict`: the calibrated model's positions (or tool poses) at given joint values,
 //! with each prediction's standard uncertainty from the calibration's covariance
-//! (`dh_calib::predict`).
+//! (`dh_workflows::predict`).
 //!
 //! The output is a measurement CSV (joint columns, `x,y,z`, `target`, `config`) that every
 //! reader of measurements accepts, with the uncertainty in `u_x,u_y,u_z` (and, for the tool,
@@ -10,8 +10,7 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-use dh_calib::predict::Frame;
-use dh_workflows::predict::{frame_of, Predictions, Wanted};
+use dh_workflows::predict::{frame_of, Frame, Predictions, Wanted};
 
 use crate::calibrated::{load_calibrated, CalibratedModel};
 use crate::error::Outcome;
@@ -94,7 +93,7 @@ pub struct PredictArgs {
     pub out: Option<String>,
     /// Joint values a library caller hands over as arrays instead of the file `joints` (which
     /// then only names them in messages); `None` on the command line.
-    pub given: Option<dh_calib::csv::SampleArrays>,
+    pub given: Option<dh_workflows::measured::SampleArrays>,
 }
 
 impl PredictCli {
