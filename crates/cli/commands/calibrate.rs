@@ -10,9 +10,9 @@
 //! # Layout
 //! The calibration itself (inputs, the serial, contact and tree paths, the calibrated model
 //! proved as written) is the library's [`dh_workflows::calibration`]; its inputs are re-exported
-//! here. The arguments and documents this command shares with `crate::commands::sockets` and
-//! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args` and
-//! `crate::commands::calibrate_doc`, re-exported here; the run (files and rendering) is in
+//! here. The arguments this command shares with `crate::commands::sockets` and
+//! `crate::commands::calibrate_tree` are in `crate::commands::calibrate_args`, re-exported here
+//! (the report's documents are the library's, `dh_workflows::fit`); the run (files and rendering) is in
 //! `run`, the text report in `text`, the residual chart (`--plot`) in `chart`.
 
 use std::collections::HashMap;
@@ -22,13 +22,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use dh_calib::calibrate::Report;
-use dh_calib::data::{Measurements, Split};
 use dh_calib::effects::label_of;
-use dh_calib::model::{Effect, Model, ModelOptions};
-use dh_calib::pipeline::{self, Plan};
-use dh_core::pose::from_xyz_rpy;
-use dh_core::DhTable;
+use dh_calib::model::{Model, ModelOptions};
+use dh_workflows::fit::{CalibrationDoc, Effect, Measurements, Plan, Report, Silent, Split};
+use dh_workflows::geometry::{from_xyz_rpy, DhTable};
 use nalgebra::{Isometry3, Vector3};
 
 use crate::error::Outcome;
@@ -40,7 +37,6 @@ use crate::units::{AngleUnit, LengthUnit};
 use dh_workflows::calibrated_writer::row_values;
 
 pub use super::calibrate_args::*;
-pub use super::calibrate_doc::*;
 pub use dh_workflows::calibration::{self as calibration, Calibrated, Inputs, Loaded};
 
 // The submodules import what they use through `use super::*`: the imports above and each

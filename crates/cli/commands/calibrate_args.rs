@@ -5,11 +5,11 @@
 //! Shared by `calibrate`, its contact rendering (`crate::commands::sockets`) and its tree
 //! rendering (`crate::commands::calibrate_tree`), so that none of them imports another for them.
 
-use crate::measured::DataUnits;
-use crate::sheet::ConventionDoc;
-use crate::units::{AngleUnit, LengthUnit};
+use dh_workflows::fit::EffectsChoice;
+use dh_workflows::measured::DataUnits;
+use dh_workflows::sheet::ConventionDoc;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 
-pub use dh_calib::pipeline::EffectsChoice;
 pub use dh_workflows::calibration::{CalibrationRequest, GivenData};
 
 /// Output format of `calibrate`.

@@ -1,13 +1,10 @@
 //! The findings of `calibrate` beyond the fit as text lines: the outliers it named and the
 //! verdict on the final model (their JSON documents are the library's, see
-//! `dh_calib::pipeline`, re-exported here).
+//! `dh_workflows::fit`).
 
 use std::fmt::Write as _;
 
-pub use dh_calib::pipeline::{
-    documents, DiagnosisDoc, OutlierDoc, OutliersDoc, RoundDoc, StructureDoc, TestDoc, TrialDoc,
-    VerdictDoc,
-};
+use dh_workflows::fit::{OutliersDoc, VerdictDoc};
 
 /// Text lines for the outliers and the verdict (millimetres).
 pub fn text(outliers: Option<&OutliersDoc>, verdict: &VerdictDoc) -> String {

@@ -1,12 +1,11 @@
 //! Measurement sessions in `calibrate`'s text report and written sheet (see
-//! `dh_calib::sessions`; the JSON documents are `dh_calib::pipeline`'s):
+//! the library's fit; the JSON documents are `dh_workflows::fit`'s):
 //! each session's device frame `T_device_base` (the robot's base link frame in that session's
 //! device frame; metres, URDF roll-pitch-yaw radians) and its RMS.
 
 use std::fmt::Write as _;
 
-pub use dh_calib::pipeline::{SessionDoc, SessionFrameDoc};
-pub use dh_workflows::calibrated_writer::read_back_deviation;
+use dh_workflows::fit::{SessionDoc, SessionFrameDoc};
 
 /// The frames of every session but the first (whose frame the sheet's `device` holds).
 pub fn frames(docs: &[SessionDoc]) -> Vec<SessionFrameDoc> {

@@ -1,4 +1,4 @@
-//! The report of `urdf-dh calibrate` on a tree sheet (see [`crate::tree_sheet`]): every chain
+//! The report of `urdf-dh calibrate` on a tree sheet (see [`dh_workflows::tree_sheet`]): every chain
 //! of the tree fitted at once, each measured target on the branch it names (the run and the
 //! calibrated tree sheet are the library's, `dh_workflows::calibration`).
 //!
@@ -6,8 +6,8 @@
 //! `tree` section saying which parameters, targets and mount belong to the trunk and to each
 //! branch.
 
-pub use dh_calib::pipeline::{TableDoc, TreeCalibrationDoc};
 use dh_workflows::calibration::Tree;
+use dh_workflows::fit::TableDoc;
 
 use crate::commands::calibrate::text_for;
 

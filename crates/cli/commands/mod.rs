@@ -1,13 +1,12 @@
 //! One module per subcommand, plus what several share: `calibrate`'s arguments
-//! ([`calibrate_args`]) and documents ([`calibrate_doc`]), which its contact report
-//! ([`sockets`]) and tree report ([`calibrate_tree`]) use too, and its findings
+//! ([`calibrate_args`]), which its contact report ([`sockets`]) and tree report
+//! ([`calibrate_tree`]) use too, and its findings
 //! ([`calibrate_findings`]) and sessions ([`calibrate_sessions`]). What `calibrate` reads and
 //! runs is the library's `dh_workflows::calibration`.
 
 pub mod batch;
 pub mod calibrate;
 pub mod calibrate_args;
-pub mod calibrate_doc;
 pub mod calibrate_findings;
 pub mod calibrate_sessions;
 pub mod calibrate_tree;
@@ -21,11 +20,3 @@ pub mod predict;
 pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
-/// The calibrated URDF as a minimal edit of the user's own (the `dh-workflows` library's).
-pub mod urdf_edit {
-    pub use dh_workflows::urdf_edit::*;
-}
-/// The proof of a calibrated model as written (the `dh-workflows` library's).
-pub mod written {
-    pub use dh_workflows::written::*;
-}

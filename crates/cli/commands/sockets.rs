@@ -1,5 +1,5 @@
 //! The report of `urdf-dh calibrate` on contact data (a `socket` column, e.g. `urdf-dh import
-//! --layout mukca`): unknown socket centres instead of measured points, see `dh_calib::socket`;
+//! --layout mukca`): unknown socket centres instead of measured points, see `dh_workflows::fit::SocketReport`;
 //! the run and the calibrated model are the library's (`dh_workflows::calibration`).
 //!
 //! `text` renders the report; `chart` (`--plot`) draws each contact's distance to its
@@ -7,10 +7,8 @@
 
 use std::fmt::Write as _;
 
-use dh_calib::pipeline::ContactDoc;
-use dh_calib::socket::SocketReport;
+use dh_workflows::fit::{unit_of, ContactDistance, ContactDoc, SocketReport};
 
-use crate::commands::calibrate_doc::unit_of;
 use crate::plot::{Panel, Residual, ResidualChart};
 use crate::units::LengthUnit;
 
@@ -162,7 +160,7 @@ pub(crate) fn text(doc: &ContactDoc) -> String {
 /// The chart: each contact's distance to its socket's modelled mean (file order, so the
 /// placements follow each other), with the model as given and after the last step.
 pub(crate) fn chart(model: &str, data: &str, r: &SocketReport) -> ResidualChart {
-    let panel = |label: String, pick: fn(&dh_calib::socket::ContactDistance) -> f64| {
+    let panel = |label: String, pick: fn(&ContactDistance) -> f64| {
         let residuals: Vec<Residual> = r
             .distances
             .iter()

@@ -39,7 +39,7 @@ pub fn calibrate(
     };
     let data_name = display_name(&request.data);
     let mut calibrated = if loaded.is_contacts() {
-        loaded.calibrate(request, &mut pipeline::Silent)?
+        loaded.calibrate(request, &mut Silent)?
     } else {
         let subject = loaded.subject();
         let notice = |p: &Plan| subject.notice(p);

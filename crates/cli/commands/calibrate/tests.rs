@@ -1,6 +1,7 @@
 //! Unit tests of `calibrate`.
 
 use super::*;
+use dh_workflows::fit::{unit_of, EffectsChoice};
 
 #[test]
 fn standard_errors_below_the_printed_digits_switch_to_scientific() {

@@ -340,7 +340,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         &doc.verdict,
     ));
     if let Some(w) = &doc.written {
-        let _ = writeln!(s, "{}", crate::commands::written::line(w));
+        let _ = writeln!(s, "{}", dh_workflows::written::line(w));
     }
     let _ = writeln!(
         s,
