@@ -5,7 +5,7 @@ use std::ffi::OsString;
 use std::io::Write;
 
 use clap::{Args, Parser, Subcommand};
-use dh_core::Tolerance;
+use dh_workflows::geometry::{Convention, Tolerance};
 
 use crate::commands::batch::{batch, BatchArgs};
 use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK_LINEAR};
@@ -492,10 +492,10 @@ fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyho
                 &BatchArgs {
                     list: a.list,
                     conventions: match a.convention {
-                        Conventions::Standard => vec![dh_core::Convention::Standard],
-                        Conventions::Modified => vec![dh_core::Convention::Modified],
+                        Conventions::Standard => vec![Convention::Standard],
+                        Conventions::Modified => vec![Convention::Modified],
                         Conventions::Both => {
-                            vec![dh_core::Convention::Standard, dh_core::Convention::Modified]
+                            vec![Convention::Standard, Convention::Modified]
                         }
                     },
                     length_unit: a.length_unit,
@@ -511,7 +511,7 @@ fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyho
         Command::Convert(a) => convert(
             &ConvertArgs {
                 sheet: a.sheet,
-                to: a.to.map_or(dh_core::Convention::Standard, Into::into),
+                to: a.to.map_or(Convention::Standard, Into::into),
                 deltas: a.deltas,
                 format: a.format,
                 length_unit: a.length_unit,

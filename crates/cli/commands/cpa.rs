@@ -12,9 +12,9 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-pub use dh_calib::cpa::{CPA_ANGULAR, CPA_LINEAR};
 use dh_workflows::cpa_report::cpa as run;
 pub use dh_workflows::cpa_report::*;
+use dh_workflows::geometry::Tolerance;
 
 use crate::error::Outcome;
 use crate::input::display_name;
@@ -151,7 +151,7 @@ impl CpaCli {
     pub fn into_args(self) -> Result<CpaArgs> {
         Ok(CpaArgs {
             request: CpaRequest {
-                tolerance: dh_core::Tolerance::new(self.linear_tol, self.angular_tol)
+                tolerance: Tolerance::new(self.linear_tol, self.angular_tol)
                     .map_err(|e| anyhow::anyhow!("{e}"))?,
                 data: self.data,
                 model: self.model,
