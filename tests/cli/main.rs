@@ -11,6 +11,7 @@ mod contacts;
 mod corpus;
 mod cpa;
 mod default_tip;
+mod docs;
 mod diagnosis;
 mod extract;
 mod hostile_names;
