@@ -1,7 +1,7 @@
 //! Calibration from measured points and using its result: `calibrate` (the library's
 //! `dh_workflows::calibration`, which the command line runs too), `predict` and `compensate` (the
 //! library's `dh_workflows::predict` and `dh_workflows::compensate`, returning numbers), in process and without
-//! files: measurements and joint values cross as arrays ([`ArraysIn`], read by `dh_calib::csv::SampleArrays` with the
+//! files: measurements and joint values cross as arrays ([`ArraysIn`], read by `dh_workflows::measured::SampleArrays` with the
 //! CSV reader's checks), or as a file path. Also `measured_joints` and the generic `run`.
 //!
 //! Units: the arrays are in the caller's `length_unit` and `angle_unit`; reports are in metres
@@ -9,21 +9,18 @@
 
 use std::collections::HashMap;
 
-use dh_calib::compensate::{CompensateOptions, DEFAULT_MAX_CHANGE};
-use dh_calib::csv::SampleArrays;
-use dh_calib::pipeline::EffectsChoice;
-use dh_calib::predict::Frame;
-use dh_core::Convention;
 use dh_workflows::calibrated::{load_calibrated, CalibratedModel};
 use dh_workflows::calibration::{
     self as calibration, CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFECTS,
 };
-use dh_workflows::compensate::{failed_poses, same_joints};
+use dh_workflows::compensate::{failed_poses, same_joints, CompensateOptions, DEFAULT_MAX_CHANGE};
+use dh_workflows::fit::{EffectsChoice, DEFAULT_ALPHA};
+use dh_workflows::geometry::Convention;
 use dh_workflows::input::display_name;
-use dh_workflows::measured::DataUnits;
+use dh_workflows::measured::{DataUnits, SampleArrays, RESERVED_COLUMNS};
 use dh_workflows::model::load_model;
 use dh_workflows::output::{write_all, STDIO};
-use dh_workflows::predict::{frame_of, read_joints};
+use dh_workflows::predict::{frame_of, read_joints, Frame};
 use dh_workflows::ranges;
 use dh_workflows::units::{AngleUnit, LengthUnit};
 use pyo3::prelude::*;
@@ -174,8 +171,7 @@ fn calibrate(
             payload: None,
             max_effects: guarded("max_effects", max_effects, guard::max_effects)?
                 .unwrap_or(DEFAULT_MAX_EFFECTS),
-            alpha: guarded("alpha", alpha, guard::alpha)?
-                .unwrap_or(dh_calib::findings::DEFAULT_ALPHA),
+            alpha: guarded("alpha", alpha, guard::alpha)?.unwrap_or(DEFAULT_ALPHA),
             keep_outliers,
             given,
         };
@@ -479,6 +475,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compensate, m)?)?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(measured_joints, m)?)?;
-    m.add("RESERVED_COLUMNS", dh_calib::csv::RESERVED_COLUMNS.to_vec())?;
+    m.add("RESERVED_COLUMNS", RESERVED_COLUMNS.to_vec())?;
     Ok(())
 }

@@ -3,8 +3,8 @@
 //! as arrays. Returns the extracted table as a sheet with the report as its `cpa` section, as
 //! JSON (for Python) and YAML (what `cpa --format yaml` prints), in metres and radians.
 
-use dh_core::{Convention, Tolerance};
-use dh_workflows::cpa_report::{cpa as run, CpaRequest};
+use dh_workflows::cpa_report::{cpa as run, CpaRequest, CPA_ANGULAR, CPA_LINEAR};
+use dh_workflows::geometry::{Convention, Tolerance};
 use dh_workflows::render::{render_sheet, Format};
 use pyo3::prelude::*;
 
@@ -71,7 +71,7 @@ fn cpa(
 /// Adds this module's functions and constants to the native module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(cpa, m)?)?;
-    m.add("CPA_LINEAR", dh_calib::cpa::CPA_LINEAR)?;
-    m.add("CPA_ANGULAR", dh_calib::cpa::CPA_ANGULAR)?;
+    m.add("CPA_LINEAR", CPA_LINEAR)?;
+    m.add("CPA_ANGULAR", CPA_ANGULAR)?;
     Ok(())
 }

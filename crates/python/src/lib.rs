@@ -4,7 +4,7 @@
 //! (`table`: `dh_workflows::extract`, `dh_workflows::check`), prediction and compensation
 //! (`calibration`: `dh_workflows::predict`, `dh_workflows::compensate`), and calibration
 //! (`dh_workflows::calibration`, which reads the files or arrays and runs serial, tree and contact
-//! data through `dh_calib::pipeline`), simulated measurements (`simulation`:
+//! data through the fitting library), simulated measurements (`simulation`:
 //! `dh_workflows::simulation`) and circle-point analysis (`cpa`: `dh_workflows::cpa_report`), with measurements and joint values handed over as
 //! arrays, no files; this crate only converts arguments and results. Poses cross as 4x4
 //! homogeneous matrices (nested lists, row-major; metres and radians), which the pure-Python

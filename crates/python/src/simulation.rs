@@ -9,7 +9,7 @@
 
 use std::path::Path;
 
-use dh_core::Convention;
+use dh_workflows::geometry::Convention;
 use dh_workflows::output::{check_destinations, write_all};
 use dh_workflows::ranges as guard;
 use dh_workflows::simulation::{simulate as run, SimulationRequest};

@@ -2,9 +2,9 @@
 //! URDF chain with a sheet; [`NativeTable`] is the extracted table.
 
 use anyhow::Context;
-use dh_core::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_workflows::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
 use dh_workflows::extract::{extract_bytes_in, prove_extracted, ExtractOptions};
+use dh_workflows::geometry::{Convention, DhTable, Extraction, JointKind, Tolerance};
 use dh_workflows::input::{display_name, folder_of, load_chain_in, read_robot_with, read_text};
 use dh_workflows::poe::PoeDoc;
 use dh_workflows::xacro::XacroOptions;
