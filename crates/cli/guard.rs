@@ -67,6 +67,8 @@ pub const KNOWN_EXTENSIONS: &[(&str, &str)] = &[
     ("tsv", "a tab-separated table"),
     ("txt", "plain text"),
     ("md", "a Markdown document"),
+    ("html", "an HTML page"),
+    ("htm", "an HTML page"),
     ("mat", "a MATLAB file"),
     ("xlsx", "a spreadsheet"),
 ];
@@ -114,6 +116,15 @@ fn output_named(path: &str, what: &str, accepted: &[&str]) -> Result<String, Str
 /// A file name whose extension names another format.
 pub fn svg_output(path: &str) -> Result<String, String> {
     output_named(path, "an SVG drawing", &["svg"])
+}
+
+/// An output option that writes an HTML page (`--report`), accepted as [`svg_output`] accepts
+/// an SVG.
+///
+/// # Errors
+/// A file name whose extension names another format.
+pub fn html_output(path: &str) -> Result<String, String> {
+    output_named(path, "an HTML page", &["html", "htm"])
 }
 
 /// An output option that writes a measurement or joint CSV (`--out` of `predict`,

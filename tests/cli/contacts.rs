@@ -93,7 +93,7 @@ fn touch(model: &Model, x: &[f64], goal: Vector3<f64>, rng: &mut ChaCha8Rng) -> 
 /// Simulated contacts of a Panda with planted geometric errors (and `effect` at its value):
 /// three placements of a two-socket tool (50 mm ± 0.1 mm), `per_socket` contacts per socket;
 /// placements `p0` and `p1` calibrate, `p2` validates. Written as the measurement CSV.
-fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u64) {
+pub(crate) fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)>, seed: u64) {
     let table = panda();
     let mut model = Model::new(&table, &["ball".into()], &ModelOptions::default()).unwrap();
     let range = effect.map(|(label, _)| {

@@ -25,6 +25,7 @@ mod mjcf;
 mod outputs;
 mod pose6;
 mod predict;
+mod report;
 mod roundtrip;
 mod sdf;
 mod sessions;

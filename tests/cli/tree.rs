@@ -18,7 +18,7 @@ fn path(dir: &Path, name: &str) -> String {
 }
 
 /// A torso of two joints carrying two arms of three; `{..}` placeholders take planted errors.
-fn tree_sheet(e: &[(&str, f64)]) -> String {
+pub(crate) fn tree_sheet(e: &[(&str, f64)]) -> String {
     let v = |name: &str, nominal: f64| {
         nominal
             + e.iter()
@@ -80,7 +80,7 @@ const NOISE: f64 = 2e-5;
 
 /// Writes `poses` poses of both hands of `truth` in the measurement CSV: target `r` on branch
 /// `r` and `l/hand` on branch `l` (the `BRANCH/NAME` rule), with Gaussian-like noise.
-fn write_data(truth: &TreeSheet, poses: usize, seed: u64, file: &str) {
+pub(crate) fn write_data(truth: &TreeSheet, poses: usize, seed: u64, file: &str) {
     write_data_with(truth, poses, seed, file, &|_| {});
 }
 

@@ -31,6 +31,8 @@ pub struct CalibrateArgs {
     pub format: CalibrateFormat,
     /// Where to write the residual chart (SVG).
     pub plot: Option<String>,
+    /// Where to write the report as one self-contained HTML page.
+    pub report: Option<String>,
     /// No progress line on standard error.
     pub quiet: bool,
 }
@@ -96,6 +98,11 @@ pub struct CalibrateCli {
     /// the report then goes to standard error).
     #[arg(long, value_name = "FILE.svg", value_parser = crate::guard::svg_output)]
     plot: Option<String>,
+    /// Write the report as one self-contained HTML page: the steps, residual plots, outliers,
+    /// the diagnosis, parameters with standard errors and correlations, the verdict and the
+    /// inputs' provenance (SHA-256); inline SVG, no script, opens offline.
+    #[arg(long, value_name = "FILE.html", value_parser = crate::guard::html_output)]
+    report: Option<String>,
     /// Link masses for the compliance effects: YAML with `links: [{joint, mass, com}]` (kg,
     /// m; `com_frame: base_at_zero` or `dh`) and optional `payloads`, `gravity` [default: a
     /// URDF model's inertials, a tree sheet's own `inertials`; none for a sheet, and
@@ -169,6 +176,7 @@ impl CalibrateCli {
             },
             format: self.format,
             plot: self.plot,
+            report: self.report,
             quiet: self.quiet,
         }
     }

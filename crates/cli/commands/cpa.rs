@@ -44,6 +44,8 @@ pub struct CpaArgs {
     /// Where to write the chart of each joint's measured against commanded motion (SVG), `-`
     /// for standard output (the report then goes to standard error).
     pub plot: Option<String>,
+    /// Where to write the report as one self-contained HTML page.
+    pub report: Option<String>,
 }
 
 mod text;
@@ -56,6 +58,18 @@ use text::*;
 /// fit no circle.
 pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let data_name = display_name(&args.request.data);
+    if let Some(page) = &args.report {
+        let inputs: Vec<(&str, &str)> = [
+            ("DATA", Some(args.request.data.as_str())),
+            ("--model", args.request.model.as_deref()),
+        ]
+        .into_iter()
+        .filter_map(|(o, p)| Some((o, p?)))
+        .collect();
+        let mut outputs = vec![("--report", page.as_str())];
+        outputs.extend(args.plot.iter().map(|p| ("--plot", p.as_str())));
+        crate::output::check_destinations(&inputs, &outputs)?;
+    }
     let r = run(&args.request, err)?;
     let report = match args.format {
         CpaFormat::Text => text(&r.doc, &r.sheet),
@@ -64,18 +78,42 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     };
     // The chart is written (or piped) before the report is printed: a chart that cannot be
     // written leaves no report claiming success. `--plot -`: the chart alone on standard output.
+    // The chart and the page are written together, all or nothing.
+    let mut files: Vec<(&Path, String)> = Vec::new();
     if let Some(path) = &args.plot {
         let svg = motion_svg(
             &format!("circle-point analysis of {data_name}: measured against commanded motion"),
             &r.result.joints,
         );
-        crate::output::write_all_or_stdout(&[(Path::new(path), svg.as_bytes())], out)?;
+        files.push((Path::new(path), svg));
     }
-    let report_sink: &mut dyn Write = if crate::output::any_stdout([args.plot.as_deref()]) {
-        err
-    } else {
-        out
-    };
+    if let Some(path) = &args.report {
+        let inputs: Vec<(&str, &str)> = [
+            (
+                "DATA",
+                (args.request.given.is_none()).then_some(args.request.data.as_str()),
+            ),
+            ("--model", args.request.model.as_deref()),
+        ]
+        .into_iter()
+        .filter_map(|(o, p)| Some((o, p?)))
+        .collect();
+        let provenance = crate::commands::report_provenance(&inputs);
+        files.push((
+            Path::new(path),
+            dh_workflows::report_html::cpa_page(&r, &provenance),
+        ));
+    }
+    if !files.is_empty() {
+        let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
+        crate::output::write_all_or_stdout(&files, out)?;
+    }
+    let report_sink: &mut dyn Write =
+        if crate::output::any_stdout([args.plot.as_deref(), args.report.as_deref()]) {
+            err
+        } else {
+            out
+        };
     report_sink.write_all(report.as_bytes())?;
     // Points left out are named in the report; a sweep whose screen left out too many (or did
     // not settle) has no trustworthy axis.
@@ -141,6 +179,11 @@ pub struct CpaCli {
     /// error).
     #[arg(long, value_name = "SVG", value_parser = crate::guard::svg_output)]
     plot: Option<String>,
+    /// Write the report as one self-contained HTML page: the sweeps, each joint's circles and
+    /// axis, per-point residual and motion plots, the points left out, the DH table, the proof
+    /// and the inputs' provenance (SHA-256); inline SVG, no script, opens offline.
+    #[arg(long, value_name = "FILE.html", value_parser = crate::guard::html_output)]
+    report: Option<String>,
 }
 
 impl CpaCli {
@@ -166,6 +209,7 @@ impl CpaCli {
             },
             format: self.format,
             plot: self.plot,
+            report: self.report,
         })
     }
 }

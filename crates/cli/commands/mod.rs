@@ -20,3 +20,20 @@ pub mod predict;
 pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
+
+/// The provenance of a `--report` page of this run: `inputs` (option, path) read and hashed,
+/// the command line as this process got it, the tool's version, the date (UTC, or
+/// `SOURCE_DATE_EPOCH`).
+pub(crate) fn report_provenance(inputs: &[(&str, &str)]) -> dh_workflows::report_html::Provenance {
+    let command = std::env::args_os()
+        .enumerate()
+        .map(|(i, a)| {
+            if i == 0 {
+                "urdf-dh".to_string()
+            } else {
+                a.to_string_lossy().into_owned()
+            }
+        })
+        .collect();
+    dh_workflows::report_html::Provenance::now("urdf-dh", command, inputs)
+}

@@ -38,6 +38,7 @@
 //! | [`calibrated_writer`] | writing a calibrated model (`calibrate --out`): a sheet with its `calibration` section or a URDF, proved as written |
 //! | [`output`] | writing files all or nothing (staged, synced, renamed), `-` for standard output, and refusing an output that is an input |
 //! | [`cpa_report`] | circle-point analysis as `cpa` runs it: the table the measured axes make, as a sheet, and the report's document (sweeps, circles, commanded against measured motion, the comparison with a nominal model) |
+//! | [`report_html`] | a calibration's or circle-point analysis's report as one self-contained HTML page (`--report`): plots, findings, provenance |
 //! | [`simulation`] | simulated measurements of a model with planted errors and effects, the CSV and the truth sheet `simulate` writes |
 //! | [`import`] | published datasets as their authors left them (the importers), and data tables read as text or MATLAB `.mat` |
 //! | [`geometry`] | the geometry's types a face names (DH tables, conventions, tolerances, lines), `dh_core`'s |
@@ -89,6 +90,7 @@ pub mod prove;
 pub mod ranges;
 pub mod read_back;
 pub mod render;
+pub mod report_html;
 pub mod sheet;
 pub mod simulation;
 pub mod sniff;

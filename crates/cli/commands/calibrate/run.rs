@@ -19,8 +19,9 @@ pub fn calibrate(
     err: &mut dyn Write,
 ) -> Result<Outcome> {
     let request = &args.request;
-    let plot: Vec<(&str, &str)> = args.plot.iter().map(|p| ("--plot", p.as_str())).collect();
-    request.check_destinations(&plot)?;
+    let mut more: Vec<(&str, &str)> = args.plot.iter().map(|p| ("--plot", p.as_str())).collect();
+    more.extend(args.report.iter().map(|p| ("--report", p.as_str())));
+    request.check_destinations(&more)?;
     let loaded = match calibration::identify(request)? {
         Some((sheet, origin)) => {
             if args.plot.is_some() {
@@ -80,10 +81,31 @@ pub fn calibrate(
         };
         files.push((Path::new(path), residuals_svg(&chart)));
     }
+    if let Some(path) = &args.report {
+        let inputs: Vec<(&str, &str)> = [
+            ("--model", request.model.as_deref()),
+            (
+                "--data",
+                request.given.is_none().then_some(request.data.as_str()),
+            ),
+            ("--validate", request.validate.as_deref()),
+            ("--inertials", request.inertials.as_deref()),
+        ]
+        .into_iter()
+        .filter_map(|(o, p)| Some((o, p?)))
+        .collect();
+        let provenance = crate::commands::report_provenance(&inputs);
+        let page = dh_workflows::report_html::calibration_page(&calibrated, request, &provenance)?;
+        files.push((Path::new(path), page));
+    }
     // `--out -` or `--plot -`: that artefact on standard output, the report on standard error.
     // Otherwise the report goes to standard output first, and the files land only once it has
     // been written and flushed (all or nothing, standard output included).
-    let piped = crate::output::any_stdout([request.out.as_deref(), args.plot.as_deref()]);
+    let piped = crate::output::any_stdout([
+        request.out.as_deref(),
+        args.plot.as_deref(),
+        args.report.as_deref(),
+    ]);
     let report = match args.format {
         CalibrateFormat::Json => calibrated.json()?,
         CalibrateFormat::Text => match &calibrated {

@@ -72,6 +72,8 @@ pub struct CpaReport {
     pub sheet: SheetDoc,
     /// The report's document.
     pub doc: CpaDoc,
+    /// The measurements analysed (SI units), for the report page's per-point plots.
+    pub data: dh_calib::data::Measurements,
 }
 
 impl CpaReport {
@@ -214,5 +216,10 @@ pub fn cpa(args: &CpaRequest, err: &mut dyn Write) -> Result<CpaReport> {
             }
         },
     };
-    Ok(CpaReport { result, sheet, doc })
+    Ok(CpaReport {
+        result,
+        sheet,
+        doc,
+        data,
+    })
 }

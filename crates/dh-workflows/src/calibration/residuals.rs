@@ -1,0 +1,181 @@
+//! Each measured point's residual before and after a calibration of a serial model from
+//! points ([`Residuals`], [`residuals`]): the distance between the point the model predicts and the one
+//! measured (device frame, metres), with the `nominal` step's model (device frame and targets
+//! fitted on the nominal table) and with the final one (the calibrated table, the last step's
+//! effects at their estimates). What the residual chart (`calibrate --plot`) and the HTML
+//! report (`calibrate --report`) draw.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use anyhow::Result;
+use dh_calib::calibrate::Report;
+use dh_calib::data::Measurements;
+use dh_calib::effects::label_of;
+use dh_calib::model::{Effect, Model, ModelOptions};
+use dh_core::pose::from_xyz_rpy;
+use dh_core::DhTable;
+use nalgebra::{Isometry3, Vector3};
+
+use super::Inputs;
+use crate::calibrated_writer::row_values;
+
+/// Every sample's residual before and after, and its pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Residuals {
+    /// Distance with the `nominal` step's model, per sample in file order (metres).
+    pub before: Vec<f64>,
+    /// Distance with the final model, per sample (metres).
+    pub after: Vec<f64>,
+    /// Each sample's pose index ([`pose_indices`]).
+    pub poses: Vec<usize>,
+    /// Number of poses.
+    pub pose_count: usize,
+}
+
+/// Pose index of every sample: samples sharing `config` (or else joint values) are one pose,
+/// numbered in order of first appearance; and the number of poses.
+pub fn pose_indices(data: &Measurements) -> (Vec<usize>, usize) {
+    let mut ids: HashMap<String, usize> = HashMap::new();
+    let v = data
+        .samples
+        .iter()
+        .map(|s| {
+            let key = match &s.config {
+                Some(c) => format!("c{c}"),
+                None => format!("q{:?}", s.q.iter().map(|v| v.to_bits()).collect::<Vec<_>>()),
+            };
+            let next = ids.len();
+            *ids.entry(key).or_insert(next)
+        })
+        .collect();
+    (v, ids.len())
+}
+
+/// Distances between the points `table` (with `effects` at their values, the device frame and
+/// the targets) predicts and the measured ones, per sample (metres).
+///
+/// # Errors
+/// A model that cannot be built from `table`, joint values the table cannot take.
+pub fn distances(
+    table: &DhTable,
+    effects: &[(Arc<dyn Effect>, Vec<f64>)],
+    device: &Isometry3<f64>,
+    targets: &[Vector3<f64>],
+    data: &Measurements,
+) -> Result<Vec<f64>> {
+    let mut model = Model::new(table, &data.targets, &ModelOptions::default())?;
+    let mut x_effects = Vec::new();
+    for (e, v) in effects {
+        let range = model.add_effect(e.clone())?;
+        x_effects.push((range, v.clone()));
+    }
+    model.set_device(device);
+    for (k, t) in targets.iter().enumerate() {
+        model.set_target(k, *t);
+    }
+    let mut x = vec![0.0; model.parameter_count()];
+    for (range, v) in x_effects {
+        for (i, val) in range.zip(v) {
+            if let Some(slot) = x.get_mut(i) {
+                *slot = val;
+            }
+        }
+    }
+    let q = row_values(table, data)?;
+    // The effects of the sample order see each sample's place in the sequence, as the fit did.
+    let contexts = dh_calib::effects_order::contexts_of(q.iter().map(Vec::as_slice), data);
+    Ok(data
+        .samples
+        .iter()
+        .zip(&q)
+        .zip(&contexts)
+        .map(|((s, q), c)| (model.point_in(&x, q, c, s.target) - s.point).norm())
+        .collect())
+}
+
+/// The nominal-step device frame and targets, from the report's `nominal` column.
+pub fn nominal_frames(report: &Report, targets: &[String]) -> (Isometry3<f64>, Vec<Vector3<f64>>) {
+    let get = |name: &str| {
+        report
+            .parameters
+            .iter()
+            .find(|p| p.name == name)
+            .map_or(0.0, |p| p.nominal)
+    };
+    let device = from_xyz_rpy(
+        [get("device.x"), get("device.y"), get("device.z")],
+        [get("device.rx"), get("device.ry"), get("device.rz")],
+    );
+    let t = targets
+        .iter()
+        .map(|n| {
+            Vector3::new(
+                get(&format!("target.{n}.x")),
+                get(&format!("target.{n}.y")),
+                get(&format!("target.{n}.z")),
+            )
+        })
+        .collect();
+    (device, t)
+}
+
+/// The residuals of the calibration `report` of `inputs`, `effects` the last step's effects
+/// (those of `report.selected_effects` are applied at their estimates).
+///
+/// # Errors
+/// As [`distances`].
+pub fn residuals(
+    inputs: &Inputs,
+    report: &Report,
+    effects: &[Arc<dyn Effect>],
+) -> Result<Residuals> {
+    {
+        let data = &inputs.data;
+        let (poses, pose_count) = pose_indices(data);
+        let (device0, targets0) = nominal_frames(report, &data.targets);
+        let before = distances(&inputs.table, &[], &device0, &targets0, data)?;
+        let estimates: Vec<(Arc<dyn Effect>, Vec<f64>)> = effects
+            .iter()
+            .filter(|e| report.selected_effects.contains(&label_of(e.as_ref())))
+            .map(|e| {
+                let v = e
+                    .parameter_names()
+                    .iter()
+                    .map(|n| {
+                        report
+                            .parameters
+                            .iter()
+                            .find(|p| &p.name == n)
+                            .map_or(0.0, |p| p.estimate)
+                    })
+                    .collect();
+                (e.clone(), v)
+            })
+            .collect();
+        let targets1: Vec<Vector3<f64>> = data
+            .targets
+            .iter()
+            .map(|n| {
+                report
+                    .targets
+                    .iter()
+                    .find(|(t, _)| t == n)
+                    .map_or_else(Vector3::zeros, |(_, p)| *p)
+            })
+            .collect();
+        let after = distances(
+            &report.calibrated,
+            &estimates,
+            &report.device,
+            &targets1,
+            data,
+        )?;
+        Ok(Residuals {
+            before,
+            after,
+            poses,
+            pose_count,
+        })
+    }
+}
