@@ -64,4 +64,7 @@ for dir in "$ROOT"/fixtures/robots/*/; do
 done
 gallery="${gallery%,}]"
 echo "$gallery" > "$DIST/gallery.json"
+# The user guide beside the page (web/dist is the project's site): docs/guide/*.md rendered
+# to dist/guide/*.html by web/guide.mjs (marked, from package-lock.json).
+node "$WEB/guide.mjs" "$ROOT/docs/guide" "$DIST/guide"
 echo "build.sh: built $DIST ($(du -sh "$DIST" | cut -f1); wasm $(gzip -9c "$DIST/urdf_dh.wasm" | wc -c) bytes gzipped)" >&2

@@ -27,6 +27,7 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
@@ -297,7 +298,8 @@ fn examples() {
     let mut report = String::new();
     for run in &runs {
         for note in &run.notes {
-            println!("docs: {note}");
+            // Past the harness's capture (as `println!` is not), so that a skip is seen.
+            let _ = writeln!(std::io::stderr().lock(), "docs: {note}");
         }
         for failure in &run.failures {
             let _ = writeln!(report, "{failure}");
@@ -321,4 +323,110 @@ fn blocks_are_read_with_their_words_and_outputs() {
     assert_eq!(b[0].examples[0].output, 4..6);
     assert_eq!(b[0].examples[1].line, 7);
     assert_eq!(b[0].examples[1].output, 7..7);
+}
+
+/// GitHub's anchor of a heading: lowercase, punctuation dropped, spaces to `-`.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || *c == ' ' || *c == '-' || *c == '_')
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The anchors of a Markdown page's headings (outside fenced blocks).
+fn anchors(page: &str) -> Vec<String> {
+    let mut fenced = false;
+    let mut out = Vec::new();
+    for line in page.lines() {
+        if line.starts_with("```") {
+            fenced = !fenced;
+        } else if !fenced && line.starts_with('#') {
+            out.push(anchor(line.trim_start_matches('#')));
+        }
+    }
+    out
+}
+
+/// The targets of a page's inline links `[text](target)` (outside fenced blocks), with lines.
+fn links(page: &str) -> Vec<(usize, String)> {
+    let mut fenced = false;
+    let mut out = Vec::new();
+    for (i, line) in page.lines().enumerate() {
+        if line.starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if fenced {
+            continue;
+        }
+        let mut rest = line;
+        while let Some(at) = rest.find("](") {
+            let tail = &rest[at + 2..];
+            let Some(end) = tail.find(')') else { break };
+            out.push((i + 1, tail[..end].to_string()));
+            rest = &tail[end..];
+        }
+    }
+    out
+}
+
+/// Every relative link of README.md and the guide names a file that is there, and every
+/// `#anchor` a heading of its page.
+#[test]
+fn links_resolve() {
+    let mut dead = Vec::new();
+    for page in pages() {
+        let text = std::fs::read_to_string(&page).expect("read page");
+        let name = page
+            .strip_prefix(root())
+            .unwrap_or(&page)
+            .display()
+            .to_string();
+        for (line, target) in links(&text) {
+            if target.contains("://") || target.starts_with("mailto:") {
+                continue;
+            }
+            let (path, hash) = match target.split_once('#') {
+                Some((p, h)) => (p, Some(h)),
+                None => (target.as_str(), None),
+            };
+            let file = if path.is_empty() {
+                page.clone()
+            } else {
+                page.parent().expect("page folder").join(path)
+            };
+            if !file.exists() {
+                dead.push(format!(
+                    "{name}:{line}: {target}: no file {}",
+                    file.display()
+                ));
+                continue;
+            }
+            if let Some(hash) = hash {
+                let linked = std::fs::read_to_string(&file).unwrap_or_default();
+                if !anchors(&linked).iter().any(|a| a == hash) {
+                    dead.push(format!(
+                        "{name}:{line}: {target}: no heading with anchor #{hash}"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(dead.is_empty(), "dead links:\n{}", dead.join("\n"));
+}
+
+#[test]
+fn anchors_are_github_s() {
+    assert_eq!(anchor(" Examples are tested"), "examples-are-tested");
+    assert_eq!(
+        anchor(" `--format poe`: product of exponentials"),
+        "--format-poe-product-of-exponentials"
+    );
+    assert_eq!(
+        links("see [a](b.md#c) and [d](e)"),
+        vec![(1, "b.md#c".into()), (1, "e".into())]
+    );
 }
