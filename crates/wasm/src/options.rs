@@ -3,9 +3,9 @@
 //! refused so that a misspelt option is not silently ignored.
 
 use anyhow::{bail, Result};
-use dh_core::Tolerance;
 use dh_workflows::check::{CHECK_ANGULAR, CHECK_LINEAR};
 use dh_workflows::extract::ExtractOptions;
+use dh_workflows::geometry::Tolerance;
 use dh_workflows::sheet::ConventionDoc;
 use dh_workflows::{AngleUnit, Format, LengthUnit};
 use serde::de::DeserializeOwned;

@@ -1,15 +1,15 @@
 //! What the page's 3-D view draws: the URDF's frames along a chain and the DH frames of its
-//! table at the same joint values, both from the library (`urdf_axes::Chain::link_poses`,
-//! `dh_core::DhTable::frames`, `DhTable::common_normals`), in the base link frame, metres.
+//! table at the same joint values, both from the library (`dh_workflows::input::Chain::link_poses`,
+//! `dh_workflows::geometry::DhTable::frames`, `DhTable::common_normals`), in the base link frame, metres.
 //!
 //! Poses go to JavaScript as 4x4 homogeneous matrices in column-major order (16 numbers, as
 //! three.js's `Matrix4.fromArray` reads them).
 
 use anyhow::Context as _;
-use dh_core::{DhTable, JointKind};
+use dh_workflows::geometry::{DhTable, JointKind};
+use dh_workflows::input::{Chain, UrdfModel};
 use nalgebra::Isometry3;
 use serde::Serialize;
-use urdf_axes::{Chain, UrdfModel};
 use wasm_bindgen::prelude::*;
 
 use crate::{js_error, ExtractOptionsDoc};
