@@ -35,7 +35,7 @@ enum Command {
     /// Extract a DH table (with base and tool transforms) from a URDF chain and prove it by
     /// forward kinematics against the URDF at many joint values.
     #[command(
-        after_help = "EXAMPLES:\n  urdf-dh extract robot.urdf                               # root link to the arm's tip, standard DH, text\n  urdf-dh extract robot.urdf --tip tool0 --convention modified --angle-unit deg\n  urdf-dh extract robot.urdf --format yaml > robot-dh.yaml  # the sheet format, proved as written\n  urdf-dh extract robot.urdf.xacro --xacro-arg arm:=gen3 --package arm_description=../arm_description"
+        after_help = "EXAMPLES:\n  urdf-dh extract robot.urdf   # root link to the arm's tip, standard DH, text\n  urdf-dh extract robot.urdf --tip tool0 --convention modified --angle-unit deg\n  urdf-dh extract robot.urdf --format yaml > robot-dh.yaml   # the sheet format, proved as written\n  urdf-dh extract robot.urdf.xacro --xacro-arg arm:=gen3 \\\n    --package arm_description=../arm_description"
     )]
     Extract(ExtractCli),
     /// Extract many chains of many URDFs in one process (a list of `ROBOT [BASE [TIP]]` lines),
@@ -73,13 +73,13 @@ enum Command {
     /// Predict a calibrated model's target positions (or tool poses) at given joint values,
     /// with each prediction's standard uncertainty.
     #[command(
-        after_help = "EXAMPLES:\n  urdf-dh predict --model calibrated.yaml --joints poses.csv --out predicted.csv\n  urdf-dh predict --model calibrated.yaml --joints poses.csv --targets tool --frame base --length-unit mm --angle-unit deg"
+        after_help = "EXAMPLES:\n  urdf-dh predict --model calibrated.yaml --joints poses.csv --out predicted.csv\n  urdf-dh predict --model calibrated.yaml --joints poses.csv --targets tool --frame base \\\n    --length-unit mm --angle-unit deg"
     )]
     Predict(predict::PredictCli),
     /// Correct a robot program's joint values so that the calibrated robot puts its tool where
     /// the nominal model does; exit 1 naming any pose that cannot be compensated.
     #[command(
-        after_help = "EXAMPLES:\n  urdf-dh compensate --nominal vendor.yaml --model calibrated.yaml --joints program.csv --out corrected.csv\n  urdf-dh compensate --nominal robot.urdf --tip tool0 --model calibrated.yaml --joints program.csv --position-only"
+        after_help = "EXAMPLES:\n  urdf-dh compensate --nominal vendor.yaml --model calibrated.yaml --joints program.csv \\\n    --out corrected.csv\n  urdf-dh compensate --nominal robot.urdf --tip tool0 --model calibrated.yaml \\\n    --joints program.csv --position-only"
     )]
     Compensate(compensate::CompensateCli),
     /// Circle-point analysis: joint axes from sweeps of one joint at a time, and their DH table.
@@ -89,7 +89,7 @@ enum Command {
     Cpa(cpa::CpaCli),
     /// Simulate measurements of a model with known errors, noise and effects.
     #[command(
-        after_help = "EXAMPLES:\n  urdf-dh simulate --model vendor.yaml --poses 200 --noise 0.00005 --out measured.csv --truth truth.yaml"
+        after_help = "EXAMPLES:\n  urdf-dh simulate --model vendor.yaml --poses 200 --noise 0.00005 --out measured.csv \\\n    --truth truth.yaml"
     )]
     Simulate(simulate::SimulateCli),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
@@ -100,9 +100,12 @@ enum Command {
         /// The shell.
         shell: clap_complete::Shell,
     },
-    /// Print the manual page (roff) to stdout.
-    #[command(after_help = "EXAMPLES:\n  urdf-dh man > urdf-dh.1 && man ./urdf-dh.1")]
-    Man,
+    /// Print the manual page of urdf-dh or of one of its commands (roff), or write every page
+    /// into a directory.
+    #[command(
+        after_help = "EXAMPLES:\n  urdf-dh man | man -l -\n  urdf-dh man extract > urdf-dh-extract.1\n  urdf-dh man --dir ~/.local/share/man/man1   # then: man urdf-dh-extract"
+    )]
+    Man(crate::manual::ManCli),
 }
 
 #[derive(Debug, Args)]
@@ -386,7 +389,7 @@ where
 /// is a digit).
 fn command() -> clap::Command {
     use clap::CommandFactory;
-    Cli::command().mut_subcommands(|c| {
+    crate::manual::sized(Cli::command()).mut_subcommands(|c| {
         c.mut_args(|a| {
             if a.get_action().takes_values() {
                 a.allow_negative_numbers(true)
@@ -574,13 +577,7 @@ fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyho
             out.write_all(&script)?;
             Ok(Outcome::Pass)
         }
-        Command::Man => {
-            use clap::CommandFactory;
-            let mut page = Vec::new();
-            clap_mangen::Man::new(Cli::command()).render(&mut page)?;
-            out.write_all(&page)?;
-            Ok(Outcome::Pass)
-        }
+        Command::Man(a) => crate::manual::man(&a, out),
     }
 }
 

@@ -11,6 +11,7 @@ pub mod commands;
 pub mod error;
 pub mod guard;
 pub mod input;
+pub mod manual;
 pub mod measured;
 pub mod output;
 pub mod plot;
