@@ -15,18 +15,14 @@
 //! (the report's documents are the library's, `dh_workflows::fit`); the run (files and rendering) is in
 //! `run`, the text report in `text`, the residual chart (`--plot`) in `chart`.
 
-use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use dh_calib::effects::label_of;
-use dh_calib::model::{Model, ModelOptions};
+use dh_workflows::calibration::residuals;
 use dh_workflows::fit::{CalibrationDoc, Effect, Measurements, Plan, Report, Silent, Split};
-use dh_workflows::geometry::{from_xyz_rpy, DhTable};
-use nalgebra::{Isometry3, Vector3};
 
 use crate::error::Outcome;
 use crate::input::display_name;
@@ -34,7 +30,6 @@ use crate::measured::{DataUnits, LoadedModel};
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::progress::PipelineProgress;
 use crate::units::{AngleUnit, LengthUnit};
-use dh_workflows::calibrated_writer::row_values;
 
 pub use super::calibrate_args::*;
 pub use dh_workflows::calibration::{self as calibration, Calibrated, Inputs, Loaded};
@@ -47,7 +42,5 @@ mod text;
 use text::*;
 mod chart;
 use chart::*;
-#[cfg(test)]
-mod chart_tests;
 #[cfg(test)]
 mod tests;

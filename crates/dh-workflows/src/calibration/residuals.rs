@@ -179,3 +179,92 @@ pub fn residuals(
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::units::{AngleUnit, LengthUnit};
+    use dh_calib::calibrate::{calibrate, CalibrationOptions};
+    use dh_calib::simulate::{simulate, Errors, SimulationOptions};
+    use dh_core::{Convention, DhRow};
+
+    fn arm() -> DhTable {
+        let h = std::f64::consts::FRAC_PI_2;
+        DhTable {
+            convention: Convention::Standard,
+            base: Isometry3::identity(),
+            tool: Isometry3::identity(),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, h, 0.4, 0.0),
+                DhRow::revolute("j2", 0.5, 0.0, 0.0, 0.0),
+                DhRow::revolute("j3", 0.1, h, 0.0, 0.0),
+                DhRow::revolute("j4", 0.0, -h, 0.45, 0.0),
+                DhRow::revolute("j5", 0.0, h, 0.0, 0.0),
+                DhRow::revolute("j6", 0.0, 0.0, 0.1, 0.0),
+            ],
+        }
+    }
+
+    fn rms(d: &[f64]) -> f64 {
+        (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt()
+    }
+
+    /// The residuals are recomputed from the report (nominal-step frames, calibrated table,
+    /// effect estimates): their RMS must be the report's, or a chart of them shows another fit.
+    /// (Moved from the CLI's chart, which now draws these.)
+    #[test]
+    fn residuals_reproduce_the_reported_rms() {
+        let table = arm();
+        let (data, _) = simulate(
+            &table,
+            &SimulationOptions {
+                poses: 60,
+                sigma: 2e-5,
+                target_count: 2,
+                errors: Errors::Explicit(vec![("j2.a".into(), 4e-4), ("j3.theta".into(), 1e-3)]),
+                ..SimulationOptions::default()
+            },
+        )
+        .unwrap();
+        let effects: Vec<Arc<dyn Effect>> =
+            vec![dh_calib::effects::parse_label("gear_ratio:j2", &table).unwrap()];
+        for with_effects in [false, true] {
+            let options = CalibrationOptions {
+                effects: if with_effects {
+                    effects.clone()
+                } else {
+                    vec![]
+                },
+                ..CalibrationOptions::default()
+            };
+            let report = calibrate(&table, &data, &options).unwrap();
+            let inputs = Inputs {
+                table: table.clone(),
+                model_name: "arm".into(),
+                robot: None,
+                units: (LengthUnit::M, AngleUnit::Rad),
+                links: ("base_link".into(), "tool0".into()),
+                coupled: vec![],
+                data: data.clone(),
+                cpa: false,
+            };
+            let r = residuals(&inputs, &report, &effects).unwrap();
+            assert!(
+                (rms(&r.before) - report.rms_before).abs() < 1e-9,
+                "before {} {}",
+                rms(&r.before),
+                report.rms_before
+            );
+            assert!(
+                // The calibrated table folds Hayati tilts into DH values to within
+                // dh_calib::model::FOLD_TOLERANCE (1e-9 m, 1e-9 rad).
+                (rms(&r.after) - report.rms_after).abs() < 1e-8,
+                "after {} {}",
+                rms(&r.after),
+                report.rms_after
+            );
+            assert_eq!(r.pose_count, 60);
+            assert_eq!(r.poses.len(), data.samples.len());
+        }
+    }
+}
