@@ -2,8 +2,9 @@
 # The page's tests in a real browser, for .ci/run and for people: installs what is missing
 # (Debian's chromium, the wasm32 target, wasm-bindgen-cli of the pinned version, the npm packages
 # of package-lock.json), lints crates/wasm (not a workspace member), builds the page
-# (web/build.sh) and the CLI, and runs web/tests/browser.mjs, whose last line is
-# 'N passed, N failed'. Exit 0 only when every test passed.
+# (web/build.sh) and the CLI, and runs web/tests/browser.mjs and web/tests/report.mjs (the
+# pages of calibrate --report and cpa --report), whose last lines are 'N passed, N failed'.
+# Exit 0 only when every test passed.
 #
 # Env: CARGO_TARGET_DIR (default: the repository's target/), SCREENSHOTS=dir (keep screenshots),
 #      WEB_SKIP_LINT=1 (skip the wasm crate's fmt and clippy).
@@ -50,3 +51,6 @@ cargo build --quiet --locked --manifest-path "$ROOT/Cargo.toml" --bin urdf-dh
 
 step "browser tests"
 node "$WEB/tests/browser.mjs" "$CARGO_TARGET_DIR/debug/urdf-dh"
+
+step "report pages in the browser (calibrate --report, cpa --report)"
+node "$WEB/tests/report.mjs" "$CARGO_TARGET_DIR/debug/urdf-dh"

@@ -13,6 +13,7 @@ use dh_core::JointKind;
 
 use super::findings;
 use super::page::{self, esc, fixed, mm, sci, table, tiles, Page, NA};
+use super::parameters::{correlations, parameters};
 use super::svg::{Bars, Kind, Point, Scatter};
 use super::Provenance;
 use crate::calibration::{residuals, Calibrated, CalibrationRequest, Inputs, Residuals};
@@ -377,140 +378,6 @@ fn residual_plots(doc: &CalibrationDoc, inputs: &Inputs, r: &Residuals) -> Strin
         ));
     }
     s.push_str("</div>\n");
-    s
-}
-
-/// A parameter's value in the page's units: lengths in mm, angles in degrees, others as they
-/// are; and the unit's symbol.
-pub(super) fn shown(v: f64, unit: &str) -> (String, &'static str) {
-    match unit {
-        "m" => (fixed(v * 1e3, 4), "mm"),
-        "rad" => (fixed(v.to_degrees(), 5), "deg"),
-        "rad/(N m)" => (sci(v, 4), "rad/(N m)"),
-        "rad/rad" => (sci(v, 4), "rad/rad"),
-        _ => (sci(v, 4), "1"),
-    }
-}
-
-/// A standard error in the page's units (scientific: a fit of many points pins them far below
-/// the value's last printed digit).
-pub(super) fn shown_error(e: Option<f64>, unit: &str) -> String {
-    let scale = match unit {
-        "m" => 1e3,
-        "rad" => 180.0 / std::f64::consts::PI,
-        _ => 1.0,
-    };
-    sci(e.map(|e| e * scale), 2)
-}
-
-fn parameters(doc: &CalibrationDoc) -> String {
-    let free: Vec<&dh_calib::pipeline::ParameterDoc> =
-        doc.parameters.iter().filter(|p| p.free).collect();
-    let rows: Vec<Vec<String>> = free
-        .iter()
-        .map(|p| {
-            let (nominal, unit) = shown(p.nominal, &p.unit);
-            let (estimate, _) = shown(p.estimate, &p.unit);
-            let (change, _) = shown(p.estimate - p.nominal, &p.unit);
-            vec![
-                esc(&p.name),
-                unit.into(),
-                nominal,
-                estimate,
-                change,
-                shown_error(p.std_error, &p.unit),
-            ]
-        })
-        .collect();
-    let mut s = page::muted(&format!(
-        "{} estimated parameters (of {}); lengths in mm, angles in degrees; standard errors from the covariance of the last step (residual sigma {} mm per coordinate).",
-        free.len(),
-        doc.parameters.len(),
-        mm(doc.sigma_hat)
-    ));
-    s.push_str(&table(
-        &[
-            "parameter",
-            "unit",
-            "#nominal",
-            "#estimate",
-            "#change",
-            "#standard error",
-        ],
-        &rows,
-    ));
-    if !doc.fixed.is_empty() {
-        let rows: Vec<Vec<String>> = doc
-            .fixed
-            .iter()
-            .map(|f| {
-                vec![
-                    esc(&f.name),
-                    if f.aliases.is_empty() {
-                        "no effect on the data".into()
-                    } else {
-                        esc(&f.aliases.join(", "))
-                    },
-                ]
-            })
-            .collect();
-        s.push_str("<h3>Held at nominal (not identifiable from the data)</h3>\n");
-        s.push_str(&table(&["parameter", "absorbed by"], &rows));
-    }
-    s
-}
-
-/// The `n` most correlated pairs of free parameters of `report`'s covariance: (first, second,
-/// correlation), largest |correlation| first.
-pub(super) fn most_correlated(report: &Report, n: usize) -> Vec<(String, String, f64)> {
-    let Some(c) = &report.covariance else {
-        return Vec::new();
-    };
-    let k = c.parameters.len();
-    let sd: Vec<f64> = (0..k).map(|i| c.matrix[(i, i)].max(0.0).sqrt()).collect();
-    let mut pairs = Vec::new();
-    for i in 0..k {
-        for j in 0..i {
-            let denom = sd[i] * sd[j];
-            if denom > 0.0 && denom.is_finite() {
-                let r = (c.matrix[(i, j)] / denom).clamp(-1.0, 1.0);
-                if r.is_finite() {
-                    pairs.push((c.parameters[j].clone(), c.parameters[i].clone(), r));
-                }
-            }
-        }
-    }
-    pairs.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
-    pairs.truncate(n);
-    pairs
-}
-
-fn correlations(doc: &CalibrationDoc, report: &Report) -> String {
-    let mut s = tiles(&[
-        (
-            "condition number (scaled Jacobian)",
-            sci(doc.condition_number, 3),
-        ),
-        ("free parameters (rank)", doc.rank.to_string()),
-        (
-            "angle columns scaled by",
-            format!("{} mm", fixed(report.length_scale * 1e3, 1)),
-        ),
-        ("rank tolerance (relative)", sci(report.rank_tolerance, 1)),
-    ]);
-    let pairs = most_correlated(report, 12);
-    if pairs.is_empty() {
-        s.push_str(&page::muted(
-            "No covariance: the residual's sigma is unknown (no more coordinates than parameters).",
-        ));
-        return s;
-    }
-    let rows: Vec<Vec<String>> = pairs
-        .iter()
-        .map(|(a, b, r)| vec![esc(a), esc(b), fixed(*r, 4)])
-        .collect();
-    s.push_str("<h3>Most correlated pairs</h3>\n");
-    s.push_str(&table(&["parameter", "parameter", "#correlation"], &rows));
     s
 }
 

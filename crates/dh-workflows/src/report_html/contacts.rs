@@ -4,8 +4,9 @@
 
 use dh_calib::pipeline::unit_of;
 
-use super::calibration::{shown, shown_error, verdict_class};
+use super::calibration::verdict_class;
 use super::page::{self, esc, fixed, mm, sci, table, table_with, tiles, Page, NA};
+use super::parameters::{shown, shown_error};
 use super::svg::{Kind, Point, Scatter};
 use super::Provenance;
 use crate::calibration::{CalibrationRequest, Contacts};

@@ -150,18 +150,6 @@ fn joints(r: &CpaReport) -> String {
                 mm(j.plane_rms),
                 motion,
                 sci(j.motion.slope, 3),
-                format!(
-                    "({}, {}, {})",
-                    fixed(j.axis.direction[0], 5),
-                    fixed(j.axis.direction[1], 5),
-                    fixed(j.axis.direction[2], 5)
-                ),
-                format!(
-                    "({}, {}, {})",
-                    fixed(j.axis.point[0] * 1e3, 2),
-                    fixed(j.axis.point[1] * 1e3, 2),
-                    fixed(j.axis.point[2] * 1e3, 2)
-                ),
             ]
         })
         .collect();
@@ -176,13 +164,35 @@ fn joints(r: &CpaReport) -> String {
             "#plane RMS [mm]",
             "#motion RMS",
             "#motion slope",
-            "axis direction",
-            "axis point [mm]",
         ],
         &rows,
     );
     s.push_str(&page::muted(
-        "motion: measured minus commanded joint motion, mean removed; slope: measured = (1 + slope) x commanded. Axes in the device frame at each sweep's configuration.",
+        "motion: measured minus commanded joint motion, mean removed; slope: measured = (1 + slope) x commanded.",
+    ));
+    let axes: Vec<Vec<String>> = r
+        .doc
+        .joints
+        .iter()
+        .map(|j| {
+            let mut row = vec![esc(&j.name)];
+            row.extend(j.axis.direction.iter().map(|v| fixed(*v, 6)));
+            row.extend(j.axis.point.iter().map(|v| fixed(v * 1e3, 3)));
+            row
+        })
+        .collect();
+    s.push_str("<h3>Axes (device frame, at each sweep's configuration)</h3>\n");
+    s.push_str(&table(
+        &[
+            "joint",
+            "#direction x",
+            "#direction y",
+            "#direction z",
+            "#point x [mm]",
+            "#point y [mm]",
+            "#point z [mm]",
+        ],
+        &axes,
     ));
     let rows: Vec<Vec<String>> = r
         .doc

@@ -21,7 +21,7 @@
 //!
 //! # Layout
 //! `page` (skeleton, styles, escaping, tables), `svg` (plots), `provenance`, and one module per
-//! page: `calibration` (points and trees), `findings` (outliers, diagnosis, verdict, shared by
+//! page: `calibration` (points and trees), `parameters` (estimates, correlations), `findings` (outliers, diagnosis, verdict, shared by
 //! points and trees), `contacts`, `cpa`.
 
 mod calibration;
@@ -29,6 +29,7 @@ mod contacts;
 mod cpa;
 mod findings;
 pub mod page;
+mod parameters;
 mod provenance;
 pub mod svg;
 

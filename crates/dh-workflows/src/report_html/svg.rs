@@ -294,7 +294,7 @@ impl Scatter<'_> {
                 let mark = if class == "out" {
                     format!("<circle class=\"out\" cx=\"{lx:.1}\" cy=\"27\" r=\"4\"/>")
                 } else {
-                    format!("<path class=\"{class}\" d=\"M{lx:.1} 27h0\"/>")
+                    format!("<path class=\"{class} key\" d=\"M{lx:.1} 27h0\"/>")
                 };
                 let _ = write!(
                     s,
