@@ -10,7 +10,7 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
-use dh_workflows::predict::{frame_of, Frame, Predictions, Wanted};
+use dh_workflows::predict::{frame_of, rows_text, Frame, Predictions, Wanted};
 
 use crate::calibrated::{load_calibrated, CalibratedModel};
 use crate::error::Outcome;
@@ -284,23 +284,10 @@ fn render(
     }
     text.push_str(&header.join(","));
     text.push('\n');
-    // Blocks of predictions written on every core, then joined in order.
-    const BLOCK: usize = 8192;
-    let all = &predictions.predicted;
-    let write_block = |b: usize| -> String {
-        let mut t = String::new();
-        let range = b * BLOCK..((b + 1) * BLOCK).min(all.len());
-        for p in &all[range] {
-            write_row(&mut t, p, input, units, attitude, sessions);
-        }
-        t
-    };
-    let blocks = all.len().div_ceil(BLOCK);
-    match dh_core::parallel::map(blocks, write_block) {
-        Some(parts) => parts.iter().for_each(|p| text.push_str(p)),
-        // A lost block (a thread failed): write them here instead.
-        None => (0..blocks).for_each(|b| text.push_str(&write_block(b))),
-    }
+    // Written on every core, joined in order.
+    text.push_str(&rows_text(&predictions.predicted, |t, p| {
+        write_row(t, p, input, units, attitude, sessions)
+    }));
     text
 }
 
