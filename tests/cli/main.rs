@@ -20,6 +20,7 @@ mod import_columns;
 mod import_hardening;
 mod import_writes;
 mod invalid;
+mod layers;
 mod limits;
 mod measured;
 mod mjcf;
