@@ -48,7 +48,11 @@ rm -rf "$DIST" && mkdir -p "$DIST/robots"
 cp "$BUILD/pkg/urdf_dh_wasm_bg.wasm" "$DIST/urdf_dh.wasm"
 cp "$WEB/index.html" "$WEB/src/style.css" "$DIST/"
 
-# The gallery: the project's own robots (authored for this project, see each SOURCE.md).
+# The gallery: the project's own robots (authored for this project, see each SOURCE.md), an
+# MJCF model and a xacro package (fixtures/mjcf, fixtures/xacro). Each entry: `dir` (its folder
+# in dist), `files` (paths below it, the robot file first), `sheet` (a vendor sheet or null),
+# `xacro_args`. The repository has no SDFormat robot of its own (its SDF tests carry their
+# documents inline), so the gallery has none.
 gallery="["
 for dir in "$ROOT"/fixtures/robots/*/; do
   name="$(basename "$dir")"
@@ -60,9 +64,14 @@ for dir in "$ROOT"/fixtures/robots/*/; do
     cp "$dir/vendor.yaml" "$DIST/robots/$name/"
     sheet="\"robots/$name/vendor.yaml\""
   fi
-  gallery+="{\"name\":\"$name\",\"urdf\":\"robots/$name/robot.urdf\",\"sheet\":$sheet},"
+  gallery+="{\"name\":\"$name\",\"dir\":\"robots/$name\",\"files\":[\"robot.urdf\"],\"sheet\":$sheet},"
 done
-gallery="${gallery%,}]"
+mkdir -p "$DIST/robots/scara_mjcf" "$DIST/robots/demo_arm_xacro"
+cp "$ROOT/fixtures/mjcf/scara.xml" "$DIST/robots/scara_mjcf/"
+gallery+='{"name":"scara_mjcf","dir":"robots/scara_mjcf","files":["scara.xml"],"sheet":null},'
+cp -r "$ROOT/fixtures/xacro/demo_arm_description" "$DIST/robots/demo_arm_xacro/"
+gallery+='{"name":"demo_arm_xacro","dir":"robots/demo_arm_xacro","files":["demo_arm_description/urdf/arm.urdf.xacro","demo_arm_description/urdf/segment.xacro","demo_arm_description/config/links.yaml","demo_arm_description/package.xml"],"sheet":null,"xacro_args":"reach:=long"}'
+gallery+="]"
 echo "$gallery" > "$DIST/gallery.json"
 # The user guide beside the page (web/dist is the project's site): docs/guide/*.md rendered
 # to dist/guide/*.html by web/guide.mjs (marked, from package-lock.json).

@@ -6,8 +6,10 @@ import { View3D } from './view3d.js';
 const $ = (id) => document.getElementById(id);
 
 const state = {
-  text: null, // the URDF's text
+  text: null, // the robot file's text
   name: 'robot.urdf', // its file name, as the CLI shows it in messages
+  path: null, // its path among `files` (a dropped folder keeps its layout)
+  files: {}, // every file given, by path: xacro includes, packages, YAML, MJCF includes
   sheet: null, // the extracted sheet (parsed JSON of `extract --format json`)
   robot: null, // wasm.Robot of the chosen chain (for the sliders)
   joints: [],
@@ -25,7 +27,9 @@ window.urdfDh = {
   check: (urdfText, sheetText, options = {}) =>
     wasm.check(urdfText, sheetText, JSON.stringify(options)),
   toUrdf: (sheetText, options = {}) => wasm.to_urdf(sheetText, JSON.stringify(options)),
-  tree: (text, name = 'robot.urdf') => JSON.parse(wasm.tree(text, name)),
+  // `options`: a file name (string) or {name, path, files, xacro_args, packages}.
+  tree: (text, options = 'robot.urdf') =>
+    JSON.parse(wasm.tree(text, JSON.stringify(typeof options === 'string' ? { name: options } : options))),
   // Both forward kinematics of a chain at joint values q: {urdf, axes, dh, normals, dh_tip},
   // poses as column-major 4x4 matrices in the base link frame (metres).
   fk: (text, options, q) => {
@@ -36,15 +40,36 @@ window.urdfDh = {
       robot.free();
     }
   },
+  // The warnings `extract` prints on stderr, without `urdf-dh: warning: `.
+  warnings: (text, options = {}) => JSON.parse(wasm.extract_warnings(text, JSON.stringify(options))),
+  // One extraction to read several times: .output(format) (the CLI's text, proved as written),
+  // .warnings() (JSON), .joints() (JSON), .fk(Float64Array); free it with .free().
+  robot: (text, options = {}) => new wasm.Robot(text, JSON.stringify(options)),
   lastTiming: null,
-  load: (text, name) => loadUrdf(text, name),
+  loads: 0, // robot files read so far (a test waits for the next)
+  load: (text, name) => loadFiles([{ path: `/${name}`, text }]),
+  // Several files (a folder), each {path, text}: the robot file is chosen as a drop chooses it.
+  loadFiles: (files) => loadFiles(files),
 };
 
 let view = null;
 
-function options() {
+// How the robot file is read: its name and path, the files beside it, the xacro arguments.
+function source() {
+  const files = {};
+  for (const [p, t] of Object.entries(state.files)) if (p !== state.path) files[p] = t;
+  const args = $('xacro-args').value.trim();
   return {
     name: state.name,
+    path: state.path || undefined,
+    files,
+    xacro_args: args ? args.split(/\s+/) : [],
+  };
+}
+
+function options() {
+  return {
+    ...source(),
     base: $('base').value || undefined,
     tip: $('tip').value || undefined,
     convention: $('convention').value,
@@ -94,7 +119,69 @@ function fillChainSelects(tree) {
   }
 }
 
-async function loadUrdf(text, name, galleryButton = null) {
+// The robot files among `files` ({path: text}), most likely first: a file no other file
+// includes, then by kind (a top-level xacro, a URDF, a xacro, SDFormat, MJCF), then the
+// shallowest, then by name. Which format a file holds is told as the CLI tells it: a `.xacro`
+// name is expanded, then the content decides (<mujoco>, <sdf>, else URDF).
+function robotCandidates(files) {
+  const paths = Object.keys(files);
+  const base = (p) => p.slice(p.lastIndexOf('/') + 1);
+  const rank = (p) => {
+    const n = base(p).toLowerCase();
+    if (n.endsWith('.urdf.xacro')) return 0;
+    if (n.endsWith('.urdf')) return 1;
+    if (n.endsWith('.xacro')) return 2;
+    if (n.endsWith('.sdf') || n.endsWith('.world')) return 3;
+    if (n.endsWith('.xml') && n !== 'package.xml' && /<mujoco[\s>]/.test(files[p])) return 4;
+    if (paths.length === 1) return 5;
+    return -1;
+  };
+  // Named in an include (xacro's filename="...", MJCF's file="...") of another file.
+  const included = (p) => {
+    const n = base(p);
+    return paths.some((q) => q !== p && (files[q].includes(`/${n}"`) || files[q].includes(`="${n}"`)));
+  };
+  const depth = (p) => p.split('/').length;
+  return paths
+    .filter((p) => rank(p) >= 0)
+    .map((p) => [p, included(p) ? 1 : 0, rank(p), depth(p)])
+    .sort((a, b) => a[1] - b[1] || a[2] - b[2] || a[3] - b[3] || (a[0] < b[0] ? -1 : 1))
+    .map((c) => c[0]);
+}
+
+// Reads the given files ([{path, text}]) and shows the most likely robot file among them.
+async function loadFiles(list, galleryButton = null, xacroArgs = '') {
+  state.files = {};
+  for (const f of list) state.files[f.path] = f.text;
+  const candidates = robotCandidates(state.files);
+  const sel = $('robot-file');
+  sel.replaceChildren();
+  for (const p of candidates) {
+    const opt = document.createElement('option');
+    opt.value = p;
+    opt.textContent = p.replace(/^\//, '');
+    sel.appendChild(opt);
+  }
+  $('robot-file-row').hidden = candidates.length < 2;
+  $('xacro-args').value = xacroArgs;
+  if (candidates.length === 0) {
+    clearResults();
+    showError(`no robot file among the ${list.length} file(s) given (expected .urdf, .xacro, .sdf, .world, or an MJCF .xml)`);
+    return;
+  }
+  await loadRobot(candidates[0], galleryButton);
+}
+
+// Reads the robot file at `path` of the files given; counts the loads (for tests).
+async function loadRobot(path, galleryButton = null) {
+  try {
+    await readRobot(path, galleryButton);
+  } finally {
+    window.urdfDh.loads += 1;
+  }
+}
+
+async function readRobot(path, galleryButton) {
   await ready;
   for (const b of $('gallery').children) b.classList.toggle('active', b === galleryButton);
   if (!galleryButton) {
@@ -102,19 +189,24 @@ async function loadUrdf(text, name, galleryButton = null) {
     $('gallery-sheet').hidden = true;
   }
   const t0 = performance.now();
-  state.text = text;
-  state.name = name;
-  $('file-name').textContent = name;
+  state.path = path;
+  state.text = state.files[path];
+  state.name = path.slice(path.lastIndexOf('/') + 1);
+  $('robot-file').value = path;
+  const others = Object.keys(state.files).length - 1;
+  $('file-name').textContent = others > 0 ? `${state.name} (and ${others} file(s) beside it)` : state.name;
+  $('xacro-row').hidden = !state.name.endsWith('.xacro');
   $('check-result').replaceChildren();
   let tree;
   try {
-    tree = JSON.parse(wasm.tree(text, name));
+    tree = JSON.parse(wasm.tree(state.text, JSON.stringify(source())));
   } catch (e) {
     clearResults();
     showError(errorText(e));
     return;
   }
   fillChainSelects(tree);
+  $('format').textContent = tree.format;
   if (!tree.default) {
     clearResults();
     showError(tree.default_error);
@@ -125,6 +217,7 @@ async function loadUrdf(text, name, galleryButton = null) {
 
 function clearResults() {
   state.sheet = null;
+  if (state.robot) state.robot.free();
   state.robot = null;
   $('dh-table').tHead.replaceChildren();
   $('dh-table').tBodies[0].replaceChildren();
@@ -138,7 +231,8 @@ function clearResults() {
   if (view) view.clear();
 }
 
-// Extracts and proves the chosen chain, fills the page; `t0` times the whole.
+// Extracts the chosen chain once (a wasm.Robot), proves its JSON and text as written (the
+// robot file's side of the proof computed once for both), fills the page; `t0` times the whole.
 function run(t0 = performance.now()) {
   showError('');
   const o = options();
@@ -146,11 +240,12 @@ function run(t0 = performance.now()) {
   let text;
   let warnings;
   try {
-    json = wasm.extract(state.text, JSON.stringify({ ...o, format: 'json' }));
-    text = wasm.extract(state.text, JSON.stringify({ ...o, format: 'text' }));
-    warnings = JSON.parse(wasm.extract_warnings(state.text, JSON.stringify(o)));
     if (state.robot) state.robot.free();
+    state.robot = null;
     state.robot = new wasm.Robot(state.text, JSON.stringify(o));
+    json = state.robot.output('json');
+    text = state.robot.output('text');
+    warnings = JSON.parse(state.robot.warnings());
   } catch (e) {
     clearResults();
     showError(errorText(e));
@@ -170,7 +265,7 @@ function run(t0 = performance.now()) {
   updateTipGap();
   const ms = performance.now() - t0;
   window.urdfDh.lastTiming = ms;
-  $('timing').textContent = `extracted, proved twice (JSON and text as written) and drawn in ${ms.toFixed(1)} ms`;
+  $('timing').textContent = `extracted once, proved as written twice (JSON and text) and drawn in ${ms.toFixed(1)} ms`;
 }
 
 const fmt = (v) => (v === null || v === undefined ? '' : Number(v).toFixed(6));
@@ -336,15 +431,15 @@ function download(name, text, type) {
 const EXT = { yaml: 'yaml', json: 'json', csv: 'csv', markdown: 'md' };
 
 function onDownload(format) {
-  if (!state.sheet) return;
+  if (!state.sheet || !state.robot) return;
   const stem = (state.sheet.robot || state.name.replace(/\.[^.]*$/, '') || 'robot').replace(/[^\w.-]+/g, '_');
   try {
     if (format === 'urdf') {
-      const yaml = wasm.extract(state.text, JSON.stringify({ ...options(), format: 'yaml' }));
+      const yaml = state.robot.output('yaml');
       const sheetName = `${stem}.dh.yaml`;
       download(`${stem}.dh.urdf`, wasm.to_urdf(yaml, JSON.stringify({ sheet_name: sheetName })), 'application/xml');
     } else {
-      const text = wasm.extract(state.text, JSON.stringify({ ...options(), format }));
+      const text = state.robot.output(format);
       download(`${stem}.dh.${EXT[format]}`, text, 'text/plain');
     }
   } catch (e) {
@@ -357,7 +452,7 @@ function runCheck(sheetText, sheetName) {
   box.replaceChildren();
   for (const td of document.querySelectorAll('#dh-table td.diff, #dh-table tr.diff')) td.classList.remove('diff');
   if (!state.text) return;
-  const o = { name: state.name, sheet_name: sheetName, base: $('base').value, tip: $('tip').value };
+  const o = { ...source(), sheet_name: sheetName, base: $('base').value, tip: $('tip').value };
   let report;
   let warnings;
   try {
@@ -411,6 +506,36 @@ async function readFile(file) {
   return await file.text();
 }
 
+// The files of an <input type=file> (several files, or a folder with webkitdirectory), each
+// {path, text}; a folder keeps its layout, so that includes and packages resolve.
+async function readInput(fileList) {
+  return Promise.all(
+    [...fileList].map(async (f) => ({ path: `/${f.webkitRelativePath || f.name}`, text: await f.text() })),
+  );
+}
+
+// The files of a drop: files and whole folders (walked through the entries API).
+async function readDrop(dataTransfer) {
+  const entries = [...dataTransfer.items].map((i) => (i.webkitGetAsEntry ? i.webkitGetAsEntry() : null));
+  if (entries.some((e) => e === null)) return readInput(dataTransfer.files);
+  const out = [];
+  const walk = async (entry) => {
+    if (entry.isFile) {
+      const file = await new Promise((ok, fail) => entry.file(ok, fail));
+      out.push({ path: entry.fullPath, text: await file.text() });
+    } else if (entry.isDirectory) {
+      const reader = entry.createReader();
+      for (;;) {
+        const batch = await new Promise((ok, fail) => reader.readEntries(ok, fail));
+        if (batch.length === 0) break;
+        for (const e of batch) await walk(e);
+      }
+    }
+  };
+  for (const e of entries) await walk(e);
+  return out;
+}
+
 async function loadGallery() {
   const box = $('gallery');
   let list = [];
@@ -424,8 +549,11 @@ async function loadGallery() {
     b.textContent = item.name.replace(/_/g, ' ');
     b.setAttribute('data-testid', `gallery-${item.name}`);
     b.addEventListener('click', async () => {
-      const text = await (await fetch(item.urdf)).text();
-      await loadUrdf(text, 'robot.urdf', b);
+      // Each file at its path below the gallery entry's folder, the robot file first.
+      const files = await Promise.all(
+        item.files.map(async (p) => ({ path: `/${p}`, text: await (await fetch(`${item.dir}/${p}`)).text() })),
+      );
+      await loadFiles(files, b, item.xacro_args || '');
       state.gallerySheet = item.sheet;
       $('gallery-sheet').hidden = !item.sheet;
     });
@@ -434,11 +562,14 @@ async function loadGallery() {
 }
 
 function wire() {
-  $('urdf-file').addEventListener('change', async (ev) => {
-    const f = ev.target.files[0];
-    if (!f) return;
-    await loadUrdf(await readFile(f), f.name);
-  });
+  for (const id of ['urdf-file', 'robot-folder']) {
+    $(id).addEventListener('change', async (ev) => {
+      if (ev.target.files.length === 0) return;
+      await loadFiles(await readInput(ev.target.files));
+    });
+  }
+  $('robot-file').addEventListener('change', () => loadRobot($('robot-file').value));
+  $('xacro-args').addEventListener('change', () => state.path && loadRobot(state.path));
   const drop = $('drop');
   for (const t of ['dragenter', 'dragover']) {
     drop.addEventListener(t, (ev) => {
@@ -449,8 +580,8 @@ function wire() {
   for (const t of ['dragleave', 'drop']) drop.addEventListener(t, () => drop.classList.remove('over'));
   drop.addEventListener('drop', async (ev) => {
     ev.preventDefault();
-    const f = ev.dataTransfer.files[0];
-    if (f) await loadUrdf(await readFile(f), f.name);
+    const files = await readDrop(ev.dataTransfer);
+    if (files.length > 0) await loadFiles(files);
   });
   for (const id of ['base', 'tip', 'convention', 'length-unit', 'angle-unit']) {
     $(id).addEventListener('change', () => state.text && run());

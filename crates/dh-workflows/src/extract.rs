@@ -183,6 +183,25 @@ pub fn extract_bytes_in(
     extract_chain(&model, chain, name, options)
 }
 
+/// [`extract_bytes`] of a robot file held in memory with the files beside it
+/// ([`crate::input::RobotFiles`]: a `.xacro` file expanded from them, an MJCF's includes read
+/// from them); the expansion's warnings come first in [`Extracted::urdf_warnings`].
+///
+/// # Errors
+/// As [`crate::input::RobotFiles::load_chain`], plus geometry errors.
+pub fn extract_files(
+    robot: &crate::input::RobotFiles,
+    base: Option<&str>,
+    tip: Option<&str>,
+    options: &ExtractOptions,
+) -> Result<Extracted> {
+    let (model, chain, mut warnings) = robot.load_chain(base, tip)?;
+    let mut ex = extract_chain(&model, chain, &robot.name(), options)?;
+    warnings.append(&mut ex.urdf_warnings);
+    ex.urdf_warnings = warnings;
+    Ok(ex)
+}
+
 /// Extracts the table of `chain` (of `model`, read from the file shown as `name`) and its sheet
 /// with the extraction's facts; the caller proves it ([`prove_extracted`]).
 ///

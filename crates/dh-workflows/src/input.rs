@@ -12,7 +12,11 @@ pub use urdf_axes::{Chain, UrdfModel};
 
 use crate::error::hinted;
 
+mod memory;
 mod source;
+
+pub use memory::{MemoryFiles, RobotFiles};
+pub use urdf_xacro::files::normalize as normalize_path;
 
 pub use source::{
     read_capped, read_within, reading_once, too_large, TooLarge, MAX_DATA_BYTES, MAX_TEXT_BYTES,
@@ -169,8 +173,21 @@ pub fn folder_of(path: &str) -> Option<std::path::PathBuf> {
 /// # Errors
 /// An invalid model ("`NAME`: invalid MJCF" or "`NAME`: invalid URDF").
 pub fn read_model(bytes: &[u8], name: &str, dir: Option<&Path>) -> Result<UrdfModel> {
+    read_model_with(bytes, name, dir, None)
+}
+
+/// [`read_model`] with an MJCF's `<include>`s read from `files` (when given) instead of the disk.
+///
+/// # Errors
+/// As [`read_model`].
+pub fn read_model_with(
+    bytes: &[u8],
+    name: &str,
+    dir: Option<&Path>,
+    files: Option<&MemoryFiles>,
+) -> Result<UrdfModel> {
     if urdf_axes::mjcf::is_mjcf(bytes) {
-        return urdf_axes::mjcf::from_bytes(bytes, dir)
+        return urdf_axes::mjcf::from_bytes_with(bytes, dir, files)
             .with_context(|| format!("{name}: invalid MJCF"));
     }
     UrdfModel::from_bytes(bytes).map_err(|e| match crate::sniff::not_a_robot(bytes) {

@@ -98,6 +98,26 @@ pub fn expand_with(path: &str, options: &XacroOptions) -> Result<Vec<u8>> {
     }
 }
 
+/// Expands the `.xacro` file `path` of the in-memory tree `options.files` into URDF bytes,
+/// returning the expansion's warnings instead of showing them (a page shows them itself).
+///
+/// # Errors
+/// As [`expand_with`]; a construct the native expansion refuses is an error (Python's `xacro`
+/// cannot read files held in memory).
+pub fn expand_in_memory(path: &Path, options: &XacroOptions) -> Result<(Vec<u8>, Vec<String>)> {
+    match urdf_xacro::expand_file(path, options) {
+        Ok(done) => Ok((done.xml.into_bytes(), done.warnings)),
+        Err(XacroError::Invalid(message)) => Err(match hint_for(&message) {
+            Some(hint) => hinted(message, hint),
+            None => anyhow::anyhow!(message),
+        }),
+        Err(XacroError::Unsupported { message, .. }) => Err(hinted(
+            message,
+            "expand the file with Python's xacro (xacro FILE > robot.urdf) and give the URDF",
+        )),
+    }
+}
+
 /// The remedy of an expansion error the user can fix from the command line.
 fn hint_for(message: &str) -> Option<String> {
     let quoted = |after: &str| {

@@ -51,6 +51,7 @@ fn xacro_options(
             .map(|(n, d)| (n, d.into()))
             .collect(),
         max_bytes: None,
+        files: None,
     }
 }
 

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 use crate::expr::ExprError;
+use crate::files::Source;
 use crate::macros::Macro;
 use crate::packages::Packages;
 use crate::tree::{self, Element, Node, Pos};
@@ -38,6 +39,8 @@ pub struct File {
 
 /// The state of one expansion.
 pub struct Expander {
+    /// Where files are read from.
+    pub source: Source,
     pub packages: Packages,
     pub files: Vec<File>,
     /// Files being expanded, innermost last (relative paths are relative to the last).
@@ -62,8 +65,13 @@ pub struct Expander {
 impl Expander {
     /// A fresh expansion with the caller's options.
     pub fn new(opts: &Options) -> Expander {
+        let source = match &opts.files {
+            Some(files) => Source::Memory(files.clone()),
+            None => Source::Disk,
+        };
         Expander {
-            packages: Packages::new(&opts.packages),
+            packages: Packages::new(&opts.packages, source.clone()),
+            source,
             files: Vec::new(),
             file_stack: Vec::new(),
             args: opts.args.iter().cloned().collect(),
@@ -109,7 +117,7 @@ impl Expander {
             file: index,
             line: 0,
         };
-        let text = read_capped(path).map_err(|e| match from {
+        let text = read_capped(&self.source, path).map_err(|e| match from {
             Some(at) => self.invalid(at, &format!("cannot read '{}': {e}", path.display())),
             None => XacroError::Invalid(format!("{}: cannot read the file: {e}", path.display())),
         })?;
@@ -474,12 +482,12 @@ impl Expander {
                 &format!("includes nested deeper than {MAX_INCLUDE_DEPTH}"),
             ));
         }
-        let key = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        let key = self.source.canonical(&path);
         let open: Vec<PathBuf> = self
             .file_stack
             .iter()
             .filter_map(|&i| self.files.get(i))
-            .map(|f| std::fs::canonicalize(&f.path).unwrap_or_else(|_| f.path.clone()))
+            .map(|f| self.source.canonical(&f.path))
             .collect();
         if let Some(first) = open.iter().position(|p| *p == key) {
             let chain: Vec<String> = open[first..]
@@ -489,7 +497,7 @@ impl Expander {
                 .collect();
             return Err(self.invalid(e.pos, &format!("include cycle: {}", chain.join(" -> "))));
         }
-        if optional && !path.is_file() {
+        if optional && !self.source.is_file(&path) {
             return Ok(());
         }
         let root = self.read(&path, Some(e.pos))?;
@@ -544,13 +552,8 @@ impl Expander {
 }
 
 /// Reads a file of at most [`MAX_OUTPUT_BYTES`] as UTF-8 text.
-pub fn read_capped(path: &Path) -> Result<String, String> {
-    use std::io::Read;
-    let f = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let mut bytes = Vec::new();
-    f.take(MAX_OUTPUT_BYTES as u64 + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| e.to_string())?;
+pub fn read_capped(source: &Source, path: &Path) -> Result<String, String> {
+    let mut bytes = source.read(path, MAX_OUTPUT_BYTES)?;
     if bytes.len() > MAX_OUTPUT_BYTES {
         return Err(format!("the file exceeds {MAX_OUTPUT_BYTES} bytes"));
     }

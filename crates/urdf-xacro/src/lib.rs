@@ -24,6 +24,7 @@
 
 mod expand;
 pub mod expr;
+pub mod files;
 mod macros;
 pub mod packages;
 mod text;
@@ -54,6 +55,11 @@ pub struct Options {
     pub packages: Vec<(String, PathBuf)>,
     /// A smaller limit than [`MAX_OUTPUT_BYTES`] on the expanded document, if any.
     pub max_bytes: Option<usize>,
+    /// The files to read instead of the disk, if any: then every file (the top file,
+    /// includes, YAML) is taken from this tree, and `$(find PKG)` looks in [`Options::packages`]
+    /// and then at the `package.xml` files of the tree (or a folder named PKG), never at
+    /// `ROS_PACKAGE_PATH` (a browser page has no disk).
+    pub files: Option<std::sync::Arc<files::MemoryFiles>>,
 }
 
 impl Options {
@@ -133,6 +139,17 @@ impl std::error::Error for XacroError {}
 /// property, argument or macro, missing package, division by zero, recursion, include cycle,
 /// size); [`XacroError::Unsupported`] for constructs not supported natively.
 pub fn expand_file(path: &Path, options: &Options) -> Result<Expansion, XacroError> {
+    expand_on_a_large_stack(path, options)
+}
+
+/// WebAssembly in a browser has no threads: the expansion runs on the caller's stack there.
+#[cfg(target_arch = "wasm32")]
+fn expand_on_a_large_stack(path: &Path, options: &Options) -> Result<Expansion, XacroError> {
+    expand::Expander::new(options).run(path)
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+fn expand_on_a_large_stack(path: &Path, options: &Options) -> Result<Expansion, XacroError> {
     const STACK_BYTES: usize = 256 << 20;
     std::thread::scope(|s| {
         std::thread::Builder::new()

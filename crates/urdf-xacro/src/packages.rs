@@ -2,10 +2,13 @@
 //! pairs the caller gives, in the folders of `ROS_PACKAGE_PATH` (each walked recursively, the
 //! first folder holding a `package.xml` whose `<name>` is PKG wins, and a package holds no
 //! packages: rospack's rule), and in the `share/PKG` folders of `AMENT_PREFIX_PATH` (ROS 2's
-//! install spaces).
+//! install spaces). With an in-memory file tree ([`crate::Options::files`]) the environment is
+//! not looked at: the tree's `package.xml` files are, then a folder of the tree named PKG.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+
+use crate::files::Source;
 
 /// Folders deeper than this below a `ROS_PACKAGE_PATH` entry are not searched.
 const MAX_WALK_DEPTH: usize = 12;
@@ -15,14 +18,16 @@ const MAX_WALK_DEPTH: usize = 12;
 pub struct Packages {
     given: Vec<(String, PathBuf)>,
     walked: Option<HashMap<String, PathBuf>>,
+    source: Source,
 }
 
 impl Packages {
     /// Resolution with the caller's `NAME=DIR` pairs first.
-    pub fn new(given: &[(String, PathBuf)]) -> Packages {
+    pub fn new(given: &[(String, PathBuf)], source: Source) -> Packages {
         Packages {
             given: given.to_vec(),
             walked: None,
+            source,
         }
     }
 
@@ -32,7 +37,17 @@ impl Packages {
     /// The package is found nowhere; the message says where it was looked for.
     pub fn find(&mut self, name: &str) -> Result<PathBuf, String> {
         if let Some((_, dir)) = self.given.iter().find(|(n, _)| n == name) {
+            if let Source::Memory(_) = self.source {
+                return Ok(dir.clone());
+            }
             return Ok(absolute(dir));
+        }
+        if let Source::Memory(files) = &self.source {
+            return in_memory(files, name).ok_or_else(|| {
+                format!(
+                    "package '{name}' not found (looked in the given package folders, the package.xml files and the folders of the files given)"
+                )
+            });
         }
         let ros = std::env::var_os("ROS_PACKAGE_PATH").unwrap_or_default();
         let walked = self.walked.get_or_insert_with(|| {
@@ -62,6 +77,37 @@ impl Packages {
 
 fn absolute(dir: &Path) -> PathBuf {
     std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf())
+}
+
+/// The folder of package `name` in an in-memory tree: the folder of a `package.xml` naming it
+/// (the shallowest), else the shallowest folder called `name`.
+fn in_memory(files: &crate::files::MemoryFiles, name: &str) -> Option<PathBuf> {
+    let shallowest = |dirs: Vec<PathBuf>| dirs.into_iter().min_by_key(|d| d.components().count());
+    let manifests = files
+        .iter()
+        .filter(|(p, _)| p.file_name().is_some_and(|f| f == "package.xml"))
+        .filter(|(_, text)| {
+            std::str::from_utf8(text)
+                .ok()
+                .and_then(package_name)
+                .is_some_and(|n| n == name)
+        })
+        .filter_map(|(p, _)| p.parent().map(Path::to_path_buf))
+        .collect();
+    if let Some(dir) = shallowest(manifests) {
+        return Some(dir);
+    }
+    let named = files
+        .keys()
+        .filter_map(|p| {
+            p.ancestors()
+                .skip(1)
+                .filter(|a| a.file_name().is_some_and(|f| f == name))
+                .last()
+                .map(Path::to_path_buf)
+        })
+        .collect();
+    shallowest(named)
 }
 
 /// The `<name>` of a package.xml's text.
@@ -119,7 +165,26 @@ mod tests {
 
     #[test]
     fn given_packages_come_first() {
-        let mut p = Packages::new(&[("arm".into(), PathBuf::from("/opt/arm"))]);
+        let mut p = Packages::new(&[("arm".into(), PathBuf::from("/opt/arm"))], Source::Disk);
         assert_eq!(p.find("arm"), Ok(PathBuf::from("/opt/arm")));
+    }
+
+    #[test]
+    fn finds_packages_in_memory_by_manifest_then_folder() {
+        let mut files = crate::files::MemoryFiles::new();
+        files.insert(
+            "/drop/src/arm_pkg/package.xml".into(),
+            b"<package><name>arm_description</name></package>".to_vec(),
+        );
+        files.insert("/drop/src/arm_pkg/urdf/arm.xacro".into(), Vec::new());
+        files.insert("/drop/gripper/urdf/g.xacro".into(), Vec::new());
+        let mut p = Packages::new(&[], Source::Memory(std::sync::Arc::new(files)));
+        assert_eq!(
+            p.find("arm_description"),
+            Ok(PathBuf::from("/drop/src/arm_pkg"))
+        );
+        assert_eq!(p.find("gripper"), Ok(PathBuf::from("/drop/gripper")));
+        let missing = p.find("base").unwrap_err();
+        assert!(missing.contains("package 'base' not found"), "{missing}");
     }
 }

@@ -244,7 +244,7 @@ impl Names for Symbols<'_> {
                     path: path.clone(),
                     included_from: None,
                 });
-                crate::yaml::load(&path).map(Some)
+                crate::yaml::load(&self.ex.source, &path).map(Some)
             }
             ("xacro.arg", [n]) => Ok(Some(Value::str(self.ex.arg(&n.to_text())?))),
             _ => Ok(None),

@@ -14,8 +14,8 @@ use crate::value::Value;
 ///
 /// # Errors
 /// Unreadable file, invalid YAML, a unit tag whose scalar is not a number.
-pub fn load(path: &Path) -> Result<Value, ExprError> {
-    let text = crate::expand::read_capped(path)
+pub fn load(source: &crate::files::Source, path: &Path) -> Result<Value, ExprError> {
+    let text = crate::expand::read_capped(source, path)
         .map_err(|e| ExprError::new(format!("load_yaml: cannot read '{}': {e}", path.display())))?;
     let doc: Yaml = serde_yaml::from_str(&text).map_err(|e| {
         ExprError::new(format!(

@@ -1,7 +1,8 @@
 //! WebAssembly bindings of urdf-dh for the web page (`web/`): a face like the CLI and the Python
 //! package, with no domain logic of its own. Each function calls the `dh-workflows` entry points
 //! that `urdf-dh extract`, `check` and `to-urdf` call, and returns the text those commands
-//! print on standard output, byte for byte; [`Robot`] adds the forward kinematics of the URDF
+//! print on standard output, byte for byte. [`Robot`] holds one extraction (made once per file
+//! and settings) and gives its texts, its warnings and the forward kinematics of the robot file
 //! and of its DH table for the page's 3-D view.
 //!
 //! Options come as JSON text (`{"base": "panda_link0", "convention": "modified"}`), so the
@@ -15,8 +16,8 @@ mod options;
 mod scene;
 
 use anyhow::Context as _;
-use dh_workflows::extract::{default_samples, extract_bytes, prove_extracted, Extracted};
-use dh_workflows::input::{load_chain_bytes, urdf_warnings};
+use dh_workflows::extract::{extract_files, Extracted};
+use dh_workflows::input::urdf_warnings;
 use dh_workflows::Sheet;
 use wasm_bindgen::prelude::*;
 
@@ -36,38 +37,34 @@ fn js_error(e: anyhow::Error) -> JsError {
 /// verification is part of the text).
 ///
 /// `options` (JSON): `name` (the file name, as the CLI shows it in messages; default
-/// `robot.urdf`), `base`, `tip`, `convention` (`standard`|`modified`), `format`
+/// `robot.urdf`; a `.xacro` name is expanded), `path` (where the file sits among `files`,
+/// default `/NAME`), `files` (`{path: text}`: the files beside it, for xacro includes,
+/// `$(find PKG)`, `load_yaml` and MJCF includes), `xacro_args` (`["NAME:=VALUE"]`),
+/// `packages` (`["NAME=DIR"]`), `base`, `tip`, `convention` (`standard`|`modified`), `format`
 /// (`text`|`yaml`|`json`|`csv`|`markdown`, default `json`), `length_unit` (`m`|`mm`),
 /// `angle_unit` (`rad`|`deg`), `linear_tol`, `angular_tol`, `samples`, `seed`: the CLI's
 /// defaults for every one left out.
 ///
 /// # Errors
-/// The CLI's error for the same input: an invalid URDF, an unknown base or tip, a chain
+/// The CLI's error for the same input: an invalid robot file, an unknown base or tip, a chain
 /// without moving joints, bad options.
 #[wasm_bindgen]
-pub fn extract(urdf: &str, options: &str) -> Result<String, JsError> {
+pub fn extract(text: &str, options: &str) -> Result<String, JsError> {
     let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
-    run_extract(urdf.as_bytes(), &o).map_err(js_error)
+    let format = o.format().map_err(js_error)?;
+    Robot::extract(text, &o)?
+        .output_as(format)
+        .map_err(js_error)
 }
 
 /// The extraction `options` describe, as `urdf-dh extract` makes it before its proof.
-fn extracted(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<Extracted> {
-    extract_bytes(
-        urdf,
-        &o.name,
+fn extracted(text: &str, o: &ExtractOptionsDoc) -> anyhow::Result<Extracted> {
+    extract_files(
+        &o.robot(text)?,
         o.base.as_deref(),
         o.tip.as_deref(),
         &o.options()?,
     )
-}
-
-fn run_extract(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<String> {
-    let mut ex = extracted(urdf, o)?;
-    let samples = o
-        .samples
-        .unwrap_or_else(|| default_samples(ex.extraction.table.rows.len()));
-    let (text, _passed) = prove_extracted(&mut ex, o.format()?, samples, o.seed)?;
-    Ok(text)
 }
 
 /// The warnings `urdf-dh extract` prints on standard error for the same input and options
@@ -76,16 +73,9 @@ fn run_extract(urdf: &[u8], o: &ExtractOptionsDoc) -> anyhow::Result<String> {
 /// # Errors
 /// As [`extract`].
 #[wasm_bindgen]
-pub fn extract_warnings(urdf: &str, options: &str) -> Result<String, JsError> {
+pub fn extract_warnings(text: &str, options: &str) -> Result<String, JsError> {
     let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
-    let ex = extracted(urdf.as_bytes(), &o).map_err(js_error)?;
-    let all: Vec<String> = ex
-        .urdf_warnings
-        .iter()
-        .cloned()
-        .chain(ex.extraction.warnings.iter().map(|w| w.to_string()))
-        .collect();
-    serde_json::to_string(&all).map_err(|e| JsError::new(&e.to_string()))
+    Robot::extract(text, &o)?.warnings()
 }
 
 /// `urdf-dh check ROBOT SHEET --format json`: the JSON report the CLI prints (its `warnings`
@@ -99,7 +89,7 @@ pub fn extract_warnings(urdf: &str, options: &str) -> Result<String, JsError> {
 #[wasm_bindgen]
 pub fn check(urdf: &str, sheet: &str, options: &str) -> Result<String, JsError> {
     let o = CheckOptions::parse(options).map_err(js_error)?;
-    run_check(urdf.as_bytes(), sheet, &o)
+    run_check(urdf, sheet, &o)
         .map(|(json, _)| json)
         .map_err(js_error)
 }
@@ -112,14 +102,15 @@ pub fn check(urdf: &str, sheet: &str, options: &str) -> Result<String, JsError> 
 #[wasm_bindgen]
 pub fn check_warnings(urdf: &str, sheet: &str, options: &str) -> Result<String, JsError> {
     let o = CheckOptions::parse(options).map_err(js_error)?;
-    run_check(urdf.as_bytes(), sheet, &o)
+    run_check(urdf, sheet, &o)
         .and_then(|(_, w)| Ok(serde_json::to_string(&w)?))
         .map_err(js_error)
 }
 
-fn run_check(urdf: &[u8], sheet: &str, o: &CheckOptions) -> anyhow::Result<(String, Vec<String>)> {
-    let (model, chain) = load_chain_bytes(urdf, &o.name, o.base.as_deref(), o.tip.as_deref())?;
-    let mut warnings = urdf_warnings(&o.name, &model, &chain);
+fn run_check(text: &str, sheet: &str, o: &CheckOptions) -> anyhow::Result<(String, Vec<String>)> {
+    let robot = o.robot(text)?;
+    let (model, chain, mut warnings) = robot.load_chain(o.base.as_deref(), o.tip.as_deref())?;
+    warnings.extend(urdf_warnings(&robot.name(), &model, &chain));
     let sheet = Sheet::parse(sheet, &o.sheet_name)?;
     warnings.extend(sheet.effects_warning(&o.sheet_name, "check compares the DH kinematics alone"));
     let report = dh_workflows::compare(&chain, &sheet, o.tolerance()?)?;
@@ -155,13 +146,18 @@ pub fn to_urdf(sheet: &str, options: &str) -> Result<String, JsError> {
     run().map_err(js_error)
 }
 
-/// The link tree of a URDF, for choosing a chain: JSON `{robot, root, links: [{name, parent,
-/// joint}], default: {base, tip} | null, default_error: string | null}` (`parent` and `joint`
-/// are `null` for the root; `default` is the chain `extract` takes without `base` and `tip`).
+/// The link tree of a robot file, for choosing a chain: JSON `{robot, format, root, links:
+/// [{name, parent, joint}], default: {base, tip} | null, default_error: string | null}`
+/// (`format` is `URDF`, `MJCF` or `SDFormat`; `parent` and `joint` are `null` for the root;
+/// `default` is the chain `extract` takes without `base` and `tip`).
+///
+/// `options` (JSON): those of [`extract`] that say how to read the file (`name`, `path`,
+/// `files`, `xacro_args`, `packages`); the others are ignored.
 ///
 /// # Errors
-/// An invalid URDF (the CLI's message).
+/// An invalid robot file (the CLI's message).
 #[wasm_bindgen]
-pub fn tree(urdf: &str, name: &str) -> Result<String, JsError> {
-    scene::tree(urdf.as_bytes(), name).map_err(js_error)
+pub fn tree(text: &str, options: &str) -> Result<String, JsError> {
+    let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
+    scene::tree(&o.robot(text).map_err(js_error)?).map_err(js_error)
 }

@@ -2,11 +2,16 @@
 //! as the CLI's flags (`length_unit`), camel case accepted too (`lengthUnit`), unknown keys
 //! refused so that a misspelt option is not silently ignored.
 
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
 use anyhow::{bail, Result};
 use dh_workflows::check::{CHECK_ANGULAR, CHECK_LINEAR};
 use dh_workflows::extract::ExtractOptions;
 use dh_workflows::geometry::Tolerance;
+use dh_workflows::input::{MemoryFiles, RobotFiles};
 use dh_workflows::sheet::ConventionDoc;
+use dh_workflows::xacro::XacroOptions;
 use dh_workflows::{AngleUnit, Format, LengthUnit};
 use serde::de::DeserializeOwned;
 use serde::Deserialize;
@@ -15,6 +20,44 @@ use serde::Deserialize;
 fn parse<T: DeserializeOwned>(text: &str, what: &str) -> Result<T> {
     let text = if text.trim().is_empty() { "{}" } else { text };
     serde_json::from_str(text).map_err(|e| anyhow::anyhow!("{what} options: {e}"))
+}
+
+/// The robot file `text` at `path` (default `/NAME`) among `files`, with the xacro options.
+fn robot_files(
+    text: &str,
+    name: &str,
+    path: Option<&str>,
+    files: &BTreeMap<String, String>,
+    args: &[String],
+    packages: &[String],
+) -> Result<RobotFiles> {
+    let top = path.map_or_else(|| format!("/{name}"), str::to_string);
+    let mut all: MemoryFiles = files
+        .iter()
+        .map(|(p, t)| (urdf_xacro_path(p), t.clone().into_bytes()))
+        .collect();
+    all.insert(urdf_xacro_path(&top), text.as_bytes().to_vec());
+    let mut xacro = XacroOptions::default();
+    for a in args {
+        xacro
+            .add_arg(a)
+            .map_err(|e| anyhow::anyhow!("xacro argument: {e}"))?;
+    }
+    for p in packages {
+        xacro
+            .add_package(p)
+            .map_err(|e| anyhow::anyhow!("package folder: {e}"))?;
+    }
+    Ok(RobotFiles {
+        top: top.into(),
+        files: Arc::new(all),
+        xacro,
+    })
+}
+
+/// A path of the in-memory tree, `.` and `..` applied.
+fn urdf_xacro_path(p: &str) -> std::path::PathBuf {
+    dh_workflows::input::normalize_path(std::path::Path::new(p))
 }
 
 fn default_robot_name() -> String {
@@ -64,6 +107,19 @@ pub struct ExtractOptionsDoc {
     /// The robot file's name, as messages show it.
     #[serde(default = "default_robot_name")]
     pub name: String,
+    /// Where the robot file sits among `files` (default: `/` and its name).
+    #[serde(default)]
+    pub path: Option<String>,
+    /// The files beside the robot file, by path (text): includes, packages, YAML.
+    #[serde(default)]
+    pub files: BTreeMap<String, String>,
+    /// A xacro file's arguments, `NAME:=VALUE` (the CLI's `--xacro-arg`).
+    #[serde(default, alias = "xacroArgs")]
+    pub xacro_args: Vec<String>,
+    /// Package folders among `files`, `NAME=DIR` (the CLI's `--package`); others are found by
+    /// their `package.xml`.
+    #[serde(default)]
+    pub packages: Vec<String>,
     /// Base link (default: the root link).
     #[serde(default)]
     pub base: Option<String>,
@@ -105,6 +161,21 @@ impl ExtractOptionsDoc {
         parse(text, "extract")
     }
 
+    /// The robot file `text` among the files these options give.
+    ///
+    /// # Errors
+    /// A malformed xacro argument or package folder.
+    pub fn robot(&self, text: &str) -> Result<RobotFiles> {
+        robot_files(
+            text,
+            &self.name,
+            self.path.as_deref(),
+            &self.files,
+            &self.xacro_args,
+            &self.packages,
+        )
+    }
+
     /// The library's extraction options.
     ///
     /// # Errors
@@ -124,17 +195,23 @@ impl ExtractOptionsDoc {
     /// # Errors
     /// A name that is none of the CLI's `--format` values.
     pub fn format(&self) -> Result<Format> {
-        Ok(match self.format.as_str() {
-            "text" => Format::Text,
-            "yaml" => Format::Yaml,
-            "json" => Format::Json,
-            "csv" => Format::Csv,
-            "markdown" => Format::Markdown,
-            other => {
-                bail!("format: expected one of text, yaml, json, csv, markdown, found '{other}'")
-            }
-        })
+        format_named(&self.format)
     }
+}
+
+/// The output format called `name`.
+///
+/// # Errors
+/// A name that is none of the CLI's `--format` values.
+pub fn format_named(name: &str) -> Result<Format> {
+    Ok(match name {
+        "text" => Format::Text,
+        "yaml" => Format::Yaml,
+        "json" => Format::Json,
+        "csv" => Format::Csv,
+        "markdown" => Format::Markdown,
+        other => bail!("format: expected one of text, yaml, json, csv, markdown, found '{other}'"),
+    })
 }
 
 /// Options of `check` (the CLI's flags of the same names and defaults).
@@ -144,6 +221,18 @@ pub struct CheckOptions {
     /// The robot file's name, as messages show it.
     #[serde(default = "default_robot_name")]
     pub name: String,
+    /// As [`ExtractOptionsDoc::path`].
+    #[serde(default)]
+    pub path: Option<String>,
+    /// As [`ExtractOptionsDoc::files`].
+    #[serde(default)]
+    pub files: BTreeMap<String, String>,
+    /// As [`ExtractOptionsDoc::xacro_args`].
+    #[serde(default, alias = "xacroArgs")]
+    pub xacro_args: Vec<String>,
+    /// As [`ExtractOptionsDoc::packages`].
+    #[serde(default)]
+    pub packages: Vec<String>,
     /// The sheet's file name, as messages show it.
     #[serde(default = "default_sheet_name", alias = "sheetName")]
     pub sheet_name: String,
@@ -168,6 +257,21 @@ impl CheckOptions {
     /// Text that is not a JSON object of these options.
     pub fn parse(text: &str) -> Result<Self> {
         parse(text, "check")
+    }
+
+    /// As [`ExtractOptionsDoc::robot`].
+    ///
+    /// # Errors
+    /// As [`ExtractOptionsDoc::robot`].
+    pub fn robot(&self, text: &str) -> Result<RobotFiles> {
+        robot_files(
+            text,
+            &self.name,
+            self.path.as_deref(),
+            &self.files,
+            &self.xacro_args,
+            &self.packages,
+        )
     }
 
     /// The comparison's tolerances.

@@ -5,9 +5,12 @@
 //! Poses go to JavaScript as 4x4 homogeneous matrices in column-major order (16 numbers, as
 //! three.js's `Matrix4.fromArray` reads them).
 
-use anyhow::Context as _;
-use dh_workflows::geometry::{DhTable, JointKind};
-use dh_workflows::input::{Chain, UrdfModel};
+use std::collections::HashMap;
+
+use dh_workflows::extract::{default_samples, prove_extracted_with, Extracted};
+use dh_workflows::geometry::JointKind;
+use dh_workflows::input::RobotFiles;
+use dh_workflows::Format;
 use nalgebra::Isometry3;
 use serde::Serialize;
 use wasm_bindgen::prelude::*;
@@ -38,6 +41,7 @@ struct ChainDoc<'a> {
 #[derive(Serialize)]
 struct TreeDoc<'a> {
     robot: &'a str,
+    format: &'a str,
     root: &'a str,
     links: Vec<LinkDoc<'a>>,
     default: Option<ChainDoc<'a>>,
@@ -45,8 +49,10 @@ struct TreeDoc<'a> {
 }
 
 /// See [`crate::tree`].
-pub(crate) fn tree(urdf: &[u8], name: &str) -> anyhow::Result<String> {
-    let model = UrdfModel::from_bytes(urdf).with_context(|| format!("{name}: invalid URDF"))?;
+pub(crate) fn tree(robot: &RobotFiles) -> anyhow::Result<String> {
+    let name = robot.name();
+    let (bytes, _warnings) = robot.bytes()?;
+    let model = robot.model_of(&bytes)?;
     let links = model
         .links()
         .into_iter()
@@ -72,12 +78,13 @@ pub(crate) fn tree(urdf: &[u8], name: &str) -> anyhow::Result<String> {
             None,
             Some(format!(
                 "{:#}",
-                dh_workflows::input::chain_error(name, e.clone())
+                dh_workflows::input::chain_error(&name, e.clone())
             )),
         ),
     };
     let doc = TreeDoc {
         robot: model.robot_name(),
+        format: model.format_name(),
         root: model.root_link(),
         links,
         default,
@@ -113,28 +120,83 @@ struct SceneDoc {
     dh_tip: Vec<f64>,
 }
 
-/// A chain of a URDF and its DH table (SI units), extracted once for the sliders.
+/// One extraction of a chain (its table in SI units, its sheet in the units asked for), made once
+/// per file and settings: the page's table, texts, warnings and sliders all read it.
 #[wasm_bindgen]
 pub struct Robot {
-    chain: Chain,
-    table: DhTable,
+    ex: Extracted,
+    samples: usize,
+    seed: u64,
+    /// The robot file's tip pose at each proof sample (by the bits of the joint values): the
+    /// proofs of the texts in several formats draw the same samples, so the robot file's side
+    /// is computed once.
+    poses: HashMap<Vec<u64>, Isometry3<f64>>,
+}
+
+impl Robot {
+    /// The extraction `o` describes.
+    pub(crate) fn extract(text: &str, o: &ExtractOptionsDoc) -> Result<Robot, JsError> {
+        let ex = crate::extracted(text, o).map_err(js_error)?;
+        let samples = o
+            .samples
+            .unwrap_or_else(|| default_samples(ex.extraction.table.rows.len()));
+        Ok(Robot {
+            ex,
+            samples,
+            seed: o.seed,
+            poses: HashMap::new(),
+        })
+    }
+
+    /// The text `urdf-dh extract --format F` prints, proved as written.
+    pub(crate) fn output_as(&mut self, format: Format) -> anyhow::Result<String> {
+        let poses = &mut self.poses;
+        let (text, _passed) =
+            prove_extracted_with(&mut self.ex, format, self.samples, self.seed, |chain, q| {
+                let key = q.iter().map(|v| v.to_bits()).collect();
+                *poses.entry(key).or_insert_with(|| chain.fk(q))
+            })?;
+        Ok(text)
+    }
 }
 
 #[wasm_bindgen]
 impl Robot {
-    /// Extracts the chain chosen by `options` (those of [`crate::extract`]; units and format
-    /// do not matter: the scene is in metres and radians).
+    /// Extracts the chain chosen by `options` (those of [`crate::extract`]; the format does not
+    /// matter here: [`Robot::output`] takes it).
     ///
     /// # Errors
     /// As [`crate::extract`].
     #[wasm_bindgen(constructor)]
-    pub fn new(urdf: &str, options: &str) -> Result<Robot, JsError> {
+    pub fn new(text: &str, options: &str) -> Result<Robot, JsError> {
         let o = ExtractOptionsDoc::parse(options).map_err(js_error)?;
-        let ex = crate::extracted(urdf.as_bytes(), &o).map_err(js_error)?;
-        Ok(Robot {
-            chain: ex.chain,
-            table: ex.extraction.table,
-        })
+        Robot::extract(text, &o)
+    }
+
+    /// The text `urdf-dh extract --format FORMAT` prints (`text`, `yaml`, `json`, `csv`,
+    /// `markdown`), proved as written.
+    ///
+    /// # Errors
+    /// An unknown format; a writer bug (the text does not read back).
+    pub fn output(&mut self, format: &str) -> Result<String, JsError> {
+        let format = crate::options::format_named(format).map_err(js_error)?;
+        self.output_as(format).map_err(js_error)
+    }
+
+    /// The warnings `urdf-dh extract` prints on standard error (without the
+    /// `urdf-dh: warning: ` prefix), as a JSON array of strings.
+    ///
+    /// # Errors
+    /// None expected (serialising strings).
+    pub fn warnings(&self) -> Result<String, JsError> {
+        let all: Vec<String> = self
+            .ex
+            .urdf_warnings
+            .iter()
+            .cloned()
+            .chain(self.ex.extraction.warnings.iter().map(|w| w.to_string()))
+            .collect();
+        serde_json::to_string(&all).map_err(|e| JsError::new(&e.to_string()))
     }
 
     /// The moving joints as JSON `[{name, kind, lower, upper}]`, in row order.
@@ -143,6 +205,7 @@ impl Robot {
     /// None expected (serialising plain data).
     pub fn joints(&self) -> Result<String, JsError> {
         let joints: Vec<JointDoc> = self
+            .ex
             .chain
             .axes()
             .iter()
@@ -166,11 +229,12 @@ impl Robot {
     /// `q` of the wrong length or not finite.
     pub fn fk(&self, q: &[f64]) -> Result<String, JsError> {
         let run = || -> anyhow::Result<String> {
-            let urdf = self.chain.link_poses(q)?;
-            let axes = self.chain.axis_lines(q)?;
-            let dh = self.table.frames(q)?;
-            let normals = self.table.common_normals(q)?;
-            let dh_tip = self.table.fk(q)?;
+            let (chain, table) = (&self.ex.chain, &self.ex.extraction.table);
+            let urdf = chain.link_poses(q)?;
+            let axes = chain.axis_lines(q)?;
+            let dh = table.frames(q)?;
+            let normals = table.common_normals(q)?;
+            let dh_tip = table.fk(q)?;
             let six = |a: nalgebra::Vector3<f64>, b: nalgebra::Vector3<f64>| {
                 [a.x, a.y, a.z, b.x, b.y, b.z]
             };

@@ -67,6 +67,23 @@ const SKIPPED: [&str; 13] = [
 /// # Errors
 /// As [`read`]; [`UrdfError::NotUtf8`] and [`UrdfError::TooLarge`] (as [`MjcfError::Model`]).
 pub fn from_bytes(bytes: &[u8], dir: Option<&Path>) -> Result<UrdfModel, MjcfError> {
+    from_bytes_with(bytes, dir, None)
+}
+
+/// Files by path, their contents as bytes: an in-memory folder tree (the files a person dropped
+/// on the web page, where there is no disk).
+pub type MemoryFiles = std::collections::BTreeMap<std::path::PathBuf, Vec<u8>>;
+
+/// [`from_bytes`] with `<include file>` read from `files` (when given) instead of the disk:
+/// the included path is `dir` joined with the file's name, `.` and `..` applied.
+///
+/// # Errors
+/// As [`from_bytes`]; an include not among `files`.
+pub fn from_bytes_with(
+    bytes: &[u8],
+    dir: Option<&Path>,
+    files: Option<&MemoryFiles>,
+) -> Result<UrdfModel, MjcfError> {
     if bytes.len() > MAX_URDF_BYTES {
         return Err(UrdfError::TooLarge {
             size: Some(bytes.len()),
@@ -82,7 +99,7 @@ pub fn from_bytes(bytes: &[u8], dir: Option<&Path>) -> Result<UrdfModel, MjcfErr
             + 1;
         UrdfError::NotUtf8 { offset, line }
     })?;
-    read(text, dir)
+    read_with(text, dir, files)
 }
 
 /// Reads an MJCF document (see the module docs for what is read).
@@ -95,6 +112,14 @@ pub fn from_bytes(bytes: &[u8], dir: Option<&Path>) -> Result<UrdfModel, MjcfErr
 ///   or `<replicate>`;
 /// - [`MjcfError::Model`]: a fault of the converted model's own validation.
 pub fn read(text: &str, dir: Option<&Path>) -> Result<UrdfModel, MjcfError> {
+    read_with(text, dir, None)
+}
+
+fn read_with(
+    text: &str,
+    dir: Option<&Path>,
+    files: Option<&MemoryFiles>,
+) -> Result<UrdfModel, MjcfError> {
     if text.len() > MAX_URDF_BYTES {
         return Err(UrdfError::TooLarge {
             size: Some(text.len()),
@@ -102,7 +127,7 @@ pub fn read(text: &str, dir: Option<&Path>) -> Result<UrdfModel, MjcfError> {
         }
         .into());
     }
-    let root = xml::read_document(text, dir)?;
+    let root = xml::read_document(text, dir, files)?;
     let mut compiler = orient::Compiler::default();
     for c in root.children.iter().filter(|c| c.name == "compiler") {
         compiler.apply(c)?;

@@ -69,9 +69,14 @@ impl Node {
 /// [`MjcfError::Invalid`] for an `<include>` that cannot be followed (no folder, no `file`,
 /// missing or unreadable file, the same file twice, a root other than `<mujoco>`) or nesting
 /// beyond [`MAX_DEPTH`].
-pub(crate) fn read_document(text: &str, dir: Option<&Path>) -> Result<Node, MjcfError> {
+pub(crate) fn read_document(
+    text: &str,
+    dir: Option<&Path>,
+    files: Option<&super::MemoryFiles>,
+) -> Result<Node, MjcfError> {
     let mut includes = Includes {
         dir: dir.map(Path::to_path_buf),
+        files,
         seen: HashSet::new(),
         count: 0,
     };
@@ -80,8 +85,10 @@ pub(crate) fn read_document(text: &str, dir: Option<&Path>) -> Result<Node, Mjcf
     convert(&doc, root, None, 0, &mut includes)
 }
 
-struct Includes {
+struct Includes<'f> {
     dir: Option<PathBuf>,
+    /// The files to read includes from instead of the disk (see [`super::from_bytes_with`]).
+    files: Option<&'f super::MemoryFiles>,
     seen: HashSet<PathBuf>,
     count: usize,
 }
@@ -161,14 +168,24 @@ fn include(at: &Node, depth: usize, includes: &mut Includes) -> Result<Vec<Node>
             "expected at most {MAX_INCLUDES} <include> elements, found more"
         )));
     }
-    let key = path.canonicalize().unwrap_or_else(|_| path.clone());
-    if !includes.seen.insert(key) {
+    let key = match includes.files {
+        Some(_) => normalize(&path),
+        None => path.canonicalize().unwrap_or_else(|_| path.clone()),
+    };
+    if !includes.seen.insert(key.clone()) {
         return Err(at.error(format!(
             "expected each file included once, found '{name}' included again"
         )));
     }
-    let bytes = std::fs::read(&path)
-        .map_err(|e| at.error(format!("cannot read the included file '{name}': {e}")))?;
+    let bytes = match includes.files {
+        Some(files) => files.get(&key).cloned().ok_or_else(|| {
+            at.error(format!(
+                "cannot read the included file '{name}': not among the files given"
+            ))
+        })?,
+        None => std::fs::read(&path)
+            .map_err(|e| at.error(format!("cannot read the included file '{name}': {e}")))?,
+    };
     if bytes.len() > MAX_URDF_BYTES {
         return Err(at.error(format!(
             "expected an included file of at most {MAX_URDF_BYTES} bytes, found {}",
@@ -184,6 +201,24 @@ fn include(at: &Node, depth: usize, includes: &mut Includes) -> Result<Vec<Node>
     let doc = parse(&text, Some(&file))?;
     let root = convert(&doc, doc.root_element(), Some(&file), depth + 1, includes)?;
     Ok(root.children)
+}
+
+/// `path` with `.` dropped and `..` applied to the component before it (in-memory files have
+/// no file system to canonicalise paths).
+fn normalize(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                if !out.pop() {
+                    out.push("..");
+                }
+            }
+            other => out.push(other.as_os_str()),
+        }
+    }
+    out
 }
 
 /// Whether `bytes` hold an MJCF document: the first element (after an XML declaration, comments,
