@@ -6,6 +6,10 @@ use std::io::Write;
 
 use clap::{Args, Parser, Subcommand};
 use dh_workflows::geometry::{Convention, Tolerance};
+use dh_workflows::output::check_destinations;
+use dh_workflows::render::Format;
+use dh_workflows::sheet::ConventionDoc;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 
 use crate::commands::batch::{batch, BatchArgs};
 use crate::commands::check::{check, CheckArgs, CheckFormat, CHECK_ANGULAR, CHECK_LINEAR};
@@ -15,10 +19,6 @@ use crate::commands::to_urdf::{to_urdf, ToUrdfArgs};
 use crate::commands::{calibrate, compensate, cpa, import, predict, simulate};
 use crate::error::Outcome;
 use crate::guard;
-use crate::output::check_destinations;
-use crate::render::Format;
-use crate::sheet::ConventionDoc;
-use crate::units::{AngleUnit, LengthUnit};
 use crate::xacro_flags::XacroCli;
 
 /// Denavit-Hartenberg parameters of serial manipulators: from URDFs, vendor DH sheets and
@@ -348,7 +348,7 @@ where
             // One line each: a line feed inside a quoted name is escaped too.
             let message = format!("{e:#}");
             let _ = writeln!(err, "urdf-dh: error: {}", crate::guard::escape(&message));
-            if let Some(h) = crate::error::hint_for(&e) {
+            if let Some(h) = dh_workflows::error::hint_for(&e) {
                 let _ = writeln!(err, "hint: {}", crate::guard::escape(&h));
             }
             2
@@ -357,7 +357,7 @@ where
 }
 
 /// Runs one command as [`run`] does, for callers in process (the Python package): the
-/// command's error (with its hint, see [`crate::error::hint_for`]) is returned, not printed, and
+/// command's error (with its hint, see [`dh_workflows::error::hint_for`]) is returned, not printed, and
 /// a usage error is an error whose message is clap's.
 ///
 /// # Errors
@@ -376,7 +376,9 @@ where
         let text = e.render().to_string();
         let message = text.strip_prefix("error: ").unwrap_or(&text).trim_end();
         match similar_option(&args, &e) {
-            Some(option) => crate::error::hinted(message, format!("did you mean '{option}'?")),
+            Some(option) => {
+                dh_workflows::error::hinted(message, format!("did you mean '{option}'?"))
+            }
             None => anyhow::anyhow!("{message}"),
         }
     })?;

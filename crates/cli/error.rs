@@ -1,6 +1,4 @@
-//! Errors the CLI reports with a hint, and the exit-code contract.
-
-pub use dh_workflows::error::{hint_for, hinted, Hinted};
+//! The exit-code contract (errors with their hints are the library's, `dh_workflows::error`).
 
 /// What a successful run found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -8,7 +8,7 @@
 
 use std::fmt::Write as _;
 
-use crate::units::LengthUnit;
+use dh_workflows::units::LengthUnit;
 
 /// One measured point's residual.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,10 +6,10 @@
 #![no_main]
 
 use dh_core::Convention;
+use dh_workflows::render::{render_sheet, Format};
+use dh_workflows::sheet::{Sheet, SheetDoc};
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use libfuzzer_sys::fuzz_target;
-use urdf_dh::render::{render_sheet, Format};
-use urdf_dh::sheet::{Sheet, SheetDoc};
-use urdf_dh::units::{AngleUnit, LengthUnit};
 
 fn finite(p: &nalgebra::Isometry3<f64>) -> bool {
     p.translation

@@ -5,10 +5,10 @@
 //! written tree that does not read back.
 #![no_main]
 
+use dh_workflows::render::{render_sheet, Format};
+use dh_workflows::tree_sheet::TreeSheet;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use libfuzzer_sys::fuzz_target;
-use urdf_dh::render::{render_sheet, Format};
-use urdf_dh::tree_sheet::TreeSheet;
-use urdf_dh::units::{AngleUnit, LengthUnit};
 
 fn finite(p: &nalgebra::Isometry3<f64>) -> bool {
     p.translation

@@ -6,11 +6,11 @@
 #![no_main]
 
 use dh_core::{Convention, DhTable, Tolerance};
+use dh_workflows::render::{render_sheet, Format};
+use dh_workflows::sheet::{Sheet, SheetDoc};
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use libfuzzer_sys::fuzz_target;
 use urdf_axes::UrdfModel;
-use urdf_dh::render::{render_sheet, Format};
-use urdf_dh::sheet::{Sheet, SheetDoc};
-use urdf_dh::units::{AngleUnit, LengthUnit};
 
 fn finite_table(t: &DhTable) -> bool {
     let pose = |p: &nalgebra::Isometry3<f64>| {

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
+use dh_workflows::input::load_chain;
+use dh_workflows::sheet::Sheet;
 use serde_yaml::Value;
 use urdf_dh::commands::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
-use urdf_dh::commands::extract::load_chain;
-use urdf_dh::sheet::Sheet;
 
 use crate::common::{fixture_robots, root, run, settings, skip_without_shared};
 
@@ -466,12 +466,12 @@ fn to_urdf_round_trips_every_fixture_sheet() {
 
 mod round_trip {
     use dh_core::{Convention, DhRow, DhTable, Limits};
+    use dh_workflows::sheet::{Sheet, SheetDoc};
+    use dh_workflows::units::{AngleUnit, LengthUnit};
     use nalgebra::Isometry3;
     use proptest::prelude::*;
     use urdf_dh::commands::check::compare;
     use urdf_dh::commands::to_urdf::urdf_of;
-    use urdf_dh::sheet::{Sheet, SheetDoc};
-    use urdf_dh::units::{AngleUnit, LengthUnit};
 
     /// A row value: often exactly 0 or a multiple of 90 degrees (the degenerate cases vendor
     /// sheets are made of), else anything.

@@ -6,11 +6,11 @@
 use std::path::Path;
 
 use dh_core::Convention;
+use dh_workflows::render::{render_sheet, Format};
+use dh_workflows::sheet::Sheet;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use urdf_dh::commands::check::{compare, CHECK_ANGULAR, CHECK_LINEAR};
 use urdf_dh::commands::extract::{run_extract, ExtractArgs};
-use urdf_dh::render::{render_sheet, Format};
-use urdf_dh::sheet::Sheet;
-use urdf_dh::units::{AngleUnit, LengthUnit};
 
 use crate::common::{corpus_chains, skip_without_shared};
 

@@ -331,7 +331,7 @@ fn contacts_and_trees_get_a_report() {
     // A tree.
     let nominal = path(dir.path(), "tree.yaml");
     std::fs::write(&nominal, crate::tree::tree_sheet(&[])).unwrap();
-    let truth = urdf_dh::tree_sheet::TreeSheet::parse(
+    let truth = dh_workflows::tree_sheet::TreeSheet::parse(
         &crate::tree::tree_sheet(&[("r2.a", 1e-3)]),
         "truth.yaml",
     )

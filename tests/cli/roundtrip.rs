@@ -37,7 +37,9 @@ fn folded(t: &dh_core::DhTable) -> dh_core::DhTable {
 }
 
 fn table(yaml: &str) -> dh_core::DhTable {
-    urdf_dh::sheet::Sheet::parse(yaml, "output").unwrap().table
+    dh_workflows::sheet::Sheet::parse(yaml, "output")
+        .unwrap()
+        .table
 }
 
 /// Where two tables differ beyond [`SAME_LENGTH`] / [`SAME_ANGLE`], if anywhere.

@@ -5,11 +5,11 @@
 use crate::common::{exec, ok};
 use std::path::Path;
 
+use dh_workflows::tree_sheet::TreeSheet;
 use nalgebra::{Isometry3, Point3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
-use urdf_dh::tree_sheet::TreeSheet;
 
 use crate::common::skip_without_shared;
 

@@ -13,17 +13,17 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::{bail, Result};
 use dh_workflows::geometry::{Convention, Tolerance};
+use dh_workflows::input::chain_error;
 use dh_workflows::input::Chain;
+use dh_workflows::input::{display_name, read_robot, read_text};
+use dh_workflows::render::Format;
+use dh_workflows::sheet::SheetDoc;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use nalgebra::Isometry3;
 use serde::Serialize;
 
 use crate::commands::extract::{extract_chain, prove_extracted_with, ExtractOptions};
 use crate::error::Outcome;
-use crate::input::chain_error;
-use crate::input::{display_name, read_robot, read_text};
-use crate::render::Format;
-use crate::sheet::SheetDoc;
-use crate::units::{AngleUnit, LengthUnit};
 
 /// Everything `batch` needs.
 #[derive(Clone, Debug)]

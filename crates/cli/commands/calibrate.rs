@@ -23,19 +23,21 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use dh_workflows::calibration::residuals;
 use dh_workflows::fit::{CalibrationDoc, Effect, Measurements, Plan, Report, Silent, Split};
+use dh_workflows::input::display_name;
+use dh_workflows::measured::DataUnits;
+use dh_workflows::model::LoadedModel;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 
 use crate::error::Outcome;
-use crate::input::display_name;
-use crate::measured::{DataUnits, LoadedModel};
 use crate::plot::{residuals_svg, Panel, Residual, ResidualChart};
 use crate::progress::PipelineProgress;
-use crate::units::{AngleUnit, LengthUnit};
 
 pub use super::calibrate_args::*;
 pub use dh_workflows::calibration::{self as calibration, Calibrated, Inputs, Loaded};
 
 // The submodules import what they use through `use super::*`: the imports above and each
 // other's items, re-exported here.
+
 mod run;
 pub use run::*;
 mod text;

@@ -19,11 +19,11 @@ pub use dh_workflows::check::{
     compare, CheckReport, CheckTolerances, DifferenceDoc, CHECK_ANGULAR, CHECK_LINEAR,
 };
 use dh_workflows::geometry::Tolerance;
+use dh_workflows::input::load_chain;
+use dh_workflows::input::{display_name, read_text};
+use dh_workflows::sheet::Sheet;
 
 use crate::error::Outcome;
-use crate::input::load_chain;
-use crate::input::{display_name, read_text};
-use crate::sheet::Sheet;
 
 /// Output format of `check`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -58,7 +58,7 @@ pub struct CheckArgs {
 /// Unreadable or invalid URDF or sheet.
 pub fn check(args: &CheckArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let (model, chain) = load_chain(&args.robot, args.base.as_deref(), args.tip.as_deref())?;
-    for w in crate::input::urdf_warnings(&display_name(&args.robot), &model, &chain) {
+    for w in dh_workflows::input::urdf_warnings(&display_name(&args.robot), &model, &chain) {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let sheet_name = display_name(&args.sheet);

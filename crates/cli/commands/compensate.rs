@@ -9,15 +9,16 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
+use dh_workflows::calibrated::load_calibrated;
 use dh_workflows::compensate::{failed_poses, same_joints, CompensateOptions, DEFAULT_MAX_CHANGE};
 use dh_workflows::geometry::Convention;
+use dh_workflows::input::display_name;
+use dh_workflows::measured::DataUnits;
+use dh_workflows::model::load_model;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 
-use crate::calibrated::load_calibrated;
 use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
 use crate::error::Outcome;
-use crate::input::display_name;
-use crate::measured::{load_model, DataUnits};
-use crate::units::{AngleUnit, LengthUnit};
 
 /// Command-line arguments of `compensate`.
 #[derive(Debug, clap::Args)]
@@ -195,9 +196,9 @@ pub fn compensate(
         text.push_str(&cells.join(","));
         text.push('\n');
     }
-    let path = args.out.as_deref().unwrap_or(crate::output::STDIO);
-    crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
-    let report: &mut dyn Write = if path == crate::output::STDIO {
+    let path = args.out.as_deref().unwrap_or(dh_workflows::output::STDIO);
+    dh_workflows::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
+    let report: &mut dyn Write = if path == dh_workflows::output::STDIO {
         err
     } else {
         out
@@ -207,7 +208,7 @@ pub fn compensate(
         report,
         "compensated {} pose(s): {c_origin} against {n_origin}{}",
         input.rows.len(),
-        if path == crate::output::STDIO {
+        if path == dh_workflows::output::STDIO {
             String::new()
         } else {
             format!(" -> {}", display_name(path))

@@ -4,15 +4,15 @@ use std::io::Write;
 
 use anyhow::Result;
 use dh_workflows::geometry::{Bound, Convention};
+use dh_workflows::input::{display_name, read_text};
+use dh_workflows::prove::{failure_line, prove, Isometry3Pair, Source};
+use dh_workflows::render::{render_sheet, Format};
+use dh_workflows::sheet::{Sheet, SheetDoc};
+use dh_workflows::units::{AngleUnit, LengthUnit};
+use dh_workflows::ur;
 use nalgebra::Isometry3;
 
 use crate::error::Outcome;
-use crate::input::{display_name, read_text};
-use crate::readback::{failure_line, prove, Isometry3Pair, Source};
-use crate::render::{render_sheet, Format};
-use crate::sheet::{Sheet, SheetDoc};
-use crate::units::{AngleUnit, LengthUnit};
-use dh_workflows::ur;
 
 /// Everything `convert` needs.
 #[derive(Clone, Debug)]
@@ -38,7 +38,7 @@ pub struct ConvertArgs {
 /// Runs `convert`: `a`, `alpha` move one row and the base or tool takes the pair that falls
 /// off the end (see `DhTable::to_convention`); `theta`, `d`, joint directions and zero pose stay.
 /// What is written is read back and compared with the input sheet by forward kinematics
-/// ([`crate::readback::prove`]); exit 1 if it strays beyond the written precision's bound.
+/// ([`dh_workflows::prove::prove`]); exit 1 if it strays beyond the written precision's bound.
 ///
 /// # Errors
 /// Unreadable or invalid sheet.
@@ -143,7 +143,7 @@ fn sheet_text(path: &str) -> Result<(String, String)> {
             return Ok((format!("{}.yaml", n.name), n.text.to_owned()));
         }
         let names: Vec<&str> = ur::NOMINAL.iter().map(|n| n.name).collect();
-        return Err(crate::error::hinted(
+        return Err(dh_workflows::error::hinted(
             format!("{path}: cannot read the file: no such file, and no shipped nominal table of that name"),
             format!("the shipped nominal tables: {}", names.join(", ")),
         ));

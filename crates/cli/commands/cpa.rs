@@ -15,12 +15,12 @@ use anyhow::Result;
 use dh_workflows::cpa_report::cpa as run;
 pub use dh_workflows::cpa_report::*;
 use dh_workflows::geometry::Tolerance;
+use dh_workflows::input::display_name;
+use dh_workflows::render::{render_sheet, Format};
+use dh_workflows::units::{AngleUnit, LengthUnit};
 
 use crate::error::Outcome;
-use crate::input::display_name;
 use crate::plot_motion::motion_svg;
-use crate::render::{render_sheet, Format};
-use crate::units::{AngleUnit, LengthUnit};
 
 /// Output format of `cpa`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Default)]
@@ -68,7 +68,7 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         .collect();
         let mut outputs = vec![("--report", page.as_str())];
         outputs.extend(args.plot.iter().map(|p| ("--plot", p.as_str())));
-        crate::output::check_destinations(&inputs, &outputs)?;
+        dh_workflows::output::check_destinations(&inputs, &outputs)?;
     }
     let r = run(&args.request, err)?;
     let report = match args.format {
@@ -106,10 +106,10 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
     }
     if !files.is_empty() {
         let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
-        crate::output::write_all_or_stdout(&files, out)?;
+        dh_workflows::output::write_all_or_stdout(&files, out)?;
     }
     let report_sink: &mut dyn Write =
-        if crate::output::any_stdout([args.plot.as_deref(), args.report.as_deref()]) {
+        if dh_workflows::output::any_stdout([args.plot.as_deref(), args.report.as_deref()]) {
             err
         } else {
             out
@@ -157,8 +157,8 @@ pub struct CpaCli {
     #[command(flatten)]
     pub xacro: crate::xacro_flags::XacroCli,
     /// DH convention of the extracted table (a sheet model brings its own).
-    #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
-    convention: crate::sheet::ConventionDoc,
+    #[arg(long, value_enum, default_value_t = dh_workflows::sheet::ConventionDoc::Standard)]
+    convention: dh_workflows::sheet::ConventionDoc,
     /// Measured axes whose common normal is shorter than this intersect (metres).
     #[arg(long, value_name = "M", default_value_t = CPA_LINEAR, value_parser = crate::guard::linear_tol)]
     linear_tol: f64,
@@ -201,7 +201,7 @@ impl CpaCli {
                 base: self.base,
                 tip: self.tip,
                 convention: self.convention.into(),
-                units: crate::measured::DataUnits {
+                units: dh_workflows::measured::DataUnits {
                     length: self.length_unit,
                     angle: self.angle_unit,
                 },

@@ -5,19 +5,17 @@
 use std::path::Path;
 
 use anyhow::Result;
-use dh_workflows::geometry::{Convention, Tolerance};
-
-use crate::error::Outcome;
-use crate::input::{display_name, read_robot};
-// Loading a chain is `crate::input`'s; re-exported for the callers of `extract`'s API.
-pub use crate::input::{chain_error, load_chain, load_chain_bytes, urdf_warnings};
-use crate::readback::failure_line;
-use crate::render::Format;
-use crate::units::{AngleUnit, LengthUnit};
 pub use dh_workflows::extract::{
     default_samples, extract_bytes, extract_bytes_in, extract_chain, prove_extracted,
     prove_extracted_with, ExtractOptions, Extracted,
 };
+use dh_workflows::geometry::{Convention, Tolerance};
+use dh_workflows::input::{display_name, read_robot};
+use dh_workflows::prove::failure_line;
+use dh_workflows::render::Format;
+use dh_workflows::units::{AngleUnit, LengthUnit};
+
+use crate::error::Outcome;
 
 /// Everything `extract` needs.
 #[derive(Clone, Debug)]
@@ -141,13 +139,13 @@ pub fn extract(
     // `--svg -`: the picture on standard output, the table on standard error. A drawing in a
     // file lands only once the table has reached standard output.
     match drawing {
-        Some((path, svg)) if path == crate::output::STDIO => {
-            crate::output::write_all_or_stdout(&[(Path::new(path), svg.as_bytes())], out)?;
+        Some((path, svg)) if path == dh_workflows::output::STDIO => {
+            dh_workflows::output::write_all_or_stdout(&[(Path::new(path), svg.as_bytes())], out)?;
             err.write_all(text.as_bytes())?;
         }
         Some((path, svg)) => {
             out.write_all(text.as_bytes())?;
-            crate::output::write_all_after(out, &[(Path::new(path), svg.as_bytes())])?;
+            dh_workflows::output::write_all_after(out, &[(Path::new(path), svg.as_bytes())])?;
         }
         None => out.write_all(text.as_bytes())?,
     }

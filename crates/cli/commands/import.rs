@@ -5,17 +5,18 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
+use dh_workflows::error::hinted;
 use dh_workflows::fit::{Measurements, Split};
 use dh_workflows::import::{
     import as import_layout, joint_name_problem, mukca, parse_columns, write_measurements,
     ColumnMap, DataError, Layout, Source,
 };
+use dh_workflows::input::{display_name, read_text};
 use dh_workflows::measured::RESERVED_COLUMNS;
+use dh_workflows::output::check_destinations;
 use dh_workflows::text::escape;
 
-use crate::error::{hinted, Outcome};
-use crate::input::{display_name, read_text};
-use crate::output::check_destinations;
+use crate::error::Outcome;
 
 /// Everything `import` needs.
 #[derive(Clone, Debug)]
@@ -284,7 +285,7 @@ fn write_import(
     text.push_str(&write_measurements(data));
     match &args.out {
         Some(path) => {
-            crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
+            dh_workflows::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
             writeln!(
                 err,
                 "urdf-dh: {}: {} samples ({} for validation) of {} target(s) {}, joints {}",
@@ -362,11 +363,11 @@ pub struct ImportCli {
     #[arg(long)]
     no_header: bool,
     /// `--layout columns`: unit of the points, sigmas and prismatic joints.
-    #[arg(long, value_enum, default_value_t = crate::units::LengthUnit::M)]
-    length_unit: crate::units::LengthUnit,
+    #[arg(long, value_enum, default_value_t = dh_workflows::units::LengthUnit::M)]
+    length_unit: dh_workflows::units::LengthUnit,
     /// `--layout columns`: unit of the revolute joints.
-    #[arg(long, value_enum, default_value_t = crate::units::AngleUnit::Rad)]
-    angle_unit: crate::units::AngleUnit,
+    #[arg(long, value_enum, default_value_t = dh_workflows::units::AngleUnit::Rad)]
+    angle_unit: dh_workflows::units::AngleUnit,
     /// `--layout columns`: the prismatic joints (by written name).
     #[arg(long, value_name = "NAMES", value_delimiter = ',')]
     prismatic: Vec<String>,

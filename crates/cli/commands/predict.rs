@@ -10,13 +10,13 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
+use dh_workflows::calibrated::{load_calibrated, CalibratedModel};
+use dh_workflows::input::display_name;
+use dh_workflows::measured::DataUnits;
 use dh_workflows::predict::{frame_of, rows_text, Frame, Predictions, Wanted};
+use dh_workflows::units::{AngleUnit, LengthUnit};
 
-use crate::calibrated::{load_calibrated, CalibratedModel};
 use crate::error::Outcome;
-use crate::input::display_name;
-use crate::measured::DataUnits;
-use crate::units::{AngleUnit, LengthUnit};
 
 /// The frame option.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -187,14 +187,14 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     let text = render(&model, &input, &predictions, args, &origin);
-    let path = args.out.as_deref().unwrap_or(crate::output::STDIO);
-    crate::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
+    let path = args.out.as_deref().unwrap_or(dh_workflows::output::STDIO);
+    dh_workflows::output::write_all_or_stdout(&[(Path::new(path), text.as_bytes())], out)?;
     let uncertainty = if predictions.has_uncertainty {
         "with standard uncertainties from the calibration's covariance"
     } else {
         "without uncertainty (the model has no covariance: calibrate --out writes one)"
     };
-    let report: &mut dyn Write = if path == crate::output::STDIO {
+    let report: &mut dyn Write = if path == dh_workflows::output::STDIO {
         err
     } else {
         out
@@ -212,7 +212,7 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
             Frame::Device => "device",
             Frame::Base => "base link",
         },
-        if path == crate::output::STDIO {
+        if path == dh_workflows::output::STDIO {
             String::new()
         } else {
             format!(": {}", display_name(path))

@@ -7,11 +7,12 @@ use std::io::Write;
 use std::path::Path;
 
 use anyhow::Result;
+use dh_workflows::error::hinted;
+use dh_workflows::output::check_destinations;
 use dh_workflows::simulation::simulate as run;
 pub use dh_workflows::simulation::{truth_path, SimulationRequest};
 
-use crate::error::{hinted, Outcome};
-use crate::output::check_destinations;
+use crate::error::Outcome;
 
 /// Everything `simulate` needs: the library's request and the files to write.
 #[derive(Clone, Debug)]
@@ -29,7 +30,7 @@ pub struct SimulateArgs {
 /// # Errors
 /// A bad model, option or effect; failed writes.
 pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
-    if args.out == crate::output::STDIO && args.truth.is_none() {
+    if args.out == dh_workflows::output::STDIO && args.truth.is_none() {
         return Err(hinted(
             "--out -: the measurements go to standard output, so the truth needs a file of its own: expected --truth FILE, found none".to_string(),
             "urdf-dh simulate --model M --out - --truth truth.yaml | ...",
@@ -49,7 +50,7 @@ pub fn simulate(args: &SimulateArgs, out: &mut dyn Write, err: &mut dyn Write) -
         err,
     )?;
     let truth_text = sim.truth_yaml()?;
-    crate::output::write_all_or_stdout(
+    dh_workflows::output::write_all_or_stdout(
         &[
             (Path::new(&args.out), sim.csv.as_bytes()),
             (Path::new(&truth_file), truth_text.as_bytes()),
@@ -82,8 +83,8 @@ pub struct SimulateCli {
     #[command(flatten)]
     pub xacro: crate::xacro_flags::XacroCli,
     /// DH convention for a URDF model.
-    #[arg(long, value_enum, default_value_t = crate::sheet::ConventionDoc::Standard)]
-    convention: crate::sheet::ConventionDoc,
+    #[arg(long, value_enum, default_value_t = dh_workflows::sheet::ConventionDoc::Standard)]
+    convention: dh_workflows::sheet::ConventionDoc,
     /// Random poses within the joint limits; with --cpa, poses per joint sweep.
     #[arg(long, value_name = "N", default_value_t = 100, value_parser = crate::guard::poses)]
     poses: usize,

@@ -8,9 +8,9 @@
 use std::fmt::Write as _;
 
 use dh_workflows::fit::{unit_of, ContactDistance, ContactDoc, SocketReport};
+use dh_workflows::units::LengthUnit;
 
 use crate::plot::{Panel, Residual, ResidualChart};
-use crate::units::LengthUnit;
 
 fn mm(v: f64) -> String {
     format!("{:.3}", v * 1e3)

@@ -4,13 +4,13 @@
 use std::io::Write;
 
 use anyhow::Result;
-
-use crate::error::Outcome;
-use crate::input::{display_name, read_text};
-use crate::sheet::Sheet;
+use dh_workflows::input::{display_name, read_text};
+use dh_workflows::sheet::Sheet;
 pub use dh_workflows::urdf_writer::{
     check_urdf, origin, prove_urdf, urdf_of, write_proved, UrdfProof,
 };
+
+use crate::error::Outcome;
 
 /// Everything `to-urdf` needs.
 #[derive(Clone, Debug)]

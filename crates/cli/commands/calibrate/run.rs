@@ -25,7 +25,7 @@ pub fn calibrate(
     let loaded = match calibration::identify(request)? {
         Some((sheet, origin)) => {
             if args.plot.is_some() {
-                return Err(crate::error::hinted(
+                return Err(dh_workflows::error::hinted(
                     format!(
                         "--plot: the residual chart is drawn for serial models only; {origin} is a tree"
                     ),
@@ -101,7 +101,7 @@ pub fn calibrate(
     // `--out -` or `--plot -`: that artefact on standard output, the report on standard error.
     // Otherwise the report goes to standard output first, and the files land only once it has
     // been written and flushed (all or nothing, standard output included).
-    let piped = crate::output::any_stdout([
+    let piped = dh_workflows::output::any_stdout([
         request.out.as_deref(),
         args.plot.as_deref(),
         args.report.as_deref(),
@@ -119,7 +119,7 @@ pub fn calibrate(
     }
     if proved {
         let files: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_bytes())).collect();
-        let written = crate::output::write_all_or_stdout(&files, out);
+        let written = dh_workflows::output::write_all_or_stdout(&files, out);
         match (&calibrated, &request.out) {
             (Calibrated::Tree(_), Some(path)) => written.with_context(|| {
                 format!(

@@ -1,10 +1,10 @@
 //! The text report of `cpa`.
 
+use dh_workflows::sheet::SheetDoc;
+use dh_workflows::units::{AngleUnit, LengthUnit};
 use std::fmt::Write as _;
 
 use super::*;
-use crate::sheet::SheetDoc;
-use crate::units::{AngleUnit, LengthUnit};
 
 /// `v` with `decimals`, `-0` as `0`.
 pub(super) fn fixed(v: f64, decimals: usize) -> String {
