@@ -473,10 +473,7 @@ fn mukca_panda_6_through_the_cli() {
     };
     let set = shared.join("measured/mukca_ball_socket_panda_iiwa/data/panda_6");
     if !set.is_dir() {
-        println!(
-            "mukca_panda_6_through_the_cli: skipped: {} is absent",
-            set.display()
-        );
+        test_skips::skip(&format!("{} is absent", set.display()));
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -223,7 +223,7 @@ fn a_mat_export_reads_as_its_csv_export() {
 #[test]
 fn the_innopolis_mat_file_imports_as_its_csv() {
     let Ok(mat) = std::env::var("URDF_DH_INNOPOLIS_MAT") else {
-        eprintln!("skipped: URDF_DH_INNOPOLIS_MAT does not name a copy of calibration_dataset.mat");
+        test_skips::skip("URDF_DH_INNOPOLIS_MAT does not name a copy of calibration_dataset.mat");
         return;
     };
     let Some(shared) =

@@ -320,8 +320,8 @@ fn ctu_file() -> Option<std::path::PathBuf> {
 #[test]
 fn the_ctu_motoman_leica_export_imports_in_one_command() {
     let Some(file) = ctu_file() else {
-        println!(
-            "the_ctu_motoman_leica_export_imports_in_one_command: skipped: neither URDF_DH_CTU_MAT nor ../shared/measured/ctu_motoman_leica/updated_leica_dataset.mat"
+        test_skips::skip(
+            "neither URDF_DH_CTU_MAT nor ../shared/measured/ctu_motoman_leica/updated_leica_dataset.mat",
         );
         return;
     };

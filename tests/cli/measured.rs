@@ -107,10 +107,10 @@ fn every_published_set_imports_and_calibrates() {
     for set in &SETS {
         let folder = shared.join("measured").join(set.dir);
         if !folder.is_dir() {
-            println!(
-                "{}: skipped: ../shared/measured/{} is absent",
+            test_skips::skip(&format!(
+                "{}: ../shared/measured/{} is absent",
                 set.layout, set.dir
-            );
+            ));
             continue;
         }
         let tmp = tempfile::tempdir().unwrap();
@@ -135,10 +135,10 @@ fn every_published_set_imports_and_calibrates() {
             set.layout
         );
         let Some(model) = model_path(set, &folder, tmp.path()) else {
-            println!(
-                "{}: imported {} samples; calibration skipped: the nominal model {} is absent",
+            test_skips::skip(&format!(
+                "{}: imported {} samples; calibration not checked: the nominal model {} is absent",
                 set.layout, set.samples, set.model
-            );
+            ));
             continue;
         };
         let model = model.to_string_lossy().into_owned();
@@ -199,7 +199,9 @@ fn import_detects_the_layout_from_file_names_and_writes_canonical_csv() {
     };
     let folder = shared.join("measured/boby_klimchik_laser_tracker_cpa");
     if !folder.is_dir() {
-        println!("import_detects_the_layout: skipped: the Boby set is absent");
+        test_skips::skip(
+            "the Boby set (../shared/measured/boby_klimchik_laser_tracker_cpa) is absent",
+        );
         return;
     }
     let file = folder.join("N1N2N3Jval.csv").to_string_lossy().into_owned();

@@ -327,10 +327,7 @@ fn the_dlr_tree_calibrates_through_the_cli() {
     };
     let file = shared.join("measured/dlr_agile_justin_vicon/measurements.csv");
     if !file.is_file() {
-        println!(
-            "the_dlr_tree_calibrates_through_the_cli: skipped: {} is absent",
-            file.display()
-        );
+        test_skips::skip(&format!("{} is absent", file.display()));
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -18,7 +18,7 @@ const ARCSEC: f64 = std::f64::consts::PI / 180.0 / 3600.0;
 #[test]
 fn boby_six_joints_micrometre_circles_arcsecond_angles() {
     let Ok(text) = std::fs::read_to_string(Path::new(FILE)) else {
-        println!("skipped: {FILE} not readable");
+        test_skips::skip(&format!("{FILE} not readable"));
         return;
     };
     let m = import(

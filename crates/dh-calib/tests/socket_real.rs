@@ -30,10 +30,10 @@ fn load(robot: &str, placements: &[&str], split: Split) -> Option<Measurements> 
             match std::fs::read_to_string(dir.join(p).join(f)) {
                 Ok(t) => texts.push((format!("{p}/{f}"), t)),
                 Err(e) => {
-                    println!(
-                        "skipped: needs ../shared: {} not readable: {e}",
+                    test_skips::skip(&format!(
+                        "needs ../shared: {} not readable: {e}",
                         dir.join(p).join(f).display()
-                    );
+                    ));
                     return None;
                 }
             }

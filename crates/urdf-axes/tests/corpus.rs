@@ -89,15 +89,14 @@ fn check_chain(
 }
 
 #[test]
-#[allow(clippy::print_stderr)]
 fn every_corpus_robot_parses_and_builds_its_chain() {
     let root = PathBuf::from(CORPUS);
     let Ok(dirs) = fs::read_dir(&root) else {
-        eprintln!(
-            "corpus test skipped: {} is absent (the shared robot corpus sits beside the \
-             workspace only on project machines)",
+        test_skips::skip(&format!(
+            "{} is absent (the shared robot corpus sits beside the workspace only on project \
+             machines)",
             root.display()
-        );
+        ));
         return;
     };
     let mut dirs: Vec<PathBuf> = dirs.filter_map(|d| d.ok().map(|d| d.path())).collect();
