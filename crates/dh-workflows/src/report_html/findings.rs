@@ -94,6 +94,9 @@ fn candidate_rows(candidates: &[CandidateDoc]) -> (Vec<Vec<String>>, Vec<&'stati
     (rows, classes)
 }
 
+/// Candidates listed in each round after the first (best scores first), besides those refitted.
+const LATER_ROUND_CANDIDATES: usize = 15;
+
 const CANDIDATE_HEADER: [&str; 6] = [
     "effect",
     "#score [mm\u{b2}]",
@@ -105,6 +108,9 @@ const CANDIDATE_HEADER: [&str; 6] = [
 
 /// A test's one-line figures.
 fn test_line(t: &TestDoc) -> String {
+    if t.kind == "none" {
+        return t.summary.clone();
+    }
     format!(
         "{}: statistic {} on ({}, {}) degrees of freedom, p = {}; noise {} mm RMS; {}",
         t.kind,
@@ -168,6 +174,9 @@ pub(super) fn diagnosis(doc: &CalibrationDoc) -> String {
         return s;
     };
     let mut s = page::para(&format!("Rule: {} (level {}).", d.rule, fixed(d.alpha, 4)));
+    s.push_str(&page::muted(
+        "score: first-order reduction of the calibration sum of squares beyond the fit; independence: sine between the effect's columns and the geometric ones (below 1e-3: aliased).",
+    ));
     s.push_str(&page::para(&format!(
         "After the geometric step: {}.",
         test_line(&d.geometric_test)
@@ -180,11 +189,27 @@ pub(super) fn diagnosis(doc: &CalibrationDoc) -> String {
             mm(r.rms),
             mm(r.val_rms)
         );
-        let (rows, classes) = candidate_rows(&r.candidates);
-        s.push_str(&page::muted(
-            "score: first-order reduction of the calibration sum of squares beyond the fit; independence: sine between the effect's columns and the geometric ones (below 1e-3: aliased).",
-        ));
+        // The first round lists every candidate; later ones the best and those refitted.
+        let shown: Vec<CandidateDoc> = r
+            .candidates
+            .iter()
+            .enumerate()
+            .filter(|(i, c)| {
+                k == 0
+                    || *i < LATER_ROUND_CANDIDATES
+                    || c.status == "selected"
+                    || r.trials.iter().any(|t| t.label == c.label)
+            })
+            .map(|(_, c)| c.clone())
+            .collect();
+        let (rows, classes) = candidate_rows(&shown);
         s.push_str(&table_with(&CANDIDATE_HEADER, &rows, &classes));
+        if shown.len() < r.candidates.len() {
+            s.push_str(&page::muted(&format!(
+                "{} more candidates with lower scores, none refitted (the first round lists them all; --format json has every round whole).",
+                r.candidates.len() - shown.len()
+            )));
+        }
         if !r.trials.is_empty() {
             let rows: Vec<Vec<String>> = r
                 .trials

@@ -41,7 +41,7 @@ td.n, th.n { text-align: right; font-variant-numeric: tabular-nums; white-space:
 tr:nth-child(even) td { background: #fafbfc; }
 tr.taken td { background: #ecfdf3; }
 tr.flag td { background: #fef2f2; }
-.tag { display: inline-block; padding: 0 6px; border-radius: 4px; font-size: .85em; background: #eef1f5; }
+.tag { display: inline-block; white-space: nowrap; padding: 0 6px; border-radius: 4px; font-size: .85em; background: #eef1f5; }
 .tag.taken { background: #dcfce7; color: var(--good); }
 .tag.rejected { background: #fee2e2; color: var(--bad); }
 .muted { color: var(--muted); }

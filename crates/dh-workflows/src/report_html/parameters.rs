@@ -88,9 +88,22 @@ pub(super) fn parameters(doc: &CalibrationDoc) -> String {
     s
 }
 
+/// Whether `name` is a measurement-setup parameter (the device frame, a session's frame, a
+/// target) rather than the robot's.
+fn is_setup(name: &str) -> bool {
+    ["device.", "session.", "target."]
+        .iter()
+        .any(|p| name.starts_with(p))
+}
+
 /// The `n` most correlated pairs of free parameters of `report`'s covariance: (first, second,
-/// correlation), largest |correlation| first.
-pub(super) fn most_correlated(report: &Report, n: usize) -> Vec<(String, String, f64)> {
+/// correlation), largest |correlation| first; `robot`: only pairs with a parameter of the robot
+/// (not both of the setup, [`is_setup`]).
+pub(super) fn most_correlated(
+    report: &Report,
+    n: usize,
+    robot: bool,
+) -> Vec<(String, String, f64)> {
     let Some(c) = &report.covariance else {
         return Vec::new();
     };
@@ -99,6 +112,9 @@ pub(super) fn most_correlated(report: &Report, n: usize) -> Vec<(String, String,
     let mut pairs = Vec::new();
     for i in 0..k {
         for j in 0..i {
+            if robot && is_setup(&c.parameters[i]) && is_setup(&c.parameters[j]) {
+                continue;
+            }
             let denom = sd[i] * sd[j];
             if denom > 0.0 && denom.is_finite() {
                 let r = (c.matrix[(i, j)] / denom).clamp(-1.0, 1.0);
@@ -126,7 +142,7 @@ pub(super) fn correlations(doc: &CalibrationDoc, report: &Report) -> String {
         ),
         ("rank tolerance (relative)", sci(report.rank_tolerance, 1)),
     ]);
-    let pairs = most_correlated(report, 12);
+    let pairs = most_correlated(report, 12, true);
     if pairs.is_empty() {
         s.push_str(&page::muted(
             "No covariance: the residual's sigma is unknown (no more coordinates than parameters).",
@@ -138,6 +154,20 @@ pub(super) fn correlations(doc: &CalibrationDoc, report: &Report) -> String {
         .map(|(a, b, r)| vec![esc(a), esc(b), fixed(*r, 4)])
         .collect();
     s.push_str("<h3>Most correlated pairs</h3>\n");
+    s.push_str(&page::muted(
+        "Correlation of the estimates (from the covariance of the last step), largest first; pairs of two setup parameters (device frame, targets) left out. Near \u{b1}1: the data hardly tell the two apart.",
+    ));
     s.push_str(&table(&["parameter", "parameter", "#correlation"], &rows));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn setup_parameters_are_told_from_the_robots() {
+        assert!(is_setup("device.rx") && is_setup("target.t1.x") && is_setup("session.s2.z"));
+        assert!(!is_setup("elbow_joint.a") && !is_setup("base.x") && !is_setup("gear_ratio:j2"));
+    }
 }

@@ -236,7 +236,7 @@ impl Scatter<'_> {
             };
             let mut d = String::new();
             for p in points.iter().filter(|p| p.kind == kind) {
-                let _ = write!(d, "M{:.1} {:.1}h0", px(p.x), py(p.y));
+                let _ = write!(d, "M{:.0} {:.0}h0", px(p.x), py(p.y));
             }
             if !d.is_empty() {
                 let _ = write!(s, "<path class=\"{class}\" d=\"{d}\"/>");
