@@ -173,6 +173,8 @@ fn run(command: &str, dir: &Path, bin_dir: &Path) -> (i32, String) {
 #[derive(Default)]
 struct PageRun {
     failures: Vec<String>,
+    /// Blocks not run, and why (listed by tests/run.sh through test_skips).
+    skips: Vec<String>,
     notes: Vec<String>,
     blessed: BTreeMap<usize, (std::ops::Range<usize>, String)>,
 }
@@ -209,15 +211,15 @@ fn run_page(page: &Path, bless: bool, release: bool) -> PageRun {
             continue;
         }
         if block.shared && shared().is_none() {
-            result.notes.push(format!(
-                "{name}:{}: skipped: needs ../shared (real robots and measurements), absent",
+            result.skips.push(format!(
+                "{name}:{}: needs ../shared (real robots and measurements), absent",
                 block.line
             ));
             continue;
         }
         if block.release && !release {
-            result.notes.push(format!(
-                "{name}:{}: skipped: a release example (URDF_DH_DOCS_RELEASE=1 URDF_DH_DOCS_BIN=target/release/urdf-dh runs it)",
+            result.skips.push(format!(
+                "{name}:{}: a release example (URDF_DH_DOCS_RELEASE=1 URDF_DH_DOCS_BIN=target/release/urdf-dh runs it)",
                 block.line
             ));
             continue;
@@ -297,6 +299,9 @@ fn examples() {
     });
     let mut report = String::new();
     for run in &runs {
+        for skip in &run.skips {
+            test_skips::skip(skip);
+        }
         for note in &run.notes {
             // Past the harness's capture (as `println!` is not), so that a skip is seen.
             let _ = writeln!(std::io::stderr().lock(), "docs: {note}");
