@@ -14,6 +14,7 @@ mod default_tip;
 mod docs;
 mod diagnosis;
 mod extract;
+mod format_errors;
 mod help;
 mod hostile_names;
 mod import_columns;

@@ -189,7 +189,7 @@ fn run_file(entries: &[&Entry], args: &BatchArgs) -> Vec<Vec<Done>> {
                     let mut one = || -> Result<Done> {
                         let chain = model
                             .chain(entry.base.as_deref(), entry.tip.as_deref())
-                            .map_err(|e| chain_error(&name, e))?;
+                            .map_err(|e| chain_error(&name, model, e))?;
                         let options = ExtractOptions {
                             convention,
                             length_unit: args.length_unit,

@@ -171,7 +171,8 @@ pub fn folder_of(path: &str) -> Option<std::path::PathBuf> {
 /// looked at), else URDF.
 ///
 /// # Errors
-/// An invalid model ("`NAME`: invalid MJCF" or "`NAME`: invalid URDF").
+/// An invalid model, named after the format read ("`NAME`: invalid MJCF", "`NAME`: invalid
+/// SDFormat" or "`NAME`: invalid URDF", [`UrdfModel::format_name_of`]).
 pub fn read_model(bytes: &[u8], name: &str, dir: Option<&Path>) -> Result<UrdfModel> {
     read_model_with(bytes, name, dir, None)
 }
@@ -190,13 +191,14 @@ pub fn read_model_with(
         return urdf_axes::mjcf::from_bytes_with(bytes, dir, files)
             .with_context(|| format!("{name}: invalid MJCF"));
     }
+    let format = UrdfModel::format_name_of(bytes);
     UrdfModel::from_bytes(bytes).map_err(|e| match crate::sniff::not_a_robot(bytes) {
         // A sheet, a CSV or an image given as the robot: say what it is and what reads it.
         Some(s) => crate::error::hinted(
-            format!("{name}: invalid URDF: {e}; the file is {}", s.what),
+            format!("{name}: invalid {format}: {e}; the file is {}", s.what),
             s.hint,
         ),
-        None => anyhow::Error::new(e).context(format!("{name}: invalid URDF")),
+        None => anyhow::Error::new(e).context(format!("{name}: invalid {format}")),
     })
 }
 
@@ -227,19 +229,22 @@ pub fn load_chain_in(
     tip: Option<&str>,
 ) -> Result<(UrdfModel, Chain)> {
     let model = read_model(bytes, name, dir)?;
-    let chain = model.chain(base, tip).map_err(|e| chain_error(name, e))?;
+    let chain = model
+        .chain(base, tip)
+        .map_err(|e| chain_error(name, &model, e))?;
     Ok((model, chain))
 }
 
-/// The error of choosing a chain of the file shown as `name`: a fault of a joint on the chain is
-/// a fault of the file ("invalid URDF"), not of the choice ("cannot choose the chain").
-pub fn chain_error(name: &str, e: urdf_axes::UrdfError) -> anyhow::Error {
-    let what = if e.is_choice() {
-        "cannot choose the chain"
+/// The error of choosing a chain of `model`, the file shown as `name`: a fault of a joint on the
+/// chain is a fault of the file ("invalid URDF", or the model's own format: "invalid MJCF",
+/// "invalid SDFormat"), not of the choice ("cannot choose the chain").
+pub fn chain_error(name: &str, model: &UrdfModel, e: urdf_axes::UrdfError) -> anyhow::Error {
+    let context = if e.is_choice() {
+        format!("{name}: cannot choose the chain")
     } else {
-        "invalid URDF"
+        format!("{name}: invalid {}", model.format_name())
     };
-    anyhow::Error::new(e).context(format!("{name}: {what}"))
+    anyhow::Error::new(e).context(context)
 }
 
 /// The warnings of reading the URDF that concern `chain`, each prefixed with the file's name

@@ -14,10 +14,10 @@ use crate::error::hinted;
 use crate::input::{display_name, read_data_text};
 use crate::units::{AngleUnit, LengthUnit};
 
-/// Columns of the canonical CSV that are not joints (the format's own list).
-pub use dh_calib::csv::RESERVED_COLUMNS;
 /// Measurements and joint values handed over as arrays instead of a file.
 pub use dh_calib::csv::SampleArrays;
+/// Columns of the canonical CSV that are not joints (the format's own list).
+pub use dh_calib::csv::RESERVED_COLUMNS;
 
 /// Units of a measurement file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -13,6 +13,9 @@ use crate::UrdfError;
 /// worst) for piped or hostile input.
 pub const MAX_URDF_BYTES: usize = 64 * 1024 * 1024;
 
+/// The name of SDFormat in messages ([`UrdfModel::format_name`]).
+const SDFORMAT: &str = "SDFormat";
+
 /// A parsed and validated URDF: one tree of uniquely named links joined by joints, indexed by
 /// name, with the warnings of its reading.
 ///
@@ -68,7 +71,9 @@ impl UrdfModel {
         }
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         if crate::sdf::is_sdf(text) {
-            return Self::validate(crate::sdf::read(text)?);
+            let mut model = Self::validate(crate::sdf::read(text)?)?;
+            model.format_name = SDFORMAT;
+            return Ok(model);
         }
         let doc = scan::scan(text).map_err(|e| match e {
             ScanError::Entity { line } => UrdfError::EntityDeclaration { line },
@@ -291,9 +296,30 @@ impl UrdfModel {
         out
     }
 
-    /// The format the model was read from: `URDF`, or `MJCF` for [`crate::mjcf::read`].
+    /// The format the model was read from: `URDF`, `SDFormat` (a document whose root element
+    /// is `<sdf>`), or `MJCF` for [`crate::mjcf::read`].
     pub fn format_name(&self) -> &'static str {
         self.format_name
+    }
+
+    /// The format a robot file's `bytes` are read as, by their root element (only the prolog is
+    /// looked at): `MJCF` for `<mujoco>`, `SDFormat` for `<sdf>`, else `URDF`; what an error of
+    /// reading them names.
+    pub fn format_name_of(bytes: &[u8]) -> &'static str {
+        if crate::mjcf::is_mjcf(bytes) {
+            return "MJCF";
+        }
+        // The root element is in the valid UTF-8 prefix when there is one.
+        let valid = match std::str::from_utf8(bytes) {
+            Ok(text) => text,
+            Err(e) => std::str::from_utf8(bytes.get(..e.valid_up_to()).unwrap_or_default())
+                .unwrap_or_default(),
+        };
+        if crate::sdf::is_sdf(valid) {
+            SDFORMAT
+        } else {
+            "URDF"
+        }
     }
 
     /// The `name` attribute of `<robot>` (empty when absent).
@@ -541,6 +567,28 @@ fn edit_distance(a: &str, b: &str) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each reader names its own format, so that a message says which was read.
+    #[test]
+    fn the_format_is_named_after_the_root_element() {
+        let urdf = r#"<robot name="r"><link name="a"/><link name="b"/>
+            <joint name="j" type="revolute"><parent link="a"/><child link="b"/>
+            <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#;
+        let sdf = r#"<?xml version="1.0"?><sdf version="1.6"><model name="m"><link name="a"/><link name="b"/>
+            <joint name="j" type="revolute"><parent>a</parent><child>b</child>
+            <axis><xyz>0 0 1</xyz></axis></joint></model></sdf>"#;
+        let mjcf = r#"<mujoco model="m"><worldbody><body name="b"><joint name="j" axis="0 0 1"/></body></worldbody></mujoco>"#;
+        assert_eq!(UrdfModel::parse(urdf).unwrap().format_name(), "URDF");
+        assert_eq!(UrdfModel::parse(sdf).unwrap().format_name(), "SDFormat");
+        assert_eq!(UrdfModel::format_name_of(urdf.as_bytes()), "URDF");
+        assert_eq!(UrdfModel::format_name_of(sdf.as_bytes()), "SDFormat");
+        assert_eq!(UrdfModel::format_name_of(mjcf.as_bytes()), "MJCF");
+        // Not UTF-8 after the root element: still told by its prolog.
+        let mut bytes = b"<sdf version='1.6'><model name='m'>".to_vec();
+        bytes.push(0xff);
+        assert_eq!(UrdfModel::format_name_of(&bytes), "SDFormat");
+        assert_eq!(UrdfModel::format_name_of(b"not xml"), "URDF");
+    }
 
     #[test]
     fn edit_distance_counts_edits() {

@@ -78,7 +78,7 @@ pub(crate) fn tree(robot: &RobotFiles) -> anyhow::Result<String> {
             None,
             Some(format!(
                 "{:#}",
-                dh_workflows::input::chain_error(&name, e.clone())
+                dh_workflows::input::chain_error(&name, &model, e.clone())
             )),
         ),
     };

@@ -41,8 +41,8 @@ pub use inputs::{
     enough_samples, gravity_inputs, keep_targets, load_inputs, read_data_for, read_inertials,
     read_sets, too_few, Inputs,
 };
-pub use residuals::{residuals, Residuals};
 pub use request::{CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFECTS};
+pub use residuals::{residuals, Residuals};
 pub use serial::{check_sigma, pipeline_options, serial_error, Contacts, Points};
 pub use tree::{check_tree_options, check_tree_out, load_tree, tree_model, Tree, TreeInputs};
 

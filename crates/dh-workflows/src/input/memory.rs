@@ -67,7 +67,7 @@ impl RobotFiles {
         let model = self.model_of(&bytes)?;
         let chain = model
             .chain(base, tip)
-            .map_err(|e| super::chain_error(&self.name(), e))?;
+            .map_err(|e| super::chain_error(&self.name(), &model, e))?;
         Ok((model, chain, warnings))
     }
 
