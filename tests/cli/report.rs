@@ -195,10 +195,16 @@ fn calibrate_report_has_the_text_reports_figures_outliers_and_provenance() {
     // parameters (device frame, targets).
     let pairs = rows(&html, "correlations");
     assert!(pairs.len() >= 5, "{pairs:?}");
-    let r: Vec<f64> = pairs.iter().map(|p| p[2].parse::<f64>().unwrap().abs()).collect();
+    let r: Vec<f64> = pairs
+        .iter()
+        .map(|p| p[2].parse::<f64>().unwrap().abs())
+        .collect();
     assert!(r.windows(2).all(|w| w[0] >= w[1]) && r[0] <= 1.0, "{r:?}");
     let setup = |n: &str| n.starts_with("device.") || n.starts_with("target.");
-    assert!(pairs.iter().all(|p| !(setup(&p[0]) && setup(&p[1]))), "{pairs:?}");
+    assert!(
+        pairs.iter().all(|p| !(setup(&p[0]) && setup(&p[1]))),
+        "{pairs:?}"
+    );
     // Provenance: the data's SHA-256 and size, the command line.
     let bytes = std::fs::read(&data).unwrap();
     let sha = dh_workflows::report_html::sha256_hex(&bytes);
