@@ -27,7 +27,8 @@ pub struct Residuals {
     pub before: Vec<f64>,
     /// Distance with the final model, per sample (metres).
     pub after: Vec<f64>,
-    /// Each sample's pose index ([`pose_indices`]).
+    /// Each sample's pose index (samples sharing `config`, or else joint values, are one pose,
+    /// numbered in order of first appearance).
     pub poses: Vec<usize>,
     /// Number of poses.
     pub pose_count: usize,
@@ -124,7 +125,7 @@ pub fn nominal_frames(report: &Report, targets: &[String]) -> (Isometry3<f64>, V
 /// (those of `report.selected_effects` are applied at their estimates).
 ///
 /// # Errors
-/// As [`distances`].
+/// A model that cannot be built from the tables, joint values they cannot take.
 pub fn residuals(
     inputs: &Inputs,
     report: &Report,
