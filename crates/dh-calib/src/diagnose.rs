@@ -53,7 +53,7 @@
 //! The options and constants are here; the entry points and the selection loop are in
 //! `selection`, the scoring and judging of candidates in `scoring` (both re-exported here); the
 //! findings' data types are in [`crate::findings`] and the residual tests of steps 1 and 5 in
-//! [`crate::calibrate`], re-exported here under their old paths.
+//! [`crate::calibrate`] (each has that one path).
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -73,9 +73,8 @@ use crate::rivals;
 use crate::stats;
 use crate::tree::DhTree;
 
-pub use crate::findings::{
-    CandidateReport, CandidateStatus, Diagnosis, EffectEstimate, NoiseTest, ResidualTest, Round,
-    StructureCheck, Trial, Verdict, DEFAULT_ALPHA,
+use crate::findings::{
+    CandidateReport, CandidateStatus, Diagnosis, EffectEstimate, Round, Trial, DEFAULT_ALPHA,
 };
 
 // The submodules import what they use through `use super::*`: the imports above and each

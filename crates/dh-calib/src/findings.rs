@@ -4,7 +4,7 @@
 //! ([`EffectEstimate`]), the whole diagnosis ([`Diagnosis`]) and the verdict on the final model
 //! ([`Verdict`]).
 //!
-//! Data only: [`crate::diagnose`] fills them (and re-exports them from its old paths),
+//! Data only: [`crate::diagnose`] fills them,
 //! [`crate::calibrate`] carries them in its [`crate::calibrate::Report`], and neither has to
 //! import the other for them. Lengths in metres, angles in radians, as in the report.
 

@@ -65,10 +65,10 @@ use dh_core::DhTable;
 use crate::calibrate::{prepare, CalibrationOptions, FixedParameter, ParameterEstimate, Stats};
 use crate::data::{Measurements, Split};
 use crate::diagnose::{
-    bic, effect_context, paired_wilcoxon, CandidateReport, CandidateStatus, DiagnoseOptions,
-    EffectSelection, Trial, ALIAS_SINE,
+    bic, effect_context, paired_wilcoxon, DiagnoseOptions, EffectSelection, ALIAS_SINE,
 };
 use crate::effects;
+use crate::findings::{CandidateReport, CandidateStatus, Trial};
 use crate::fit::{self, CalibError, FitOutcome, Problem, Termination};
 use crate::model::{xyz_rpy, Block, Effect, Field, Model, Observation, Observed};
 use crate::stats;

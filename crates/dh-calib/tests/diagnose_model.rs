@@ -443,7 +443,7 @@ fn a_coupling_with_a_joint_that_does_not_move_is_inert() {
     for c in &with_still {
         assert_eq!(
             c.status,
-            dh_calib::diagnose::CandidateStatus::Inert,
+            dh_calib::findings::CandidateStatus::Inert,
             "{}: {:?}",
             c.label,
             c.status
@@ -452,5 +452,5 @@ fn a_coupling_with_a_joint_that_does_not_move_is_inert() {
     assert!(!r.selected_effects.iter().any(|e| e.contains(&still)));
     // Couplings between joints that move are still scored.
     assert!(first.iter().any(|c| c.label.starts_with("coupling:")
-        && c.status != dh_calib::diagnose::CandidateStatus::Inert));
+        && c.status != dh_calib::findings::CandidateStatus::Inert));
 }

@@ -11,7 +11,7 @@
 mod diagnose_support;
 
 use dh_calib::calibrate::Report;
-use dh_calib::diagnose::CandidateStatus;
+use dh_calib::findings::CandidateStatus;
 use diagnose_support::{
     industrial, run, seeds, simulate, simulate_values, step_summaries, ur_sized, Simulated,
 };

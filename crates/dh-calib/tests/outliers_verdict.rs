@@ -5,7 +5,8 @@ mod fit_support;
 
 use dh_calib::calibrate::{calibrate, CalibrationOptions, Report};
 use dh_calib::data::Measurements;
-use dh_calib::diagnose::{diagnose, DiagnoseOptions, NoiseTest};
+use dh_calib::diagnose::{diagnose, DiagnoseOptions};
+use dh_calib::findings::NoiseTest;
 use dh_calib::outliers::{threshold, OutlierOptions, DEFAULT_LEVEL};
 use dh_calib::simulate::{simulate, Errors, SimulationOptions};
 use fit_support::ur5;

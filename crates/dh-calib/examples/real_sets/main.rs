@@ -9,8 +9,8 @@
 //!
 //! A set whose files are absent is skipped with a message on stderr. The fixture readers here
 //! are deliberately small and serial (the CLI owns the full sheet format). The DLR Agile Justin
-//! set is a kinematic tree: its tree sheet is read by the CLI (`urdf_dh::tree_sheet`), and it
-//! runs there (`-- dlr` prints the commands; see docs/results.md).
+//! set is a kinematic tree: its tree sheet is read by the library (`dh_workflows::tree_sheet`),
+//! and it runs there (`-- dlr` prints the commands; see docs/results.md).
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 use std::collections::HashMap;
@@ -20,8 +20,9 @@ use std::sync::Arc;
 use dh_calib::calibrate::{CalibrationOptions, Report};
 use dh_calib::cpa::{analyse, CpaOptions};
 use dh_calib::data::{Measurements, Split};
-use dh_calib::diagnose::{diagnose_tree, CandidateStatus, DiagnoseOptions, EffectSelection};
+use dh_calib::diagnose::{diagnose_tree, DiagnoseOptions, EffectSelection};
 use dh_calib::effects::{parse_label_in, EffectContext};
+use dh_calib::findings::CandidateStatus;
 use dh_calib::gravity::{GravityModel, Inertial, Inertials};
 use dh_calib::import::{import, Layout, Source};
 use dh_calib::model::{Effect, Model, ModelOptions};

@@ -29,8 +29,8 @@ pub struct CandidateDoc {
     pub reason: Option<String>,
 }
 
-impl From<&crate::diagnose::CandidateReport> for CandidateDoc {
-    fn from(c: &crate::diagnose::CandidateReport) -> Self {
+impl From<&crate::findings::CandidateReport> for CandidateDoc {
+    fn from(c: &crate::findings::CandidateReport) -> Self {
         CandidateDoc {
             label: c.label.clone(),
             score: c.score,
