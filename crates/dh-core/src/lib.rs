@@ -21,6 +21,7 @@ mod error;
 pub mod extract;
 pub mod line;
 pub mod literal;
+pub mod math;
 pub mod parallel;
 pub mod pose;
 pub mod precision;

@@ -9,6 +9,9 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use crate::pose::{rot_x, rot_y, rot_z, trans_x, trans_z};
 use crate::CoreError;
 
+mod prepared;
+pub use prepared::PreparedFk;
+
 /// Where a row's link parameters sit.
 ///
 /// With `q` the joint value (added to `theta` for revolute joints, to `d` for prismatic ones):
@@ -143,7 +146,7 @@ impl DhRow {
     }
 
     /// `theta` and `d` with the joint value `q` applied.
-    fn moved(&self, q: f64) -> (f64, f64) {
+    pub(crate) fn moved(&self, q: f64) -> (f64, f64) {
         match self.kind {
             JointKind::Revolute => (self.theta + q, self.d),
             JointKind::Prismatic => (self.theta, self.d + q),
@@ -164,7 +167,7 @@ impl DhRow {
 
     /// [`DhRow::transform`] given `(sin, cos)` of `alpha / 2`, which does not depend on `q`
     /// (see [`PreparedFk`]).
-    fn transform_with_twist(
+    pub(crate) fn transform_with_twist(
         &self,
         convention: Convention,
         q: f64,
@@ -214,32 +217,6 @@ pub(crate) fn standard_from_halves(
     )
 }
 
-/// A [`DhTable`] with every row's half-twist sine and cosine computed once, for verification
-/// and other loops that evaluate FK at thousands of joint vectors (made by [`DhTable::prepare`]).
-#[derive(Clone, Debug)]
-pub struct PreparedFk<'a> {
-    table: &'a DhTable,
-    /// `(sin, cos)` of `alpha / 2` per row.
-    twists: Vec<(f64, f64)>,
-}
-
-impl PreparedFk<'_> {
-    /// Pose of the tip link frame in the base link frame at joint values `q`, bit for bit as
-    /// [`DhTable::fk`].
-    ///
-    /// # Errors
-    /// [`CoreError::JointCount`] when `q` has the wrong length.
-    pub fn fk(&self, q: &[f64]) -> Result<Isometry3<f64>, CoreError> {
-        let table = self.table;
-        table.check_len(q)?;
-        let mut t = table.base;
-        for ((row, &qi), &twist) in table.rows.iter().zip(q).zip(&self.twists) {
-            t *= row.transform_with_twist(table.convention, qi, twist);
-        }
-        Ok(t * table.tool)
-    }
-}
-
 /// A DH table with the base and tool transforms that make it exact.
 ///
 /// `base` is the pose of DH frame 0 in the robot's base link frame; `tool` is the pose of the
@@ -271,17 +248,11 @@ impl DhTable {
         Ok(t * self.tool)
     }
 
-    /// The table prepared for many FK evaluations (one `sin_cos` per joint instead of two);
-    /// its [`PreparedFk::fk`] gives the same bits as [`DhTable::fk`].
+    /// The table prepared for many FK evaluations ([`PreparedFk`]: one `sin_cos` per joint
+    /// instead of two, each row composed as two quaternion turns about coordinate axes); its
+    /// [`PreparedFk::fk`] equals [`DhTable::fk`] to rounding.
     pub fn prepare(&self) -> PreparedFk<'_> {
-        PreparedFk {
-            table: self,
-            twists: self
-                .rows
-                .iter()
-                .map(|r| (0.5 * r.alpha).sin_cos())
-                .collect(),
-        }
+        PreparedFk::new(self)
     }
 
     /// Poses of DH frames `0..=n` in the base link frame at joint values `q`. For the modified
@@ -334,7 +305,7 @@ impl DhTable {
             .collect())
     }
 
-    fn check_len(&self, q: &[f64]) -> Result<(), CoreError> {
+    pub(crate) fn check_len(&self, q: &[f64]) -> Result<(), CoreError> {
         if q.len() == self.rows.len() {
             Ok(())
         } else {

@@ -2,7 +2,7 @@
 
 use dh_core::pose::from_xyz_rpy;
 use dh_core::{CoreError, JointAxis, JointKind, Limits, Line, Mimic};
-use nalgebra::{Isometry3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Unit, UnitQuaternion, Vector3};
 
 use crate::check::unit_axis;
 use crate::model::UrdfModel;
@@ -35,6 +35,39 @@ struct Segment {
     /// Unit axis in the joint frame.
     axis: Unit<Vector3<f64>>,
     kind: JointKind,
+    /// `origin.rotation · (0, axis)` as a quaternion product: the origin's rotation followed
+    /// by the turn by `q` about the axis is `cos(q/2) origin.rotation + sin(q/2) turn`, one
+    /// quaternion sum where [`UnitQuaternion::from_axis_angle`] and a product were.
+    turn: Quaternion<f64>,
+}
+
+impl Segment {
+    fn new(origin: Isometry3<f64>, axis: Unit<Vector3<f64>>, kind: JointKind) -> Segment {
+        let turn = origin.rotation.quaternion() * Quaternion::from_imag(axis.into_inner());
+        Segment {
+            origin,
+            axis,
+            kind,
+            turn,
+        }
+    }
+
+    /// `t · origin · motion(q)` into `t`.
+    #[inline]
+    fn step(&self, t: &mut Isometry3<f64>, q: f64) {
+        match self.kind {
+            JointKind::Revolute => {
+                t.translation.vector += t.rotation * self.origin.translation.vector;
+                let (s, c) = dh_core::math::sin_cos(0.5 * q);
+                let local = self.origin.rotation.quaternion() * c + self.turn * s;
+                t.rotation = UnitQuaternion::new_unchecked(t.rotation.quaternion() * local);
+            }
+            JointKind::Prismatic => {
+                *t *= self.origin;
+                apply_motion(t, self, q);
+            }
+        }
+    }
 }
 
 /// A serial chain of a URDF from a base link down to a tip link.
@@ -231,11 +264,7 @@ impl Chain {
                 limits,
                 mimic,
             });
-            segments.push(Segment {
-                origin: pending * origin,
-                axis,
-                kind,
-            });
+            segments.push(Segment::new(pending * origin, axis, kind));
             pending = Isometry3::identity();
             pose = frame;
         }
@@ -304,15 +333,15 @@ impl Chain {
     /// given, not one computed from their driver. Each joint contributes
     /// `origin(xyz, rpy) · motion(q)`, with `motion` the rotation by `q` about the normalised
     /// axis or the translation `q · axis` (ROS URDF joint specification); fixed joints are
-    /// precomputed into their neighbours, and the call allocates nothing.
+    /// precomputed into their neighbours, a revolute joint's origin rotation and its turn are one
+    /// quaternion sum (half-angle sine and cosine from [`dh_core::math::sin_cos`]), and the call
+    /// allocates nothing.
     ///
     /// A missing value reads as 0 and extra values are ignored; [`Chain::try_fk`] refuses both.
     pub fn fk(&self, q: &[f64]) -> Isometry3<f64> {
         let mut t = Isometry3::identity();
         for (i, seg) in self.segments.iter().enumerate() {
-            let qi = q.get(i).copied().unwrap_or(0.0);
-            t *= seg.origin;
-            apply_motion(&mut t, seg, qi);
+            seg.step(&mut t, q.get(i).copied().unwrap_or(0.0));
         }
         t * self.tail
     }
@@ -363,8 +392,7 @@ impl Chain {
         let mut t = Isometry3::identity();
         let mut poses = Vec::with_capacity(self.segments.len() + 1);
         for (seg, &qi) in self.segments.iter().zip(q) {
-            t *= seg.origin;
-            apply_motion(&mut t, seg, qi);
+            seg.step(&mut t, qi);
             poses.push(t);
         }
         poses.push(t * self.tail);
@@ -459,11 +487,7 @@ mod tests {
         let t0 = Isometry3::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.4, -0.5, 0.6));
         let axis = Unit::new_normalize(Vector3::new(1.0, 2.0, -1.0));
         for kind in [JointKind::Revolute, JointKind::Prismatic] {
-            let seg = Segment {
-                origin: Isometry3::identity(),
-                axis,
-                kind,
-            };
+            let seg = Segment::new(Isometry3::identity(), axis, kind);
             let mut t = t0;
             apply_motion(&mut t, &seg, 0.7);
             let motion = match kind {
@@ -473,6 +497,29 @@ mod tests {
                 }
             };
             assert_relative_eq!(t, t0 * motion, epsilon = 1e-14);
+        }
+    }
+
+    /// A step (origin, then the motion) is the isometry product `t · origin · motion(q)`,
+    /// for an origin with a turn in it, both kinds, several joint values.
+    #[test]
+    fn step_is_origin_then_motion() {
+        let t0 = Isometry3::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.4, -0.5, 0.6));
+        let origin = Isometry3::new(Vector3::new(-0.2, 0.05, 0.4), Vector3::new(1.2, 0.3, -2.1));
+        let axis = Unit::new_normalize(Vector3::new(1.0, 2.0, -1.0));
+        for kind in [JointKind::Revolute, JointKind::Prismatic] {
+            let seg = Segment::new(origin, axis, kind);
+            for q in [-3.0, -0.7, 0.0, 0.2, 2.9] {
+                let mut t = t0;
+                seg.step(&mut t, q);
+                let motion = match kind {
+                    JointKind::Revolute => Isometry3::rotation(*axis * q),
+                    JointKind::Prismatic => {
+                        Isometry3::translation(axis.x * q, axis.y * q, axis.z * q)
+                    }
+                };
+                assert_relative_eq!(t, t0 * origin * motion, epsilon = 1e-14);
+            }
         }
     }
 }
