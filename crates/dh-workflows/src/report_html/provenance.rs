@@ -25,22 +25,33 @@ pub struct InputFile {
 }
 
 impl InputFile {
-    /// `path` hashed (`-`, standard input, is named but not hashed: it was read once).
+    /// `path` hashed as it is read, never held whole (`-`, standard input, is named but not
+    /// hashed: it was read once).
     pub fn read(role: &str, path: &str) -> Self {
-        let bytes = (path != "-").then(|| std::fs::read(path).ok()).flatten();
+        let hashed = (path != "-")
+            .then(|| {
+                let mut file = std::fs::File::open(path).ok()?;
+                let mut hasher = Sha256::new();
+                let size = std::io::copy(&mut file, &mut hasher).ok()?;
+                Some((hex(&hasher.finalize()), size))
+            })
+            .flatten();
         InputFile {
             role: role.into(),
             path: path.into(),
-            sha256: bytes.as_deref().map(sha256_hex),
-            size: bytes.map(|b| b.len() as u64),
+            sha256: hashed.as_ref().map(|h| h.0.clone()),
+            size: hashed.map(|h| h.1),
         }
     }
 }
 
 /// Lowercase hex SHA-256 of `bytes`.
 pub fn sha256_hex(bytes: &[u8]) -> String {
-    let digest = Sha256::digest(bytes);
-    let mut s = String::with_capacity(64);
+    hex(&Sha256::digest(bytes))
+}
+
+fn hex(digest: &[u8]) -> String {
+    let mut s = String::with_capacity(2 * digest.len());
     for b in digest {
         let _ = write!(s, "{b:02x}");
     }
@@ -172,6 +183,20 @@ mod tests {
             sha256_hex(b"abc"),
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
+    }
+
+    #[test]
+    fn a_file_is_hashed_as_it_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("data.csv");
+        std::fs::write(&file, b"abc").unwrap();
+        let f = InputFile::read("--data", file.to_str().unwrap());
+        assert_eq!(f.sha256.as_deref(), Some(sha256_hex(b"abc").as_str()));
+        assert_eq!(f.size, Some(3));
+        let stdin = InputFile::read("--data", "-");
+        assert_eq!((stdin.sha256, stdin.size), (None, None));
+        let gone = InputFile::read("--data", dir.path().join("gone").to_str().unwrap());
+        assert_eq!(gone.sha256, None);
     }
 
     #[test]
