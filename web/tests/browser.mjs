@@ -67,6 +67,26 @@ const DEVIATION_REL = 1e-6;
 const NUMBER = /-?\d+(?:\.\d+)?(?:e[+-]?\d+)?/gi;
 const sameness = { exact: 0, noise: 0 };
 
+// An `"rpy": [roll, pitch, yaw]` triple is a rotation, R = Rz(yaw) Ry(pitch) Rx(roll) (URDF's
+// convention), and is compared as one: near gimbal lock (|pitch| -> pi/2) roll and yaw are
+// ill-conditioned (their last-bit differences grow as 1/cos(pitch): 1.8e-11 rad at a pitch of
+// 1.5707897 in an SDFormat chain) while the rotation they give is not. The matrices' entries
+// must agree within FLOAT_ABS + FLOAT_REL, which holds a wrong angle to the same standard as
+// any other number.
+function rpyMatrix([r, p, y]) {
+  const [cr, sr, cp, sp, cy, sy] = [Math.cos(r), Math.sin(r), Math.cos(p), Math.sin(p), Math.cos(y), Math.sin(y)];
+  return [
+    cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+    sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+    -sp, cp * sr, cp * cr,
+  ];
+}
+
+function sameRotation(got, want) {
+  const [g, w] = [rpyMatrix(got), rpyMatrix(want)];
+  return g.every((x, i) => Math.abs(x - w[i]) <= FLOAT_ABS + FLOAT_REL);
+}
+
 function assertSameOutput(got, want, what) {
   if (got === want) {
     sameness.exact++;
@@ -75,11 +95,17 @@ function assertSameOutput(got, want, what) {
   const words = (t) => t.split(NUMBER);
   const numbers = (t) => (t.match(NUMBER) || []).map(Number);
   const [gw, ww, gn, wn] = [words(got), words(want), numbers(got), numbers(want)];
-  const close = gw.length === ww.length && gw.every((w, i) => w === ww[i]) && gn.length === wn.length &&
-    gn.every((x, i) => {
-      const rel = /error\W*$/.test(gw[i]) ? DEVIATION_REL : FLOAT_REL;
-      return Math.abs(x - wn[i]) <= FLOAT_ABS + rel * Math.max(Math.abs(x), Math.abs(wn[i]));
-    });
+  const shapes = gw.length === ww.length && gw.every((w, i) => w === ww[i]) && gn.length === wn.length;
+  let close = shapes;
+  for (let i = 0; close && i < gn.length; i++) {
+    if (/"rpy":\s*\[\s*$/.test(gw[i]) && i + 2 < gn.length) {
+      close = sameRotation(gn.slice(i, i + 3), wn.slice(i, i + 3));
+      i += 2;
+      continue;
+    }
+    const rel = /error\W*$/.test(gw[i]) ? DEVIATION_REL : FLOAT_REL;
+    close = Math.abs(gn[i] - wn[i]) <= FLOAT_ABS + rel * Math.max(Math.abs(gn[i]), Math.abs(wn[i]));
+  }
   if (close) {
     sameness.noise++;
     return;
