@@ -49,7 +49,7 @@ pub struct ExtractArgs {
 /// Extracts; the caller proves what it writes ([`prove_extracted`]) and prints.
 ///
 /// # Errors
-/// As [`load_chain`], plus geometry errors (a chain without moving joints).
+/// As [`dh_workflows::input::load_chain`], plus geometry errors (a chain without moving joints).
 pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
     let bytes = read_robot(&args.path)?;
     extract_bytes_in(
@@ -66,7 +66,7 @@ pub fn run_extract(args: &ExtractArgs) -> Result<Extracted> {
 /// error messages.
 ///
 /// # Errors
-/// As [`load_chain_bytes`], plus geometry errors (a chain without moving joints).
+/// As [`dh_workflows::input::load_chain_bytes`], plus geometry errors (a chain without moving joints).
 pub fn run_extract_bytes(bytes: &[u8], name: &str, args: &ExtractArgs) -> Result<Extracted> {
     extract_bytes(
         bytes,
