@@ -24,6 +24,7 @@ mod mjcf;
 mod outputs;
 mod pose6;
 mod predict;
+mod predict_effects;
 mod roundtrip;
 mod sdf;
 mod sessions;
