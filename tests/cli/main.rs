@@ -12,6 +12,7 @@ mod corpus;
 mod cpa;
 mod default_tip;
 mod diagnosis;
+mod diagnosis_rules;
 mod extract;
 mod hostile_names;
 mod import_columns;

@@ -71,6 +71,10 @@ pub struct StepDoc {
     /// without such samples.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angle_rms: Option<f64>,
+    /// The same of the held-out samples (validation or cross-validation, as `val_rms`);
+    /// absent without 6-DoF samples or without validation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub val_angle_rms: Option<f64>,
     /// Parameters the step would estimate but held at their start, not identifiable from the
     /// data (in `nominal`: device or target coordinates), with what absorbs them.
     pub fixed: Vec<FixedDoc>,
