@@ -246,3 +246,197 @@ fn a_calibrated_file_without_its_gravity_model_is_refused_naming_it() {
         assert!(err.contains(part), "{part}\n{err}");
     }
 }
+
+/// `predict` of `model` with `extra` options; returns the rows and the standard error.
+fn predict_tool(
+    model: &str,
+    joints: &str,
+    out: &str,
+    extra: &[&str],
+) -> (Vec<HashMap<String, String>>, String) {
+    let mut args = vec![
+        "predict",
+        "--model",
+        model,
+        "--joints",
+        joints,
+        "--targets",
+        "tool",
+        "--frame",
+        "base",
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    let (code, stdout, err) = exec(&args);
+    assert_eq!(code, 0, "{stdout}{err}");
+    (table(out), err)
+}
+
+#[test]
+fn direction_backlash_is_predicted_on_its_flank_in_a_sequence_and_as_uncertainty_without() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_string();
+    // 0.3 mrad of play each side on the elbow and 0.2 on the shoulder (0.2-0.3 mm at the
+    // tool), a link length error, 50 µm noise; poses in the order the robot moved.
+    simulate(
+        UR5,
+        "150",
+        &p("ur5.csv"),
+        &[
+            "--noise",
+            "5e-5",
+            "--targets",
+            "3",
+            "--effect",
+            "backlash_direction:elbow_joint=3e-4",
+            "--effect",
+            "backlash_direction:shoulder_lift_joint=-2e-4",
+            "--error",
+            "shoulder_lift_joint.a=0.0005",
+            "--seed",
+            "41",
+            "--truth",
+            &p("truth.yaml"),
+        ],
+    );
+    ok(&[
+        "calibrate",
+        "--model",
+        UR5,
+        "--data",
+        &p("ur5.csv"),
+        "--effects",
+        "backlash_direction:elbow_joint,backlash_direction:shoulder_lift_joint",
+        "--out",
+        &p("cal.yaml"),
+    ]);
+    simulate(
+        UR5,
+        "100",
+        &p("program.csv"),
+        &["--seed", "42", "--truth", &p("program.truth.yaml")],
+    );
+    // The truth on its flanks: the program run in its order.
+    let (truth, _) = predict_tool(
+        &p("truth.yaml"),
+        &p("program.csv"),
+        &p("t.csv"),
+        &["--sequence"],
+    );
+    // In the sequence: each pose on its flank, within the noise.
+    let (seq, err) = predict_tool(
+        &p("cal.yaml"),
+        &p("program.csv"),
+        &p("s.csv"),
+        &["--sequence"],
+    );
+    // The first row's joints have not moved yet: that row alone has the flank unknown.
+    assert!(err.contains("at 1 of 100 row(s)"), "{err}");
+    let (z, e) = standardised(&seq[1..], &truth[1..]);
+    let covered = z.iter().filter(|v| v.abs() <= 2.0).count() as f64 / z.len() as f64;
+    eprintln!(
+        "backlash, in sequence: error RMS {:.2e} m, max {:.2e} m; 2-sigma coverage {covered:.3}, RMS z {:.3}",
+        rms(&e),
+        e.iter().copied().fold(0.0, f64::max),
+        rms(&z)
+    );
+    assert!(rms(&e) < 5e-5, "error RMS {} m", rms(&e));
+    // One calibration is one draw of its parameter errors, shared by every pose: its coverage
+    // scatters about 95 % from draw to draw (this one is on the safe side).
+    assert!(covered >= 0.88, "coverage {covered}");
+    assert!((0.5..1.6).contains(&rms(&z)), "RMS z {}", rms(&z));
+    // Without the order: midway between the flanks, said so, and the half backlash in the
+    // uncertainty keeps the truth within two sigma.
+    let (mid, err) = predict_tool(&p("cal.yaml"), &p("program.csv"), &p("m.csv"), &[]);
+    for part in [
+        "'backlash_direction:elbow_joint'",
+        "at 100 of 100 row(s)",
+        "--sequence",
+    ] {
+        assert!(err.contains(part), "{part}\n{err}");
+    }
+    let (zm, em) = standardised(&mid, &truth);
+    let covered = zm.iter().filter(|v| v.abs() <= 2.0).count() as f64 / zm.len() as f64;
+    eprintln!(
+        "backlash, midway: error RMS {:.2e} m, max {:.2e} m; 2-sigma coverage {covered:.3}, RMS z {:.3}",
+        rms(&em),
+        em.iter().copied().fold(0.0, f64::max),
+        rms(&zm)
+    );
+    assert!(
+        rms(&em) > 2.0 * rms(&e),
+        "midway {} vs flank {}",
+        rms(&em),
+        rms(&e)
+    );
+    assert!(covered >= 0.95, "midway coverage {covered}");
+    let u = |r: &HashMap<String, String>| num(r, "u_x").hypot(num(r, "u_y")).hypot(num(r, "u_z"));
+    assert!(mid.iter().zip(&seq).skip(1).all(|(a, b)| u(a) > u(b)));
+
+    // Compensation of the program in its order puts the true robot (on its flanks) at the
+    // nominal goal; without the order, midway, it leaves the backlash.
+    let (goal, _) = predict_tool(UR5, &p("program.csv"), &p("goal.csv"), &[]);
+    let mut errors = Vec::new();
+    for (extra, name) in [(&["--sequence"][..], "seq"), (&[][..], "mid")] {
+        let (corrected, cal, program) = (
+            p(&format!("corrected_{name}.csv")),
+            p("cal.yaml"),
+            p("program.csv"),
+        );
+        let mut args = vec![
+            "compensate",
+            "--nominal",
+            UR5,
+            "--model",
+            &cal,
+            "--joints",
+            &program,
+            "--out",
+            &corrected,
+        ];
+        args.extend_from_slice(extra);
+        let (code, report, err) = exec(&args);
+        assert!(code == 0 || code == 1, "{report}{err}");
+        assert_eq!(
+            err.contains("backlash_direction:elbow_joint"),
+            name == "mid" || err.contains("at 1 of"),
+            "{err}"
+        );
+        let status = table(&corrected);
+        let (after, _) = predict_tool(
+            &p("truth.yaml"),
+            &corrected,
+            &p(&format!("after_{name}.csv")),
+            &["--sequence"],
+        );
+        let e: Vec<f64> = after
+            .iter()
+            .zip(&goal)
+            .zip(&status)
+            .skip(1)
+            .filter(|(_, s)| s["status"] == "compensated")
+            .map(|((a, b), _)| dist(xyz(a), xyz(b)))
+            .collect();
+        assert!(e.len() >= 90, "{} compensated", e.len());
+        errors.push(rms(&e));
+    }
+    let before: Vec<f64> = truth
+        .iter()
+        .zip(&goal)
+        .skip(1)
+        .map(|(a, b)| dist(xyz(a), xyz(b)))
+        .collect();
+    eprintln!(
+        "backlash: true error RMS {:.2e} m; compensated in sequence {:.2e} m, midway {:.2e} m",
+        rms(&before),
+        errors[0],
+        errors[1]
+    );
+    assert!(
+        errors[0] < 5e-5 && errors[0] < 0.1 * rms(&before),
+        "{errors:?} vs {}",
+        rms(&before)
+    );
+    assert!(errors[1] > 2.0 * errors[0], "{errors:?}");
+}
