@@ -4,6 +4,7 @@
 //! predicted at poses the calibration never saw against the truth, and compensated.
 
 use std::collections::HashMap;
+use std::path::Path;
 
 use crate::common::{csv_rows, exec, ok, simulate};
 
@@ -439,4 +440,125 @@ fn direction_backlash_is_predicted_on_its_flank_in_a_sequence_and_as_uncertainty
         rms(&before)
     );
     assert!(errors[1] > 2.0 * errors[0], "{errors:?}");
+}
+
+/// `Rᵀ v` for the URDF attitude `R = Rz(yaw) Ry(pitch) Rx(roll)`.
+fn unrotate(rpy: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    let (sr, cr) = rpy[0].sin_cos();
+    let (sp, cp) = rpy[1].sin_cos();
+    let (sy, cy) = rpy[2].sin_cos();
+    let r = [
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ];
+    [0, 1, 2].map(|j| (0..3).map(|i| r[i][j] * v[i]).sum())
+}
+
+/// The Liao Wu ABB IRB 120 set (`../shared/measured`; skipped when absent): calibrated on its
+/// three calibration points with `--effects auto` (which selects the joint compliances of
+/// joints 2 and 3 under the estimated link masses), written, and `predict` at its 40 test poses:
+/// each test target is located on the tool from its own samples (3 parameters, closed form:
+/// the mean of `Rᵢᵀ (pᵢ − oᵢ)`, as a tool is taught), then compared.
+#[test]
+fn the_liao_wu_test_poses_are_predicted_with_the_selected_compliances() {
+    let set = "../shared/measured/liaowu_abb_irb120_position";
+    if !Path::new(set).is_dir() {
+        eprintln!("the_liao_wu_test_poses_are_predicted_with_the_selected_compliances: skipped: {set} is absent");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_string();
+    ok(&["import", set, "--out", &p("liaowu.csv")]);
+    let fixture = "fixtures/measured/liaowu_abb_irb120";
+    let (code, report, err) = exec(&[
+        "calibrate",
+        "--model",
+        &format!("{fixture}/model.yaml"),
+        "--data",
+        &p("liaowu.csv"),
+        "--targets",
+        "point1,point2,point3",
+        "--inertials",
+        &format!("{fixture}/inertials.yaml"),
+        "--folds",
+        "6",
+        "--effects",
+        "auto",
+        "--format",
+        "json",
+        "--out",
+        &p("cal.yaml"),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let selected: Vec<&str> = v["selected_effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap())
+        .collect();
+    assert!(selected.contains(&"compliance:joint_2"), "{selected:?}");
+    // The 40 test poses (the validation rows of the import), their tool frames predicted.
+    let measured: Vec<HashMap<String, String>> = table(&p("liaowu.csv"))
+        .into_iter()
+        .filter(|r| r["set"] == "validation")
+        .collect();
+    assert_eq!(measured.len(), 40);
+    let tools_csv = p("tools.csv");
+    ok(&[
+        "predict",
+        "--model",
+        &p("cal.yaml"),
+        "--joints",
+        &p("liaowu.csv"),
+        "--targets",
+        "tool",
+        "--out",
+        &tools_csv,
+    ]);
+    let tools = table(&tools_csv);
+    let tools: Vec<&HashMap<String, String>> = tools
+        .iter()
+        .filter(|r| r["config"].starts_with("test"))
+        .collect();
+    assert_eq!(tools.len(), 40);
+    let rpy = |r: &HashMap<String, String>| [num(r, "roll"), num(r, "pitch"), num(r, "yaw")];
+    let mut errors = Vec::new();
+    for target in ["test1", "test2"] {
+        let rows: Vec<(&HashMap<String, String>, &HashMap<String, String>)> = measured
+            .iter()
+            .zip(&tools)
+            .filter(|(m, _)| m["target"] == target)
+            .map(|(m, t)| (m, *t))
+            .collect();
+        let mut t = [0.0; 3];
+        for (m, o) in &rows {
+            let (pm, po) = (xyz(m), xyz(o));
+            let local = unrotate(rpy(o), [pm[0] - po[0], pm[1] - po[1], pm[2] - po[2]]);
+            for i in 0..3 {
+                t[i] += local[i] / rows.len() as f64;
+            }
+        }
+        for (m, o) in &rows {
+            // p = o + R t, compared with the measured point.
+            let (pm, po) = (xyz(m), xyz(o));
+            let d = unrotate(rpy(o), [pm[0] - po[0], pm[1] - po[1], pm[2] - po[2]]);
+            errors.push(dist(d, t));
+        }
+    }
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    let max = errors.iter().copied().fold(0.0, f64::max);
+    eprintln!(
+        "liao wu: {selected:?}; 40 test poses predicted: mean {:.3} mm, max {:.3} mm",
+        mean * 1e3,
+        max * 1e3
+    );
+    // docs/results.md, the CLI's figures for the same location of the test targets (from their
+    // own samples): 0.130 mean / 0.348 max with the two compliances (geometric alone 0.243 /
+    // 0.473); the example's 0.160 / 0.343 locates them from one zero-pose measurement instead.
+    assert!(
+        mean < 0.1305e-3 && max < 0.3485e-3,
+        "mean {mean} m, max {max} m"
+    );
 }
