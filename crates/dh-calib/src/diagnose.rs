@@ -46,7 +46,10 @@
 //!    joint `j` (F test of the explained part against what is left, degrees of freedom reduced
 //!    by the parameters fitted), and tested for correlation between consecutive poses (pose order,
 //!    i.e. time: the self-normalised lag-1 statistic `Σ a_i / sqrt(Σ a_i²)`,
-//!    `a_i = r̄_i · r̄_{i+1}` over pose-mean residuals), each at `alpha / (joints + 1)`. What is
+//!    `a_i = r̄_i · r̄_{i+1}` over pose-mean residuals); against time (the pose order), by a
+//!    cubic trend and a length change growing as a cubic in time (a warm-up); and against the
+//!    gravity lever arm of each joint (`1, l, l², l³`: a sag that grows with the reach), all
+//!    at `alpha / K` (Bonferroni over the `K` tests; see `calibrate::structure`). What is
 //!    significant is reported with binned residuals rather than fitted.
 //!
 //! # Layout

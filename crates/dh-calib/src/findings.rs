@@ -171,13 +171,15 @@ pub struct ResidualTest {
 /// Step 5: residual structure against one variable.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructureCheck {
-    /// `pose order` or a joint name.
+    /// A joint name, `pose order` (lag-1 correlation), `time` (a smooth trend along the pose
+    /// order) or `gravity lever at <joint>` (see the verdict's structure tests).
     pub variable: String,
     /// The statistic (F, chi-square or z).
     pub statistic: f64,
     /// Its p-value.
     pub p_value: f64,
-    /// Significant at `alpha / (joints + 1)`.
+    /// Significant at `alpha / K`, `K` the tests made (each joint, the pose order, time and
+    /// each gravity lever arm).
     pub significant: bool,
     /// Binned residuals: `(bin centre, RMS of the residual, length of the mean residual
     /// vector)` in the variable's unit (radians, metres, or pose index) and metres.

@@ -69,7 +69,9 @@ pub(crate) fn verdict_with(
         .map(|s| s.variable.as_str())
         .collect();
     let shape = if significant.is_empty() {
-        "no structure against the joints or the pose order that the tests resolve".to_string()
+        "no structure against the joints, the pose order, time or the gravity lever arms that \
+         the tests resolve"
+            .to_string()
     } else {
         format!(
             "structure against {} (see the bins)",
@@ -353,7 +355,11 @@ fn structure_checks(
     let joints: Vec<usize> = (0..rows.len())
         .filter(|&j| rows[j].mimic.is_none())
         .collect();
-    let k_tests = (joints.len() + 1) as f64;
+    // The gravity lever arms of the joints that have one (see `structure`), read first: their
+    // count is part of the Bonferroni level of every test.
+    let (picked, levers) = super::structure::lever_arms(session, firsts, means.len());
+    // Each joint, the pose order, time, and each gravity lever arm.
+    let k_tests = (joints.len() + 2 + levers.len()) as f64;
     let level = alpha / k_tests;
     // The joints' tests are independent: run on every core, gathered in joint order.
     let check = |j: usize| joint_check(session, fit, j, means, firsts, res, level);
@@ -364,6 +370,19 @@ fn structure_checks(
             // this thread instead.
             Err(_) => joints.iter().filter_map(|&j| check(j)).collect(),
         };
+    for (row, l) in &levers {
+        let bin = |v: &[f64], m: &[Vector3<f64>]| bins(|| v.iter().copied(), m, 8);
+        out.extend(super::structure::lever_check(
+            session,
+            *row,
+            &picked,
+            l,
+            means,
+            fit.free.len(),
+            level,
+            bin,
+        ));
+    }
     drop(units);
     // Pose order: pose-mean residuals in order of first appearance, which is the order of
     // the group numbers (`Prepared::groups`); with a sample per group, its residuals.
@@ -383,6 +402,14 @@ fn structure_checks(
             bins: bins(|| (0..means.len()).map(|i| i as f64), means, 8),
         });
     }
+    let bin = |m: &[Vector3<f64>]| bins(|| (0..m.len()).map(|i| i as f64), m, 8);
+    out.extend(super::structure::time_check(
+        prep,
+        means,
+        fit.free.len(),
+        level,
+        bin,
+    ));
     out
 }
 
