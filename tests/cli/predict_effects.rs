@@ -562,3 +562,76 @@ fn the_liao_wu_test_poses_are_predicted_with_the_selected_compliances() {
         "mean {mean} m, max {max} m"
     );
 }
+
+/// A declared effect the data cannot see (no harmonic planted on the wrist, whose turns barely
+/// move a target 5 cm from its axis) is estimated but reported as not identified, in the text
+/// and in JSON; the planted gear ratio is identified.
+#[test]
+fn an_effect_parameter_within_two_standard_errors_of_zero_is_reported_not_identified() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| dir.path().join(f).to_str().unwrap().to_string();
+    simulate(
+        UR5,
+        "120",
+        &p("ur5.csv"),
+        &[
+            "--noise",
+            "5e-5",
+            "--effect",
+            "gear_ratio:elbow_joint=1e-3",
+            "--seed",
+            "51",
+        ],
+    );
+    let run = |format: &str| {
+        let (code, out, err) = exec(&[
+            "calibrate",
+            "--model",
+            UR5,
+            "--data",
+            &p("ur5.csv"),
+            "--effects",
+            "gear_ratio:elbow_joint,gear_harmonic2:wrist_3_joint",
+            "--format",
+            format,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        out
+    };
+    let v: serde_json::Value = serde_json::from_str(&run("json")).unwrap();
+    let param = |name: &str| {
+        v["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap_or_else(|| panic!("no parameter {name}"))
+            .clone()
+    };
+    let ratio = param("gear_ratio:elbow_joint");
+    assert_eq!(ratio["identified"], true, "{ratio}");
+    for name in [
+        "gear_harmonic2:wrist_3_joint.sin2",
+        "gear_harmonic2:wrist_3_joint.cos2",
+    ] {
+        let h = param(name);
+        let (e, se) = (
+            h["estimate"].as_f64().unwrap(),
+            h["std_error"].as_f64().unwrap(),
+        );
+        eprintln!("{name}: {e:.3e} +- {se:.3e}");
+        assert_eq!(h["free"], true, "{h}");
+        assert_eq!(h["identified"], e.abs() >= 2.0 * se, "{h}");
+    }
+    // At least one of the two is not identified (both are noise), and the text says so.
+    let text = run("text");
+    assert!(
+        text.contains("not identified by this data (")
+            && text.contains("gear_harmonic2:wrist_3_joint.")
+            && text.contains("  not identified\n"),
+        "{text}"
+    );
+    assert!(!text
+        .lines()
+        .any(|l| l.contains("gear_ratio:elbow_joint") && l.contains("not identified")));
+}

@@ -246,13 +246,33 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
     }) {
         let _ = writeln!(
             s,
-            "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
+            "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}{}",
             crate::guard::escape(&p.name),
             unit_label(&p.unit, units),
             value(p.nominal, &p.unit, units),
             value(p.estimate, &p.unit, units),
             p.std_error
-                .map_or_else(|| "-".into(), |e| std_error(e, &p.unit, units))
+                .map_or_else(|| "-".into(), |e| std_error(e, &p.unit, units)),
+            if p.identified { "" } else { "  not identified" }
+        );
+    }
+    let unidentified: Vec<&str> = doc
+        .parameters
+        .iter()
+        .filter(|p| p.free && !p.identified)
+        .map(|p| p.name.as_str())
+        .collect();
+    if !unidentified.is_empty() {
+        let _ = writeln!(
+            s,
+            "not identified by this data ({}): {}: each estimate is within {} standard errors of zero, as consistent with no effect as with the estimate; kept in the model, its uncertainty covers zero",
+            unidentified.len(),
+            unidentified
+                .iter()
+                .map(|n| crate::guard::escape(n))
+                .collect::<Vec<_>>()
+                .join(", "),
+            dh_calib::pipeline::IDENTIFIED_SIGMAS
         );
     }
     let rpy = |r: [f64; 3]| {

@@ -129,6 +129,8 @@ impl CalibrationDoc {
                     estimate: p.estimate,
                     std_error: p.std_error,
                     free: p.free,
+                    identified: p.free
+                        && ParameterDoc::identifies(&p.name, p.estimate, p.std_error),
                 })
                 .collect(),
             fixed: report.fixed.iter().map(FixedDoc::from).collect(),
