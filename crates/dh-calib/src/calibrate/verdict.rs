@@ -105,6 +105,18 @@ pub(crate) fn verdict_with(
         }
         Some(true) => {}
     }
+    // A structure test can resolve what the residual test, spread over every degree of
+    // freedom, does not (a warm-up of a few noise sigmas concentrated on a trend in time).
+    if complete != Some(false) && !significant.is_empty() {
+        notes.push(format!(
+            "the final residual has {shape}{}",
+            if complete == Some(true) {
+                ", though its size is within the noise by the residual test"
+            } else {
+                ""
+            }
+        ));
+    }
     Verdict {
         test,
         alpha,
