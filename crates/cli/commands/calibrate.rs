@@ -28,6 +28,7 @@ use dh_calib::effects::label_of;
 use dh_calib::model::{Effect, Model, ModelOptions};
 use dh_calib::pipeline::{self, Plan};
 use dh_core::pose::from_xyz_rpy;
+use dh_calib::tree::DhTree;
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Vector3};
 

@@ -1,5 +1,6 @@
 //! The residual chart (`--plot`): each sample's modelled-to-measured distance before and after
-//! calibration (metres), per pose, as an SVG.
+//! calibration (metres), per pose, as an SVG; for a tree, a before and an after panel per
+//! branch ([`tree_chart`]).
 
 use super::*;
 
@@ -182,5 +183,178 @@ pub(super) fn chart(
                 report.noise_floor.as_ref().map(|n| n.rms),
             ),
         ],
+    })
+}
+
+/// Distances between the points the tree `tree` (with `effects` at their values, the device
+/// frame and the targets, each on its branch `chains[k]`) predicts and the measured ones, per
+/// sample; `q` the samples' values in the tree's row order.
+fn tree_distances(
+    tree: &DhTree,
+    chains: &[usize],
+    effects: &[(Arc<dyn Effect>, Vec<f64>)],
+    device: &Isometry3<f64>,
+    targets: &[Vector3<f64>],
+    data: &Measurements,
+    q: &[Vec<f64>],
+) -> Result<Vec<f64>> {
+    let on: Vec<(String, usize)> = data
+        .targets
+        .iter()
+        .cloned()
+        .zip(chains.iter().copied())
+        .collect();
+    let mut model = Model::new_tree(tree, &on, &ModelOptions::default())?;
+    let mut values = Vec::new();
+    for (e, v) in effects {
+        values.push((model.add_effect(e.clone())?, v.clone()));
+    }
+    model.set_device(device);
+    for (k, t) in targets.iter().enumerate() {
+        model.set_target(k, *t);
+    }
+    let mut x = vec![0.0; model.parameter_count()];
+    for (range, v) in values {
+        for (i, val) in range.zip(v) {
+            if let Some(slot) = x.get_mut(i) {
+                *slot = val;
+            }
+        }
+    }
+    let contexts = dh_calib::effects_order::contexts_of(q.iter().map(Vec::as_slice), data);
+    Ok(data
+        .samples
+        .iter()
+        .zip(q)
+        .zip(&contexts)
+        .map(|((s, q), c)| (model.point_in(&x, q, c, s.target) - s.point).norm())
+        .collect())
+}
+
+/// The residual chart of a tree calibration: per branch, the residuals of the samples of its
+/// targets before (the nominal tree, device frame and targets fitted) and after (the final
+/// step, effects included), two panels a branch, the poses numbered over the whole data.
+pub(super) fn tree_chart(
+    data_name: &str,
+    t: &calibration::Tree,
+    unit: LengthUnit,
+) -> Result<ResidualChart> {
+    let (inputs, c) = (&t.inputs, &t.calibration);
+    let (data, report) = (&inputs.data, &c.report);
+    let nominal = &inputs.sheet.tree;
+    let branch_of = |name: &str| {
+        c.target_branches
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, b)| *b)
+    };
+    let chains: Vec<usize> = data
+        .targets
+        .iter()
+        .map(|n| branch_of(n).unwrap_or(0))
+        .collect();
+    let q = row_values(&inputs.model.table, data)?;
+    let (poses, count) = pose_indices(data);
+    let (device0, targets0) = nominal_frames(report, &data.targets);
+    let before = tree_distances(nominal, &chains, &[], &device0, &targets0, data, &q)?;
+    // The selected effects, parsed as the fit parsed them: on the nominal tree, with its masses.
+    let ctx = dh_calib::effects::EffectContext {
+        tree: nominal.clone(),
+        gravity: match &inputs.inertials {
+            Some(i) => Some(Arc::new(dh_calib::gravity::GravityModel::new(
+                nominal,
+                i,
+                inputs.gravity,
+            )?)),
+            None => None,
+        },
+    };
+    let estimate = |n: &String| {
+        report
+            .parameters
+            .iter()
+            .find(|p| &p.name == n)
+            .map_or(0.0, |p| p.estimate)
+    };
+    let effects = report
+        .selected_effects
+        .iter()
+        .map(|label| {
+            let e = dh_calib::effects::parse_label_in(label, &ctx)?;
+            let v = e.parameter_names().iter().map(estimate).collect();
+            Ok((e, v))
+        })
+        .collect::<Result<Vec<_>, dh_calib::CalibError>>()?;
+    let targets1: Vec<Vector3<f64>> = data
+        .targets
+        .iter()
+        .map(|n| {
+            report
+                .targets
+                .iter()
+                .find(|(t, _)| t == n)
+                .map_or_else(Vector3::zeros, |(_, p)| *p)
+        })
+        .collect();
+    let after = tree_distances(
+        &c.calibrated,
+        &chains,
+        &effects,
+        &report.device,
+        &targets1,
+        data,
+        &q,
+    )?;
+    let last = report
+        .steps
+        .last()
+        .map_or("geometric", |s| s.label.as_str());
+    let mut panels = Vec::new();
+    for (b, branch) in nominal.branches().iter().enumerate() {
+        let panel = |label: String, d: &[f64]| {
+            let residuals: Vec<Residual> = d
+                .iter()
+                .zip(&poses)
+                .zip(&data.samples)
+                .filter(|(_, s)| chains.get(s.target) == Some(&b))
+                .map(|((&distance, &pose), s)| Residual {
+                    pose,
+                    distance,
+                    validation: s.split == Split::Validation,
+                })
+                .collect();
+            let calibration: Vec<f64> = residuals
+                .iter()
+                .filter(|r| !r.validation)
+                .map(|r| r.distance)
+                .collect();
+            let rms = (!calibration.is_empty()).then(|| {
+                (calibration.iter().map(|d| d * d).sum::<f64>() / calibration.len() as f64).sqrt()
+            });
+            Panel {
+                label,
+                residuals,
+                rms,
+                floor: None,
+            }
+        };
+        let name = crate::guard::escape(&branch.name);
+        panels.push(panel(
+            format!("branch {name}, before: nominal tree (device frame and targets fitted)"),
+            &before,
+        ));
+        panels.push(panel(format!("branch {name}, after: {last}"), &after));
+    }
+    Ok(ResidualChart {
+        title: format!(
+            "residuals per pose and branch: {} against {} ({} samples of {} target(s))",
+            inputs.origin,
+            data_name,
+            data.samples.len(),
+            data.targets.len()
+        ),
+        unit,
+        poses: count,
+        panels,
     })
 }

@@ -22,19 +22,9 @@ pub fn calibrate(
     let plot: Vec<(&str, &str)> = args.plot.iter().map(|p| ("--plot", p.as_str())).collect();
     request.check_destinations(&plot)?;
     let loaded = match calibration::identify(request)? {
-        Some((sheet, origin)) => {
-            if args.plot.is_some() {
-                return Err(crate::error::hinted(
-                    format!(
-                        "--plot: the residual chart is drawn for serial models only; {origin} is a tree"
-                    ),
-                    "drop --plot; the JSON report (--format json) has every step's figures",
-                ));
-            }
-            Loaded::Tree(Box::new(calibration::load_tree(
-                request, sheet, origin, err,
-            )?))
-        }
+        Some((sheet, origin)) => Loaded::Tree(Box::new(calibration::load_tree(
+            request, sheet, origin, err,
+        )?)),
         None => Loaded::Serial(Box::new(calibration::load_inputs(request, err)?)),
     };
     let data_name = display_name(&request.data);
@@ -76,7 +66,8 @@ pub fn calibrate(
                 &data_name,
                 &c.calibration.report,
             ),
-            Calibrated::Tree(_) => unreachable_tree_plot()?,
+            // Two panels a branch: a tree's arms differ in length and in what they carry.
+            Calibrated::Tree(t) => tree_chart(&data_name, t, LengthUnit::Mm)?,
         };
         files.push((Path::new(path), residuals_svg(&chart)));
     }
@@ -116,11 +107,6 @@ pub fn calibrate(
     } else {
         Outcome::Differs
     })
-}
-
-/// A tree never reaches the chart: `--plot` is refused for trees before loading.
-fn unreachable_tree_plot() -> Result<ResidualChart> {
-    anyhow::bail!("--plot: the residual chart is drawn for serial models only")
 }
 
 // ---------------------------------------------------------------- hooks for trees
