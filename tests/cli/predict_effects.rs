@@ -24,6 +24,9 @@ payloads:
   - {chain: 0, mass: 1.0, com: [0.0, 0.0, 0.05]}
 ";
 
+/// A CSV row by column name.
+type Row = HashMap<String, String>;
+
 fn table(path: &str) -> Vec<HashMap<String, String>> {
     csv_rows(&std::fs::read_to_string(path).unwrap())
 }
@@ -526,7 +529,7 @@ fn the_liao_wu_test_poses_are_predicted_with_the_selected_compliances() {
     let rpy = |r: &HashMap<String, String>| [num(r, "roll"), num(r, "pitch"), num(r, "yaw")];
     let mut errors = Vec::new();
     for target in ["test1", "test2"] {
-        let rows: Vec<(&HashMap<String, String>, &HashMap<String, String>)> = measured
+        let rows: Vec<(&Row, &Row)> = measured
             .iter()
             .zip(&tools)
             .filter(|(m, _)| m["target"] == target)
