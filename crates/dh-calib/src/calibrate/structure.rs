@@ -56,10 +56,12 @@ use crate::stats;
 /// depend on a variable that does not vary.
 pub(crate) const MIN_LEVER: f64 = 0.05;
 
-/// Beyond this many units (pose means per target) the lever tests read an evenly spaced
-/// subset of them: the lever arms cost a forward kinematics per unit, and millions of poses
-/// would add seconds to the verdict for a statistic that a fraction of them resolves.
-const LEVER_UNITS_MAX: usize = 50_000;
+/// Beyond this many units (pose means per target for the lever tests, pose groups for the
+/// time test) the tests read an evenly spaced subset of them: a lever arm costs a forward
+/// kinematics per unit and the time test a row of 16 columns per axis, and millions of poses
+/// would add seconds to the verdict for a statistic that a fraction of them resolves (the
+/// degrees of freedom of the parameters fitted are charged to the subset in proportion).
+const UNITS_MAX: usize = 50_000;
 
 /// The degree of the time trend's polynomial.
 const TIME_DEGREE: usize = 3;
@@ -135,23 +137,32 @@ pub(super) fn time_check(
     if groups < 8 {
         return None;
     }
-    // Each group's mean measured position, as its mean residual.
-    let mut points = vec![Vector3::zeros(); groups];
-    let mut counts = vec![0usize; groups];
+    // Every `step`-th group, and each picked group's mean measured position (as its mean
+    // residual).
+    let step = groups.div_ceil(UNITS_MAX).max(1);
+    let picked = groups.div_ceil(step);
+    let mut points = vec![Vector3::zeros(); picked];
+    let mut counts = vec![0usize; picked];
     for (o, &g) in prep.cal.iter().zip(&prep.groups) {
-        if let Some(p) = points.get_mut(g) {
-            *p += measured(o);
-            counts[g] += 1;
+        if g % step == 0 {
+            if let Some(p) = points.get_mut(g / step) {
+                *p += measured(o);
+                counts[g / step] += 1;
+            }
         }
     }
     for (p, &n) in points.iter_mut().zip(&counts) {
         *p /= n.max(1) as f64;
     }
-    let centre = points.iter().sum::<Vector3<f64>>() / groups as f64;
+    let centre = points.iter().sum::<Vector3<f64>>() / picked as f64;
     let nb = 3 * (TIME_DEGREE + 1) + TIME_DEGREE;
     let mut qr = fit::Tsqr::new(nb + 1);
     let mut row = vec![0.0; nb + 1];
-    for (g, (mean, p)) in means.iter().zip(&points).enumerate() {
+    let mut ss = 0.0;
+    for (k, p) in points.iter().enumerate() {
+        let g = k * step;
+        let mean = means[g];
+        ss += mean.norm_squared();
         let s = 2.0 * g as f64 / (groups - 1) as f64 - 1.0;
         let poly = legendre(s);
         let d = p - centre;
@@ -168,8 +179,8 @@ pub(super) fn time_check(
         }
     }
     let r = qr.finish();
-    let ss: f64 = means.iter().map(|v| v.norm_squared()).sum();
-    let (f, p) = f_test(&r, nb, 1, ss, 3 * groups, free, false)?;
+    let share = (free as f64 * picked as f64 / groups as f64).round() as usize;
+    let (f, p) = f_test(&r, nb, 1, ss, 3 * picked, share, false)?;
     Some(StructureCheck {
         variable: "time".into(),
         statistic: f,
@@ -194,15 +205,20 @@ pub(super) fn lever_arms(
     }
     let table: &DhTable = tree.trunk();
     let rows = &table.rows;
-    let step = count.div_ceil(LEVER_UNITS_MAX).max(1);
+    let step = count.div_ceil(UNITS_MAX).max(1);
     let picked: Vec<usize> = (0..count).step_by(step).collect();
     let mut levers: Vec<Vec<f64>> = vec![Vec::with_capacity(picked.len()); rows.len()];
     for &u in &picked {
         let i = units.map_or(u, |f| f[u]);
-        let Some(o) = session.prep.cal.get(i) else {
-            continue;
-        };
-        let Ok(frames) = table.frames(&o.q) else {
+        // A sample whose joint values the table cannot take (none reach here: the model
+        // checked them) has no lever arm: 0 keeps the lists aligned with `picked`.
+        let frames = session
+            .prep
+            .cal
+            .get(i)
+            .and_then(|o| table.frames(&o.q).ok());
+        let Some(frames) = frames else {
+            levers.iter_mut().for_each(|l| l.push(0.0));
             continue;
         };
         let tip = frames[rows.len()] * table.tool;
