@@ -144,3 +144,82 @@ fn an_error_the_angles_show_is_selected_and_the_verdict_weighs_them() {
     assert!(selected(&report).is_empty(), "{:?}", selected(&report));
     assert_eq!(report["verdict"]["summary"], "model complete");
 }
+
+/// §3: a once-per-turn error of the UR5's first joint, 120 µrad (about 50 µm at the tool, the
+/// noise's size), labelled `gear_harmonic:J:2` (once and twice per turn) on today's code in
+/// both ways the rule allowed: (seed 442, validation split) the smaller label failed its
+/// held-out check by a hair (p = 0.0102) and the bigger one passed, the two never compared;
+/// (seed 423, 6 folds) the two were within the BIC tie and the held-out RMS picked the bigger.
+/// Nested rivals are compared by the extra-sum-of-squares F test and the simpler kept; the
+/// report says which were compared. With both harmonics planted the bigger one is kept.
+#[test]
+fn nested_rivals_are_compared_and_the_simpler_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let j1 = "gear_harmonic:shoulder_pan_joint";
+    let both = "gear_harmonic:shoulder_pan_joint:2";
+    for (seed, validation, planted, expected) in [
+        ("442", true, format!("{j1}=120e-6,0"), j1),
+        ("423", false, format!("{j1}=120e-6,0"), j1),
+        ("423", false, format!("{both}=120e-6,0,150e-6,0"), both),
+    ] {
+        let data = dir
+            .path()
+            .join(format!("h_{seed}_{expected}.csv"))
+            .to_string_lossy()
+            .into_owned();
+        let mut sim = vec![
+            "--noise",
+            "50e-6",
+            "--random-errors",
+            "0.0005,0.0005",
+            "--effect",
+            &planted,
+            "--seed",
+            seed,
+        ];
+        if validation {
+            sim.extend(["--validation", "0.4"]);
+        }
+        simulate(UR5, "120", &data, &sim);
+        let folds: &[&str] = if validation { &[] } else { &["--folds", "6"] };
+        let report = calibrate_json(UR5, &data, folds);
+        let trials = &report["diagnosis"]["rounds"][0]["trials"];
+        assert_eq!(
+            selected(&report),
+            [expected],
+            "seed {seed}, {planted}: {trials:#}"
+        );
+        if expected == j1 {
+            let bigger = trials
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|t| t["label"] == both)
+                .unwrap();
+            let reason = bigger["reason"].as_str().unwrap();
+            assert!(
+                reason.starts_with(&format!(
+                    "rival of {j1}, nested in it: the extra terms are not significant (F = "
+                )),
+                "{reason}"
+            );
+            let note = format!("nested rivals compared: {j1} kept over {both}");
+            assert!(
+                report["notes"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .any(|n| n.as_str().unwrap().starts_with(&note)),
+                "{:#}",
+                report["notes"]
+            );
+            let row = report["candidates"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|c| c["label"] == both)
+                .unwrap();
+            assert_eq!(row["status"], "rival", "{row:#}");
+        }
+    }
+}

@@ -36,7 +36,11 @@
 //!    the same joint, or the device scale: [`crate::rivals`]) are then refitted and judged
 //!    too, and the best of those that pass (lowest BIC, the held-out RMS deciding within
 //!    [`crate::rivals::BIC_TIE`]) is added, the others reported as rivals with the
-//!    difference; then the loop repeats. It stops when none of the
+//!    difference. A **nested** rival (its terms among the other's: `gear_harmonic:J` in
+//!    `gear_harmonic:J:2`), refitted in the round whether it passed or not, is compared with
+//!    the winner by the extra-sum-of-squares F test, and the simpler is kept unless the extra
+//!    terms are significant at `alpha` (`nested`: the held-out check, which compares the two
+//!    on a handful of poses, no longer picks the bigger on noise); then the loop repeats. It stops when none of the
 //!    [`DiagnoseOptions::trials`] best candidates passes, or after
 //!    [`DiagnoseOptions::max_effects`] (a guard, reported in the notes when it stops the
 //!    loop). With explicit labels every non-aliased, identifiable candidate is added in the
@@ -89,6 +93,7 @@ mod attempts;
 mod fold_normals;
 use attempts::{Attempts, Wanted};
 mod scoring;
+mod nested;
 use fold_normals::FoldNormals;
 pub(crate) use scoring::*;
 
@@ -103,8 +108,10 @@ at alpha/K (Bonferroni over the K eligible candidates), (b) lower BIC on calibra
 one-sided Wilcoxon signed-rank test at alpha, paired over pose groups, of the held-out squared errors \
 (validation split, else cross-validation); then refit its rivals (eligible candidates changing \
 the same quantity of the same joint, or the device scale) and add the best of those that pass \
-(lowest BIC; within 2 of it, lowest held-out RMS); stop when none of the tried candidates passes; \
-aliased candidates (sine < 1e-3) are never selected";
+(lowest BIC; within 2 of it, lowest held-out RMS); of nested rivals (the terms of one among the \
+other's) keep the simpler unless an extra-sum-of-squares F test finds the extra terms significant \
+at alpha; stop when none of the tried candidates passes; aliased candidates (sine < 1e-3) are \
+never selected";
 
 /// Which effects to consider.
 #[derive(Clone, Debug, PartialEq, Default)]
