@@ -299,8 +299,8 @@ fn a_tree_is_plotted_per_branch() {
     let data = path(dir.path(), "d.csv");
     let r2 = truth.tree.row_index("r2").unwrap();
     write_data_with(&truth, 40, 5, &data, &|q| q[r2] *= 1.0 + 3e-3);
-    let svg = path(dir.path(), "r.svg");
-    ok(&[
+    let (svg, out) = (path(dir.path(), "r.svg"), path(dir.path(), "cal.yaml"));
+    let (code, _, err) = exec(&[
         "calibrate",
         "--model",
         &nominal,
@@ -310,7 +310,20 @@ fn a_tree_is_plotted_per_branch() {
         "gear_ratio:r2,compliance:l2",
         "--plot",
         &svg,
+        "--out",
+        &out,
     ]);
+    assert_eq!(code, 0, "{err}");
+    // What the written tree cannot be used for is said before the fit (its first line).
+    assert!(
+        err.starts_with("urdf-dh: warning: ")
+            && err
+                .lines()
+                .next()
+                .unwrap()
+                .contains("predict and compensate take one chain"),
+        "{err}"
+    );
     let text = std::fs::read_to_string(&svg).unwrap();
     let panels: Vec<&str> = text
         .split("<g>")
