@@ -282,6 +282,79 @@ fn an_effect_on_a_branch_joint_comes_back_and_inertials_come_from_the_sheet() {
     );
 }
 
+/// `--plot` of a tree: two panels a branch (before, after), each with the samples of that
+/// branch's target at every pose and the RMS line of its calibration samples; the after panels
+/// sit at the noise, the before ones at the planted errors.
+#[test]
+fn a_tree_is_plotted_per_branch() {
+    let dir = tempfile::tempdir().unwrap();
+    let nominal = path(dir.path(), "tree.yaml");
+    std::fs::write(
+        &nominal,
+        tree_sheet(&[])
+            + "inertials:\n  com_frame: dh\n  links:\n    - {joint: r2, mass: 3.0, com: [0.15, 0, 0]}\n    - {joint: l2, mass: 3.0, com: [0.15, 0, 0]}\n",
+    )
+    .unwrap();
+    let truth = TreeSheet::parse(&tree_sheet(&PLANTED), "truth.yaml").unwrap();
+    let data = path(dir.path(), "d.csv");
+    let r2 = truth.tree.row_index("r2").unwrap();
+    write_data_with(&truth, 40, 5, &data, &|q| q[r2] *= 1.0 + 3e-3);
+    let (svg, out) = (path(dir.path(), "r.svg"), path(dir.path(), "cal.yaml"));
+    let (code, _, err) = exec(&[
+        "calibrate",
+        "--model",
+        &nominal,
+        "--data",
+        &data,
+        "--effects",
+        "gear_ratio:r2,compliance:l2",
+        "--plot",
+        &svg,
+        "--out",
+        &out,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // What the written tree cannot be used for is said before the fit (its first line).
+    assert!(
+        err.starts_with("urdf-dh: warning: ")
+            && err
+                .lines()
+                .next()
+                .unwrap()
+                .contains("predict and compensate take one chain"),
+        "{err}"
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let panels: Vec<&str> = text
+        .split("<g>")
+        .skip(1)
+        .map(|g| g.split("</g>").next().unwrap())
+        .collect();
+    assert_eq!(panels.len(), 4, "{text}");
+    let rms = |panel: &str| -> f64 {
+        let at = panel.find(">RMS ").expect("an RMS line") + 5;
+        panel[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    for (panel, label) in panels.iter().zip([
+        "branch r, before: nominal tree",
+        "branch r, after: effects",
+        "branch l, before: nominal tree",
+        "branch l, after: effects",
+    ]) {
+        assert!(panel.contains(label), "{label}: {panel}");
+        assert_eq!(panel.matches("<circle").count(), 40, "{label}");
+    }
+    // Millimetres: the planted errors move the hands by millimetres, the noise is 0.02 mm per
+    // axis (0.035 mm in 3-D).
+    for b in [0, 2] {
+        let (before, after) = (rms(panels[b]), rms(panels[b + 1]));
+        assert!(
+            before > 0.5 && after < 0.06,
+            "before {before} mm, after {after} mm"
+        );
+    }
+}
+
 #[test]
 fn options_that_need_one_chain_are_refused_for_a_tree() {
     let dir = tempfile::tempdir().unwrap();
@@ -295,10 +368,6 @@ fn options_that_need_one_chain_are_refused_for_a_tree() {
         &data,
     );
     for (extra, says) in [
-        (
-            vec!["--plot", "r.svg"],
-            "--plot: the residual chart is drawn for serial models only",
-        ),
         (
             vec!["--payload", "1,0,0,0"],
             "--payload: tree.yaml is a tree with one tip per branch",

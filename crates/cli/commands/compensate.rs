@@ -58,6 +58,11 @@ pub struct CompensateCli {
     /// The CSV to write (`-` or absent: standard output).
     #[arg(long, value_name = "C.csv", value_parser = crate::guard::csv_output)]
     out: Option<String>,
+    /// The joint rows are in the order the robot moves through them: each joint's approach
+    /// direction (for a `backlash_direction` effect) is the sign of its commanded motion
+    /// [default: unknown, compensated midway between the gear's flanks].
+    #[arg(long)]
+    sequence: bool,
 }
 
 /// What the CLI passes to [`compensate`].
@@ -84,6 +89,8 @@ pub struct CompensateArgs {
     /// Joint values a library caller hands over as arrays instead of the file `joints` (which
     /// then only names them in messages); `None` on the command line.
     pub given: Option<dh_workflows::measured::SampleArrays>,
+    /// The rows are a sequence of motions ([`dh_workflows::predict::in_sequence`]).
+    pub sequence: bool,
 }
 
 impl CompensateCli {
@@ -103,6 +110,7 @@ impl CompensateCli {
             },
             out: self.out,
             given: None,
+            sequence: self.sequence,
         }
     }
 }
@@ -134,7 +142,13 @@ pub fn compensate(
     {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
-    let input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
+    let mut input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
+    if args.sequence {
+        dh_workflows::predict::in_sequence(&model, &mut input);
+    }
+    for w in dh_workflows::predict::backlash_warnings(&model, &input) {
+        writeln!(err, "urdf-dh: warning: {w}")?;
+    }
     let options = CompensateOptions {
         orientation: !args.position_only,
         max_change: args.max_change,

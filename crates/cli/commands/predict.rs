@@ -68,6 +68,12 @@ pub struct PredictCli {
     /// The CSV to write (`-` or absent: standard output).
     #[arg(long, value_name = "P.csv", value_parser = crate::guard::csv_output)]
     out: Option<String>,
+    /// The joint rows are in the order the robot moves through them: each joint's approach
+    /// direction (for a `backlash_direction` effect) is the sign of its last motion, as
+    /// calibrate reads a measurement file [default: unknown, the backlash added to the
+    /// uncertainty].
+    #[arg(long)]
+    sequence: bool,
 }
 
 /// What the CLI passes to [`predict`].
@@ -94,6 +100,8 @@ pub struct PredictArgs {
     /// Joint values a library caller hands over as arrays instead of the file `joints` (which
     /// then only names them in messages); `None` on the command line.
     pub given: Option<dh_workflows::measured::SampleArrays>,
+    /// The rows are a sequence of motions ([`dh_workflows::predict::in_sequence`]).
+    pub sequence: bool,
 }
 
 impl PredictCli {
@@ -113,6 +121,7 @@ impl PredictCli {
             },
             out: self.out,
             given: None,
+            sequence: self.sequence,
         }
     }
 }
@@ -173,7 +182,10 @@ pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> 
     ) {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
-    let input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
+    let mut input = read_joints(&args.joints, args.given.as_ref(), &model, args.units)?;
+    if args.sequence {
+        dh_workflows::predict::in_sequence(&model, &mut input);
+    }
     let predictions = dh_workflows::predict::predict(
         &model,
         frame,

@@ -106,6 +106,10 @@ pub struct SimulateCli {
     /// An effect of the true robot, LABEL=VALUE (e.g. gear_ratio:elbow_joint=0.001); repeatable.
     #[arg(long = "effect", value_name = "LABEL=VALUE")]
     effects: Vec<String>,
+    /// Link masses for the gravity effects (compliance:J, lateral_compliance:J, backlash:J), as
+    /// calibrate --inertials reads them; the truth file keeps them so that it predicts.
+    #[arg(long, value_name = "FILE")]
+    inertials: Option<String>,
     /// A geometric error of the true robot, NAME=VALUE in metres or radians (e.g.
     /// elbow_joint.a=0.0005); repeatable.
     #[arg(long = "error", value_name = "NAME=VALUE", allow_hyphen_values = true)]
@@ -153,6 +157,7 @@ impl SimulateCli {
                 cpa: self.cpa,
                 arc: self.arc,
                 effects: self.effects,
+                inertials: self.inertials,
                 errors: self.errors,
                 random_errors: self.random_errors,
                 targets: self.targets,

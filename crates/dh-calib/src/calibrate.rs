@@ -65,6 +65,7 @@ pub use pipeline::*;
 mod identify;
 pub(crate) use identify::*;
 mod screen;
+mod structure;
 mod verdict;
 pub use screen::screen;
 pub(crate) use screen::{check_level, screen_from};

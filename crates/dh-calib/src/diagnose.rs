@@ -36,7 +36,11 @@
 //!    the same joint, or the device scale: [`crate::rivals`]) are then refitted and judged
 //!    too, and the best of those that pass (lowest BIC, the held-out RMS deciding within
 //!    [`crate::rivals::BIC_TIE`]) is added, the others reported as rivals with the
-//!    difference; then the loop repeats. It stops when none of the
+//!    difference. A **nested** rival (its terms among the other's: `gear_harmonic:J` in
+//!    `gear_harmonic:J:2`), refitted in the round whether it passed or not, is compared with
+//!    the winner by the extra-sum-of-squares F test, and the simpler is kept unless the extra
+//!    terms are significant at `alpha` (`nested`: the held-out check, which compares the two
+//!    on a handful of poses, no longer picks the bigger on noise); then the loop repeats. It stops when none of the
 //!    [`DiagnoseOptions::trials`] best candidates passes, or after
 //!    [`DiagnoseOptions::max_effects`] (a guard, reported in the notes when it stops the
 //!    loop). With explicit labels every non-aliased, identifiable candidate is added in the
@@ -46,7 +50,10 @@
 //!    joint `j` (F test of the explained part against what is left, degrees of freedom reduced
 //!    by the parameters fitted), and tested for correlation between consecutive poses (pose order,
 //!    i.e. time: the self-normalised lag-1 statistic `Σ a_i / sqrt(Σ a_i²)`,
-//!    `a_i = r̄_i · r̄_{i+1}` over pose-mean residuals), each at `alpha / (joints + 1)`. What is
+//!    `a_i = r̄_i · r̄_{i+1}` over pose-mean residuals); against time (the pose order), by a
+//!    cubic trend and a length change growing as a cubic in time (a warm-up); and against the
+//!    gravity lever arm of each joint (`1, l, l², l³`: a sag that grows with the reach), all
+//!    at `alpha / K` (Bonferroni over the `K` tests; see `calibrate::structure`). What is
 //!    significant is reported with binned residuals rather than fitted.
 //!
 //! # Layout
@@ -84,6 +91,7 @@ pub use selection::*;
 mod attempts;
 mod fold_normals;
 use attempts::{Attempts, Wanted};
+mod nested;
 mod scoring;
 use fold_normals::FoldNormals;
 pub(crate) use scoring::*;
@@ -99,8 +107,10 @@ at alpha/K (Bonferroni over the K eligible candidates), (b) lower BIC on calibra
 one-sided Wilcoxon signed-rank test at alpha, paired over pose groups, of the held-out squared errors \
 (validation split, else cross-validation); then refit its rivals (eligible candidates changing \
 the same quantity of the same joint, or the device scale) and add the best of those that pass \
-(lowest BIC; within 2 of it, lowest held-out RMS); stop when none of the tried candidates passes; \
-aliased candidates (sine < 1e-3) are never selected";
+(lowest BIC; within 2 of it, lowest held-out RMS); of nested rivals (the terms of one among the \
+other's) keep the simpler unless an extra-sum-of-squares F test finds the extra terms significant \
+at alpha; stop when none of the tried candidates passes; aliased candidates (sine < 1e-3) are \
+never selected";
 
 /// Which effects to consider.
 #[derive(Clone, Debug, PartialEq, Default)]

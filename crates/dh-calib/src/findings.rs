@@ -23,10 +23,18 @@ pub struct Verdict {
     /// `Some(true)` when nothing significant remains, `Some(false)` when something does,
     /// `None` when no test is possible.
     pub complete: Option<bool>,
-    /// Final calibration RMS over the noise floor, when there is a floor.
+    /// Final calibration RMS over the noise floor, when there is a floor; for a 6-DoF set, the
+    /// position's and the orientation's ratios together, each over its own noise
+    /// (`sqrt((n p² + k a²) / (n + k))`, `n` samples, `k` of them with an orientation).
     pub ratio: Option<f64>,
+    /// The position's ratio alone (RMS 3-D distance over [`crate::calibrate::NoiseFloor::rms`]).
+    pub position_ratio: Option<f64>,
+    /// The orientation's ratio alone (angle RMS over
+    /// [`crate::calibrate::NoiseFloor::angle_rms`]); `None` without 6-DoF samples.
+    pub angle_ratio: Option<f64>,
     /// `model complete`, `residual remains: N x the floor` (or `residual remains` without a
-    /// floor), or `no test possible`.
+    /// floor; for a 6-DoF set followed by ` (position P x, orientation A x)`), or
+    /// `no test possible`.
     pub summary: String,
     /// Residual structure of the final model against each joint and the pose order (see
     /// [`crate::diagnose`], step 5).
@@ -163,13 +171,15 @@ pub struct ResidualTest {
 /// Step 5: residual structure against one variable.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StructureCheck {
-    /// `pose order` or a joint name.
+    /// A joint name, `pose order` (lag-1 correlation), `time` (a smooth trend along the pose
+    /// order) or `gravity lever at <joint>` (see the verdict's structure tests).
     pub variable: String,
     /// The statistic (F, chi-square or z).
     pub statistic: f64,
     /// Its p-value.
     pub p_value: f64,
-    /// Significant at `alpha / (joints + 1)`.
+    /// Significant at `alpha / K`, `K` the tests made (each joint, the pose order, time and
+    /// each gravity lever arm).
     pub significant: bool,
     /// Binned residuals: `(bin centre, RMS of the residual, length of the mean residual
     /// vector)` in the variable's unit (radians, metres, or pose index) and metres.

@@ -305,6 +305,20 @@ impl GravityModel {
         self.gravity
     }
 
+    /// The link masses this model was built from (centres in the rows' DH frames of
+    /// [`GravityModel::tree`]): with the tree and [`GravityModel::gravity`], what rebuilds it.
+    pub fn inertials(&self) -> Inertials {
+        Inertials {
+            links: self
+                .links
+                .iter()
+                .zip(self.tree.rows())
+                .filter_map(|(i, r)| i.map(|i| (r.name.clone(), i)))
+                .collect(),
+            payloads: self.payloads.clone(),
+        }
+    }
+
     /// Mass (kg) that joint `row` carries: its own body and everything after it.
     pub fn carried_mass(&self, row: usize) -> f64 {
         let links: f64 = (0..self.links.len())

@@ -24,6 +24,9 @@
 //! nothing: the uncertainty is that of what was identified, in the frame it was identified in
 //! (a base frame error aliased with the device frame is in neither figure). Rotational
 //! uncertainties are about the axes of the prediction frame (radians), not roll-pitch-yaw.
+//! A `backlash_direction:J` whose approach direction the prediction does not know (`s_J = 0`)
+//! adds its own spread, `|b| · ∂p/∂theta_J` per axis (half the backlash, see
+//! `Calibrated::backlash_variance`), to the variance.
 
 use std::ops::Range;
 use std::sync::Arc;
@@ -33,7 +36,9 @@ use nalgebra::{DMatrix, DVectorView, Isometry3, UnitQuaternion, Vector3, Vector6
 
 use crate::effects::{parse_label_in, EffectContext};
 use crate::fit::CalibError;
-use crate::model::{Block, Effect, EffectField, Model, ModelOptions, Observation, Observed};
+use crate::model::{
+    Block, Effect, EffectField, Model, ModelOptions, Observation, Observed, SampleContext,
+};
 
 pub use crate::covariance::Covariance;
 
@@ -54,6 +59,9 @@ pub type EffectValues = (Arc<dyn Effect>, Vec<f64>);
 pub struct Calibrated {
     model: Model,
     x: Vec<f64>,
+    /// Where the predicted poses sit in a sequence of motions (neutral by default: see the
+    /// module docs and [`Calibrated::set_context`]).
+    context: SampleContext,
     /// The covariance and the parameters it is of.
     covariance: Option<Propagation>,
 }
@@ -98,6 +106,7 @@ impl Calibrated {
         Ok(Calibrated {
             model,
             x,
+            context: SampleContext::default(),
             covariance: None,
         })
     }
@@ -206,6 +215,15 @@ impl Calibrated {
         Ok(self)
     }
 
+    /// Predicts the next poses at `context` in a sequence of motions: each joint's approach
+    /// direction (`context.direction`, per table row, -1, 0 or +1; see
+    /// [`crate::effects_order::sequence_contexts`]) for `backlash_direction`, the place in
+    /// time for `drift`. A joint whose direction is 0 is predicted midway between its flanks,
+    /// the backlash added to the uncertainty.
+    pub fn set_context(&mut self, context: SampleContext) {
+        self.context = context;
+    }
+
     /// Whether predictions come with an uncertainty.
     pub fn has_covariance(&self) -> bool {
         self.covariance.is_some()
@@ -278,11 +296,13 @@ impl Calibrated {
     }
 
     fn point_at(&self, x: &[f64], q: &[f64], target: usize, frame: Frame) -> Vector3<f64> {
+        let ctx = &self.context;
         match frame {
-            Frame::Device => self.model.point(x, q, target),
+            Frame::Device => self.model.point_in(x, q, ctx, target),
             Frame::Base => {
+                let chain = self.model.target_chain(target);
                 self.model
-                    .robot_fk(x, q)
+                    .robot_fk_in(x, q, ctx, chain)
                     .transform_point(&self.model.target_at(x, target).into())
                     .coords
             }
@@ -291,8 +311,8 @@ impl Calibrated {
 
     fn tool_at(&self, x: &[f64], q: &[f64], frame: Frame) -> Isometry3<f64> {
         match frame {
-            Frame::Device => self.model.tip(x, q),
-            Frame::Base => self.model.robot_fk(x, q),
+            Frame::Device => self.model.tip_of_in(x, q, &self.context, 0),
+            Frame::Base => self.model.robot_fk_in(x, q, &self.context, 0),
         }
     }
 
@@ -332,7 +352,9 @@ impl Calibrated {
             },
             Of::Tool => Observation::Pose(Box::new(Isometry3::identity())),
         };
-        let obs = Observed::new(q.to_vec(), observation);
+        let mut obs = Observed::new(q.to_vec(), observation);
+        obs.context = self.context.clone();
+        let backlash = self.backlash_variance(&obs, frame);
         JACOBIAN.with(|g| {
             let mut g = g.borrow_mut();
             g.clear();
@@ -374,10 +396,68 @@ impl Calibrated {
                     let cross = tail.dot(&DVectorView::from_slice(&gr[j + 1..], m - j - 1));
                     sum += gj * (column[j] * gj + 2.0 * cross);
                 }
-                u[row] = sum.max(0.0).sqrt();
+                u[row] = (sum.max(0.0) + backlash[row]).sqrt();
             }
             Some(u)
         })
+    }
+
+    /// The `backlash_direction` effects of the model: (label, parameter index, row, `b`).
+    pub fn backlash_effects(&self) -> Vec<(String, usize, usize, f64)> {
+        self.model
+            .effects()
+            .into_iter()
+            .filter(|(e, _)| e.label().starts_with("backlash_direction:"))
+            .filter_map(|(e, r)| {
+                let row = self
+                    .model
+                    .nominal()
+                    .rows
+                    .iter()
+                    .position(|x| x.name == e.joint())?;
+                Some((e.label(), r.start, row, self.x[r.start]))
+            })
+            .collect()
+    }
+
+    /// The variance (per row of a frame derivative: position m², rotation rad²) that the
+    /// unknown approach direction of each `backlash_direction:J` adds where `obs`'s context
+    /// gives joint `J` no direction (`s_J = 0`, midway between the flanks): the gear rests on
+    /// one flank or the other, `theta_J ± b`, a two-point spread of standard deviation `|b|`
+    /// (half the backlash `2|b|`), moved to the prediction by `∂p/∂theta_J`. Joints are taken
+    /// as independent.
+    fn backlash_variance(&self, obs: &Observed, frame: Frame) -> [f64; 6] {
+        let mut var = [0.0; 6];
+        let effects = self.backlash_effects();
+        if effects.is_empty() {
+            return var;
+        }
+        // With every direction +1 the derivative by `b` is the derivative by theta_J.
+        let mut flank = obs.clone();
+        flank.context.direction = vec![1.0; self.model.nominal().rows.len()];
+        let mut g = [0.0; 6];
+        for (_, index, row, b) in effects {
+            if obs.context.direction_of(row) != 0.0 {
+                continue;
+            }
+            g.fill(0.0);
+            self.model.frame_jacobian(&self.x, &flank, &[index], &mut g);
+            let (mut p, mut w) = (
+                Vector3::new(g[0], g[1], g[2]),
+                Vector3::new(g[3], g[4], g[5]),
+            );
+            if frame == Frame::Base {
+                let r = self.model.device_at(&self.x).rotation.inverse();
+                let s = self.model.scale_at(&self.x, &obs.q);
+                p = r * p / if s == 0.0 { 1.0 } else { s };
+                w = r * w;
+            }
+            for i in 0..3 {
+                var[i] += (p[i] * b).powi(2);
+                var[3 + i] += (w[i] * b).powi(2);
+            }
+        }
+        var
     }
 }
 

@@ -43,6 +43,7 @@ fn main() -> anyhow::Result<()> {
         cpa: false,
         arc: None,
         effects: vec![],
+        inertials: None,
         errors: vec!["shoulder_lift_joint.a=0.0005".into()],
         random_errors: None,
         targets: 1,

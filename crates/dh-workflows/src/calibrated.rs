@@ -94,7 +94,7 @@ impl CalibratedModel {
 ///
 /// # Errors
 /// As [`load_model`]; a `calibration` section or `effects` that do not read (naming the file);
-/// gravity effects, which need the link masses.
+/// gravity effects without the `calibration.gravity_model` that evaluates them.
 pub fn load_calibrated(
     path: &str,
     base: Option<&str>,
@@ -161,9 +161,13 @@ fn assemble(
     origin: &str,
 ) -> Result<CalibratedModel> {
     let robot = CalibratedRobot::new(&loaded.table, &effect_values, &record).map_err(|e| match e {
+        CalibratedError::MissingGravity { .. } => hinted(
+            format!("{origin}: {e}"),
+            "the file was written before calibrate kept them: calibrate again with the same --inertials and --out, which writes `calibration.gravity_model`",
+        ),
         CalibratedError::Effects(_) => hinted(
             format!("{origin}: {e}"),
-            "gravity effects (compliance, backlash) need the link masses and cannot be predicted yet; every other effect is read as calibrate writes it",
+            "effects are read as calibrate writes them: `effects` and `calibration.effects` by parameter name",
         ),
         CalibratedError::RaggedCovariance { .. } | CalibratedError::Covariance(_) => {
             anyhow::anyhow!("{e}").context(format!("{origin}: calibration"))

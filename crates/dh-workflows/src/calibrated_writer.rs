@@ -9,13 +9,16 @@
 //! robot's base link frame in the measuring device's frame (`T_device_base`), targets in the tip
 //! frame.
 
+use std::sync::Arc;
+
 use anyhow::{Context, Result};
 use dh_calib::calibrate::Report;
 use dh_calib::data::Measurements;
 use dh_calib::effects::EffectContext;
+use dh_calib::gravity::GravityModel;
 use dh_calib::model::ModelOptions;
 use dh_calib::pipeline::{
-    CalibrationDoc, PoseSi, SessionDoc, SessionFrameDoc, TargetDoc, WrittenDoc,
+    CalibrationDoc, GravityRecord, PoseSi, SessionDoc, SessionFrameDoc, TargetDoc, WrittenDoc,
 };
 use dh_core::DhTable;
 use nalgebra::{Isometry3, Vector3};
@@ -149,6 +152,7 @@ pub fn model_text(
     data: &Measurements,
     report: &Report,
     doc: &CalibrationDoc,
+    gravity: Option<&Arc<GravityModel>>,
 ) -> Result<(String, WrittenDoc)> {
     let calibration = CalibrationSection {
         summary: SectionSummary::of(doc),
@@ -159,6 +163,8 @@ pub fn model_text(
         targets: doc.targets.clone(),
         effects: doc.estimated_effects(),
         covariance: report.covariance.as_ref().map(CovarianceDoc::of),
+        // Only with an effect that needs it: the masses are no part of a geometric model.
+        gravity_model: gravity.and_then(|g| GravityRecord::of(g)),
     };
     let source = format!(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
@@ -234,21 +240,30 @@ pub fn model_text(
             device: report.device,
         },
     )?;
-    let proof = predict_proof(path, &text, report, &doc.sessions, &q, &target, proof)?;
+    let proof = predict_proof(
+        path,
+        &text,
+        (report, gravity),
+        &doc.sessions,
+        &q,
+        &target,
+        proof,
+    )?;
     Ok((text, proof))
 }
 
 /// The second half of the proof for a sheet: `predict` reads it back (effects, device frame,
 /// targets, covariance) and its predictions of every measured point, effects included, are the
-/// fitted model's within [`written::WRITTEN_TOLERANCE`]. A model with gravity effects (which
-/// need the link masses `predict` does not take) keeps the geometric proof alone.
+/// fitted model's within [`written::WRITTEN_TOLERANCE`]. `gravity` is the gravity model of
+/// the report's gravity effects (compliance, backlash), which the sheet carries as
+/// `calibration.gravity_model`.
 ///
 /// # Errors
 /// A sheet `predict` cannot read: a defect of the writer, reported as such.
 pub fn predict_proof(
     path: &str,
     text: &str,
-    report: &Report,
+    (report, gravity): (&Report, Option<&Arc<GravityModel>>),
     sessions: &[SessionDoc],
     q: &[Vec<f64>],
     target: &[usize],
@@ -257,7 +272,8 @@ pub fn predict_proof(
     if path.to_ascii_lowercase().ends_with(".urdf") {
         return Ok(proof);
     }
-    let ctx = EffectContext::serial(&report.calibrated);
+    let mut ctx = EffectContext::serial(&report.calibrated);
+    ctx.gravity = gravity.cloned();
     let Ok(fitted) = dh_calib::predict::Calibrated::from_report(report, &ctx) else {
         return Ok(proof);
     };
@@ -333,6 +349,10 @@ pub struct CalibrationSection {
     /// Covariance of the last step's free parameters: what `predict` propagates.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub covariance: Option<CovarianceDoc>,
+    /// The link masses and nominal geometry of the gravity effects, with any selected (see
+    /// `dh_calib::pipeline::GravityRecord`): what `predict` and `compensate` evaluate them with.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gravity_model: Option<GravityRecord>,
 }
 
 /// The largest difference (metres, or radians for the rotation) between the sessions written

@@ -245,12 +245,22 @@ pub fn compensate(
     options: &CompensateOptions,
 ) -> Result<Vec<CompensatedRow>> {
     let columns = &model.joints.columns;
+    // Rows in a sequence are compensated on their joints' flanks ([`JointInput::contexts`]).
+    let mut sequenced = (!input.contexts.is_empty()).then(|| model.calibrated.clone());
     input
         .rows
         .iter()
-        .map(|row| {
+        .enumerate()
+        .map(|(i, row)| {
             let goal = nominal.fk(&model.joints.rows(&row.q))?;
-            let result = solve(&model.calibrated, &model.joints, &goal, &row.q, options);
+            let calibrated = match (sequenced.as_mut(), input.contexts.get(i)) {
+                (Some(c), Some(ctx)) => {
+                    c.set_context(ctx.clone());
+                    &*c
+                }
+                _ => &model.calibrated,
+            };
+            let result = solve(calibrated, &model.joints, &goal, &row.q, options);
             Ok(CompensatedRow {
                 config: row
                     .config

@@ -23,6 +23,8 @@ pub use dh_calib::pipeline::{
 
 // The findings beyond the fit: outliers, diagnosis, the verdict, and the test's level.
 pub use dh_calib::findings::DEFAULT_ALPHA;
+// How far from zero, in standard errors, an effect parameter must be to count as identified.
+pub use dh_calib::pipeline::IDENTIFIED_SIGMAS;
 pub use dh_calib::pipeline::{
     documents, DiagnosisDoc, OutlierDoc, OutliersDoc, RoundDoc, StructureDoc, TestDoc, TrialDoc,
     VerdictDoc,

@@ -230,7 +230,19 @@ fn split_header(line: &str) -> Vec<String> {
 /// # Errors
 /// An unknown kind, a wrong number of joints, a joint the table does not have.
 pub fn parse_effect(label: &str, table: &DhTable) -> Result<Arc<dyn Effect>> {
-    dh_calib::effects::parse_label(label, table).map_err(|e| {
+    parse_effect_in(label, &dh_calib::effects::EffectContext::serial(table))
+}
+
+/// [`parse_effect`] in `ctx` (a context with link masses parses the gravity effects).
+///
+/// # Errors
+/// As [`parse_effect`].
+pub fn parse_effect_in(
+    label: &str,
+    ctx: &dh_calib::effects::EffectContext,
+) -> Result<Arc<dyn Effect>> {
+    let table = ctx.tree.trunk();
+    dh_calib::effects::parse_label_in(label, ctx).map_err(|e| {
         hinted(
             format!("{e}"),
             format!(

@@ -15,6 +15,7 @@
 use anyhow::{Context, Result};
 use dh_calib::csv::SampleArrays;
 use dh_calib::joints::JointRow;
+use dh_calib::model::SampleContext;
 use dh_calib::predict::Calibrated;
 /// The frame predictions are in: the measuring device's or the robot's base link frame.
 pub use dh_calib::predict::Frame;
@@ -37,6 +38,46 @@ pub struct JointInput {
     pub rows: Vec<JointRow>,
     /// Per column: prismatic (its values are lengths).
     pub prismatic: Vec<bool>,
+    /// Per row, where it sits in a sequence of motions ([`in_sequence`]); empty: every row
+    /// outside any sequence (no approach direction known).
+    pub contexts: Vec<SampleContext>,
+}
+
+/// Takes `input`'s rows as the order in which the robot moves through them (a robot program, a
+/// measurement file): each joint's approach direction at a row is the sign of its last motion
+/// before it, as `calibrate` reads a measurement file (`dh_calib::effects_order`); at the
+/// first row, and until a joint first moves, its direction is unknown.
+pub fn in_sequence(model: &CalibratedModel, input: &mut JointInput) {
+    let rows: Vec<Vec<f64>> = input.rows.iter().map(|r| model.joints.rows(&r.q)).collect();
+    input.contexts = dh_calib::effects_order::sequence_contexts(
+        rows.iter()
+            .zip(&input.rows)
+            .map(|(q, r)| (q.as_slice(), r.config.as_deref())),
+    );
+}
+
+/// One warning per `backlash_direction:J` of `model` whose approach direction some rows of
+/// `input` do not give: they are predicted midway between the gear's flanks, `±|b|` (half the
+/// backlash) in the joint added to their uncertainty.
+pub fn backlash_warnings(model: &CalibratedModel, input: &JointInput) -> Vec<String> {
+    model
+        .calibrated
+        .backlash_effects()
+        .into_iter()
+        .filter_map(|(label, _, row, b)| {
+            let unknown = (0..input.rows.len())
+                .filter(|&i| input.contexts.get(i).map_or(0.0, |c| c.direction_of(row)) == 0.0)
+                .count();
+            (unknown > 0).then(|| {
+                format!(
+                    "'{}' (b = {b:.3e}): the approach direction of the joint is not known at {unknown} of {} row(s), predicted midway between the gear's flanks with ±{:.3e} (half the backlash) added to the uncertainty; give the rows in the order the robot moves through them with --sequence to predict each on its flank",
+                    escape(&label),
+                    input.rows.len(),
+                    b.abs()
+                )
+            })
+        })
+        .collect()
 }
 
 /// Reads `path`'s joint values for `model`'s measured columns ([`crate::measured::DataFile`],
@@ -86,7 +127,11 @@ pub fn read_joints(
                 .map_err(|e| anyhow::anyhow!("{}: {e}", file.name))?
         }
     };
-    Ok(JointInput { rows, prismatic })
+    Ok(JointInput {
+        rows,
+        prismatic,
+        contexts: Vec::new(),
+    })
 }
 
 /// The frame of a prediction from `model` (read from the file shown as `origin`): `asked`, or
@@ -304,14 +349,25 @@ pub fn predict(
     let (frames, row_frame, mut warnings) =
         session_frames(model, input, frame, session, joints_name, origin)?;
     warnings.extend(limit_warnings(model, input, joints_name));
+    warnings.extend(backlash_warnings(model, input));
     // Blocks of rows on every core (each row depends on its own values alone).
     let blocks = input.rows.len().div_ceil(BLOCK_ROWS);
     let predict_block = |b: usize| -> Vec<Predicted> {
         let rows = b * BLOCK_ROWS..((b + 1) * BLOCK_ROWS).min(input.rows.len());
         let per = if per_row || tool { 1 } else { plan.len() };
         let mut out = Vec::with_capacity(rows.len() * per);
+        // Each block predicts from its own copies when rows carry their place in a sequence.
+        let mut sequenced: Vec<Option<Calibrated>> = vec![None; frames.len()];
         for i in rows {
-            let c = &frames[row_frame.get(i).copied().unwrap_or(0)];
+            let f = row_frame.get(i).copied().unwrap_or(0);
+            let c = match input.contexts.get(i) {
+                Some(ctx) => {
+                    let c = sequenced[f].get_or_insert_with(|| frames[f].clone());
+                    c.set_context(ctx.clone());
+                    &*c
+                }
+                None => &frames[f],
+            };
             let targets: &[(usize, String)] = if per_row {
                 plan.get(i).map_or(&[], std::slice::from_ref)
             } else {

@@ -9,11 +9,14 @@
 
 use std::io::Write;
 use std::path::Path;
+use std::sync::Arc;
 
 use anyhow::Result;
 use dh_calib::csv::write_measurements;
 use dh_calib::data::Measurements;
-use dh_calib::pipeline::{PoseSi, TargetDoc};
+use dh_calib::effects::EffectContext;
+use dh_calib::gravity::GravityModel;
+use dh_calib::pipeline::{GravityRecord, PoseSi, TargetDoc};
 use dh_calib::simulate::{
     plant_effects, simulate as run_simulation, Errors, Mode, SimulationOptions,
 };
@@ -21,7 +24,7 @@ use dh_core::{Convention, DhTable, JointKind};
 use serde::Serialize;
 
 use crate::error::hinted;
-use crate::measured::parse_effect;
+use crate::measured::parse_effect_in;
 use crate::model::load_model_noting;
 use crate::ranges::MAX_SIM_SAMPLES;
 use crate::sheet::SheetDoc;
@@ -52,6 +55,10 @@ pub struct SimulationRequest {
     pub arc: Option<f64>,
     /// Effects and their values (`gear_ratio:joint_2=1e-3`).
     pub effects: Vec<String>,
+    /// Link masses for the gravity effects (`compliance:J`, `lateral_compliance:J`,
+    /// `backlash:J`): an inertials file as `calibrate --inertials` reads it (its `gravity` key
+    /// included); `None`: gravity effects are refused.
+    pub inertials: Option<String>,
     /// Geometric errors by parameter name (`joint_2.a=0.001`).
     pub errors: Vec<String>,
     /// Random errors on every DH parameter: largest length (metres) and angle (radians).
@@ -124,6 +131,9 @@ pub struct TruthSection {
     pub errors: Vec<(String, f64)>,
     /// The planted effects by label, in each effect's own unit.
     pub effects: Vec<(String, f64)>,
+    /// The gravity model of planted gravity effects (see `dh_calib::pipeline::GravityRecord`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gravity_model: Option<GravityRecord>,
 }
 
 /// The CPA sweeps: home at the middle of each joint's range, one arc for all.
@@ -237,14 +247,29 @@ pub fn simulate(
             "simulate fewer poses, targets or repeats",
         ));
     }
+    let mut ctx = EffectContext::serial(table);
+    if let Some(path) = &args.inertials {
+        let (inertials, gravity) = crate::calibration::read_inertials(path, table)?;
+        let gravity = gravity.unwrap_or_else(GravityModel::default_gravity);
+        ctx.gravity = Some(Arc::new(
+            GravityModel::serial(table, &inertials, gravity)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", crate::input::display_name(path)))?,
+        ));
+    }
     let effects = args
         .effects
         .iter()
         .map(|s| {
             let (label, values) = name_values(s, "effect")?;
-            Ok((parse_effect(&label, table)?, values))
+            Ok((parse_effect_in(&label, &ctx)?, values))
         })
         .collect::<Result<Vec<_>>>()?;
+    // The truth file carries the gravity model of planted gravity effects, as a calibrated
+    // sheet does, so that it predicts.
+    let gravity_model = effects
+        .iter()
+        .find_map(|(e, _)| e.gravity_model())
+        .and_then(|g| GravityRecord::of(g));
     let errors = match (args.random_errors, args.errors.is_empty()) {
         (Some(_), false) => anyhow::bail!("give --error or --random-errors, not both"),
         (Some((length, angle)), true) => Errors::Random { length, angle },
@@ -363,6 +388,7 @@ pub fn simulate(
         },
         errors: truth.errors.clone(),
         effects: applied,
+        gravity_model,
     };
     sheet.truth = Some(serde_yaml::to_value(&section)?);
     // What simulate writes as the truth, the sheet reader reads: planted errors the reader

@@ -66,6 +66,7 @@ fn simulate(
             cpa,
             arc: arc.map(|v| checked("arc", &v, guard::arc)).transpose()?,
             effects,
+            inertials: None,
             errors,
             random_errors: random_errors
                 .map(|v| checked("random_errors", &v, guard::random_errors))

@@ -24,13 +24,13 @@ pub fn calibrate(
     request.check_destinations(&more)?;
     let loaded = match calibration::identify(request)? {
         Some((sheet, origin)) => {
-            if args.plot.is_some() {
-                return Err(dh_workflows::error::hinted(
-                    format!(
-                        "--plot: the residual chart is drawn for serial models only; {origin} is a tree"
-                    ),
-                    "drop --plot; the JSON report (--format json) has every step's figures",
-                ));
+            // Said before the fit: what the result can and cannot be used for.
+            if let Some(out) = &request.out {
+                writeln!(
+                    err,
+                    "urdf-dh: warning: {}: a calibrated tree sheet is read by calibrate only; predict and compensate take one chain (a serial sheet of the trunk and one branch), so its effects are not predicted",
+                    crate::guard::output_name(out)
+                )?;
             }
             Loaded::Tree(Box::new(calibration::load_tree(
                 request, sheet, origin, err,
@@ -77,7 +77,8 @@ pub fn calibrate(
                 &data_name,
                 &c.calibration.report,
             ),
-            Calibrated::Tree(_) => unreachable_tree_plot()?,
+            // Two panels a branch: a tree's arms differ in length and in what they carry.
+            Calibrated::Tree(t) => tree_chart(&data_name, t, LengthUnit::Mm)?,
         };
         files.push((Path::new(path), residuals_svg(&chart)));
     }
@@ -138,11 +139,6 @@ pub fn calibrate(
     } else {
         Outcome::Differs
     })
-}
-
-/// A tree never reaches the chart: `--plot` is refused for trees before loading.
-fn unreachable_tree_plot() -> Result<ResidualChart> {
-    anyhow::bail!("--plot: the residual chart is drawn for serial models only")
 }
 
 // ---------------------------------------------------------------- hooks for trees

@@ -181,6 +181,24 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             o(st.val_max)
         );
     }
+    // 6-DoF poses: each step's orientation residuals, as the positions' above.
+    if doc.steps.iter().any(|st| st.angle_rms.is_some()) {
+        let urad = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{:.1}", v * 1e6));
+        let _ = writeln!(
+            s,
+            "{:<12} {:>11} {:>13}  [µrad per axis]",
+            "step", "angle_rms", "val_angle_rms"
+        );
+        for st in &doc.steps {
+            let _ = writeln!(
+                s,
+                "{:<12} {:>11} {:>13}",
+                st.label,
+                urad(st.angle_rms),
+                urad(st.val_angle_rms)
+            );
+        }
+    }
     // What the nominal step could not estimate (targets seen at one tool orientation only,
     // aliased with the device frame) stayed at the closed-form start.
     if let Some(first) = doc.steps.first().filter(|st| !st.fixed.is_empty()) {
@@ -228,13 +246,33 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
     }) {
         let _ = writeln!(
             s,
-            "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}",
+            "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}{}",
             crate::guard::escape(&p.name),
             unit_label(&p.unit, units),
             value(p.nominal, &p.unit, units),
             value(p.estimate, &p.unit, units),
             p.std_error
-                .map_or_else(|| "-".into(), |e| std_error(e, &p.unit, units))
+                .map_or_else(|| "-".into(), |e| std_error(e, &p.unit, units)),
+            if p.identified { "" } else { "  not identified" }
+        );
+    }
+    let unidentified: Vec<&str> = doc
+        .parameters
+        .iter()
+        .filter(|p| p.free && !p.identified)
+        .map(|p| p.name.as_str())
+        .collect();
+    if !unidentified.is_empty() {
+        let _ = writeln!(
+            s,
+            "not identified by this data ({}): {}: each estimate is within {} standard errors of zero, as consistent with no effect as with the estimate; kept in the model, its uncertainty covers zero",
+            unidentified.len(),
+            unidentified
+                .iter()
+                .map(|n| crate::guard::escape(n))
+                .collect::<Vec<_>>()
+                .join(", "),
+            dh_workflows::fit::IDENTIFIED_SIGMAS
         );
     }
     let rpy = |r: [f64; 3]| {
@@ -351,9 +389,29 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         match (doc.val_rms_before, doc.val_rms_after) {
             (Some(b), Some(a)) => format!(" (validation {} -> {} {})", l(b), l(a), lu.symbol()),
             _ => String::new(),
-        }
+        } + &angle_result(doc)
     );
     s
+}
+
+/// The result line's orientation part for 6-DoF poses: `; angle RMS a -> b µrad (validation
+/// c -> d µrad)`, empty for points.
+fn angle_result(doc: &CalibrationDoc) -> String {
+    let (Some(first), Some(last)) = (doc.steps.first(), doc.steps.last()) else {
+        return String::new();
+    };
+    let (Some(b), Some(a)) = (first.angle_rms, last.angle_rms) else {
+        return String::new();
+    };
+    let val = match (first.val_angle_rms, last.val_angle_rms) {
+        (Some(vb), Some(va)) => format!(" (validation {:.1} -> {:.1} µrad)", vb * 1e6, va * 1e6),
+        _ => String::new(),
+    };
+    format!(
+        "; angle RMS {:.1} -> {:.1} µrad per axis{val}",
+        b * 1e6,
+        a * 1e6
+    )
 }
 
 /// How a fixed parameter's error shows in the data: the free parameters that absorb it.

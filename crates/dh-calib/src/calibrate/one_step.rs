@@ -20,7 +20,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::validation::distances_at;
+use super::validation::{held_at, pose_weight, HeldOut};
 use super::*;
 use crate::fit;
 
@@ -45,7 +45,7 @@ pub(crate) fn one_step_cross_validation(
     free: &[usize],
     scales: &[f64],
     rank_tolerance: f64,
-) -> Result<Vec<f64>, CalibError> {
+) -> Result<HeldOut, CalibError> {
     let at = FitPoint {
         x,
         free,
@@ -71,14 +71,14 @@ fn one_step_distances(
     folds: usize,
     at: &FitPoint<'_>,
     rows_once: bool,
-) -> Result<Vec<f64>, CalibError> {
+) -> Result<HeldOut, CalibError> {
     let (x, free, scales, rank_tolerance) = (at.x, at.free, at.scales, at.rank_tolerance);
     let n = free.len();
     let cal = &prep.cal;
     let folds = folds.max(1);
     if n == 0 {
         let all: Vec<usize> = (0..cal.len()).collect();
-        return Ok(distances_at(model, x, cal, &all));
+        return Ok(held_at(model, x, cal, &all));
     }
     let fold_of = |i: usize| prep.groups.get(i).map_or(0, |g| g % folds);
     let segments = cal.len().div_ceil(SEGMENT);
@@ -161,25 +161,30 @@ fn one_step_distances(
     })?;
     // Pass 2: each sample's residual after its fold's step, a sample's own computation (so in
     // pieces of any size).
-    let distances = fit::parallel_map(cal.len().div_ceil(PIECE), |s| {
+    let pieces = fit::parallel_map(cal.len().div_ceil(PIECE), |s| {
         let (mut res, mut jac) = ([0.0; 6], vec![0.0; 6 * n]);
-        let mut out = Vec::with_capacity(PIECE);
+        let mut out = HeldOut::default();
         for (i, o) in cal.iter().enumerate().skip(s * PIECE).take(PIECE) {
             let rows = rows_of(i, o, &mut res, &mut jac);
             let step = &steps[fold_of(i)];
-            let mut moved = [0.0; 3];
-            for (r, m) in moved.iter_mut().enumerate().take(rows.min(3)) {
+            let mut moved = [0.0; 6];
+            for (r, m) in moved.iter_mut().enumerate().take(rows) {
                 let row = &jac[r * n..(r + 1) * n];
                 *m = res[r]
                     + (0..n)
                         .map(|a| row[a] * scales[free[a]] * step[a])
                         .sum::<f64>();
             }
-            out.push((moved[0] * moved[0] + moved[1] * moved[1] + moved[2] * moved[2]).sqrt());
+            out.push(&moved, rows, pose_weight(o));
         }
         Ok(out)
     })?;
-    Ok(distances.concat())
+    let mut all = HeldOut::default();
+    for piece in pieces {
+        all.distances.extend(piece.distances);
+        all.turns.extend(piece.turns);
+    }
+    Ok(all.finish())
 }
 
 /// Residual rows of an observation: 3 for a point, 6 for a pose.
@@ -234,6 +239,7 @@ mod tests {
         let x = &geo.last.outcome.x;
         let exact = session.held_out_with(x, &geo.free, Folds::Refit).unwrap();
         let approx = session.held_out_with(x, &geo.free, Folds::OneStep).unwrap();
+        let (exact, approx) = (exact.distances, approx.distances);
         assert_eq!(exact.len(), approx.len());
         let rms = |d: &[f64]| (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
         let worst = exact
@@ -257,6 +263,6 @@ mod tests {
         let by_fold = one_step_distances(&session.model, &session.prep, 10, &at, true).unwrap();
         let by_segment = one_step_distances(&session.model, &session.prep, 10, &at, false).unwrap();
         assert_eq!(by_fold, by_segment);
-        assert_eq!(by_fold, approx);
+        assert_eq!(by_fold.distances, approx);
     }
 }

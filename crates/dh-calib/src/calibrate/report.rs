@@ -61,6 +61,9 @@ pub struct StepReport {
     /// RMS per axis of the orientation residuals `log(R_model R_measuredᵀ)` of the
     /// calibration samples that measure a 6-DoF pose (radians); `None` without such samples.
     pub angle_rms: Option<f64>,
+    /// The same of the held-out samples (validation or cross-validation, as
+    /// [`StepReport::val_rms`]); `None` without them or without validation.
+    pub val_angle_rms: Option<f64>,
     /// Solver iterations.
     pub iterations: usize,
     /// Why the solver stopped.

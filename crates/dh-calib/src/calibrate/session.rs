@@ -215,9 +215,9 @@ impl<'a> Session<'a> {
         x: &[f64],
         free: &[usize],
         folds: Folds,
-    ) -> Result<Vec<f64>, CalibError> {
+    ) -> Result<HeldOut, CalibError> {
         match (&self.validation, folds) {
-            (_, Folds::Later) => Ok(vec![]),
+            (_, Folds::Later) => Ok(HeldOut::default()),
             (Validation::CrossValidation { folds: k, .. }, Folds::OneStep) => {
                 super::one_step::one_step_cross_validation(
                     &self.model,
@@ -292,7 +292,7 @@ impl<'a> Session<'a> {
             .collect();
         let cal = Stats::of(&cal);
         let held = self.held_out_with(&outcome.x, free, folds)?;
-        let val = Stats::of(&held);
+        let val = Stats::of(&held.distances);
         let cal = cal.unwrap_or(Stats {
             rms: 0.0,
             mean: 0.0,
@@ -309,6 +309,7 @@ impl<'a> Session<'a> {
             val_rms: val.map(|v| v.rms),
             val_mean: val.map(|v| v.mean),
             val_max: val.map(|v| v.max),
+            val_angle_rms: held.angle_rms(),
             free: free.len(),
             angle_rms: angle_rms(&self.model, &outcome.x, &self.prep.cal),
             iterations: outcome.iterations,

@@ -34,6 +34,97 @@ pub(crate) fn angle_rms(model: &Model, x: &[f64], obs: &[Observed]) -> Option<f6
     (n > 0).then(|| (ss / n as f64).sqrt())
 }
 
+/// Held-out errors of some samples, in sample order: the position distance of each and, for a
+/// sample that measures an orientation too, its orientation residual. The figures the report
+/// lists are the distances' ([`set_val`]); the diagnosis's held-out test pairs the samples'
+/// errors of both kinds, each over its own sigma ([`HeldOut::weighed`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct HeldOut {
+    /// 3-D distance between model and measurement (metres).
+    pub(crate) distances: Vec<f64>,
+    /// Per sample: `None` for a point; for a 6-DoF pose, the norm of its orientation rows as
+    /// the fit weighs them (`weight · ‖log(R_model R_measuredᵀ)‖`, metres: the angle over
+    /// `sigma_rot`, times `sigma`) and, for a target pose, the angle itself (radians).
+    /// Empty when no sample measures an orientation.
+    pub(crate) turns: Vec<Option<(f64, Option<f64>)>>,
+}
+
+impl HeldOut {
+    /// Each sample's error with its orientation weighed in, `sqrt(d² + (w θ)²)` (metres, the
+    /// norm of the sample's residual rows as the fit weighs them): the distances themselves
+    /// for points. What the held-out test compares.
+    pub(crate) fn weighed(&self) -> Vec<f64> {
+        if self.turns.is_empty() {
+            return self.distances.clone();
+        }
+        self.distances
+            .iter()
+            .zip(&self.turns)
+            .map(|(d, t)| match t {
+                Some((w, _)) => d.hypot(*w),
+                None => *d,
+            })
+            .collect()
+    }
+
+    /// RMS per axis (radians) of the orientation errors of the target poses, as
+    /// [`angle_rms`]; `None` without them.
+    pub(crate) fn angle_rms(&self) -> Option<f64> {
+        let angles: Vec<f64> = self
+            .turns
+            .iter()
+            .filter_map(|t| t.and_then(|t| t.1))
+            .collect();
+        (!angles.is_empty())
+            .then(|| (angles.iter().map(|a| a * a).sum::<f64>() / (3 * angles.len()) as f64).sqrt())
+    }
+
+    /// Builds it from each sample's residual rows (`rows` of 3 or 6; `weight` the target
+    /// pose's, when it is one).
+    pub(crate) fn push(&mut self, r: &[f64], rows: usize, weight: Option<f64>) {
+        self.distances.push(Vector3::new(r[0], r[1], r[2]).norm());
+        self.turns.push((rows >= 6).then(|| {
+            let t = Vector3::new(r[3], r[4], r[5]).norm();
+            (t, weight.filter(|w| *w > 0.0).map(|w| t / w))
+        }));
+    }
+
+    /// Drops [`HeldOut::turns`] when no sample has one, so that a point set's carries none.
+    pub(crate) fn finish(mut self) -> HeldOut {
+        if self.turns.iter().all(Option::is_none) {
+            self.turns.clear();
+        }
+        self
+    }
+}
+
+/// The weight of a target pose's orientation rows (`None` for other observations).
+pub(crate) fn pose_weight(o: &Observed) -> Option<f64> {
+    match o.observation {
+        Observation::TargetPose { weight, .. } => Some(weight),
+        _ => None,
+    }
+}
+
+/// Held-out errors of the observations `obs[i]` for `i` in `at` at `x`, in parallel segments
+/// for long lists.
+pub(super) fn held_at(model: &Model, x: &[f64], obs: &[Observed], at: &[usize]) -> HeldOut {
+    let rows = fit::in_segments(at, |i| {
+        let mut r = [0.0; 6];
+        model.residuals(x, &obs[*i], &mut r);
+        (
+            r,
+            obs[*i].observation.residual_count(),
+            pose_weight(&obs[*i]),
+        )
+    });
+    let mut out = HeldOut::default();
+    for (r, n, w) in &rows {
+        out.push(r, *n, *w);
+    }
+    out.finish()
+}
+
 /// Distance (metres) between model and measurement of every observation in `obs`.
 pub(crate) fn distances(model: &Model, x: &[f64], obs: &[Observed]) -> Vec<f64> {
     let idx: Vec<usize> = (0..obs.len()).collect();
@@ -69,6 +160,12 @@ pub(crate) fn residual_vectors(model: &Model, x: &[f64], obs: &[Observed]) -> Ve
 /// measures how well the model predicts the target's motion between poses, the quantity a
 /// test set of a new tool can measure.
 pub(super) fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<f64> {
+    split_held(model, x, prep).distances
+}
+
+/// [`split_distances`] with the orientation errors of the 6-DoF samples ([`HeldOut`]; a sample
+/// of a session no calibration sample saw is compared by its position alone).
+pub(super) fn split_held(model: &Model, x: &[f64], prep: &Prepared) -> HeldOut {
     let mut measured = vec![false; model.targets().len()];
     for o in &prep.cal {
         if let Observation::Point { target, .. } = &o.observation {
@@ -98,33 +195,42 @@ pub(super) fn split_distances(model: &Model, x: &[f64], prep: &Prepared) -> Vec<
     }
     let unseen = crate::sessions::unseen_frames(model, x, prep);
     let mut r = [0.0; 6];
-    prep.val
-        .iter()
-        .map(|o| match &o.observation {
+    let mut out = HeldOut::default();
+    for o in &prep.val {
+        match &o.observation {
             _ if unseen.iter().any(|(s, _)| *s == o.session) => {
                 let frame = unseen
                     .iter()
                     .find(|(s, _)| *s == o.session)
                     .map(|(_, t)| *t);
-                crate::sessions::distance_in(model, x, o, &frame.unwrap_or_default())
+                out.distances.push(crate::sessions::distance_in(
+                    model,
+                    x,
+                    o,
+                    &frame.unwrap_or_default(),
+                ));
+                out.turns.push(None);
             }
             Observation::Point { target, point } => match located.get(*target).copied().flatten() {
                 Some(p) => {
                     let tip = model.tip_in(x, &o.q, model.target_chain(*target), o.session);
                     let s = model.scale_at(x, &o.q);
-                    (tip.translation.vector + tip.rotation * p * s - point).norm()
+                    out.distances
+                        .push((tip.translation.vector + tip.rotation * p * s - point).norm());
+                    out.turns.push(None);
                 }
                 None => {
                     model.residuals(x, o, &mut r);
-                    Vector3::new(r[0], r[1], r[2]).norm()
+                    out.push(&r, 3, None);
                 }
             },
             Observation::Pose(_) | Observation::TargetPose { .. } => {
                 model.residuals(x, o, &mut r);
-                Vector3::new(r[0], r[1], r[2]).norm()
+                out.push(&r, o.observation.residual_count(), pose_weight(o));
             }
-        })
-        .collect()
+        }
+    }
+    out.finish()
 }
 
 /// For each target that only validation samples measured (see [`split_distances`]): the
@@ -232,20 +338,21 @@ pub(crate) enum Folds {
     Later,
 }
 
-/// Puts the validation figures of the held-out distances `held` into `report`.
-pub(crate) fn set_val(report: &mut StepReport, held: &[f64]) {
-    let val = Stats::of(held);
+/// Puts the validation figures of the held-out errors `held` into `report`.
+pub(crate) fn set_val(report: &mut StepReport, held: &HeldOut) {
+    let val = Stats::of(&held.distances);
     report.val_rms = val.map(|v| v.rms);
     report.val_mean = val.map(|v| v.mean);
     report.val_max = val.map(|v| v.max);
+    report.val_angle_rms = held.angle_rms();
 }
 
 pub(crate) struct StepResult {
     pub(crate) outcome: FitOutcome,
     pub(crate) report: StepReport,
-    /// Held-out distance of every validation sample (split) or calibration sample
+    /// Held-out errors of every validation sample (split) or calibration sample
     /// (cross-validation), in sample order; empty without validation.
-    pub(crate) held_out: Vec<f64>,
+    pub(crate) held_out: HeldOut,
 }
 
 /// Held-out distances of `free` fitted from `x0`: the validation split's, or k-fold
@@ -259,9 +366,9 @@ pub(crate) fn held_out(
     free: &[usize],
     scales: &[f64],
     fit_options: &FitOptions,
-) -> Result<Vec<f64>, CalibError> {
+) -> Result<HeldOut, CalibError> {
     match validation {
-        Validation::Split { .. } => Ok(split_distances(model, x, prep)),
+        Validation::Split { .. } => Ok(split_held(model, x, prep)),
         Validation::CrossValidation {
             folds,
             training_subsample,
@@ -314,18 +421,25 @@ pub(crate) fn held_out(
                 };
                 // Only the fold's parameters are read (not its outcome's covariance).
                 let fold = fit::solve_point_from(&p, x, free, scales, fit_options, first)?;
-                let d = distances_at(model, &fold, &prep.cal, &at);
+                let d = held_at(model, &fold, &prep.cal, &at);
                 Ok((at, d))
             })?;
             let mut d = vec![0.0; prep.cal.len()];
+            let mut turns = vec![None; prep.cal.len()];
             for (at, fold) in per_fold {
-                for (i, v) in at.into_iter().zip(fold) {
+                let fold_turns = fold.turns.into_iter().chain(std::iter::repeat(None));
+                for ((i, v), t) in at.into_iter().zip(fold.distances).zip(fold_turns) {
                     d[i] = v;
+                    turns[i] = t;
                 }
             }
-            Ok(d)
+            Ok(HeldOut {
+                distances: d,
+                turns,
+            }
+            .finish())
         }
-        Validation::None => Ok(vec![]),
+        Validation::None => Ok(HeldOut::default()),
     }
 }
 

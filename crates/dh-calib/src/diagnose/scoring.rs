@@ -1,9 +1,11 @@
 //! Scoring and judging candidates (module docs, steps 2 to 4): the candidates' columns
 //! projected off the estimated parameters' column space (aliasing, first-order SSR
 //! reduction), the F-to-enter test, BIC `m ln(SSR/m) + p ln m`, and the one-sided paired
-//! Wilcoxon signed-rank test of held-out squared errors (metres squared).
+//! Wilcoxon signed-rank test of held-out squared errors (metres squared; a 6-DoF sample's
+//! orientation error weighed in as in the fit, `sigma / sigma_rot` metres per radian).
 
 use super::*;
+use crate::calibrate::HeldOut;
 
 /// The scaled Jacobian, the residuals and the first row of each observation.
 pub(super) type Dense = (DMatrix<f64>, DVector<f64>, Vec<usize>);
@@ -348,9 +350,9 @@ pub(crate) fn bic(ssr: f64, m: f64, p: f64) -> f64 {
 pub(super) fn judge(
     session: &Session<'_>,
     before: &FitOutcome,
-    held_before: &[f64],
+    held_before: &HeldOut,
     after: &FitOutcome,
-    held_after: &[f64],
+    held_after: &HeldOut,
     k: usize,
     k_count: usize,
     alpha: f64,
@@ -370,7 +372,10 @@ pub(super) fn judge(
         Validation::CrossValidation { .. } => Some(&session.prep.groups),
         Validation::None => None,
     };
-    let held_out = groups.and_then(|g| paired_wilcoxon(held_before, held_after, g));
+    // A 6-DoF sample's error weighs its orientation in, as the fit does (each part over its
+    // own sigma): an effect the angles show and the positions hardly do must pass here too.
+    let held_out =
+        groups.and_then(|g| paired_wilcoxon(&held_before.weighed(), &held_after.weighed(), g));
     let mut reasons = Vec::new();
     if !forced {
         if f_p.is_nan() || f_p >= f_threshold {

@@ -415,15 +415,23 @@ fn diagnose_judged(
                 Ok((trial, Some((step, trial_free, trial_fixed))))
             };
             let mut made = Attempts::new(&attempt);
+            // The refits of this round that failed, kept for the comparison of nested rivals.
+            let mut failed: HashMap<usize, (usize, nested::Fitted)> = HashMap::new();
             let tried: Vec<Wanted> = eligible.iter().take(tries).map(|c| (c.0, c.2)).collect();
             for (t, &(e, _)) in tried.iter().enumerate() {
                 // One at a time: the next is needed only when this one fails.
                 let (trial, fitted) = made.take(&tried[t..=t])?;
                 let ok = trial.accepted;
                 round.trials.push(trial);
-                let Some(fitted) = fitted.filter(|_| ok) else {
-                    rejected.push(e);
-                    continue;
+                let fitted = match fitted {
+                    Some(f) if ok => f,
+                    other => {
+                        if let Some(f) = other {
+                            failed.insert(e, (round.trials.len() - 1, f));
+                        }
+                        rejected.push(e);
+                        continue;
+                    }
                 };
                 // It passes: its rivals (the other eligible candidates that change the same
                 // quantity of the same joint) are refitted too, and the best of those that
@@ -443,9 +451,15 @@ fn diagnose_judged(
                         let (trial, fitted) = made.take(&rivals[i..])?;
                         let ok = trial.accepted;
                         round.trials.push(trial);
-                        match fitted.filter(|_| ok) {
-                            Some(f) => passed.push((r, round.trials.len() - 1, f)),
-                            None => rejected.push(r),
+                        let at = round.trials.len() - 1;
+                        match fitted {
+                            Some(f) if ok => passed.push((r, at, f)),
+                            other => {
+                                if let Some(f) = other {
+                                    failed.insert(r, (at, f));
+                                }
+                                rejected.push(r);
+                            }
                         }
                     }
                 }
@@ -455,6 +469,21 @@ fn diagnose_judged(
                         .map(|p| &round.trials[p.1])
                         .collect::<Vec<_>>(),
                 );
+                // Nested rivals: the simpler kept unless the extra terms are significant.
+                let (best, displaced) = if forced {
+                    (best, None)
+                } else {
+                    nested::settle(
+                        &pool,
+                        &mut round.trials,
+                        &mut passed,
+                        &mut failed,
+                        &mut rejected,
+                        best,
+                        diag.alpha,
+                        &mut notes,
+                    )
+                };
                 let winner = round.trials[passed[best].1].clone();
                 for (i, (r, t, _)) in passed.iter().enumerate() {
                     if i != best {
@@ -463,6 +492,9 @@ fn diagnose_judged(
                         trial.reason = rivals::reason(&winner, trial);
                         rejected.push(*r);
                     }
+                }
+                if let Some((t, reason)) = displaced {
+                    round.trials[t].reason = reason;
                 }
                 let (e, _, (step, trial_free, trial_fixed)) = passed.swap_remove(best);
                 accepted = Some((e, step, trial_free, trial_fixed));
@@ -532,6 +564,12 @@ fn diagnose_judged(
         let rejection = last_rejection(&mut rounds.iter().flat_map(|r| r.trials.iter()), &c.label);
         c.status = match (e, &rejection) {
             (Some(e), _) if selected.contains(&e) => CandidateStatus::Selected,
+            // A rival that lost is that, even when a later round finds it aliased with what
+            // was added (a bigger harmonic once the smaller is in).
+            (Some(_), Some((CandidateStatus::Rival, reason))) => {
+                c.reason = Some(reason.clone());
+                CandidateStatus::Rival
+            }
             (Some(e), _) if aliased.contains(&e) => CandidateStatus::Aliased,
             (Some(_), _) if c.status == CandidateStatus::Inert => CandidateStatus::Inert,
             (Some(_), Some((status, reason))) => {

@@ -247,6 +247,9 @@ impl Effect for Gravitational {
             *o = self.basis(q);
         }
     }
+    fn gravity_model(&self) -> Option<&Arc<GravityModel>> {
+        Some(&self.gravity)
+    }
     fn scales(&self, length: f64) -> Vec<f64> {
         // A unit of the scaled parameter moves the joint as much as a unit of an angle or
         // length column does: the compliance times a typical torque.

@@ -77,6 +77,12 @@ pub trait Effect: fmt::Debug + Send + Sync {
     /// Column scales: the tip motion (metres) that a unit change of each parameter causes,
     /// roughly, in a robot of characteristic length `length`.
     fn scales(&self, length: f64) -> Vec<f64>;
+    /// The gravity model whose torques drive the effect (compliance, backlash under load);
+    /// `None` by default. A calibrated model file must carry it for the effect to be evaluated
+    /// again from joint values alone.
+    fn gravity_model(&self) -> Option<&std::sync::Arc<crate::gravity::GravityModel>> {
+        None
+    }
 }
 
 /// A gear ratio error: `theta_J += eps · q_J` (radians per radian), named `gear_ratio:<J>`.

@@ -132,11 +132,21 @@ impl Model {
     /// Chain `chain`'s tip frame in the device frame at `x` and `q` (its position scaled by the
     /// device scale).
     pub fn tip_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
-        let ctx = SampleContext::default();
+        self.tip_of_in(x, q, &SampleContext::default(), chain)
+    }
+
+    /// [`Model::tip_of`] for a sample at `ctx` in the measurement sequence.
+    pub fn tip_of_in(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        ctx: &SampleContext,
+        chain: usize,
+    ) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &ctx, &mut v);
+        self.op_values(x, q, ctx, &mut v);
         let mut f = self.chain(&v, None, self.chain_ops(chain));
-        f.t *= self.scale_factor(x, q, &ctx);
+        f.t *= self.scale_factor(x, q, ctx);
         f.to_iso()
     }
 
@@ -148,8 +158,19 @@ impl Model {
 
     /// Chain `chain`'s tip in the base link frame at `x` and `q` (without the device frame).
     pub fn robot_fk_of(&self, x: &[f64], q: &[f64], chain: usize) -> Isometry3<f64> {
+        self.robot_fk_in(x, q, &SampleContext::default(), chain)
+    }
+
+    /// [`Model::robot_fk_of`] for a sample at `ctx` in the measurement sequence.
+    pub fn robot_fk_in(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        ctx: &SampleContext,
+        chain: usize,
+    ) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
-        self.op_values(x, q, &SampleContext::default(), &mut v);
+        self.op_values(x, q, ctx, &mut v);
         let ops = self.chain_ops(chain);
         self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]))
             .to_iso()

@@ -97,6 +97,7 @@ impl CalibrationDoc {
                     val_mean: s.val_mean,
                     val_max: s.val_max,
                     angle_rms: s.angle_rms,
+                    val_angle_rms: s.val_angle_rms,
                     fixed: s.fixed.iter().map(FixedDoc::from).collect(),
                 })
                 .collect(),
@@ -128,6 +129,8 @@ impl CalibrationDoc {
                     estimate: p.estimate,
                     std_error: p.std_error,
                     free: p.free,
+                    identified: p.free
+                        && ParameterDoc::identifies(&p.name, p.estimate, p.std_error),
                 })
                 .collect(),
             fixed: report.fixed.iter().map(FixedDoc::from).collect(),

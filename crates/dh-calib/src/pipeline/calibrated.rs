@@ -11,6 +11,7 @@ use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use super::{needs_gravity, GravityRecord};
 use crate::covariance::Covariance;
 use crate::effects::EffectContext;
 use crate::fit::CalibError;
@@ -120,6 +121,10 @@ pub struct CalibrationRecord {
     /// lack it).
     #[serde(default)]
     pub first_session: Option<String>,
+    /// The link masses and nominal geometry of the gravity effects (compliance, backlash),
+    /// when the calibration selected any (sheets written before it was kept lack it).
+    #[serde(default)]
+    pub gravity_model: Option<GravityRecord>,
 }
 
 /// What a prediction reads of a `simulate` truth file's `truth` section: the simulated robot's
@@ -138,6 +143,9 @@ pub struct TruthRecord {
     /// With several sessions: every session's device frame, the first's (`device`) included.
     #[serde(default)]
     pub sessions: Vec<(String, PoseRecord)>,
+    /// The gravity model of planted gravity effects.
+    #[serde(default)]
+    pub gravity_model: Option<GravityRecord>,
 }
 
 impl TruthRecord {
@@ -148,6 +156,7 @@ impl TruthRecord {
             device: self.device,
             targets: self.targets,
             covariance: None,
+            gravity_model: self.gravity_model,
             sessions: self
                 .sessions
                 .into_iter()
@@ -169,6 +178,15 @@ pub enum CalibratedError {
     /// Effect values that make no effect of the table (gravity effects need link masses).
     #[error("effects: {0}")]
     Effects(CalibError),
+    /// Gravity effects in a file without the gravity model they were fitted with.
+    #[error("effects: {} need the link masses and nominal geometry the calibration was run with (`calibration.gravity_model`), which the file does not hold", .effects.iter().map(|e| format!("'{e}'")).collect::<Vec<_>>().join(", "))]
+    MissingGravity {
+        /// The gravity effects' parameters.
+        effects: Vec<String>,
+    },
+    /// A gravity model that does not fit the table.
+    #[error("{0}")]
+    Gravity(CalibError),
     /// A target too far from the tip, or not finite.
     #[error("calibration: target '{name}' at {position:?} m is not a position on a tool")]
     Target {
@@ -223,7 +241,24 @@ impl CalibratedRobot {
         effects: &[(String, f64)],
         record: &CalibrationRecord,
     ) -> Result<Self, CalibratedError> {
-        let ctx = EffectContext::serial(table);
+        let mut ctx = EffectContext::serial(table);
+        match &record.gravity_model {
+            Some(g) => {
+                ctx.gravity = Some(std::sync::Arc::new(
+                    g.model(table).map_err(CalibratedError::Gravity)?,
+                ));
+            }
+            None => {
+                let missing: Vec<String> = effects
+                    .iter()
+                    .filter(|(n, _)| needs_gravity(n))
+                    .map(|(n, _)| n.clone())
+                    .collect();
+                if !missing.is_empty() {
+                    return Err(CalibratedError::MissingGravity { effects: missing });
+                }
+            }
+        }
         let effects = effects_from_parameters(effects, &ctx).map_err(CalibratedError::Effects)?;
         let sessions = record
             .sessions

@@ -71,6 +71,10 @@ pub struct StepDoc {
     /// without such samples.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub angle_rms: Option<f64>,
+    /// The same of the held-out samples (validation or cross-validation, as `val_rms`);
+    /// absent without 6-DoF samples or without validation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub val_angle_rms: Option<f64>,
     /// Parameters the step would estimate but held at their start, not identifiable from the
     /// data (in `nominal`: device or target coordinates), with what absorbs them.
     pub fixed: Vec<FixedDoc>,
@@ -91,9 +95,38 @@ pub struct ParameterDoc {
     pub std_error: Option<f64>,
     /// Estimated (`false`: held at nominal).
     pub free: bool,
+    /// Identified by this data: free, and for an effect's parameter an estimate at least
+    /// [`IDENTIFIED_SIGMAS`] standard errors from zero ([`ParameterDoc::identifies`]). An
+    /// effect parameter that is not is estimated and kept (the fit and its covariance are
+    /// unchanged), but the data cannot tell it from no effect at all. Reports before this key
+    /// read as `true`.
+    #[serde(default = "identified_by_default")]
+    pub identified: bool,
 }
 
+fn identified_by_default() -> bool {
+    true
+}
+
+/// How many standard errors from zero an effect parameter's estimate must be to count as
+/// identified by the data ([`ParameterDoc::identified`]): below it, the two-sided 95 %
+/// interval of the estimate (±1.96 SE, rounded up) holds zero, i.e. the data are as consistent
+/// with no effect as with the estimate. Geometric parameters are not judged this way: their
+/// nominal value is a design value, and a change smaller than its standard error means the data
+/// confirm the nominal to that precision, not that they cannot see the parameter.
+pub const IDENTIFIED_SIGMAS: f64 = 2.0;
+
 impl ParameterDoc {
+    /// Whether a free parameter `name` estimated as `estimate` with standard error `std_error`
+    /// (`None`: no covariance, nothing to judge by) is identified by the data (see
+    /// [`ParameterDoc::identified`]).
+    pub fn identifies(name: &str, estimate: f64, std_error: Option<f64>) -> bool {
+        match std_error {
+            None => true,
+            Some(se) if super::is_effect(name) => estimate.abs() >= IDENTIFIED_SIGMAS * se,
+            Some(_) => true,
+        }
+    }
     /// Whether this is an effect's parameter (see [`super::is_effect`]), whatever its unit.
     pub fn is_effect(&self) -> bool {
         super::is_effect(&self.name)

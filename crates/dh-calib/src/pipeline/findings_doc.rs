@@ -162,8 +162,15 @@ pub struct VerdictDoc {
     pub summary: String,
     /// `true`/`false`, `null` without a test.
     pub complete: Option<bool>,
-    /// Final RMS over the noise floor.
+    /// Final RMS over the noise floor (for a 6-DoF set, position and orientation together,
+    /// each over its own noise).
     pub ratio: Option<f64>,
+    /// For a 6-DoF set: the position's ratio alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_ratio: Option<f64>,
+    /// For a 6-DoF set: the orientation's ratio alone (angle RMS over its floor).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle_ratio: Option<f64>,
     /// Level of the test.
     pub alpha: f64,
     /// The test.
@@ -180,6 +187,8 @@ impl From<&Verdict> for VerdictDoc {
             summary: v.summary.clone(),
             complete: v.complete,
             ratio: v.ratio,
+            position_ratio: v.angle_ratio.and(v.position_ratio),
+            angle_ratio: v.angle_ratio,
             alpha: v.alpha,
             test: TestDoc::from(&v.test),
             structure: v.structure.iter().map(StructureDoc::from).collect(),

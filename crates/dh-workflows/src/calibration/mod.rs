@@ -29,6 +29,7 @@ mod request;
 mod residuals;
 mod serial;
 mod tree;
+mod tree_residuals;
 
 use std::io::Write;
 
@@ -45,6 +46,7 @@ pub use request::{CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFE
 pub use residuals::{residuals, Residuals};
 pub use serial::{check_sigma, pipeline_options, serial_error, Contacts, Points};
 pub use tree::{check_tree_options, check_tree_out, load_tree, tree_model, Tree, TreeInputs};
+pub use tree_residuals::{tree_residuals, TreeResiduals};
 
 /// The model to calibrate and the data read for it.
 #[derive(Clone, Debug)]

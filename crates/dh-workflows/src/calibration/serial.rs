@@ -161,6 +161,7 @@ impl Points {
             &self.inputs.data,
             &c.report,
             &c.doc,
+            c.effects.iter().find_map(|e| e.gravity_model()),
         )?;
         let passed = proof.passed;
         c.doc.written = Some(proof);

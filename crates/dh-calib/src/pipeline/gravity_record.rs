@@ -1,0 +1,293 @@
+//! The gravity model of a calibration as a calibrated model file holds it (the `calibration`
+//! section's `gravity_model`, or a simulated truth's): what `compliance:J`,
+//! `lateral_compliance:J` and `backlash:J` need to be evaluated again from joint values alone.
+//!
+//! The gravity torques of these effects are computed at the **nominal** geometry the
+//! calibration started from ([`crate::effects`]), not at the calibrated one, so the record
+//! holds that geometry beside the masses: read back, the torques are the fit's to the last bit
+//! and a prediction is the fitted model's (the written proof checks it to 1 nm). Units: kg,
+//! metres, radians, m/s²; each centre of mass in its row's DH frame of that geometry (frame
+//! `i`, after the row's transform), a payload's in the tip frame; `gravity` in the robot's
+//! base link frame.
+
+use dh_core::pose::{from_xyz_rpy, to_xyz_rpy};
+use dh_core::DhTable;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use super::PoseRecord;
+use crate::fit::CalibError;
+use crate::gravity::{GravityModel, Inertial, Inertials};
+use crate::tree::DhTree;
+
+/// A body's mass and centre as the record holds it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MassRecord {
+    /// The joint that moves the body (a link), absent for a payload.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<String>,
+    /// Mass (kg).
+    pub mass: f64,
+    /// Centre of mass (m): in the joint row's DH frame, or a payload's in the tip frame.
+    pub com: [f64; 3],
+}
+
+/// One row of the nominal geometry (metres, radians).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RowGeometry {
+    /// The row's joint.
+    pub joint: String,
+    /// Link length (m).
+    pub a: f64,
+    /// Link twist (rad).
+    pub alpha: f64,
+    /// Link offset (m).
+    pub d: f64,
+    /// Joint angle offset (rad).
+    pub theta: f64,
+    /// Hayati-Mirmirani tilt (rad), absent when zero.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub beta: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// The gravity model of a serial calibration (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GravityRecord {
+    /// Gravity in the base link frame (m/s²).
+    pub gravity: [f64; 3],
+    /// Link masses, by joint.
+    pub links: Vec<MassRecord>,
+    /// Payloads on the tip.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub payloads: Vec<MassRecord>,
+    /// The nominal DH frame 0 in the base link frame.
+    pub base: PoseRecord,
+    /// The nominal tip link frame in the last DH frame.
+    pub tool: PoseRecord,
+    /// The nominal rows, in table order.
+    pub rows: Vec<RowGeometry>,
+}
+
+/// What keeps a gravity record from making a gravity model of a table.
+fn bad(reason: String) -> CalibError {
+    CalibError::BadOption {
+        what: "calibration.gravity_model".into(),
+        reason,
+    }
+}
+
+impl GravityRecord {
+    /// The record of a serial robot's gravity model `g`; `None` for a tree's (a tree's
+    /// calibrated sheet does not predict).
+    pub fn of(g: &GravityModel) -> Option<Self> {
+        let tree = g.tree();
+        if !tree.branches().is_empty() {
+            return None;
+        }
+        let table = tree.trunk();
+        let pose = |p| {
+            let (xyz, rpy) = to_xyz_rpy(p);
+            PoseRecord { xyz, rpy }
+        };
+        let inertials = g.inertials();
+        Some(GravityRecord {
+            gravity: g.gravity().into(),
+            links: inertials
+                .links
+                .iter()
+                .map(|(joint, i)| MassRecord {
+                    joint: Some(joint.clone()),
+                    mass: i.mass,
+                    com: i.com.into(),
+                })
+                .collect(),
+            payloads: inertials
+                .payloads
+                .iter()
+                .map(|(_, i)| MassRecord {
+                    joint: None,
+                    mass: i.mass,
+                    com: i.com.into(),
+                })
+                .collect(),
+            base: pose(&table.base),
+            tool: pose(&table.tool),
+            rows: table
+                .rows
+                .iter()
+                .map(|r| RowGeometry {
+                    joint: r.name.clone(),
+                    a: r.a,
+                    alpha: r.alpha,
+                    d: r.d,
+                    theta: r.theta,
+                    beta: r.beta,
+                })
+                .collect(),
+        })
+    }
+
+    /// The gravity model it records, for the calibrated `table` (whose joints, kinds, limits
+    /// and convention the nominal geometry shares).
+    ///
+    /// # Errors
+    /// [`CalibError::BadOption`] naming `calibration.gravity_model` when its rows are not the
+    /// table's joints in order, a link names no joint, or a value is not finite; as
+    /// [`GravityModel::new`].
+    pub fn model(&self, table: &DhTable) -> Result<GravityModel, CalibError> {
+        if self.rows.len() != table.rows.len()
+            || self
+                .rows
+                .iter()
+                .zip(&table.rows)
+                .any(|(g, r)| g.joint != r.name)
+        {
+            return Err(bad(format!(
+                "expected the rows of the model's joints {:?}, found {:?}",
+                table
+                    .rows
+                    .iter()
+                    .map(|r| r.name.as_str())
+                    .collect::<Vec<_>>(),
+                self.rows
+                    .iter()
+                    .map(|r| r.joint.as_str())
+                    .collect::<Vec<_>>()
+            )));
+        }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let mut nominal = table.clone();
+        for (g, r) in self.rows.iter().zip(nominal.rows.iter_mut()) {
+            if !finite(&[g.a, g.alpha, g.d, g.theta, g.beta]) {
+                return Err(bad(format!(
+                    "row '{}': expected finite a, alpha, d, theta, beta",
+                    g.joint
+                )));
+            }
+            (r.a, r.alpha, r.d, r.theta, r.beta) = (g.a, g.alpha, g.d, g.theta, g.beta);
+        }
+        for (what, p) in [("base", &self.base), ("tool", &self.tool)] {
+            if !finite(&p.xyz) || !finite(&p.rpy) {
+                return Err(bad(format!("{what}: expected a finite pose")));
+            }
+        }
+        nominal.base = from_xyz_rpy(self.base.xyz, self.base.rpy);
+        nominal.tool = from_xyz_rpy(self.tool.xyz, self.tool.rpy);
+        let inertial = |m: &MassRecord| Inertial {
+            mass: m.mass,
+            com: Vector3::from(m.com),
+        };
+        let links = self
+            .links
+            .iter()
+            .map(|m| {
+                let joint = m
+                    .joint
+                    .clone()
+                    .ok_or_else(|| bad("a link without 'joint'".into()))?;
+                Ok((joint, inertial(m)))
+            })
+            .collect::<Result<Vec<_>, CalibError>>()?;
+        let inertials = Inertials {
+            links,
+            payloads: self.payloads.iter().map(|m| (0, inertial(m))).collect(),
+        };
+        GravityModel::new(
+            &DhTree::serial(&nominal),
+            &inertials,
+            Vector3::from(self.gravity),
+        )
+    }
+}
+
+/// The effect kinds whose values need link masses (see [`crate::effects`]).
+pub const GRAVITY_EFFECTS: [&str; 3] = ["compliance", "lateral_compliance", "backlash"];
+
+/// Whether the effect parameter `name` belongs to a gravity effect ([`GRAVITY_EFFECTS`]).
+pub fn needs_gravity(name: &str) -> bool {
+    name.split(':')
+        .next()
+        .is_some_and(|k| GRAVITY_EFFECTS.contains(&k))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gravity::TorqueAxis;
+    use dh_core::DhRow;
+
+    fn arm() -> DhTable {
+        DhTable {
+            convention: dh_core::Convention::Standard,
+            base: from_xyz_rpy([0.0, 0.0, 0.3], [0.0, 0.0, 0.2]),
+            tool: from_xyz_rpy([0.0, 0.0, 0.1], [0.0, 0.0, 0.0]),
+            rows: vec![
+                DhRow::revolute("j1", 0.0, std::f64::consts::FRAC_PI_2, 0.3, 0.0),
+                DhRow::revolute("j2", 0.5, 0.0, 0.0, 0.1),
+                DhRow::revolute("j3", 0.4, 0.0, 0.0, 0.0),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_record_rebuilds_the_torques_of_the_nominal_geometry_exactly() {
+        let nominal = arm();
+        let inertials = Inertials {
+            links: vec![
+                (
+                    "j2".into(),
+                    Inertial {
+                        mass: 4.0,
+                        com: Vector3::new(-0.25, 0.0, 0.01),
+                    },
+                ),
+                (
+                    "j3".into(),
+                    Inertial {
+                        mass: 2.5,
+                        com: Vector3::new(-0.2, 0.01, 0.0),
+                    },
+                ),
+            ],
+            payloads: vec![(
+                0,
+                Inertial {
+                    mass: 1.0,
+                    com: Vector3::new(0.0, 0.0, 0.05),
+                },
+            )],
+        };
+        let g = GravityModel::serial(&nominal, &inertials, GravityModel::default_gravity())
+            .expect("a valid model");
+        let record = GravityRecord::of(&g).expect("serial");
+        let text = serde_yaml::to_string(&record).expect("serialises");
+        let back: GravityRecord = serde_yaml::from_str(&text).expect("reads back");
+        // Read with a calibrated table 2 mm and 1 mrad off: the torques are the nominal's.
+        let mut calibrated = nominal.clone();
+        calibrated.rows[1].a += 0.002;
+        calibrated.rows[2].alpha += 0.001;
+        let rebuilt = back.model(&calibrated).expect("rebuilds");
+        for q in [[0.1, 0.7, -1.2], [2.0, -0.3, 0.4]] {
+            for row in 0..3 {
+                for axis in [TorqueAxis::Joint, TorqueAxis::Lateral] {
+                    let (a, b) = (g.torque(&q, row, axis), rebuilt.torque(&q, row, axis));
+                    assert!((a - b).abs() <= 1e-12 * a.abs().max(1.0), "{a} vs {b}");
+                    let (a, b) = (g.torque_scale(row, axis), rebuilt.torque_scale(row, axis));
+                    assert!((a - b).abs() <= 1e-12 * a, "{a} vs {b}");
+                }
+            }
+        }
+        // Rows of another robot are refused, naming the section.
+        let mut other = calibrated.clone();
+        other.rows[2].name = "elbow".into();
+        let e = back.model(&other).expect_err("other joints");
+        assert!(e.to_string().contains("calibration.gravity_model"), "{e}");
+    }
+}
