@@ -129,13 +129,19 @@ fn cases() -> u32 {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(cases()))]
 
-    /// FK (and the prepared FK, bit for bit) of a table with tilts is the matrix product.
+    /// FK and the prepared FK of a table with tilts are the matrix product (to 1e-12 in each
+    /// entry: metres for the translation of chains of up to 8 rows of at most 1 m, unitless for
+    /// the rotation). The prepared FK turns the running pose about z and x instead of
+    /// composing each row's transform (`table/prepared.rs`), so it agrees with `fk` to rounding,
+    /// no longer bit for bit.
     #[test]
     fn fk_of_tilted_rows_is_the_matrix_product(t in table(), q in joint_values()) {
         let q = &q[..t.rows.len()];
         let fk = t.fk(q).unwrap();
-        prop_assert!(distance(&fk.to_homogeneous(), &oracle(&t, q)) < 1e-12);
-        prop_assert_eq!(t.prepare().fk(q).unwrap(), fk);
+        let expected = oracle(&t, q);
+        prop_assert!(distance(&fk.to_homogeneous(), &expected) < 1e-12);
+        let prepared = t.prepare().fk(q).unwrap();
+        prop_assert!(distance(&prepared.to_homogeneous(), &expected) < 1e-12);
     }
 
     /// Converting a tilted table to the other convention and back keeps its kinematics, and the
