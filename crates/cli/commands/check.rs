@@ -1,6 +1,6 @@
 //! `urdf-dh check`: does a URDF match a vendor's DH sheet? If not, which joint and which
 //! parameter differ? Reads the files, runs `dh_workflows::check::compare` and renders its report
-//! (text, or the JSON contract of the README).
+//! (text, or the JSON contract of docs/guide/check.md).
 //!
 //! Two independent answers are combined (see `dh_workflows::check`):
 //! 1. the row-by-row equivalence walk of `dh_core::equivalence`, which sees through the
@@ -31,7 +31,7 @@ pub enum CheckFormat {
     /// A readable report.
     #[default]
     Text,
-    /// The JSON contract of the README.
+    /// The JSON contract of docs/guide/check.md.
     Json,
 }
 

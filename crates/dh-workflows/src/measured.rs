@@ -89,7 +89,7 @@ pub fn read_measurements(
     .map_err(|e| {
         let hint = match &e {
             dh_calib::csv::DataError::MissingJoints { .. } => Some(
-                "the joint columns must be named as the model's joints (see README, 'Measurement files')",
+                "the joint columns must be named as the model's joints (see docs/guide/measurements.md)",
             ),
             _ => None,
         };
