@@ -67,6 +67,11 @@ const DEVIATION_REL = 1e-6;
 const NUMBER = /-?\d+(?:\.\d+)?(?:e[+-]?\d+)?/gi;
 const sameness = { exact: 0, noise: 0 };
 
+// The JSON's lengths and angles are printed rounded to 12 decimals (a picometre, a picoradian:
+// dh_workflows::units, decimals): a last-bit difference can flip the last printed digit, so a
+// number may also differ by one unit of that rounding, PRINTED, and no more.
+const PRINTED = 1e-12;
+
 // An `"rpy": [roll, pitch, yaw]` triple is a rotation, R = Rz(yaw) Ry(pitch) Rx(roll) (URDF's
 // convention), and is compared as one: near gimbal lock (|pitch| -> pi/2) roll and yaw are
 // ill-conditioned (their last-bit differences grow as 1/cos(pitch): 1.8e-11 rad at a pitch of
@@ -84,7 +89,8 @@ function rpyMatrix([r, p, y]) {
 
 function sameRotation(got, want) {
   const [g, w] = [rpyMatrix(got), rpyMatrix(want)];
-  return g.every((x, i) => Math.abs(x - w[i]) <= FLOAT_ABS + FLOAT_REL);
+  // The three angles' printed rounding moves an entry by at most 3 PRINTED.
+  return g.every((x, i) => Math.abs(x - w[i]) <= FLOAT_ABS + FLOAT_REL + 3 * PRINTED);
 }
 
 function assertSameOutput(got, want, what) {
@@ -104,7 +110,7 @@ function assertSameOutput(got, want, what) {
       continue;
     }
     const rel = /error\W*$/.test(gw[i]) ? DEVIATION_REL : FLOAT_REL;
-    close = Math.abs(gn[i] - wn[i]) <= FLOAT_ABS + rel * Math.max(Math.abs(gn[i]), Math.abs(wn[i]));
+    close = Math.abs(gn[i] - wn[i]) <= FLOAT_ABS + rel * Math.max(Math.abs(gn[i]), Math.abs(wn[i])) + PRINTED * (1 + 1e-9);
   }
   if (close) {
     sameness.noise++;
