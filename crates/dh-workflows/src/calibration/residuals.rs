@@ -65,34 +65,69 @@ pub fn distances(
     targets: &[Vector3<f64>],
     data: &Measurements,
 ) -> Result<Vec<f64>> {
-    let mut model = Model::new(table, &data.targets, &ModelOptions::default())?;
-    let mut x_effects = Vec::new();
+    let model = Model::new(table, &data.targets, &ModelOptions::default())?;
+    let q = row_values(table, data)?;
+    model_distances(model, effects, (device, targets), data, &q)
+}
+
+/// Distances between the points `model` (with `effects` added at their values, the device
+/// frame and the targets of `frames`) predicts and the measured ones, per sample (metres); `q`
+/// the samples' joint values in the model's row order. Serial and tree models alike.
+pub(super) fn model_distances(
+    mut model: Model,
+    effects: &[(Arc<dyn Effect>, Vec<f64>)],
+    frames: (&Isometry3<f64>, &[Vector3<f64>]),
+    data: &Measurements,
+    q: &[Vec<f64>],
+) -> Result<Vec<f64>> {
+    let mut values = Vec::new();
     for (e, v) in effects {
-        let range = model.add_effect(e.clone())?;
-        x_effects.push((range, v.clone()));
+        values.push((model.add_effect(e.clone())?, v.clone()));
     }
-    model.set_device(device);
-    for (k, t) in targets.iter().enumerate() {
+    model.set_device(frames.0);
+    for (k, t) in frames.1.iter().enumerate() {
         model.set_target(k, *t);
     }
     let mut x = vec![0.0; model.parameter_count()];
-    for (range, v) in x_effects {
+    for (range, v) in values {
         for (i, val) in range.zip(v) {
             if let Some(slot) = x.get_mut(i) {
                 *slot = val;
             }
         }
     }
-    let q = row_values(table, data)?;
     // The effects of the sample order see each sample's place in the sequence, as the fit did.
     let contexts = dh_calib::effects_order::contexts_of(q.iter().map(Vec::as_slice), data);
     Ok(data
         .samples
         .iter()
-        .zip(&q)
+        .zip(q)
         .zip(&contexts)
         .map(|((s, q), c)| (model.point_in(&x, q, c, s.target) - s.point).norm())
         .collect())
+}
+
+/// The estimate of the parameter `name` in `report` (0 where it is not reported).
+pub(super) fn estimate(report: &Report, name: &str) -> f64 {
+    report
+        .parameters
+        .iter()
+        .find(|p| p.name == name)
+        .map_or(0.0, |p| p.estimate)
+}
+
+/// The fitted position of each of `targets` on the tool (metres; zero where not reported).
+pub(super) fn fitted_targets(report: &Report, targets: &[String]) -> Vec<Vector3<f64>> {
+    targets
+        .iter()
+        .map(|n| {
+            report
+                .targets
+                .iter()
+                .find(|(t, _)| t == n)
+                .map_or_else(Vector3::zeros, |(_, p)| *p)
+        })
+        .collect()
 }
 
 /// The nominal-step device frame and targets, from the report's `nominal` column.
@@ -143,28 +178,12 @@ pub fn residuals(
                 let v = e
                     .parameter_names()
                     .iter()
-                    .map(|n| {
-                        report
-                            .parameters
-                            .iter()
-                            .find(|p| &p.name == n)
-                            .map_or(0.0, |p| p.estimate)
-                    })
+                    .map(|n| estimate(report, n))
                     .collect();
                 (e.clone(), v)
             })
             .collect();
-        let targets1: Vec<Vector3<f64>> = data
-            .targets
-            .iter()
-            .map(|n| {
-                report
-                    .targets
-                    .iter()
-                    .find(|(t, _)| t == n)
-                    .map_or_else(Vector3::zeros, |(_, p)| *p)
-            })
-            .collect();
+        let targets1 = fitted_targets(report, &data.targets);
         let after = distances(
             &report.calibrated,
             &estimates,

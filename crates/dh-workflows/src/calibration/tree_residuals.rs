@@ -15,7 +15,7 @@ use dh_calib::model::{Effect, Model, ModelOptions};
 use dh_calib::tree::DhTree;
 use nalgebra::{Isometry3, Vector3};
 
-use super::residuals::{nominal_frames, pose_indices};
+use super::residuals::{estimate, fitted_targets, model_distances, nominal_frames, pose_indices};
 use super::Tree;
 use crate::calibrated_writer::row_values;
 
@@ -51,32 +51,8 @@ fn distances(
         .cloned()
         .zip(branches.iter().copied())
         .collect();
-    let mut model = Model::new_tree(tree, &on, &ModelOptions::default())?;
-    let mut values = Vec::new();
-    for (e, v) in effects {
-        values.push((model.add_effect(e.clone())?, v.clone()));
-    }
-    model.set_device(frames.0);
-    for (k, t) in frames.1.iter().enumerate() {
-        model.set_target(k, *t);
-    }
-    let mut x = vec![0.0; model.parameter_count()];
-    for (range, v) in values {
-        for (i, val) in range.zip(v) {
-            if let Some(slot) = x.get_mut(i) {
-                *slot = val;
-            }
-        }
-    }
-    // The effects of the sample order see each sample's place in the sequence, as the fit did.
-    let contexts = dh_calib::effects_order::contexts_of(q.iter().map(Vec::as_slice), data);
-    Ok(data
-        .samples
-        .iter()
-        .zip(q)
-        .zip(&contexts)
-        .map(|((s, q), c)| (model.point_in(&x, q, c, s.target) - s.point).norm())
-        .collect())
+    let model = Model::new_tree(tree, &on, &ModelOptions::default())?;
+    model_distances(model, effects, frames, data, q)
 }
 
 /// The residuals of the tree calibration `t`.
@@ -109,33 +85,20 @@ pub fn tree_residuals(t: &Tree) -> Result<TreeResiduals> {
             None => None,
         },
     };
-    let estimate = |n: &String| {
-        report
-            .parameters
-            .iter()
-            .find(|p| &p.name == n)
-            .map_or(0.0, |p| p.estimate)
-    };
     let effects = report
         .selected_effects
         .iter()
         .map(|label| {
             let e = parse_label_in(label, &ctx)?;
-            let v = e.parameter_names().iter().map(estimate).collect();
+            let v = e
+                .parameter_names()
+                .iter()
+                .map(|n| estimate(report, n))
+                .collect();
             Ok((e, v))
         })
         .collect::<Result<Vec<_>, dh_calib::CalibError>>()?;
-    let targets1: Vec<Vector3<f64>> = data
-        .targets
-        .iter()
-        .map(|n| {
-            report
-                .targets
-                .iter()
-                .find(|(t, _)| t == n)
-                .map_or_else(Vector3::zeros, |(_, p)| *p)
-        })
-        .collect();
+    let targets1 = fitted_targets(report, &data.targets);
     let after = distances(
         &c.calibrated,
         &branches,
