@@ -49,20 +49,7 @@ fn rms(v: &[f64]) -> f64 {
 
 /// The tool in the base frame predicted by `model` at the rows of `joints`, written to `out`.
 fn tool(model: &str, joints: &str, out: &str) -> Vec<HashMap<String, String>> {
-    ok(&[
-        "predict",
-        "--model",
-        model,
-        "--joints",
-        joints,
-        "--targets",
-        "tool",
-        "--frame",
-        "base",
-        "--out",
-        out,
-    ]);
-    table(out)
+    predict_tool(model, joints, out, &[]).0
 }
 
 /// Standardised errors `(calibrated − true) / u` of every coordinate, and the errors (m).

@@ -38,6 +38,16 @@ fn page(file: &str) -> (String, Vec<String>) {
     (html, sections)
 }
 
+/// Asserts that the page's `sections` (their ids) include every one of `wanted`.
+fn has_sections(sections: &[String], wanted: &[&str]) {
+    for s in wanted {
+        assert!(
+            sections.iter().any(|x| x == s),
+            "no section {s}: {sections:?}"
+        );
+    }
+}
+
 /// The text of every cell of the rows of the tables of section `id`, row by row.
 fn rows(html: &str, id: &str) -> Vec<Vec<String>> {
     let options = roxmltree::ParsingOptions {
@@ -135,23 +145,21 @@ fn calibrate_report_has_the_text_reports_figures_outliers_and_provenance() {
         &report,
     ]);
     let (html, sections) = page(&report);
-    for s in [
-        "summary",
-        "steps",
-        "residuals",
-        "outliers",
-        "diagnosis",
-        "parameters",
-        "correlations",
-        "verdict",
-        "settings",
-        "provenance",
-    ] {
-        assert!(
-            sections.iter().any(|x| x == s),
-            "no section {s}: {sections:?}"
-        );
-    }
+    has_sections(
+        &sections,
+        &[
+            "summary",
+            "steps",
+            "residuals",
+            "outliers",
+            "diagnosis",
+            "parameters",
+            "correlations",
+            "verdict",
+            "settings",
+            "provenance",
+        ],
+    );
     // The steps: RMS, mean, max and validation figures are the text report's, in mm.
     let steps = rows(&html, "steps");
     for label in ["nominal", "geometric"] {
@@ -275,21 +283,19 @@ fn cpa_report_has_the_circles_the_points_left_out_and_the_table() {
     let (code, out, err) = exec(&["cpa", &data, "--model", UR5, "--report", &report]);
     assert!(code == 0 || code == 1, "{err}");
     let (html, sections) = page(&report);
-    for s in [
-        "summary",
-        "sweeps",
-        "joints",
-        "residuals",
-        "outliers",
-        "table",
-        "proof",
-        "provenance",
-    ] {
-        assert!(
-            sections.iter().any(|x| x == s),
-            "no section {s}: {sections:?}"
-        );
-    }
+    has_sections(
+        &sections,
+        &[
+            "summary",
+            "sweeps",
+            "joints",
+            "residuals",
+            "outliers",
+            "table",
+            "proof",
+            "provenance",
+        ],
+    );
     let left_out = rows(&html, "outliers");
     assert_eq!(left_out.len(), 1, "{left_out:?}");
     assert_eq!(left_out[0][1], (k + 1).to_string());
@@ -335,12 +341,10 @@ fn contacts_and_trees_get_a_report() {
         &report,
     ]);
     let (html, sections) = page(&report);
-    for s in ["summary", "steps", "residuals", "parameters", "provenance"] {
-        assert!(
-            sections.iter().any(|x| x == s),
-            "no section {s}: {sections:?}"
-        );
-    }
+    has_sections(
+        &sections,
+        &["summary", "steps", "residuals", "parameters", "provenance"],
+    );
     assert!(html.contains("ball-in-socket"));
     // A tree.
     let nominal = path(dir.path(), "tree.yaml");
@@ -363,19 +367,17 @@ fn contacts_and_trees_get_a_report() {
         &report,
     ]);
     let (html, sections) = page(&report);
-    for s in [
-        "summary",
-        "steps",
-        "tree",
-        "parameters",
-        "verdict",
-        "provenance",
-    ] {
-        assert!(
-            sections.iter().any(|x| x == s),
-            "no section {s}: {sections:?}"
-        );
-    }
+    has_sections(
+        &sections,
+        &[
+            "summary",
+            "steps",
+            "tree",
+            "parameters",
+            "verdict",
+            "provenance",
+        ],
+    );
     let steps = rows(&html, "steps");
     let geometric = steps.iter().find(|r| r[0] == "geometric").unwrap();
     let rms: f64 = geometric[4].parse().unwrap();
