@@ -331,7 +331,7 @@ where
     };
     // Standard output is flushed before the exit code is decided: a result that did not reach
     // it (a full disk, a closed pipe) is a failure, not a success.
-    let done = flushed(dispatch(cli, out, err), out);
+    let done = flushed(dispatch(cli, &args, out, err), out);
     match done {
         Ok(Outcome::Pass) => 0,
         Ok(Outcome::Differs) => 1,
@@ -382,7 +382,7 @@ where
             None => anyhow::anyhow!("{message}"),
         }
     })?;
-    flushed(dispatch(cli, out, err), out)
+    flushed(dispatch(cli, &args, out, err), out)
 }
 
 /// The command line's definition: [`Cli`], every option that takes a value also taking a
@@ -447,15 +447,28 @@ fn flushed(outcome: anyhow::Result<Outcome>, out: &mut dyn Write) -> anyhow::Res
 /// Runs one command, every input opened once ([`dh_workflows::input::reading_once`]: standard input
 /// and FIFOs can be read only once).
 /// The warnings of the xacro expansions the command made are written to `err` after it.
-fn dispatch(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
-    let result = dh_workflows::input::reading_once(|| dispatch_command(cli, out, err));
+/// Runs the parsed command line `cli`; `args` is the command line as given (the report page's
+/// provenance records it).
+fn dispatch(
+    cli: Cli,
+    args: &[OsString],
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
+    let line = crate::commands::command_line(args);
+    let result = dh_workflows::input::reading_once(|| dispatch_command(cli, line, out, err));
     for w in dh_workflows::xacro::take_warnings() {
         writeln!(err, "urdf-dh: warning: {w}")?;
     }
     result
 }
 
-fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<Outcome> {
+fn dispatch_command(
+    cli: Cli,
+    line: Vec<String>,
+    out: &mut dyn Write,
+    err: &mut dyn Write,
+) -> anyhow::Result<Outcome> {
     match cli.command {
         Command::Extract(a) => {
             a.xacro.apply()?;
@@ -542,7 +555,9 @@ fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyho
         Command::Import(a) => import::import(&a.into_args()?, out, err),
         Command::Calibrate(a) => {
             a.xacro.apply()?;
-            run_calibrate(&a.into_args(), out, err)
+            let mut args = a.into_args();
+            args.command_line = line;
+            run_calibrate(&args, out, err)
         }
         Command::Predict(a) => {
             a.xacro.apply()?;
@@ -554,7 +569,8 @@ fn dispatch_command(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyho
         }
         Command::Cpa(a) => {
             a.xacro.apply()?;
-            let args = a.into_args()?;
+            let mut args = a.into_args()?;
+            args.command_line = line;
             if let Some(plot) = &args.plot {
                 let inputs: Vec<(&str, &str)> = [
                     ("DATA", Some(args.request.data.as_str())),

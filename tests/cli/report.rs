@@ -426,3 +426,36 @@ fn a_report_is_never_written_over_an_input_and_is_named_html() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("an HTML page"), "{err}");
 }
+
+/// The provenance records the command line the run was given, not the process's own: a caller
+/// that runs the command line in process (a test, the Python package's `run`) gets its command,
+/// not the host program's arguments.
+#[test]
+fn the_provenance_records_the_command_given_in_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let (data, _) = ur5_with_outliers(dir.path());
+    let report = path(dir.path(), "in-process.html");
+    let (code, _, err) = crate::common::cli(&[
+        "calibrate",
+        "--model",
+        "fixtures/robots/ur5/vendor.yaml",
+        "--data",
+        &data,
+        "--report",
+        &report,
+        "--quiet",
+    ]);
+    assert!(code == 0 || code == 1, "{err}");
+    let (html, _) = page(&report);
+    assert!(
+        html.contains("urdf-dh calibrate --model fixtures/robots/ur5/vendor.yaml --data"),
+        "the command given is not in the page"
+    );
+    let host: Vec<String> = std::env::args().skip(1).collect();
+    for a in host.iter().filter(|a| a.len() > 3) {
+        assert!(
+            !html.contains(a.as_str()),
+            "the host's argument {a} is in the page"
+        );
+    }
+}

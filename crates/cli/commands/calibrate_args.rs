@@ -35,6 +35,9 @@ pub struct CalibrateArgs {
     pub report: Option<String>,
     /// No progress line on standard error.
     pub quiet: bool,
+    /// The command line as the run was given it (the program as `urdf-dh`), for the report
+    /// page's provenance; empty for a caller that gives none.
+    pub command_line: Vec<String>,
 }
 
 /// Command-line arguments of `calibrate`.
@@ -177,6 +180,7 @@ impl CalibrateCli {
             format: self.format,
             plot: self.plot,
             report: self.report,
+            command_line: Vec::new(),
             quiet: self.quiet,
         }
     }

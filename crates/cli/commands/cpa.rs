@@ -46,6 +46,9 @@ pub struct CpaArgs {
     pub plot: Option<String>,
     /// Where to write the report as one self-contained HTML page.
     pub report: Option<String>,
+    /// The command line as the run was given it (the program as `urdf-dh`), for the report
+    /// page's provenance; empty for a caller that gives none.
+    pub command_line: Vec<String>,
 }
 
 mod text;
@@ -98,7 +101,7 @@ pub fn cpa(args: &CpaArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<O
         .into_iter()
         .filter_map(|(o, p)| Some((o, p?)))
         .collect();
-        let provenance = crate::commands::report_provenance(&inputs);
+        let provenance = crate::commands::report_provenance(&args.command_line, &inputs);
         files.push((
             Path::new(path),
             dh_workflows::report_html::cpa_page(&r, &provenance),
@@ -210,6 +213,7 @@ impl CpaCli {
             format: self.format,
             plot: self.plot,
             report: self.report,
+            command_line: Vec::new(),
         })
     }
 }

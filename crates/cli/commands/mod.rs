@@ -21,11 +21,10 @@ pub mod simulate;
 pub mod sockets;
 pub mod to_urdf;
 
-/// The provenance of a `--report` page of this run: `inputs` (option, path) read and hashed,
-/// the command line as this process got it, the tool's version, the date (UTC, or
-/// `SOURCE_DATE_EPOCH`).
-pub(crate) fn report_provenance(inputs: &[(&str, &str)]) -> dh_workflows::report_html::Provenance {
-    let command = std::env::args_os()
+/// The command line `args` as the report page's provenance records it: the program named
+/// `urdf-dh`, each argument as text (lossy where it is not UTF-8).
+pub(crate) fn command_line(args: &[std::ffi::OsString]) -> Vec<String> {
+    args.iter()
         .enumerate()
         .map(|(i, a)| {
             if i == 0 {
@@ -34,6 +33,15 @@ pub(crate) fn report_provenance(inputs: &[(&str, &str)]) -> dh_workflows::report
                 a.to_string_lossy().into_owned()
             }
         })
-        .collect();
-    dh_workflows::report_html::Provenance::now("urdf-dh", command, inputs)
+        .collect()
+}
+
+/// The provenance of a `--report` page of this run: `inputs` (option, path) read and hashed,
+/// the `command` line as the run was given it, the tool's version, the date (UTC, or
+/// `SOURCE_DATE_EPOCH`).
+pub(crate) fn report_provenance(
+    command: &[String],
+    inputs: &[(&str, &str)],
+) -> dh_workflows::report_html::Provenance {
+    dh_workflows::report_html::Provenance::now("urdf-dh", command.to_vec(), inputs)
 }

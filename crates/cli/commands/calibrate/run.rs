@@ -95,7 +95,7 @@ pub fn calibrate(
         .into_iter()
         .filter_map(|(o, p)| Some((o, p?)))
         .collect();
-        let provenance = crate::commands::report_provenance(&inputs);
+        let provenance = crate::commands::report_provenance(&args.command_line, &inputs);
         let page = dh_workflows::report_html::calibration_page(&calibrated, request, &provenance)?;
         files.push((Path::new(path), page));
     }
