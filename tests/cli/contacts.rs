@@ -135,6 +135,7 @@ pub(crate) fn contacts(file: &str, per_socket: usize, effect: Option<(&str, f64)
                     continue;
                 };
                 samples.push(Sample {
+                    time: None,
                     orientation: None,
                     session: 0,
                     q: q.into(),

@@ -58,6 +58,11 @@ pub struct Sample {
     /// The measured orientation of the target's frame, for a 6-DoF device (a tracker's 6-DoF
     /// probe, an optical marker body); `None` for a point. Boxed as `socket`.
     pub orientation: Option<Box<Orientation>>,
+    /// When the sample was measured (seconds, any origin: only differences are used), from the
+    /// measurement file's `time` column; `None` when the set has no clock. What time effects
+    /// (`thermal_growth`, [`crate::effects_order`]) read: the time since the set's first
+    /// timed sample.
+    pub time: Option<f64>,
 }
 
 /// A measured orientation: the rotation of the target's frame in the device frame, with the
@@ -121,6 +126,7 @@ impl Sample {
             socket: None,
             session: 0,
             orientation: None,
+            time: None,
         }
     }
 }

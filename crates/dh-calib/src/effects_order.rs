@@ -86,6 +86,7 @@ where
             }
         }
         contexts.push(SampleContext {
+            time: None,
             direction: direction.clone(),
             order: if count > 1 {
                 k as f64 / (count - 1) as f64
@@ -132,6 +133,7 @@ where
 /// directions.
 pub(crate) fn order_context(k: usize, count: usize) -> SampleContext {
     SampleContext {
+        time: None,
         direction: Vec::new(),
         order: if count > 1 {
             k as f64 / (count - 1) as f64
@@ -147,12 +149,31 @@ pub fn contexts_of<'a>(
     rows_q: impl IntoIterator<Item = &'a [f64]>,
     data: &'a Measurements,
 ) -> Vec<SampleContext> {
-    sequence_contexts(
+    let mut contexts = sequence_contexts(
         rows_q
             .into_iter()
             .zip(&data.samples)
             .map(|(q, s)| (q, s.config.as_deref())),
-    )
+    );
+    let times = elapsed(data);
+    for (c, t) in contexts.iter_mut().zip(times) {
+        c.time = t;
+    }
+    contexts
+}
+
+/// Each sample's time since the set's first timed sample (seconds; see
+/// [`crate::data::Sample::time`]), `None` for a sample without one.
+pub fn elapsed(data: &Measurements) -> impl Iterator<Item = Option<f64>> + '_ {
+    let first = data.samples.iter().find_map(|s| s.time);
+    data.samples
+        .iter()
+        .map(move |s| s.time.zip(first).map(|(t, f)| t - f))
+}
+
+/// Whether any sample of `data` carries a time.
+pub fn has_times(data: &Measurements) -> bool {
+    data.samples.iter().any(|s| s.time.is_some())
 }
 
 /// [`sequence_contexts`] of a measurement set whose columns are the rows effects index (a
@@ -355,6 +376,7 @@ mod tests {
         let back_and_forth: Vec<SampleContext> = [1.0, -1.0, -1.0, 1.0, -1.0, 1.0]
             .iter()
             .map(|&d| SampleContext {
+                time: None,
                 direction: vec![d],
                 order: 0.0,
             })
@@ -376,6 +398,7 @@ mod tests {
             prismatic: false,
         };
         let ctx = SampleContext {
+            time: None,
             direction: vec![1.0, -1.0],
             order: 0.25,
         };

@@ -135,7 +135,10 @@ pub(super) fn sequence_of(rows_q: &[Arc<[f64]>], data: &Measurements) -> Vec<Sam
 
 /// [`sequence_of`] without the directions of motion (each context's `direction` empty), one
 /// at a time.
-fn orders_of(rows_q: &[Arc<[f64]>], data: &Measurements) -> impl Iterator<Item = SampleContext> {
+fn orders_of<'a>(
+    rows_q: &[Arc<[f64]>],
+    data: &'a Measurements,
+) -> impl Iterator<Item = SampleContext> + 'a {
     let (pose, count) = crate::effects_order::sequence_orders(
         rows_q
             .iter()
@@ -143,7 +146,11 @@ fn orders_of(rows_q: &[Arc<[f64]>], data: &Measurements) -> impl Iterator<Item =
             .zip(data.samples.iter().map(|s| s.config.as_deref())),
     );
     pose.into_iter()
-        .map(move |k| crate::effects_order::order_context(k, count))
+        .zip(crate::effects_order::elapsed(data))
+        .map(move |(k, time)| SampleContext {
+            time,
+            ..crate::effects_order::order_context(k, count)
+        })
 }
 
 /// The places in `data`'s whole sequence `full` ([`sequence_of`]) of the samples `keep`

@@ -359,6 +359,7 @@ pub fn simulate(
                     }
                 });
                 samples.push(Sample {
+                    time: None,
                     orientation: orientation.map(Box::new),
                     session,
                     q: q.as_slice().into(),

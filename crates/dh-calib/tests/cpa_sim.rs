@@ -69,6 +69,7 @@ impl Rig {
             for t in 0..self.targets.len() {
                 let e = Vector3::from_fn(|_, _| noise.sample(&mut rng));
                 samples.push(Sample {
+                    time: None,
                     orientation: None,
                     session: 0,
                     q: q.as_slice().into(),

@@ -159,6 +159,7 @@ fn tree_and_effect_jacobians_match_central_differences() {
             },
             // Every sample at its own place in a sequence (the order effects' columns).
             context: dh_calib::model::SampleContext {
+                time: None,
                 direction: (0..q.len())
                     .map(|k| if (i + k) % 3 == 0 { 1.0 } else { -1.0 })
                     .collect(),
@@ -284,6 +285,7 @@ fn simulate_tree(
         for k in 0..2 {
             let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * sigma);
             samples.push(Sample {
+                time: None,
                 orientation: None,
                 session: 0,
                 q: q.as_slice().into(),

@@ -82,6 +82,7 @@ fn generate(
             cal += 1;
         }
         samples.push(Sample {
+            time: None,
             orientation: None,
             session: 0,
             q: q.as_slice().into(),

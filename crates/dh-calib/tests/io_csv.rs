@@ -57,6 +57,7 @@ fn sample(joints: usize, targets: usize) -> impl Strategy<Value = Sample> {
         split(),
     )
         .prop_map(|(q, target, (x, y, z), sigma, config, split)| Sample {
+            time: None,
             orientation: None,
             session: 0,
             q: q.into(),

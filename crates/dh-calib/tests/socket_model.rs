@@ -165,6 +165,7 @@ fn simulated_panda_contacts_recover_planted_errors_within_three_standard_errors(
                     continue;
                 };
                 samples.push(Sample {
+                    time: None,
                     orientation: None,
                     session: 0,
                     q: q.into(),

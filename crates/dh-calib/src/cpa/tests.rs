@@ -12,6 +12,7 @@ fn set(qs: &[[f64; 2]]) -> Measurements {
             .iter()
             .enumerate()
             .map(|(i, q)| crate::data::Sample {
+                time: None,
                 orientation: None,
                 session: 0,
                 q: q.as_slice().into(),

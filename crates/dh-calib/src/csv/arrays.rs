@@ -336,6 +336,7 @@ impl Measurements {
                 Some(s) => index_of(&mut m.sessions, &s),
             };
             m.samples.push(Sample {
+                time: None,
                 q: q.into(),
                 target,
                 point,

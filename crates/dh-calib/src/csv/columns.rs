@@ -40,6 +40,8 @@ pub(super) struct Columns {
     pub(super) sigma: Sigma,
     pub(super) set: Option<usize>,
     pub(super) session: Option<usize>,
+    /// The `time` column (seconds, any origin), when the file has one.
+    pub(super) time: Option<usize>,
     /// The quaternion columns `qw`, `qx`, `qy`, `qz` and `sigma_rot`, when the file has them.
     pub(super) orientation: Option<OrientationColumns>,
 }
@@ -164,5 +166,6 @@ pub(super) fn header_columns(
         sigma,
         set: find("set"),
         session: find("session"),
+        time: find("time"),
     })
 }

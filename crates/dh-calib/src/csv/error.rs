@@ -285,7 +285,7 @@ pub(super) fn list(items: &[String]) -> String {
 }
 
 /// Columns of the canonical CSV that are not joints: a model's joint may not take these names.
-pub const RESERVED_COLUMNS: [&str; 20] = [
+pub const RESERVED_COLUMNS: [&str; 21] = [
     "x",
     "y",
     "z",
@@ -306,4 +306,5 @@ pub const RESERVED_COLUMNS: [&str; 20] = [
     "qy",
     "qz",
     "sigma_rot",
+    "time",
 ];

@@ -430,7 +430,12 @@ impl RowReader<'_> {
             }),
             None => None,
         };
+        let time = match cols.time.map(cell) {
+            None | Some("") => None,
+            Some(text) => Some(number(text, line, "time")?),
+        };
         Ok(Sample {
+            time,
             orientation: orientation.map(Box::new),
             session,
             q: q.as_slice().into(),

@@ -183,6 +183,7 @@ fn suspicious_units_say_what_to_pass() {
 #[test]
 fn writing_round_trips_exactly() {
     let mk = |q: Vec<f64>, target, point, sigma, config: Option<&str>, split| Sample {
+        time: None,
         orientation: None,
         session: 0,
         q: q.into(),
@@ -231,6 +232,25 @@ fn writing_round_trips_exactly() {
         }
     }
     assert_eq!(back.samples[1].line, 4);
+}
+
+/// The `time` column (seconds, any origin): read as written, an empty cell is no time, the
+/// writer adds the column only when a sample has one, and a non-number names line and column.
+#[test]
+fn time_column_round_trips_and_bad_times_are_named() {
+    let text = "j1,x,y,z,time\n0.1,1,2,3,1700000000.25\n0.2,1,2,3,\n0.3,1,2,3,-5e-3\n";
+    let m = parse_measurements(text, &names(&["j1"]), &CsvOptions::default()).unwrap();
+    let times: Vec<Option<f64>> = m.samples.iter().map(|s| s.time).collect();
+    assert_eq!(times, vec![Some(1_700_000_000.25), None, Some(-5e-3)]);
+    let written = write_measurements(&m);
+    assert!(written.lines().nth(1) == Some("j1,x,y,z,target,time"), "{written}");
+    let back = parse_measurements(&written, &m.joint_names, &CsvOptions::default()).unwrap();
+    let back_times: Vec<Option<f64>> = back.samples.iter().map(|s| s.time).collect();
+    assert_eq!(back_times, times);
+    let untimed = m.filtered(|i, _| i == 1);
+    assert!(!write_measurements(&untimed).contains("time"));
+    let e = err("j1,x,y,z,time\n0.1,1,2,3,noon\n", &["j1"]);
+    assert!(e.contains("line 2") && e.contains("time") && e.contains("noon"), "{e}");
 }
 
 #[test]

@@ -13,7 +13,7 @@ use super::*;
 /// validation; `socket` when any sample is a contact, with `partner,distance,distance_sigma`
 /// when any socket has a partner (contact rows leave `x,y,z` empty); `session` when the set
 /// names sessions; `qw,qx,qy,qz,sigma_rot` when any sample has an orientation (point rows
-/// leave them empty). Targets are written by name, so a target that no sample uses is not kept, and the
+/// leave them empty); `time` (seconds) when any sample has one. Targets are written by name, so a target that no sample uses is not kept, and the
 /// targets come back numbered in order of first use.
 pub fn write_measurements(m: &Measurements) -> String {
     let any_config = m.samples.iter().any(|s| s.config.is_some());
@@ -59,6 +59,10 @@ pub fn write_measurements(m: &Measurements) -> String {
     if any_orientation {
         header.extend(QUATERNION_COLUMNS.map(String::from));
         header.push("sigma_rot".into());
+    }
+    let any_time = m.samples.iter().any(|s| s.time.is_some());
+    if any_time {
+        header.push("time".into());
     }
     out.push_str(&header.join(","));
     out.push('\n');
@@ -123,6 +127,9 @@ pub fn write_measurements(m: &Measurements) -> String {
                 }
                 None => cells.extend((0..5).map(|_| String::new())),
             }
+        }
+        if any_time {
+            cells.push(s.time.map(|t| format!("{t:?}")).unwrap_or_default());
         }
         out.push_str(&cells.join(","));
         out.push('\n');

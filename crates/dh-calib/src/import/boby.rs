@@ -53,6 +53,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         for target in 0..3 {
             let p = &v[3 * target..3 * target + 3];
             samples.push(Sample {
+                time: None,
                 orientation: None,
                 session: 0,
                 q: Arc::clone(&q),

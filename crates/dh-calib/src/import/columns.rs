@@ -353,6 +353,7 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
             });
         }
         m.samples.push(Sample {
+            time: None,
             orientation: orientation.map(Box::new),
             session,
             q: q.into(),

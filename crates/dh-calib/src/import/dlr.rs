@@ -96,6 +96,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         let q: Arc<[f64]> = q.into();
         for (target, p) in xyz.chunks_exact(3).enumerate() {
             samples.push(Sample {
+                time: None,
                 orientation: None,
                 session: 0,
                 q: Arc::clone(&q),

@@ -136,6 +136,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
                     let q = numbers(field(entry, "joint_states", &at)?, joint_names.len(), &at)?;
                     let p = numbers(field(entry, "prism_position", &at)?, 3, &at)?;
                     samples.push(Sample {
+                        time: None,
                         orientation: None,
                         session: 0,
                         q: q.into(),

@@ -106,6 +106,7 @@ pub fn parse(text: &str) -> Result<Measurements, DataError> {
         for (target, xyz) in marker_cols.iter().enumerate() {
             let point = Vector3::new(cell(xyz[0])?, cell(xyz[1])?, cell(xyz[2])?);
             samples.push(Sample {
+                time: None,
                 orientation: None,
                 session: 0,
                 q: Arc::clone(&q),

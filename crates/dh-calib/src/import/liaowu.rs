@@ -120,6 +120,7 @@ fn table(text: &str, name: &str, width: usize) -> Result<Vec<Row>, DataError> {
 fn sample(q: &Row, p: &Row, target: usize, config: String, split: Split) -> Sample {
     let v = &p.values;
     Sample {
+        time: None,
         orientation: None,
         session: 0,
         q: q.values.iter().map(|d| d.to_radians()).collect(),

@@ -90,6 +90,7 @@ pub fn parse(sources: &[Source<'_>]) -> Result<Measurements, DataError> {
             let rows = parse_file(source.text, &mut joints).map_err(|e| in_file(source.name, e))?;
             for (q, line) in rows {
                 samples.push(Sample {
+                    time: None,
                     orientation: None,
                     session: 0,
                     q: q.into(),

@@ -70,6 +70,9 @@ pub struct SampleContext {
     /// The pose's place in the sequence, normalised to `[0, 1]` (0 the first pose, 1 the
     /// last; repeats of one pose share it). Dimensionless.
     pub order: f64,
+    /// The sample's time since the set's first timed sample (seconds), when the samples carry
+    /// a time ([`crate::data::Sample::time`]); `None` otherwise.
+    pub time: Option<f64>,
 }
 
 impl SampleContext {

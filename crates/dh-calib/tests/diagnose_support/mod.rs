@@ -217,6 +217,7 @@ fn simulate_sized(arm: &Arm, label: Option<&str>, given: Option<&[f64]>, seed: u
         let noise = Vector3::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal) * arm.sigma);
         noises.push(noise);
         samples.push(Sample {
+            time: None,
             orientation: None,
             session: 0,
             q: q.as_slice().into(),

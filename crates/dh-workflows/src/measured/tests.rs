@@ -85,6 +85,7 @@ branches:
         ],
         targets: vec!["l".into()],
         samples: vec![dh_calib::data::Sample {
+            time: None,
             orientation: None,
             session: 0,
             q: vec![0.1, 0.2, 0.3, 0.4, 0.5].into(),
