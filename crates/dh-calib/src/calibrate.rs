@@ -65,6 +65,8 @@ pub use pipeline::*;
 mod identify;
 pub(crate) use identify::*;
 mod screen;
+mod shape_start;
+pub(crate) use shape_start::{best_shape, sequence_span, shape_start};
 mod structure;
 mod verdict;
 pub use screen::screen;

@@ -17,9 +17,11 @@
 //! | `backlash:J` | `theta_J += b · tanh(tau_J / tau_0)` | `backlash:J` (rad) |
 //! | `backlash_direction:J` | `theta_J += b · s_J`, `s_J` the sign of `J`'s last motion (`d_J` for a prismatic joint) | `backlash_direction:J` (rad; m) |
 //! | `drift` | device positions `× (1 + c · t)`, `t` the pose's place in the sequence in `[0, 1]` | `drift` (1) |
+//! | `thermal_growth` | robot positions `× (1 + k (1 − exp(−t/tau)))` about the base origin (every `a`, `d`, the tool and target offsets), `t` the sample's time since the set's first (s), or its place in the sequence without times | `thermal_growth.k` (1), `thermal_growth.ln_tau` (ln of tau in s) |
 //!
-//! `backlash_direction` and `drift` depend on the order of the samples, not on the joint values
-//! alone: see [`crate::effects_order`] for `s_J` and `t`.
+//! `backlash_direction`, `drift` and `thermal_growth` depend on the order (or the time) of the
+//! samples, not on the joint values alone: see [`crate::effects_order`] for `s_J` and `t`, and
+//! [`crate::effects_thermal`] for the warm-up.
 //!
 //! `tau_J` is the gravity torque on joint `J` and `tau⊥_J` the one about the axis of its
 //! `alpha` ([`crate::gravity`]), both computed **at the nominal geometry**: the torques of the
@@ -204,7 +206,7 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
         _ => Err(bad_label(
             label,
             format!(
-                "expected one of gear_ratio, gear_harmonic, gear_harmonic2, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash, backlash_direction, drift; found '{kind}'"
+                "expected one of gear_ratio, gear_harmonic, gear_harmonic2, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash, backlash_direction, drift, thermal_growth; found '{kind}'"
             ),
         )),
     }
@@ -248,7 +250,7 @@ pub struct Candidates {
 /// joints); `coupling:J:K` for joints `K` within
 /// two rows of `J` on one chain; per joint `backlash_direction` (the diagnosis holds it inert
 /// where the joint reverses fewer than [`crate::effects_order::MIN_REVERSALS`] times in the
-/// data); `scale`; `drift`; `parallel_tilt`
+/// data); `scale`; `drift`; `thermal_growth`; `parallel_tilt`
 /// for the rows in `tilt_rows`
 /// ([`crate::model::Model::tilt_rows`]). Mimic rows are skipped (their driver's effects cover
 /// them).
@@ -310,6 +312,7 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
     }
     push("scale".into());
     push("drift".into());
+    push(crate::effects_thermal::LABEL.into());
     for &t in tilt_rows {
         // The label names the later joint of the pair.
         let later = (0..rows.len()).find(|&j| tilt_row(&ctx.tree, j) == Some(t));

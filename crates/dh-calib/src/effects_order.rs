@@ -6,6 +6,7 @@
 //! |---|---|---|
 //! | `backlash_direction:J` | `theta_J += b · s_J` (`d_J` for a prismatic joint) | `backlash_direction:J` (rad; m) |
 //! | `drift` | device positions `× (1 + c · t)` | `drift` (1) |
+//! | `thermal_growth` | robot positions `× (1 + k (1 − exp(−t/tau)))` about the base origin, `t` the time (or the order) | `thermal_growth.k` (1), `.ln_tau` (see [`crate::effects_thermal`]) |
 //!
 //! # The sequence
 //! The samples are taken in file order. A **pose** is a run of consecutive samples with one
@@ -25,16 +26,16 @@
 //!   grows linearly from the first pose to the last (a laser tracker whose air compensation
 //!   lags a temperature change). The first pose is the reference (`t = 0`). A linear growth is
 //!   the first term of any smooth drift; an exponential `1 − exp(−t/tau)` would need a time
-//!   constant the sample order cannot give (poses are not equally spaced in time), so it is
-//!   not offered.
+//!   constant the sample order cannot give (poses are not equally spaced in time): it is
+//!   `thermal_growth` ([`crate::effects_thermal`]), which reads the samples' times.
 //!
 //! Outside a sequence (a prediction, a compensation, a synthetic sample) the context is
 //! neutral ([`SampleContext::default`]: `s = 0`, `t = 0`): the model predicts the robot
 //! midway in its backlash and in the state of the session's start.
 //!
 //! Thermal growth of the robot's own links scales positions about its base rather than about
-//! the device; `drift` holds it only together with the device frame's translation, which these
-//! effects do not model in time.
+//! the device; `drift` holds it only together with the device frame's translation, so it is
+//! an effect of its own, `thermal_growth` ([`crate::effects_thermal`]).
 
 use std::sync::Arc;
 
@@ -51,7 +52,7 @@ use crate::model::{Effect, EffectField, SampleContext};
 pub const MIN_DIRECTION_STEP: f64 = 1e-6;
 
 /// The kinds of label this module parses.
-pub const KINDS: [&str; 2] = ["backlash_direction", "drift"];
+pub const KINDS: [&str; 3] = ["backlash_direction", "drift", "thermal_growth"];
 
 /// The context of every sample of a sequence (see the module docs), from each sample's joint
 /// values (one per row, in the order effects index them) and `config`, in sequence order.
@@ -245,6 +246,9 @@ pub(crate) fn parse(
             }) as Arc<dyn Effect>)
         }),
         "drift" => count(0).map(|()| Arc::new(Drift) as Arc<dyn Effect>),
+        crate::effects_thermal::LABEL => count(0).map(|()| {
+            Arc::new(crate::effects_thermal::ThermalGrowth) as Arc<dyn Effect>
+        }),
         _ => return None,
     })
 }

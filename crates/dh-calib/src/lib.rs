@@ -35,6 +35,7 @@ pub mod diagnose;
 mod effect_label;
 pub mod effects;
 pub mod effects_order;
+pub mod effects_thermal;
 pub mod findings;
 pub mod fit;
 pub mod gravity;

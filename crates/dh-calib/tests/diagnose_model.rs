@@ -129,6 +129,7 @@ fn tree_and_effect_jacobians_match_central_differences() {
         "backlash_direction:l2",
         "scale",
         "drift",
+        "thermal_growth",
     ] {
         m.add_effect(parse_label_in(l, &ctx).unwrap()).unwrap();
     }
@@ -159,7 +160,8 @@ fn tree_and_effect_jacobians_match_central_differences() {
             },
             // Every sample at its own place in a sequence (the order effects' columns).
             context: dh_calib::model::SampleContext {
-                time: None,
+                // Seconds, read by the thermal growth (`ln_tau` near 0: tau near 1 s).
+                time: Some(i as f64 * 0.4),
                 direction: (0..q.len())
                     .map(|k| if (i + k) % 3 == 0 { 1.0 } else { -1.0 })
                     .collect(),

@@ -1,8 +1,10 @@
-//! Structure that no library effect of the joint values explains (issue 33 §2, §5), on
-//! simulated data: an arm warming up (every link length growing along an exponential in
-//! time) and a wrist sagging along gravity in proportion to its reach cubed. The verdict's
-//! structure tests must name what is left (time; the gravity lever arm of a joint), and with
-//! nothing planted they must stay quiet. Each run prints its figures (`--nocapture`).
+//! Structure over time and gravity (issue 33 §2, §5), on simulated data: an arm warming up
+//! (every link length growing along an exponential in time) is the library's
+//! `thermal_growth`, fitted with its time constant from the samples' times (or their order);
+//! a length change of another shape in time, and a wrist sagging along gravity in proportion to
+//! its reach cubed, are named by the verdict's structure tests (time; the gravity lever arm of
+//! a joint); with nothing planted, or a warm-up below detectability, nothing is selected or
+//! named. Each run prints its figures (`--nocapture`).
 #![allow(clippy::print_stdout)]
 mod diagnose_support;
 
@@ -40,11 +42,20 @@ fn random_pose(rng: &mut ChaCha8Rng, distance: f64) -> Isometry3<f64> {
 /// `POSES` random poses of `arm` in sequence, `t = k / (POSES − 1) · SESSION` seconds, with
 /// ±1 mm / ±1 mrad geometric errors, a random device frame and target, noise `arm.sigma`
 /// per axis, and `plant(k, t, q, p)`: a displacement (metres, robot base frame) of the target
-/// at `p` (base frame) in pose `k` at time `t`. The samples carry no clock: their order is
-/// their time.
+/// at `p` (base frame) in pose `k` at time `t`. The samples carry no clock (their order is
+/// their time) unless `clock`: then each carries `t` plus an origin of 1 h (seconds).
 fn generate(
     arm: &Arm,
     seed: u64,
+    plant: impl Fn(usize, f64, &[f64], Vector3<f64>) -> Vector3<f64>,
+) -> Planted {
+    generate_timed(arm, seed, false, plant)
+}
+
+fn generate_timed(
+    arm: &Arm,
+    seed: u64,
+    clock: bool,
     plant: impl Fn(usize, f64, &[f64], Vector3<f64>) -> Vector3<f64>,
 ) -> Planted {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -82,7 +93,7 @@ fn generate(
             cal += 1;
         }
         samples.push(Sample {
-            time: None,
+            time: clock.then_some(3600.0 + t),
             orientation: None,
             session: 0,
             q: q.as_slice().into(),
@@ -155,7 +166,14 @@ fn describe(r: &Report) -> String {
 
 /// Link lengths growing by `k (1 − exp(−t/τ))`: the target's base-frame position scales so.
 fn warm_up(arm: &Arm, k: f64, tau: f64, seed: u64) -> Planted {
-    generate(arm, seed, |_, t, _, p| p * (k * (1.0 - (-t / tau).exp())))
+    warm_up_timed(arm, k, tau, seed, false)
+}
+
+/// [`warm_up`], its samples carrying their time when `clock`.
+fn warm_up_timed(arm: &Arm, k: f64, tau: f64, seed: u64, clock: bool) -> Planted {
+    generate_timed(arm, seed, clock, |_, t, _, p| {
+        p * (k * (1.0 - (-t / tau).exp()))
+    })
 }
 
 /// A tracker's noise (25 um per axis), where a 60 ppm warm-up leaves the geometric model
@@ -167,13 +185,115 @@ fn tracked() -> Arm {
     }
 }
 
-/// A warm-up of 60 ppm with a time constant of 20 min over 2 h, sampled in time order: the
-/// verdict must name the structure against time (today's code: "residual remains: 1.5 x the
-/// floor", "no structure against the joints or the pose order that the tests resolve").
+/// The estimate and standard error of parameter `name` in `r`.
+fn estimate(r: &Report, name: &str) -> (f64, f64) {
+    let p = r
+        .parameters
+        .iter()
+        .find(|p| p.name == name)
+        .unwrap_or_else(|| panic!("no parameter {name}"));
+    (p.estimate, p.std_error.unwrap_or(f64::NAN))
+}
+
+/// A warm-up of 60 ppm with a time constant of 20 min over 2 h whose samples carry their time
+/// (a `time` column): the library's `thermal_growth` is selected, its `k` and `tau` come back
+/// within three standard errors (this set's `k` is 2.2 of them off: see the next test for the
+/// bias over sets) and each well resolved, the model is complete and no pose is left out
+/// (before it, the code ended "residual remains: 1.15 x the floor" with 4 clean poses left
+/// out).
 #[test]
-fn a_warm_up_shows_as_structure_against_time() {
+fn a_timed_warm_up_is_fitted_as_thermal_growth() {
     let arm = tracked();
-    let set = warm_up(&arm, 60e-6, 1200.0, 3301);
+    let set = warm_up_timed(&arm, 60e-6, 1200.0, 3301, true);
+    let r = run(&arm, &set.data);
+    let (k, k_se) = estimate(&r, "thermal_growth.k");
+    let (ln_tau, ln_tau_se) = estimate(&r, "thermal_growth.ln_tau");
+    let info = format!(
+        "planted {:.1} um: k {:.2} +- {:.2} ppm, tau {:.0} s (ln {ln_tau:.3} +- {ln_tau_se:.3}): {}",
+        set.displacement * 1e6,
+        k * 1e6,
+        k_se * 1e6,
+        ln_tau.exp(),
+        describe(&r)
+    );
+    println!("{info}");
+    assert_eq!(r.selected_effects, vec!["thermal_growth".to_string()], "{info}");
+    assert!((k - 60e-6).abs() < 3.0 * k_se && k_se < 6e-6, "{info}");
+    assert!(
+        (ln_tau - 1200f64.ln()).abs() < 3.0 * ln_tau_se && ln_tau_se < 0.25,
+        "{info}"
+    );
+    assert_eq!(r.verdict.summary, "model complete", "{info}");
+    assert_eq!(r.outliers.as_ref().map(|o| o.outliers.len()), Some(0), "{info}");
+    assert!(r.verdict.structure.iter().all(|s| !s.significant), "{info}");
+    assert!(!r.notes.iter().any(|n| n.contains("no `time` column")), "{info}");
+}
+
+/// Eight timed warm-ups (new seeds): each is selected and complete, and the estimates are
+/// unbiased with honest standard errors: the mean of `(estimate − truth) / std_error` over the
+/// eight is within two of its own standard errors (`1/√8`) of 0, each within 3.
+#[test]
+fn thermal_growth_estimates_are_unbiased_over_sets() {
+    let arm = tracked();
+    let (mut zk, mut zt) = (Vec::new(), Vec::new());
+    for seed in 3310..3318 {
+        let set = warm_up_timed(&arm, 60e-6, 1200.0, seed, true);
+        let r = run(&arm, &set.data);
+        assert_eq!(r.selected_effects, vec!["thermal_growth".to_string()], "seed {seed}");
+        assert_eq!(r.verdict.summary, "model complete", "seed {seed}");
+        let (k, k_se) = estimate(&r, "thermal_growth.k");
+        let (ln_tau, ln_tau_se) = estimate(&r, "thermal_growth.ln_tau");
+        zk.push((k - 60e-6) / k_se);
+        zt.push((ln_tau - 1200f64.ln()) / ln_tau_se);
+    }
+    println!("z of k {zk:.2?}; z of ln tau {zt:.2?}");
+    for z in [&zk, &zt] {
+        let mean = z.iter().sum::<f64>() / z.len() as f64;
+        assert!(mean.abs() < 2.0 / (z.len() as f64).sqrt(), "{zk:?} {zt:?}");
+        assert!(z.iter().all(|v| v.abs() < 3.0), "{zk:?} {zt:?}");
+    }
+}
+
+/// The same warm-up without a clock: `t` is the pose order in `[0, 1]` (the poses are evenly
+/// spaced in time here), so `tau` comes back as a fraction of the session (1/6) and a note
+/// says what `t` was.
+#[test]
+fn an_untimed_warm_up_is_fitted_against_the_pose_order_and_says_so() {
+    let arm = tracked();
+    let set = warm_up_timed(&arm, 60e-6, 1200.0, 3301, false);
+    let r = run(&arm, &set.data);
+    let (k, k_se) = estimate(&r, "thermal_growth.k");
+    let (ln_tau, ln_tau_se) = estimate(&r, "thermal_growth.ln_tau");
+    let info = format!(
+        "k {:.2} +- {:.2} ppm, tau {:.4} (ln {ln_tau:.3} +- {ln_tau_se:.3}): {}; notes {:?}",
+        k * 1e6,
+        k_se * 1e6,
+        ln_tau.exp(),
+        describe(&r),
+        r.notes
+    );
+    println!("{info}");
+    assert_eq!(r.selected_effects, vec!["thermal_growth".to_string()], "{info}");
+    assert!((ln_tau - (1.0f64 / 6.0).ln()).abs() < 3.0 * ln_tau_se, "{info}");
+    assert!((k - 60e-6).abs() < 3.0 * k_se, "{info}");
+    assert_eq!(r.verdict.summary, "model complete", "{info}");
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.starts_with("thermal_growth: the samples carry no time")),
+        "{info}"
+    );
+}
+
+/// A robot length that grows and shrinks back over the session (half a sine in time, 60 ppm
+/// at its peak): no library effect has that shape, so the verdict names the structure against
+/// time.
+#[test]
+fn a_length_change_no_effect_has_shows_as_structure_against_time() {
+    let arm = tracked();
+    let set = generate(&arm, 3305, |_, t, _, p| {
+        p * (60e-6 * (std::f64::consts::PI * t / SESSION).sin())
+    });
     let r = run(&arm, &set.data);
     let info = format!("planted {:.1} um: {}", set.displacement * 1e6, describe(&r));
     println!("{info}");
@@ -184,7 +304,6 @@ fn a_warm_up_shows_as_structure_against_time() {
         .find(|s| s.variable == "time")
         .unwrap_or_else(|| panic!("no time test: {info}"));
     assert!(time.significant, "{info}");
-    assert!(time.p_value < 1e-6, "{info}");
     assert!(
         r.verdict
             .notes
@@ -273,3 +392,4 @@ fn nothing_planted_names_no_structure() {
         "{info}"
     );
 }
+

@@ -56,9 +56,11 @@ pub fn calibrate_tree(
     let mut last = last.outcome;
     if !options.effects.is_empty() {
         let all: Vec<usize> = (0..session.model.parameter_count()).collect();
-        let (free, fixed2) = session.identify(&last.x, &all)?;
+        // Effects with a shape (a time constant) start from a grid over it.
+        let start = shape_start(&session, &last.x, &all)?;
+        let (free, fixed2) = session.identify(&start, &all)?;
         fixed = fixed2;
-        let mut step = session.step("effects", &last.x, &free, steps.last())?;
+        let mut step = session.step("effects", &start, &free, steps.last())?;
         step.report.fixed = session.named_geometric(&fixed);
         last = step.outcome;
         steps.push(step.report);

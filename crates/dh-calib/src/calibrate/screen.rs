@@ -167,9 +167,9 @@ pub(crate) fn screen_from(
                     (geo.last.outcome.x, geo.free.len(), geo.last.report.rms)
                 } else {
                     let all: Vec<usize> = (0..session.model.parameter_count()).collect();
-                    let (free, _) = session.identify(&geo.last.outcome.x, &all)?;
-                    let step =
-                        session.step("effects", &geo.last.outcome.x, &free, geo.steps.last())?;
+                    let start = super::shape_start(&session, &geo.last.outcome.x, &all)?;
+                    let (free, _) = session.identify(&start, &all)?;
+                    let step = session.step("effects", &start, &free, geo.steps.last())?;
                     (step.outcome.x, free.len(), step.report.rms)
                 };
                 own = session;

@@ -8,7 +8,7 @@ use super::*;
 use crate::calibrate::HeldOut;
 
 /// The scaled Jacobian, the residuals and the first row of each observation.
-pub(super) type Dense = (DMatrix<f64>, DVector<f64>, Vec<usize>);
+pub(crate) type Dense = (DMatrix<f64>, DVector<f64>, Vec<usize>);
 
 /// Stacks the scaled Jacobian of `columns` and the residuals of `obs` at `x`; returns them
 /// with the first row of each observation (the rows made on the machine's cores,
@@ -16,7 +16,7 @@ pub(super) type Dense = (DMatrix<f64>, DVector<f64>, Vec<usize>);
 ///
 /// # Errors
 /// [`CalibError::NonFinite`] when a worker thread lost its result.
-pub(super) fn dense(
+pub(crate) fn dense(
     model: &Model,
     obs: &[Observed],
     x: &[f64],
@@ -51,7 +51,7 @@ pub(super) fn dense(
 }
 
 /// Least squares of `r + J_F δ_F + C δ_C` on a subset of rows, through the QR of `J_F`.
-pub(super) struct Projector {
+pub(crate) struct Projector {
     pub(super) q: DMatrix<f64>,
     pub(super) r: DMatrix<f64>,
     pub(super) qtr: DVector<f64>,
@@ -63,7 +63,7 @@ pub(super) struct Projector {
 }
 
 impl Projector {
-    pub(super) fn new(jf: &DMatrix<f64>, res: &DVector<f64>, rows: Vec<usize>) -> Projector {
+    pub(crate) fn new(jf: &DMatrix<f64>, res: &DVector<f64>, rows: Vec<usize>) -> Projector {
         let sub = jf.select_rows(rows.iter());
         let rr = res.select_rows(rows.iter());
         let (q, r) = if sub.ncols() == 0 {
@@ -87,7 +87,7 @@ impl Projector {
 
     /// `(δ_F, δ_C, reduction, independence)` for candidate columns `c` (all rows);
     /// independence is NaN when the columns are zero.
-    pub(super) fn solve(&self, c: &DMatrix<f64>) -> (DVector<f64>, DVector<f64>, f64, f64) {
+    pub(crate) fn solve(&self, c: &DMatrix<f64>) -> (DVector<f64>, DVector<f64>, f64, f64) {
         let selected;
         let cs = if self.all {
             c
@@ -169,26 +169,59 @@ pub(super) fn score(
 ) -> Result<Scored, CalibError> {
     let model = &session.model;
     let effects = model.effects();
+    let p = free.len();
+    let prep = &session.prep;
+    let non_finite = || CalibError::NonFinite {
+        what: "candidate scoring".into(),
+    };
+    let (jf, r, starts) = dense(model, &prep.cal, x, free, &session.scales)?;
+    if jf.iter().chain(r.iter()).any(|v| !v.is_finite()) {
+        return Err(non_finite());
+    }
+    let all_rows: Vec<usize> = (0..r.len()).collect();
+    let full = Projector::new(&jf, &r, all_rows);
+    // A candidate with a shape grid (a time constant) is scored by its amplitude's column at
+    // the grid's best shape, set in `at` (its amplitude is 0 there, so nothing else moves);
+    // it still counts all its parameters.
+    let span = crate::calibrate::sequence_span(&prep.cal);
+    let mut at = x.to_vec();
     let mut columns = free.to_vec();
     let mut spans = Vec::with_capacity(remaining.len());
     for &e in remaining {
         let start = columns.len();
-        if let Some((_, range)) = effects.get(e) {
-            columns.extend(range.clone());
+        if let Some((effect, range)) = effects.get(e) {
+            let grid = effect.shape_grid(span);
+            if grid.is_empty() || range.len() < 2 {
+                columns.extend(range.clone());
+            } else {
+                let solve = |c: &DMatrix<f64>| {
+                    let (_, dc, reduction, _) = full.solve(c);
+                    (dc.get(0).copied().unwrap_or(0.0), reduction)
+                };
+                let best = crate::calibrate::best_shape(
+                    model,
+                    &prep.cal,
+                    x,
+                    range,
+                    (&grid, &session.scales),
+                    &solve,
+                )?;
+                if let Some(b) = best {
+                    at[range.start + 1] = b.shape;
+                }
+                columns.push(range.start);
+            }
         }
         spans.push(start..columns.len());
     }
-    let p = free.len();
-    let prep = &session.prep;
-    let (j, r, starts) = dense(model, &prep.cal, x, &columns, &session.scales)?;
-    if j.iter().chain(r.iter()).any(|v| !v.is_finite()) {
-        return Err(CalibError::NonFinite {
-            what: "candidate scoring".into(),
-        });
+    let x = &at[..];
+    let (jc, _, _) = dense(model, &prep.cal, x, &columns[p..], &session.scales)?;
+    if jc.iter().any(|v| !v.is_finite()) {
+        return Err(non_finite());
     }
-    let jf = j.columns(0, p).into_owned();
-    let all_rows: Vec<usize> = (0..r.len()).collect();
-    let full = Projector::new(&jf, &r, all_rows);
+    let mut j = DMatrix::zeros(r.len(), columns.len());
+    j.columns_mut(0, p).copy_from(&jf);
+    j.columns_mut(p, columns.len() - p).copy_from(&jc);
     // Held-out predictions, linearised.
     enum Held {
         Split {
@@ -318,7 +351,9 @@ pub(super) fn score(
             e,
             CandidateReport {
                 label,
-                parameters: span.len(),
+                parameters: effects
+                    .get(e)
+                    .map_or(span.len(), |(eff, _)| eff.parameter_names().len()),
                 score: if aliased || inert { 0.0 } else { reduction },
                 independence: if inert { 0.0 } else { independence },
                 val_rms,

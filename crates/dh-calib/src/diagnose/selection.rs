@@ -373,8 +373,10 @@ fn diagnose_judged(
                     .unwrap_or_default();
                 let mut columns = free.clone();
                 columns.extend(&cols);
+                // An effect with a shape (a time constant) starts from a grid over it.
+                let start = crate::calibrate::shape_start(&session, &last.x, &columns)?;
                 let (trial_free, trial_fixed, factor) =
-                    session.identify_factored(&last.x, &columns)?;
+                    session.identify_factored(&start, &columns)?;
                 if cols.iter().any(|c| !trial_free.contains(c)) {
                     let trial = Trial {
                         label,
@@ -393,7 +395,7 @@ fn diagnose_judged(
                 // The identifiability's factor is the fit's first when every column is free.
                 let step = session.step_from(
                     &format!("+{label}"),
-                    &last.x,
+                    &start,
                     &trial_free,
                     steps.last(),
                     Folds::OneStep,
@@ -635,6 +637,9 @@ fn diagnose_judged(
             s.variable, s.statistic, s.p_value
         ));
     }
+    if let Some(note) = time_note(data, &report.selected_effects) {
+        notes.push(note);
+    }
     crate::calibrate::attach_outliers(&mut report, scan);
     report.candidates = first_table;
     // The report's notes carry the diagnosis's findings too, for readers of the report alone.
@@ -655,4 +660,19 @@ fn diagnose_judged(
         notes,
     });
     Ok(Judgement::Final(Box::new(report), confirmed, effects))
+}
+
+/// The note that a selected effect of time read the pose order because the samples carry no
+/// time (its time constant is then a fraction of the session, poses taken as evenly spaced).
+fn time_note(data: &Measurements, selected: &[String]) -> Option<String> {
+    let timed = selected
+        .iter()
+        .any(|l| l == crate::effects_thermal::LABEL);
+    (timed && !crate::effects_order::has_times(data)).then(|| {
+        format!(
+            "{}: the samples carry no time (no `time` column), so t is the pose order in [0, 1] \
+             and tau a fraction of the session (poses taken as evenly spaced in time)",
+            crate::effects_thermal::LABEL
+        )
+    })
 }

@@ -303,7 +303,7 @@ impl Model {
                 reason: "expected each effect once, found it twice".into(),
             });
         }
-        let op = if effect.field() == EffectField::Scale {
+        let op = if matches!(effect.field(), EffectField::Scale | EffectField::Growth) {
             None
         } else {
             let row =
@@ -334,7 +334,7 @@ impl Model {
                         })
                     }
                 },
-                EffectField::Scale => ops.theta,
+                EffectField::Scale | EffectField::Growth => ops.theta,
             })
         };
         let e = self.effects.len();

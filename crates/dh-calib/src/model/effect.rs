@@ -26,6 +26,11 @@ pub enum EffectField {
     /// The measuring device's length scale: modelled positions are multiplied by `1 + delta`.
     /// The effect's [`Effect::joint`] is ignored.
     Scale,
+    /// The robot's length scale: every position in the robot's base link frame (each `a` and
+    /// `d` of the table, the base and tool offsets, the targets' offsets, prismatic travel
+    /// included) is multiplied by `1 + delta`, about the base link's origin; the device frame
+    /// is not scaled. The effect's [`Effect::joint`] is ignored.
+    Growth,
 }
 
 /// A non-geometric error source: a change of one row's `theta`, `d`, `alpha` or tilt, or of the
@@ -82,6 +87,17 @@ pub trait Effect: fmt::Debug + Send + Sync {
     /// again from joint values alone.
     fn gravity_model(&self) -> Option<&std::sync::Arc<crate::gravity::GravityModel>> {
         None
+    }
+    /// For an effect whose later parameters act only through its first (an amplitude times a
+    /// shape with a time constant, so that at amplitude 0 the shape is not identifiable):
+    /// the values of the second parameter to try, in its own unit, before a fit starts from
+    /// amplitude 0 ([`crate::calibrate`] fits the amplitude at each, linearly, and starts the
+    /// joint fit from the best). `span` is the sequence's extent in the unit the effect reads
+    /// (seconds of [`SampleContext::time`], or 1 for the pose order). Empty (the default): the
+    /// effect is linear in its parameters and starts at 0.
+    fn shape_grid(&self, span: f64) -> Vec<f64> {
+        let _ = span;
+        Vec::new()
     }
 }
 

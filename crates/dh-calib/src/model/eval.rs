@@ -7,7 +7,7 @@ use nalgebra::{Isometry3, Vector3};
 
 use super::ops::{Frame, DEVICE_OPS};
 use super::prepared::DEVICE_BLOCK;
-use super::{Block, Field, Model, SampleContext};
+use super::{Block, EffectField, Field, Model, SampleContext};
 use crate::tree::{Branch, DhTree};
 
 impl Model {
@@ -31,15 +31,61 @@ impl Model {
     /// `1 + Σ s` of the device scale effects at `x`, `q` and `ctx` (1 without one): the
     /// scale effects add (a constant `scale` and a `drift` in time together).
     pub(super) fn scale_factor(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
+        self.factor_of(EffectField::Scale, x, q, ctx)
+    }
+
+    /// `1 + Σ g` of the robot growth effects at `x`, `q` and `ctx` (1 without one): what
+    /// multiplies the robot's positions about its base origin (see the module docs).
+    pub(super) fn growth_factor(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
+        self.factor_of(EffectField::Growth, x, q, ctx)
+    }
+
+    /// Whether the model has a robot growth effect.
+    pub(super) fn has_growth(&self) -> bool {
+        self.effects
+            .iter()
+            .any(|s| s.effect.field() == EffectField::Growth)
+    }
+
+    fn factor_of(&self, field: EffectField, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
         1.0 + self
             .effects
             .iter()
-            .filter(|s| s.op.is_none())
+            .filter(|s| s.op.is_none() && s.effect.field() == field)
             .map(|slot| {
                 let params = x.get(slot.params.clone()).unwrap_or(&[]);
                 slot.effect.delta_in(q, ctx, params)
             })
             .sum::<f64>()
+    }
+
+    /// The base link's origin in the device frame of `session` (metres), chain `chain`'s
+    /// device ops at `x` (they depend on `x` alone).
+    pub(super) fn base_origin(&self, x: &[f64], chain: usize, session: usize) -> Vector3<f64> {
+        let mut f = Frame::IDENTITY;
+        for &i in self.session_ops(chain, session).iter().take(DEVICE_OPS) {
+            let o = &self.ops[i];
+            let v = o.value + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0);
+            f.apply(o.kind, v, &o.fixed);
+        }
+        f.t
+    }
+
+    /// A position `p` of chain `chain` in `session`'s device frame, grown by the robot growth
+    /// effects about the base origin (`p` itself without them).
+    fn grown(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        ctx: &SampleContext,
+        (chain, session): (usize, usize),
+        p: Vector3<f64>,
+    ) -> Vector3<f64> {
+        if !self.has_growth() {
+            return p;
+        }
+        let o = self.base_origin(x, chain, session);
+        o + (p - o) * self.growth_factor(x, q, ctx)
     }
 
     /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before
@@ -91,7 +137,7 @@ impl Model {
     pub fn tip_in(&self, x: &[f64], q: &[f64], chain: usize, session: usize) -> Isometry3<f64> {
         let ctx = SampleContext::default();
         let mut f = self.with_prepared(x, chain, session, |p| p.frame(self, x, q, &ctx, None));
-        f.t *= self.scale_factor(x, q, &ctx);
+        f.t = self.grown(x, q, &ctx, (chain, session), f.t) * self.scale_factor(x, q, &ctx);
         f.to_iso()
     }
 
@@ -114,7 +160,8 @@ impl Model {
         // The device block's chain, whatever the session (see `prepared::DEVICE_BLOCK`).
         let chain = self.target_chain(target);
         let f = self.with_prepared(x, chain, DEVICE_BLOCK, |p| p.frame(self, x, q, ctx, None));
-        (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, ctx)
+        let p = f.t + f.r * self.target_at(x, target);
+        self.grown(x, q, ctx, (chain, DEVICE_BLOCK), p) * self.scale_factor(x, q, ctx)
     }
 
     /// `1 + s` of the device scale effects at `x` and `q` in the neutral context (1 without
@@ -146,7 +193,7 @@ impl Model {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, q, ctx, &mut v);
         let mut f = self.chain(&v, None, self.chain_ops(chain));
-        f.t *= self.scale_factor(x, q, ctx);
+        f.t = self.grown(x, q, ctx, (chain, DEVICE_BLOCK), f.t) * self.scale_factor(x, q, ctx);
         f.to_iso()
     }
 
@@ -172,8 +219,10 @@ impl Model {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, q, ctx, &mut v);
         let ops = self.chain_ops(chain);
-        self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]))
-            .to_iso()
+        let mut f = self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]));
+        // In the base link frame the growth's origin is the frame's own.
+        f.t *= self.growth_factor(x, q, ctx);
+        f.to_iso()
     }
 
     /// The calibrated table at `x`: nominal values plus errors, base and tool with their small

@@ -21,7 +21,20 @@ impl Model {
             p.frame(self, x, &obs.q, &obs.context, None)
         });
         let s = self.scale_factor(x, &obs.q, &obs.context);
-        self.write_residuals(x, &f, s, obs, out);
+        let growth = self.growth_of(x, obs, chain);
+        self.write_residuals(x, &f, (s, growth), obs, out);
+    }
+
+    /// The robot growth of an observation on `chain`: its factor `1 + Σ g` and the base
+    /// origin it scales about, in the device frame of the observation's session; `None`
+    /// without a growth effect.
+    fn growth_of(&self, x: &[f64], obs: &Observed, chain: usize) -> Option<(f64, Vector3<f64>)> {
+        self.has_growth().then(|| {
+            (
+                self.growth_factor(x, &obs.q, &obs.context),
+                self.base_origin(x, chain, obs.session),
+            )
+        })
     }
 
     fn observation_chain(&self, obs: &Observed) -> usize {
@@ -37,19 +50,23 @@ impl Model {
         &self,
         x: &[f64],
         f: &Frame,
-        scale: f64,
+        (scale, growth): (f64, Option<(f64, Vector3<f64>)>),
         obs: &Observed,
         out: &mut [f64],
     ) -> Vector3<f64> {
+        let grow = |p: Vector3<f64>| match growth {
+            Some((g, o)) => o + (p - o) * g,
+            None => p,
+        };
         match &obs.observation {
             Observation::Point { target, point } => {
-                let p = (f.t + f.r * self.target_at(x, *target)) * scale;
+                let p = grow(f.t + f.r * self.target_at(x, *target)) * scale;
                 let r = p - point;
                 out[..3].copy_from_slice(r.as_slice());
                 Vector3::zeros()
             }
             Observation::Pose(m) => {
-                let r = f.t * scale - m.translation.vector;
+                let r = grow(f.t) * scale - m.translation.vector;
                 out[..3].copy_from_slice(r.as_slice());
                 orientation_residual(&f.r, m, self.orientation_scale, out)
             }
@@ -58,7 +75,7 @@ impl Model {
                 pose,
                 weight,
             } => {
-                let p = (f.t + f.r * self.target_at(x, *target)) * scale;
+                let p = grow(f.t + f.r * self.target_at(x, *target)) * scale;
                 let r = p - pose.translation.vector;
                 out[..3].copy_from_slice(r.as_slice());
                 let (rk, _) = self.target_rotation_axes(x, *target);
@@ -133,7 +150,9 @@ impl Model {
     ) {
         let f = prepared.frame(self, x, &obs.q, &obs.context, Some(starts));
         let scale = self.scale_factor(x, &obs.q, &obs.context);
-        let phi = self.write_residuals(x, &f, scale, obs, residuals);
+        let chain = self.observation_chain(obs);
+        let growth = self.growth_of(x, obs, chain);
+        let phi = self.write_residuals(x, &f, (scale, growth), obs, residuals);
         let (point, target, weight) = match &obs.observation {
             Observation::Point { target, .. } => {
                 (f.t + f.r * self.target_at(x, *target), Some(*target), None)
@@ -152,6 +171,20 @@ impl Model {
         };
         // The target's orientation axes in the device frame (zero for a point target).
         let target_axes = target.map(|t| self.target_rotation_axes(x, t).1.map(|a| f.r * a));
+        // With a robot growth `G` about the base origin `o`: the grown point, the factor, and
+        // the device ops (which move the grown robot rigidly; every other op moves a point of
+        // the robot, so its motion grows by `G`).
+        let (g_factor, origin) = growth.unwrap_or((1.0, Vector3::zeros()));
+        let grown = match growth {
+            Some((g, o)) => o + (point - o) * g,
+            None => point,
+        };
+        let device_ops: &[usize] = if growth.is_some() {
+            let ops = self.session_ops(chain, obs.session);
+            &ops[..ops.len().min(super::ops::DEVICE_OPS)]
+        } else {
+            &[]
+        };
         let nc = columns.len();
         let rows = obs.observation.residual_count();
         for (k, &c) in columns.iter().enumerate() {
@@ -164,12 +197,17 @@ impl Model {
                 };
                 // The frame before op `o`: the start of its step times its place in the step.
                 let start = &starts[place.step];
+                let (moved, grows) = if device_ops.contains(&o) {
+                    (grown, 1.0)
+                } else {
+                    (point, g_factor)
+                };
                 match self.ops[o].kind {
-                    OpKind::Trans(_) => *dp += (start.r * place.axis) * g,
+                    OpKind::Trans(_) => *dp += (start.r * place.axis) * (g * grows),
                     OpKind::Rot(_) => {
                         let w = start.r * place.axis;
                         let origin = start.t + start.r * place.origin;
-                        *dp += w.cross(&(point - origin)) * g;
+                        *dp += w.cross(&(moved - origin)) * (g * grows);
                         *dw += w * g;
                     }
                     OpKind::Fixed => {}
@@ -177,9 +215,9 @@ impl Model {
             };
             match self.parameters.get(c).map(|p| p.block) {
                 Some(Block::Target(t)) if target == Some(t) => match self.parameters[c].field {
-                    Field::X => dp = f.r.column(0).into_owned(),
-                    Field::Y => dp = f.r.column(1).into_owned(),
-                    Field::Z => dp = f.r.column(2).into_owned(),
+                    Field::X => dp = f.r.column(0) * g_factor,
+                    Field::Y => dp = f.r.column(1) * g_factor,
+                    Field::Z => dp = f.r.column(2) * g_factor,
                     // An orientation turns the target's frame about its origin: the position
                     // stays, the orientation moves about the axis.
                     field => {
@@ -202,8 +240,12 @@ impl Model {
                     let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
                     match slot.op {
                         Some(op) => op_motion(op, g, &mut dp, &mut dw),
+                        // Robot growth: the position from the base origin, ungrown.
+                        None if slot.effect.field() == super::EffectField::Growth => {
+                            dp = (point - origin) * g;
+                        }
                         // Device scale: the unscaled position, undoing the factor below.
-                        None if scale != 0.0 => dp = point * (g / scale),
+                        None if scale != 0.0 => dp = grown * (g / scale),
                         None => {}
                     }
                 }

@@ -45,6 +45,13 @@
 //! unit is off. Several such effects add: the factor is `1 + Σ delta` (a constant `scale` and a
 //! `drift` in time together).
 //!
+//! # Robot growth
+//! An [`Effect`] whose field is [`EffectField::Growth`] scales the robot instead: a modelled
+//! position `p` (device frame) becomes `o + (1 + Σ delta) (p − o)`, `o` the base link's origin
+//! in the device frame (of the sample's session), before the device scale applies. A robot whose
+//! links all lengthen (a warm-up) is this; a device scale is not, unless the device sits at the
+//! robot's base.
+//!
 //! # Sample order
 //! Every [`Observed`] carries a [`SampleContext`]: the direction of each joint's last motion
 //! and the pose's place in the measurement sequence. Effects of the joint values alone ignore
