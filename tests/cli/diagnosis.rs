@@ -157,3 +157,22 @@ fn auto_names_a_drift_of_the_lengths_in_time() {
     let z = recovered(&report, "drift", 3e-5);
     assert!(z.abs() < 4.0, "drift {z:.2} standard errors off");
 }
+
+/// A warm-up planted by `simulate` (60 ppm, tau 1200 s: `ln_tau` 7.09): the CSV carries the
+/// times (poses 30 s apart), `--effects auto` selects `thermal_growth` with its time constant,
+/// and the sheet `--out` wrote carries it and reads back (its proof passed).
+#[test]
+fn auto_names_a_warm_up_of_the_robot_in_time() {
+    let (report, text) = auto_on_planted("thermal_growth=6e-5,7.09", "13");
+    assert_eq!(
+        report["selected_effects"],
+        serde_json::json!(["thermal_growth"]),
+        "{text}"
+    );
+    assert_eq!(report["verdict"]["summary"], "model complete", "{text}");
+    let z = recovered(&report, "thermal_growth.k", 6e-5);
+    assert!(z.abs() < 3.0, "k {z:.2} standard errors off");
+    let z = recovered(&report, "thermal_growth.ln_tau", 7.09);
+    assert!(z.abs() < 3.0, "ln tau {z:.2} standard errors off");
+    assert!(!text.contains("no `time` column"), "{text}");
+}

@@ -102,6 +102,9 @@ impl Effect for ThermalGrowth {
     fn uses_sequence(&self) -> bool {
         true
     }
+    fn uses_time(&self) -> bool {
+        true
+    }
     fn delta_in(&self, _q: &[f64], context: &SampleContext, params: &[f64]) -> f64 {
         let k = params.first().copied().unwrap_or(0.0);
         let ln_tau = params.get(1).copied().unwrap_or(0.0);
@@ -118,7 +121,10 @@ impl Effect for ThermalGrowth {
     }
     fn scales(&self, length: f64) -> Vec<f64> {
         // `x e^{-x}` peaks at 1/e: the most a unit of `ln tau` moves a point per unit of `k`.
-        vec![length, length * TYPICAL_GROWTH.recip() * std::f64::consts::E.recip()]
+        vec![
+            length,
+            length * TYPICAL_GROWTH.recip() * std::f64::consts::E.recip(),
+        ]
     }
     fn units(&self) -> Vec<String> {
         vec!["1".into(), "ln s".into()]
@@ -172,7 +178,10 @@ mod tests {
                 a[i] += h;
                 b[i] -= h;
                 let fd = (e.delta_in(&[], &at(t), &a) - e.delta_in(&[], &at(t), &b)) / (2.0 * h);
-                assert!((g[i] - fd).abs() <= 1e-7 * fd.abs().max(1e-12), "t {t} {i}: {g:?} {fd}");
+                assert!(
+                    (g[i] - fd).abs() <= 1e-7 * fd.abs().max(1e-12),
+                    "t {t} {i}: {g:?} {fd}"
+                );
             }
         }
         // Far time constants give finite values: a step, and no growth.

@@ -94,6 +94,9 @@ pub struct JointRow {
     pub session: Option<String>,
     /// Values in metres and radians, one per requested column, in the requested order.
     pub q: Vec<f64>,
+    /// The `time` cell (seconds, any origin), when the file has that column and the cell is
+    /// not empty: what effects of time (`thermal_growth`) read.
+    pub time: Option<f64>,
 }
 
 /// Reads a joint-value file (see the module docs): the columns `joints`, in that order,
@@ -144,6 +147,7 @@ pub fn parse_joint_values(
     let config = find("config");
     let target = find("target");
     let session = find("session");
+    let time = find("time");
     let mut out = Vec::new();
     for record in records {
         let record = record?;
@@ -204,12 +208,17 @@ pub fn parse_joint_values(
         let config = name(config, "config")?;
         let target = name(target, "target")?;
         let session = name(session, "session")?;
+        let time = match time.map(|c| record.fields[c].as_str()) {
+            None | Some("") => None,
+            Some(text) => Some(number(text, line, "time")?),
+        };
         out.push(JointRow {
             line,
             config,
             target,
             session,
             q,
+            time,
         });
     }
     Ok(out)
@@ -263,6 +272,7 @@ pub fn joint_rows(arrays: &SampleArrays, opts: &CsvOptions) -> Result<Vec<JointR
             target: name(&arrays.target, "target")?,
             session: name(&arrays.session, "session")?,
             q,
+            time: None,
         });
     }
     Ok(out)

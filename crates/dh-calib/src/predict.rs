@@ -300,11 +300,11 @@ impl Calibrated {
         match frame {
             Frame::Device => self.model.point_in(x, q, ctx, target),
             Frame::Base => {
+                // The tip's position is grown already, the target's offset on it not yet.
                 let chain = self.model.target_chain(target);
-                self.model
-                    .robot_fk_in(x, q, ctx, chain)
-                    .transform_point(&self.model.target_at(x, target).into())
-                    .coords
+                let tip = self.model.robot_fk_in(x, q, ctx, chain);
+                let growth = self.model.growth_at(x, q, ctx);
+                tip.translation.vector + tip.rotation * self.model.target_at(x, target) * growth
             }
         }
     }

@@ -23,7 +23,7 @@ use crate::fit::CalibError;
 use crate::model::{Block, Field, Model, ModelOptions, Unit};
 
 mod plant;
-pub use plant::{plant_effects, PlantedEffect};
+pub use plant::{plant_effects, PlantedEffect, POSE_INTERVAL};
 
 /// Which parameter errors the true robot has.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -104,7 +104,8 @@ pub struct SimulationOptions {
     /// inertials and are refused): added to the truth model, their values set by
     /// [`Errors::Explicit`] through their parameter names (zero otherwise). Effects of the
     /// sample order see the poses in the order simulated, repeats of one pose sharing its
-    /// place ([`crate::effects_order`]).
+    /// place ([`crate::effects_order`]); with an effect of time (`thermal_growth`) the samples
+    /// carry times, [`POSE_INTERVAL`] apart.
     pub effects: Vec<String>,
     /// With `Some(sigma_rot)` (radians, > 0): a 6-DoF device. Every target is a frame with a
     /// random orientation on the tip, and every sample also measures its orientation in the
@@ -335,9 +336,16 @@ pub fn simulate(
     let mut samples = Vec::with_capacity(poses.len() * target_pos.len() * o.repeats.max(1));
     let pose_count = poses.len().max(1);
     // Each pose's place in the sequence (its repeats and targets are measured there).
-    let contexts = crate::effects_order::sequence_contexts(
+    let mut contexts = crate::effects_order::sequence_contexts(
         poses.iter().map(|(q, c)| (q.as_slice(), Some(c.as_str()))),
     );
+    // An effect of time sees (and the samples carry) the poses' times, `POSE_INTERVAL` apart.
+    let timed = model.effects().iter().any(|(e, _)| e.uses_time());
+    if timed {
+        for (i, c) in contexts.iter_mut().enumerate() {
+            c.time = Some(i as f64 * POSE_INTERVAL);
+        }
+    }
     for (i, ((q, config), context)) in poses.iter().zip(&contexts).enumerate() {
         let session = i * sessions / pose_count;
         model.set_device(&frames[session]);
@@ -359,7 +367,7 @@ pub fn simulate(
                     }
                 });
                 samples.push(Sample {
-                    time: None,
+                    time: context.time,
                     orientation: orientation.map(Box::new),
                     session,
                     q: q.as_slice().into(),

@@ -16,7 +16,7 @@ use dh_calib::calibrate::Report;
 use dh_calib::data::Measurements;
 use dh_calib::effects::EffectContext;
 use dh_calib::gravity::GravityModel;
-use dh_calib::model::ModelOptions;
+use dh_calib::model::{ModelOptions, SampleContext};
 use dh_calib::pipeline::{
     CalibrationDoc, GravityRecord, PoseSi, SessionDoc, SessionFrameDoc, TargetDoc, WrittenDoc,
 };
@@ -252,6 +252,10 @@ pub fn model_text(
     Ok((text, proof))
 }
 
+/// The time (seconds since the first sample) at which [`predict_proof`] also compares the
+/// predictions, so that effects of time are read back: an hour, a warm-up's scale.
+const PROOF_TIME: f64 = 3600.0;
+
 /// The second half of the proof for a sheet: `predict` reads it back (effects, device frame,
 /// targets, covariance) and its predictions of every measured point, effects included, are the
 /// fitted model's within [`written::WRITTEN_TOLERANCE`]. `gravity` is the gravity model of
@@ -274,20 +278,31 @@ pub fn predict_proof(
     }
     let mut ctx = EffectContext::serial(&report.calibrated);
     ctx.gravity = gravity.cloned();
-    let Ok(fitted) = dh_calib::predict::Calibrated::from_report(report, &ctx) else {
+    let Ok(mut fitted) = dh_calib::predict::Calibrated::from_report(report, &ctx) else {
         return Ok(proof);
     };
     let name = crate::text::output_name(path);
-    let back = crate::calibrated::calibrated_sheet(text, &name).with_context(|| {
+    let mut back = crate::calibrated::calibrated_sheet(text, &name).with_context(|| {
         format!(
             "{name}: the calibrated sheet does not read back for predict (a defect of the writer)"
         )
     })?;
     let frame = dh_calib::predict::Frame::Device;
     let mut worst = 0.0f64;
-    for (q, &k) in q.iter().zip(target) {
-        let d = (back.calibrated.point(q, k, frame) - fitted.point(q, k, frame)).norm();
-        worst = worst.max(if d.is_finite() { d } else { f64::INFINITY });
+    // At the sequence's start (effects of time and order neutral) and, where they act, an
+    // hour (or the whole session) in: effects of time must read back too.
+    let late = SampleContext {
+        time: Some(PROOF_TIME),
+        order: 1.0,
+        ..SampleContext::default()
+    };
+    for context in [SampleContext::default(), late] {
+        back.calibrated.set_context(context.clone());
+        fitted.set_context(context);
+        for (q, &k) in q.iter().zip(target) {
+            let d = (back.calibrated.point(q, k, frame) - fitted.point(q, k, frame)).norm();
+            worst = worst.max(if d.is_finite() { d } else { f64::INFINITY });
+        }
     }
     // The other sessions' device frames read back as written.
     worst = worst.max(read_back_deviation(sessions, &back.sessions));

@@ -237,7 +237,8 @@ pub fn same_joints(
 /// with the same joints: [`same_joints`]).
 ///
 /// # Errors
-/// A nominal model whose forward kinematics fail at a row (non-finite values).
+/// A nominal model whose forward kinematics fail at a row (non-finite values); an effect of
+/// time without the rows' times ([`crate::predict::timed_contexts`]).
 pub fn compensate(
     nominal: &DhTable,
     model: &CalibratedModel,
@@ -245,15 +246,17 @@ pub fn compensate(
     options: &CompensateOptions,
 ) -> Result<Vec<CompensatedRow>> {
     let columns = &model.joints.columns;
-    // Rows in a sequence are compensated on their joints' flanks ([`JointInput::contexts`]).
-    let mut sequenced = (!input.contexts.is_empty()).then(|| model.calibrated.clone());
+    // Rows in a sequence are compensated on their joints' flanks ([`JointInput::contexts`]),
+    // and at their times for an effect of time.
+    let contexts = crate::predict::timed_contexts(model, input)?;
+    let mut sequenced = (!contexts.is_empty()).then(|| model.calibrated.clone());
     input
         .rows
         .iter()
         .enumerate()
         .map(|(i, row)| {
             let goal = nominal.fk(&model.joints.rows(&row.q))?;
-            let calibrated = match (sequenced.as_mut(), input.contexts.get(i)) {
+            let calibrated = match (sequenced.as_mut(), contexts.get(i)) {
                 (Some(c), Some(ctx)) => {
                     c.set_context(ctx.clone());
                     &*c

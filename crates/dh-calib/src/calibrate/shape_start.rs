@@ -29,16 +29,21 @@ pub(crate) struct ShapeFit {
     pub(crate) reduction: f64,
 }
 
-/// The best value of `grid` for the shape parameter (`range.start + 1`) of the effect whose
+/// The best value of `grid` for the shape parameter (`range.start + 1`) of `effect`, whose
 /// parameters are `range`, its amplitude (`range.start`) 0 at `x`: at each value, the
 /// amplitude's column on `observations`, fitted by `solve` (scaled columns in, the scaled
 /// amplitude step and the reduction out: a projection off the other estimated columns).
 /// `None` when no value reduces anything.
 ///
+/// The effect is the amplitude times a shape of the sample (its `delta_in` at amplitude 1),
+/// so the amplitude's column at one shape is the column at another with each sample's rows
+/// rescaled by the ratio of the shapes: the model is evaluated once, at the grid's last value
+/// (for a time constant, the longest, whose shape is 0 only where every shape is: `t = 0`).
+///
 /// # Errors
 /// Those of [`dense`].
 pub(crate) fn best_shape(
-    model: &Model,
+    (model, effect): (&Model, &dyn Effect),
     observations: &[Observed],
     x: &[f64],
     range: &Range<usize>,
@@ -47,11 +52,31 @@ pub(crate) fn best_shape(
 ) -> Result<Option<ShapeFit>, CalibError> {
     let amplitude = range.start;
     let shape = amplitude + 1;
-    let mut best: Option<ShapeFit> = None;
+    let Some(&reference) = grid.last() else {
+        return Ok(None);
+    };
     let mut at = x.to_vec();
+    at[shape] = reference;
+    let (column, _, starts) = dense(model, observations, &at, &[amplitude], scales)?;
+    let shape_of = |o: &Observed, g: f64| effect.delta_in(&o.q, &o.context, &[1.0, g]);
+    let base: Vec<f64> = observations
+        .iter()
+        .map(|o| shape_of(o, reference))
+        .collect();
+    let mut best: Option<ShapeFit> = None;
+    let mut c = column.clone();
     for &g in grid {
-        at[shape] = g;
-        let (c, _, _) = dense(model, observations, &at, &[amplitude], scales)?;
+        for (i, o) in observations.iter().enumerate() {
+            let ratio = if base[i] == 0.0 {
+                0.0
+            } else {
+                shape_of(o, g) / base[i]
+            };
+            let end = starts.get(i + 1).copied().unwrap_or(column.nrows());
+            for row in starts[i]..end {
+                c[(row, 0)] = column[(row, 0)] * ratio;
+            }
+        }
         let (step, reduction) = solve(&c);
         let better = best.as_ref().is_none_or(|b| reduction > b.reduction);
         if reduction.is_finite() && reduction > 0.0 && better {
@@ -100,7 +125,7 @@ pub(crate) fn shape_start(
             (dc.get(0).copied().unwrap_or(0.0), reduction)
         };
         let fit = best_shape(
-            &session.model,
+            (&session.model, effect.as_ref()),
             cal,
             &out,
             &range,

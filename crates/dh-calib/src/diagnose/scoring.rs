@@ -199,7 +199,7 @@ pub(super) fn score(
                     (dc.get(0).copied().unwrap_or(0.0), reduction)
                 };
                 let best = crate::calibrate::best_shape(
-                    model,
+                    (model, effect.as_ref()),
                     &prep.cal,
                     x,
                     range,

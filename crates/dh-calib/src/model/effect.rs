@@ -74,6 +74,12 @@ pub trait Effect: fmt::Debug + Send + Sync {
     fn uses_sequence(&self) -> bool {
         false
     }
+    /// Whether the effect reads the samples' time ([`SampleContext::time`], the pose order
+    /// without one; false by default): such an effect is evaluated at a given time, or at the
+    /// sequence's start ([`crate::effects_thermal`]).
+    fn uses_time(&self) -> bool {
+        false
+    }
     /// `∂delta_in/∂params` (see [`Effect::delta_in`]); by default [`Effect::gradient`].
     fn gradient_in(&self, q: &[f64], context: &SampleContext, params: &[f64], out: &mut [f64]) {
         let _ = context;

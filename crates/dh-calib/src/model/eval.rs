@@ -44,7 +44,7 @@ impl Model {
     pub(super) fn has_growth(&self) -> bool {
         self.effects
             .iter()
-            .any(|s| s.effect.field() == EffectField::Growth)
+            .any(|s| s.op.is_none() && s.effect.field() == EffectField::Growth)
     }
 
     fn factor_of(&self, field: EffectField, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
@@ -84,8 +84,13 @@ impl Model {
         if !self.has_growth() {
             return p;
         }
+        // At no growth the position is kept to the bit (`o + (p − o)` is not).
+        let g = self.growth_factor(x, q, ctx);
+        if g == 1.0 {
+            return p;
+        }
         let o = self.base_origin(x, chain, session);
-        o + (p - o) * self.growth_factor(x, q, ctx)
+        o + (p - o) * g
     }
 
     /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before
@@ -168,6 +173,12 @@ impl Model {
     /// one): what multiplies a modelled position in the device frame.
     pub fn scale_at(&self, x: &[f64], q: &[f64]) -> f64 {
         self.scale_factor(x, q, &SampleContext::default())
+    }
+
+    /// `1 + g` of the robot growth effects at `x`, `q` and `ctx` (1 without one): what
+    /// multiplies every position in the robot's base link frame.
+    pub fn growth_at(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
+        self.growth_factor(x, q, ctx)
     }
 
     /// The first chain's tip frame in the device frame at `x` and `q` (its position scaled by

@@ -21,19 +21,34 @@ impl Model {
             p.frame(self, x, &obs.q, &obs.context, None)
         });
         let s = self.scale_factor(x, &obs.q, &obs.context);
-        let growth = self.growth_of(x, obs, chain);
+        let growth = self.growth_of(x, obs, chain, false);
         self.write_residuals(x, &f, (s, growth), obs, out);
     }
 
     /// The robot growth of an observation on `chain`: its factor `1 + Σ g` and the base
     /// origin it scales about, in the device frame of the observation's session; `None`
-    /// without a growth effect.
-    fn growth_of(&self, x: &[f64], obs: &Observed, chain: usize) -> Option<(f64, Vector3<f64>)> {
-        self.has_growth().then(|| {
-            (
-                self.growth_factor(x, &obs.q, &obs.context),
-                self.base_origin(x, chain, obs.session),
-            )
+    /// without a growth effect, or at a factor of exactly 1 unless `always` (a growth
+    /// parameter's column needs the origin).
+    fn growth_of(
+        &self,
+        x: &[f64],
+        obs: &Observed,
+        chain: usize,
+        always: bool,
+    ) -> Option<(f64, Vector3<f64>)> {
+        if !self.has_growth() {
+            return None;
+        }
+        let g = self.growth_factor(x, &obs.q, &obs.context);
+        (always || g != 1.0).then(|| (g, self.base_origin(x, chain, obs.session)))
+    }
+
+    /// Whether `columns` hold a parameter of a robot growth effect.
+    fn growth_column(&self, columns: &[usize]) -> bool {
+        self.effects.iter().any(|s| {
+            s.op.is_none()
+                && s.effect.field() == super::EffectField::Growth
+                && columns.iter().any(|c| s.params.contains(c))
         })
     }
 
@@ -55,8 +70,8 @@ impl Model {
         out: &mut [f64],
     ) -> Vector3<f64> {
         let grow = |p: Vector3<f64>| match growth {
-            Some((g, o)) => o + (p - o) * g,
-            None => p,
+            Some((g, o)) if g != 1.0 => o + (p - o) * g,
+            _ => p,
         };
         match &obs.observation {
             Observation::Point { target, point } => {
@@ -151,7 +166,7 @@ impl Model {
         let f = prepared.frame(self, x, &obs.q, &obs.context, Some(starts));
         let scale = self.scale_factor(x, &obs.q, &obs.context);
         let chain = self.observation_chain(obs);
-        let growth = self.growth_of(x, obs, chain);
+        let growth = self.growth_of(x, obs, chain, self.growth_column(columns));
         let phi = self.write_residuals(x, &f, (scale, growth), obs, residuals);
         let (point, target, weight) = match &obs.observation {
             Observation::Point { target, .. } => {
@@ -176,8 +191,8 @@ impl Model {
         // the robot, so its motion grows by `G`).
         let (g_factor, origin) = growth.unwrap_or((1.0, Vector3::zeros()));
         let grown = match growth {
-            Some((g, o)) => o + (point - o) * g,
-            None => point,
+            Some((g, o)) if g != 1.0 => o + (point - o) * g,
+            _ => point,
         };
         let device_ops: &[usize] = if growth.is_some() {
             let ops = self.session_ops(chain, obs.session);

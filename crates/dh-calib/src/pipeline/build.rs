@@ -158,10 +158,15 @@ impl CalibrationDoc {
     }
 }
 
-/// Whether a parameter name is an effect's (`<kind>:<joints>`, `scale` or `drift`, see
-/// [`crate::effects`]) rather than a geometric one.
+/// Whether a parameter name is an effect's (`<kind>:<joints>`, `scale`, `drift` or
+/// `thermal_growth.k|ln_tau`, see [`crate::effects`]) rather than a geometric one.
 pub fn is_effect(name: &str) -> bool {
-    name.contains(':') || name == "scale" || name == "drift"
+    name.contains(':')
+        || name == "scale"
+        || name == "drift"
+        || crate::model::Effect::parameter_names(&crate::effects_thermal::ThermalGrowth)
+            .iter()
+            .any(|p| p == name)
 }
 
 /// The sessions of `report`, the `device` block's first; empty for a set of one session (the

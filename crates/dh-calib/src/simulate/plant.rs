@@ -29,6 +29,12 @@ use crate::data::Measurements;
 use crate::fit::CalibError;
 use crate::model::{Effect, Model, ModelOptions};
 
+/// Seconds between two simulated poses when a planted effect reads time
+/// ([`Effect::uses_time`]: `thermal_growth`) and the samples carry none: the samples get a
+/// `time`, pose `k` (of the sequence, repeats and targets sharing it) at `k · 30 s`, so 240
+/// poses take two hours, a warm-up's length.
+pub const POSE_INTERVAL: f64 = 30.0;
+
 /// One effect of the true robot and its parameter values (in the effect's own units, one per
 /// name of [`Effect::parameter_names`]).
 pub type PlantedEffect = (Arc<dyn Effect>, Vec<f64>);
@@ -40,7 +46,8 @@ pub type PlantedEffect = (Arc<dyn Effect>, Vec<f64>);
 ///
 /// The true model is rebuilt from `truth`: its device frame (each session's own), its target
 /// positions and, for data with orientations, its target rotations; its parameter errors are
-/// [`Truth::errors`] by name.
+/// [`Truth::errors`] by name. An effect of time gives samples without times their times
+/// ([`POSE_INTERVAL`] apart).
 ///
 /// # Errors
 /// [`CalibError::BadOption`] when an effect is given a number of values other than its
@@ -100,6 +107,15 @@ pub fn plant_effects(
         for ((i, val), name) in r.zip(v).zip(e.parameter_names()) {
             x[i] = *val;
             applied.push((name, *val));
+        }
+    }
+    // An effect of time needs times: poses `POSE_INTERVAL` apart, as the file will say.
+    if effects.iter().any(|(e, _)| e.uses_time()) && !crate::effects_order::has_times(data) {
+        let (pose, _) = crate::effects_order::sequence_orders(
+            data.samples.iter().map(|s| (&*s.q, s.config.as_deref())),
+        );
+        for (s, k) in data.samples.iter_mut().zip(pose) {
+            s.time = Some(k as f64 * POSE_INTERVAL);
         }
     }
     // The effects of the sample order see each sample's place in the file's sequence.

@@ -81,7 +81,7 @@ pub fn diagnose_sockets(
             let c = effects::candidates(&ctx, &probe.tilt_rows());
             let mut skipped = c.skipped;
             skipped.push(
-                "backlash_direction, drift: not searched on contacts (contact data carries no \
+                "backlash_direction, drift, thermal_growth: not searched on contacts (contact data carries no \
                  sample order); gear_harmonic2, gear_harmonic:J:2: not searched on contacts (the \
                  contact selection does not compare rival effects of one joint), name them with \
                  --effects"
