@@ -217,16 +217,27 @@ fn a_timed_warm_up_is_fitted_as_thermal_growth() {
         describe(&r)
     );
     println!("{info}");
-    assert_eq!(r.selected_effects, vec!["thermal_growth".to_string()], "{info}");
+    assert_eq!(
+        r.selected_effects,
+        vec!["thermal_growth".to_string()],
+        "{info}"
+    );
     assert!((k - 60e-6).abs() < 3.0 * k_se && k_se < 6e-6, "{info}");
     assert!(
         (ln_tau - 1200f64.ln()).abs() < 3.0 * ln_tau_se && ln_tau_se < 0.25,
         "{info}"
     );
     assert_eq!(r.verdict.summary, "model complete", "{info}");
-    assert_eq!(r.outliers.as_ref().map(|o| o.outliers.len()), Some(0), "{info}");
+    assert_eq!(
+        r.outliers.as_ref().map(|o| o.outliers.len()),
+        Some(0),
+        "{info}"
+    );
     assert!(r.verdict.structure.iter().all(|s| !s.significant), "{info}");
-    assert!(!r.notes.iter().any(|n| n.contains("no `time` column")), "{info}");
+    assert!(
+        !r.notes.iter().any(|n| n.contains("no `time` column")),
+        "{info}"
+    );
 }
 
 /// Eight timed warm-ups (new seeds): each is selected and complete, and the estimates are
@@ -239,7 +250,11 @@ fn thermal_growth_estimates_are_unbiased_over_sets() {
     for seed in 3310..3318 {
         let set = warm_up_timed(&arm, 60e-6, 1200.0, seed, true);
         let r = run(&arm, &set.data);
-        assert_eq!(r.selected_effects, vec!["thermal_growth".to_string()], "seed {seed}");
+        assert_eq!(
+            r.selected_effects,
+            vec!["thermal_growth".to_string()],
+            "seed {seed}"
+        );
         assert_eq!(r.verdict.summary, "model complete", "seed {seed}");
         let (k, k_se) = estimate(&r, "thermal_growth.k");
         let (ln_tau, ln_tau_se) = estimate(&r, "thermal_growth.ln_tau");
@@ -273,8 +288,15 @@ fn an_untimed_warm_up_is_fitted_against_the_pose_order_and_says_so() {
         r.notes
     );
     println!("{info}");
-    assert_eq!(r.selected_effects, vec!["thermal_growth".to_string()], "{info}");
-    assert!((ln_tau - (1.0f64 / 6.0).ln()).abs() < 3.0 * ln_tau_se, "{info}");
+    assert_eq!(
+        r.selected_effects,
+        vec!["thermal_growth".to_string()],
+        "{info}"
+    );
+    assert!(
+        (ln_tau - (1.0f64 / 6.0).ln()).abs() < 3.0 * ln_tau_se,
+        "{info}"
+    );
     assert!((k - 60e-6).abs() < 3.0 * k_se, "{info}");
     assert_eq!(r.verdict.summary, "model complete", "{info}");
     assert!(
@@ -392,4 +414,3 @@ fn nothing_planted_names_no_structure() {
         "{info}"
     );
 }
-

@@ -243,14 +243,20 @@ fn time_column_round_trips_and_bad_times_are_named() {
     let times: Vec<Option<f64>> = m.samples.iter().map(|s| s.time).collect();
     assert_eq!(times, vec![Some(1_700_000_000.25), None, Some(-5e-3)]);
     let written = write_measurements(&m);
-    assert!(written.lines().nth(1) == Some("j1,x,y,z,target,time"), "{written}");
+    assert!(
+        written.lines().nth(1) == Some("j1,x,y,z,target,time"),
+        "{written}"
+    );
     let back = parse_measurements(&written, &m.joint_names, &CsvOptions::default()).unwrap();
     let back_times: Vec<Option<f64>> = back.samples.iter().map(|s| s.time).collect();
     assert_eq!(back_times, times);
     let untimed = m.filtered(|i, _| i == 1);
     assert!(!write_measurements(&untimed).contains("time"));
     let e = err("j1,x,y,z,time\n0.1,1,2,3,noon\n", &["j1"]);
-    assert!(e.contains("line 2") && e.contains("time") && e.contains("noon"), "{e}");
+    assert!(
+        e.contains("line 2") && e.contains("time") && e.contains("noon"),
+        "{e}"
+    );
 }
 
 #[test]

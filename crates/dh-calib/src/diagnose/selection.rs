@@ -665,9 +665,7 @@ fn diagnose_judged(
 /// The note that a selected effect of time read the pose order because the samples carry no
 /// time (its time constant is then a fraction of the session, poses taken as evenly spaced).
 fn time_note(data: &Measurements, selected: &[String]) -> Option<String> {
-    let timed = selected
-        .iter()
-        .any(|l| l == crate::effects_thermal::LABEL);
+    let timed = selected.iter().any(|l| l == crate::effects_thermal::LABEL);
     (timed && !crate::effects_order::has_times(data)).then(|| {
         format!(
             "{}: the samples carry no time (no `time` column), so t is the pose order in [0, 1] \

@@ -356,6 +356,8 @@ pub fn unit_of(name: &str) -> &'static str {
             // Radians, metres for a prismatic joint (the report's effect table says which).
             Some("backlash_direction") => "rad",
             Some("gear_ratio" | "coupling") => "rad/rad",
+            // `thermal_growth.ln_tau`: the natural log of tau in seconds.
+            Some("thermal_growth.ln_tau") => "ln s",
             _ => "1",
         };
     }
