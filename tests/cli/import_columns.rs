@@ -450,3 +450,46 @@ fn a_six_dof_export_imports_as_the_set_it_came_from() {
         assert!(err.contains(expected), "{extra:?}: {err}");
     }
 }
+
+/// `--time COL` writes the export's time column (seconds) as the canonical `time` column, an
+/// empty cell a row without a time; a cell that is no number names its line and column, and
+/// `--time` without `--layout columns` is refused.
+#[test]
+fn a_time_column_is_imported_as_the_time_of_each_row() {
+    let dir = tempfile::tempdir().unwrap();
+    let export = dir.path().join("timed.csv");
+    std::fs::write(
+        &export,
+        "q1,q2,X,Y,Z,stamp\n0.1,0.2,1,2,3,1700000000.5\n0.3,0.4,1,2,4,\n0.5,0.6,1,2,5,1700000060\n",
+    )
+    .unwrap();
+    let export = export.to_str().unwrap();
+    let map = [
+        "import", "--layout", "columns", "--joints", "1-2", "--points", "3-5", "--time", "stamp",
+    ];
+    let mut args = map.to_vec();
+    args.push(export);
+    let (code, out, err) = exec(&args);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = out.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(lines[0], "q1,q2,x,y,z,target,time", "{out}");
+    let times: Vec<&str> = lines[1..]
+        .iter()
+        .map(|l| l.rsplit(',').next().unwrap())
+        .collect();
+    assert_eq!(times, ["1700000000.5", "", "1700000060.0"], "{out}");
+
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(&bad, "q1,q2,X,Y,Z,stamp\n0.1,0.2,1,2,3,noon\n").unwrap();
+    let mut args = map.to_vec();
+    args.push(bad.to_str().unwrap());
+    let (code, _, err) = exec(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("line 2") && err.contains("'stamp'") && err.contains("'noon'"),
+        "{err}"
+    );
+    let (code, _, err) = exec(&["import", "--time", "stamp", export]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--time: expected --layout columns"), "{err}");
+}

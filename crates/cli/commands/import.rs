@@ -343,6 +343,10 @@ pub struct ImportCli {
     /// sessions; each gets its own device frame).
     #[arg(long, value_name = "COL")]
     session: Option<String>,
+    /// `--layout columns`: the time column (seconds, any origin): written as the `time` column
+    /// that effects of time (thermal_growth) read.
+    #[arg(long, value_name = "COL")]
+    time: Option<String>,
     /// `--layout columns`: a 6-DoF device's orientation of the target frame in the device
     /// frame, as a quaternion: its columns in the order qw, qx, qy, qz (scalar first, whatever
     /// the file's order); needs --sigma-rot and --sigma.
@@ -420,7 +424,8 @@ impl ImportCli {
             || self.skip_incomplete
             || self.quaternion.is_some()
             || self.rpy.is_some()
-            || self.sigma_rot.is_some();
+            || self.sigma_rot.is_some()
+            || self.time.is_some();
         let columns = match self.layout {
             Some(LayoutChoice::Columns) => {
                 let list = |option: &str, v: &Option<String>| -> Result<Vec<ColumnRef>> {
@@ -537,6 +542,7 @@ impl ImportCli {
                     config: one("--config", &self.config)?,
                     set: one("--set", &self.set)?,
                     session: one("--session", &self.session)?,
+                    time: one("--time", &self.time)?,
                     orientation,
                     delimiter: self.delimiter.map(|d| match d {
                         Delimiter::Comma => ',',
@@ -551,7 +557,7 @@ impl ImportCli {
             }
             _ if given_columns => {
                 return Err(hinted(
-                    "--joints/--points/--sigma-axes/--skip-incomplete/--quaternion/--rpy/--sigma-rot: expected --layout columns, found another layout".to_string(),
+                    "--joints/--points/--sigma-axes/--skip-incomplete/--quaternion/--rpy/--sigma-rot/--time: expected --layout columns, found another layout".to_string(),
                     "column options map your own export: urdf-dh import --layout columns --joints 1-6 --points 7-9 export.csv",
                 ))
             }

@@ -119,6 +119,9 @@ pub struct ColumnMap {
     /// The measurement session column (a non-empty name per row; see [`crate::sessions`]):
     /// each session has its own device frame. Without it every row is in one session.
     pub session: Option<ColumnRef>,
+    /// The time column (seconds, any origin; see [`crate::data::Sample::time`]): what effects
+    /// of time read (`thermal_growth`). An empty cell is a row without a time.
+    pub time: Option<ColumnRef>,
     /// A 6-DoF device's orientation columns ([`orientation`]); `None`: points. Needs
     /// [`ColumnMap::sigma`] (the position sigma weighs the angle against the position).
     pub orientation: Option<OrientationMap>,
@@ -352,8 +355,27 @@ pub fn parse(text: &str, map: &ColumnMap) -> Result<(Measurements, Vec<String>),
                 found: "an empty cell".into(),
             });
         }
+        let time = match cols.time {
+            Some(c) if !cell(c).is_empty() => {
+                let text = cell(c);
+                let t: f64 = text.trim().parse().map_err(|_| DataError::Format {
+                    line,
+                    expected: format!("a time in seconds in column '{}'", column_name(c)),
+                    found: format!("'{text}'"),
+                })?;
+                if !t.is_finite() {
+                    return Err(DataError::Format {
+                        line,
+                        expected: format!("a finite time in column '{}'", column_name(c)),
+                        found: format!("'{text}'"),
+                    });
+                }
+                Some(t)
+            }
+            _ => None,
+        };
         m.samples.push(Sample {
-            time: None,
+            time,
             orientation: orientation.map(Box::new),
             session,
             q: q.into(),

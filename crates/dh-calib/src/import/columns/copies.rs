@@ -24,6 +24,10 @@ fn key(s: &Sample) -> Key {
         numbers.push(1);
         numbers.extend(sigma.iter().map(|v| v.to_bits()));
     }
+    if let Some(t) = s.time {
+        numbers.push(3);
+        numbers.push(t.to_bits());
+    }
     if let Some(o) = &s.orientation {
         numbers.push(2);
         numbers.extend(o.rotation.coords.iter().map(|v| v.to_bits()));

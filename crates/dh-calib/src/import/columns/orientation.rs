@@ -186,6 +186,7 @@ mod tests {
     /// column 7 on.
     fn map(rotation: RotationColumns, sigma: usize) -> ColumnMap {
         ColumnMap {
+            time: None,
             joints: ColumnRef::parse_list("1-2").unwrap(),
             joint_names: vec![],
             point: [

@@ -14,6 +14,7 @@ pub(super) struct Columns {
     pub(super) config: Option<usize>,
     pub(super) set: Option<usize>,
     pub(super) session: Option<usize>,
+    pub(super) time: Option<usize>,
     pub(super) orientation: Option<orientation::Resolved>,
     /// The names the joints are written under, one per joint column.
     pub(super) joint_names: Vec<String>,
@@ -155,6 +156,7 @@ impl ColumnMap {
             config: optional(&self.config)?,
             set: optional(&self.set)?,
             session: optional(&self.session)?,
+            time: optional(&self.time)?,
             orientation,
             joint_names: Vec::new(),
             prismatic: Vec::new(),
@@ -245,6 +247,7 @@ impl Columns {
             (self.config, "config"),
             (self.set, "set"),
             (self.session, "session"),
+            (self.time, "time"),
         ] {
             if let Some(c) = c {
                 roles.push((c, role.into()));

@@ -2,6 +2,7 @@ use super::*;
 
 fn map() -> ColumnMap {
     ColumnMap {
+        time: None,
         joints: ColumnRef::parse_list("1-2").unwrap(),
         joint_names: vec![],
         point: [
