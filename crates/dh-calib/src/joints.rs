@@ -272,7 +272,7 @@ pub fn joint_rows(arrays: &SampleArrays, opts: &CsvOptions) -> Result<Vec<JointR
             target: name(&arrays.target, "target")?,
             session: name(&arrays.session, "session")?,
             q,
-            time: None,
+            time: crate::csv::time_at(&arrays.time, row)?,
         });
     }
     Ok(out)

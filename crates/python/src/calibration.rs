@@ -64,6 +64,9 @@ pub(crate) fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
         quaternion,
         sigma_rot,
         sigma_axes,
+        // Times from Python are not taken yet: effects of time refuse the rows, naming the
+        // missing `time` column.
+        time: None,
     };
     if let Some(k) = labels.keys().next() {
         anyhow::bail!("expected text columns target, config, session or set, found '{k}'");

@@ -43,6 +43,24 @@ pub struct SampleArrays {
     /// The `sigma_rot` column (radians, standard deviation per axis of the rotation), with
     /// `quaternion`; NaN in the rows of points.
     pub sigma_rot: Option<Vec<f64>>,
+    /// The `time` column (seconds, any origin; NaN for a row without one, as an empty cell),
+    /// or `None`: what effects of time (`thermal_growth`) read.
+    pub time: Option<Vec<f64>>,
+}
+
+/// Row `row`'s time in `time` (NaN: none); an infinite time is an error naming the row.
+pub(crate) fn time_at(time: &Option<Vec<f64>>, row: usize) -> Result<Option<f64>, DataError> {
+    match time.as_ref().and_then(|t| t.get(row)).copied() {
+        None => Ok(None),
+        Some(t) if t.is_nan() => Ok(None),
+        Some(t) if t.is_finite() => Ok(Some(t)),
+        Some(t) => Err(array_error(
+            row,
+            "time",
+            "a finite time in seconds",
+            format!("{t}"),
+        )),
+    }
 }
 
 /// The error for row `row` (0-based, as numpy and pandas count), column `column`.
@@ -153,6 +171,7 @@ impl SampleArrays {
             ("'config'", self.config.as_ref().map(Vec::len)),
             ("'session'", self.session.as_ref().map(Vec::len)),
             ("'set'", self.set.as_ref().map(Vec::len)),
+            ("'time'", self.time.as_ref().map(Vec::len)),
         ] {
             if let Some(len) = len {
                 shape(what, len, n)?;
@@ -336,7 +355,7 @@ impl Measurements {
                 Some(s) => index_of(&mut m.sessions, &s),
             };
             m.samples.push(Sample {
-                time: None,
+                time: time_at(&arrays.time, row)?,
                 q: q.into(),
                 target,
                 point,

@@ -4,6 +4,7 @@ use super::*;
 
 fn arrays() -> SampleArrays {
     SampleArrays {
+        time: None,
         joint_names: vec!["j1".into(), "j2".into()],
         q: vec![0.1, 0.2, 90.0, -45.0],
         points: vec![1000.0, 0.0, 500.0, 1.0, 2.0, 3.0],
@@ -205,4 +206,46 @@ fn orientations_read_as_the_csv_reader_reads_them() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("together"), "{e}");
+}
+
+/// A `time` array gives each sample and joint row its time (NaN: none, as an empty cell); a
+/// wrong length or an infinite time is refused naming the column (and the row).
+#[test]
+fn times_are_read_like_the_time_column() {
+    let opts = CsvOptions {
+        length_unit: LengthUnit::Millimetre,
+        angle_unit: AngleUnit::Degree,
+        prismatic: vec!["j2".into()],
+    };
+    let timed = SampleArrays {
+        time: Some(vec![1_700_000_000.5, f64::NAN]),
+        ..arrays()
+    };
+    let (m, _) = Measurements::from_arrays(&timed, &opts).unwrap();
+    let times: Vec<Option<f64>> = m.samples.iter().map(|s| s.time).collect();
+    assert_eq!(times, vec![Some(1_700_000_000.5), None]);
+    let joints = SampleArrays {
+        points: Vec::new(),
+        sigma: None,
+        ..timed.clone()
+    };
+    let rows = crate::joints::joint_rows(&joints, &opts).unwrap();
+    assert_eq!(rows[0].time, Some(1_700_000_000.5));
+    assert_eq!(rows[1].time, None);
+    let short = SampleArrays {
+        time: Some(vec![1.0]),
+        ..arrays()
+    };
+    let e = Measurements::from_arrays(&short, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("'time'"), "{e}");
+    let infinite = SampleArrays {
+        time: Some(vec![0.0, f64::INFINITY]),
+        ..arrays()
+    };
+    let e = Measurements::from_arrays(&infinite, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("row 1") && e.contains("time"), "{e}");
 }
