@@ -95,6 +95,7 @@ pub mod sheet;
 pub mod simulation;
 pub mod sniff;
 pub mod text;
+mod timed_rows;
 pub mod tree_sheet;
 pub mod units;
 pub mod ur;
