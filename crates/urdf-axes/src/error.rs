@@ -20,7 +20,7 @@ pub enum UrdfError {
     },
     /// The document is larger than [`crate::MAX_URDF_BYTES`] (refused before reading it all).
     #[error(
-        "expected a urdf of at most {limit} bytes, found {}",
+        "expected a robot description of at most {limit} bytes, found {}",
         .size.map_or_else(|| "more".to_owned(), |s| format!("{s} bytes"))
     )]
     TooLarge {
