@@ -403,6 +403,7 @@ def predict(
     tip: Optional[str] = None,
     length_unit: str = "m",
     angle_unit: str = "rad",
+    sequence: bool = False,
 ) -> Prediction:
     """The calibrated model's target positions (or tool poses, ``targets="tool"``) at joint
     values, with their standard uncertainty, as ``urdf-dh predict`` computes them.
@@ -415,6 +416,11 @@ def predict(
         session: with a calibration of several measurement sessions, predict every pose from
             this session's device frame (default: each row's ``session`` column of a CSV or
             DataFrame, else the first session's).
+        sequence: the poses are in the order the robot moves through them (``--sequence``):
+            each joint's approach direction (for a ``backlash_direction`` effect) is the sign of
+            its last motion, and a ``drift`` effect reads each pose's place in the order, as
+            ``calibrate`` reads a measurement file (default: unknown, the backlash added to the
+            uncertainty with a warning, and no drift).
 
     Raises:
         UrdfDhError: bad model or joint values (the CLI's message).
@@ -425,7 +431,17 @@ def predict(
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
     name, arrays = _source(joints, columns, "joints", points=False)
     native = _native.predict(
-        os.fspath(model), name, arrays, base, tip, _names(targets), frame, session, length_unit, angle_unit
+        os.fspath(model),
+        name,
+        arrays,
+        base,
+        tip,
+        _names(targets),
+        frame,
+        session,
+        length_unit,
+        angle_unit,
+        bool(sequence),
     )
     _warn_all(native[-1])
     return Prediction(native)
@@ -442,10 +458,11 @@ def compensate(
     max_change: Optional[float] = None,
     length_unit: str = "m",
     angle_unit: str = "rad",
+    sequence: bool = False,
 ) -> Tuple[np.ndarray, np.ndarray, List[str]]:
     """Corrected joint values with which the calibrated ``model`` puts its tool where
     ``nominal`` puts it at the commanded ``joints`` (same forms as :func:`predict`), as
-    ``urdf-dh compensate`` computes them.
+    ``urdf-dh compensate`` computes them. ``sequence`` as in :func:`predict` (``--sequence``).
 
     Returns:
         ``(q, errors, failures)``: the corrected joint values (poses x joints), per pose the
@@ -471,6 +488,7 @@ def compensate(
         None if max_change is None else repr(float(max_change)),
         length_unit,
         angle_unit,
+        bool(sequence),
     )
     _warn_all(notes)
     return (
