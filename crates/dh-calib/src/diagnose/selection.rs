@@ -44,6 +44,7 @@ pub(crate) fn effect_context(
     Ok(EffectContext {
         tree: tree.clone(),
         gravity,
+        gravity_vector: diag.gravity,
     })
 }
 
@@ -244,6 +245,18 @@ fn diagnose_judged(
     may_rejudge: bool,
 ) -> Result<Judgement, CalibError> {
     let ctx = effect_context(tree, diag)?;
+    // The verdict's gravity structure tests read the gravity (and masses) of the effects.
+    let options = &CalibrationOptions {
+        gravity: Some(match &ctx.gravity {
+            Some(g) => g.clone(),
+            None => Arc::new(GravityModel::new(
+                tree,
+                &crate::gravity::Inertials::default(),
+                diag.gravity,
+            )?),
+        }),
+        ..options.clone()
+    };
     let mut notes = Vec::new();
     // Which candidates the model can carry.
     let probe = Model::new_tree(tree, &[], &options.model)?;

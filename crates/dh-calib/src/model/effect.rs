@@ -26,6 +26,10 @@ pub enum EffectField {
     /// The measuring device's length scale: modelled positions are multiplied by `1 + delta`.
     /// The effect's [`Effect::joint`] is ignored.
     Scale,
+    /// A translation of the robot in its base link frame (metres): the tip and every target
+    /// move by `delta` along [`Effect::shift_direction`], after the chain (no joint turns
+    /// it), before the device frame. A sag under gravity ([`crate::effects::GravitySag`]).
+    Shift,
 }
 
 /// A non-geometric error source: a change of one row's `theta`, `d`, `alpha` or tilt, or of the
@@ -82,6 +86,11 @@ pub trait Effect: fmt::Debug + Send + Sync {
     /// again from joint values alone.
     fn gravity_model(&self) -> Option<&std::sync::Arc<crate::gravity::GravityModel>> {
         None
+    }
+    /// For an [`EffectField::Shift`] effect, the unit direction of its translation in the
+    /// robot's base link frame; zero for every other effect (the default).
+    fn shift_direction(&self) -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::zeros()
     }
 }
 

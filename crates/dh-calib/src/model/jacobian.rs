@@ -150,6 +150,13 @@ impl Model {
             Some(w) => left_jacobian_inverse(&phi) * w,
             None => Matrix3::zeros(),
         };
+        // The shift effects' translation in the device frame: ops after the device block do
+        // not turn it (it is along gravity in the base link frame whatever the joints).
+        let shifted = if self.has_shift() {
+            prepared.device_rotation() * self.shift_at(x, &obs.q, &obs.context)
+        } else {
+            Vector3::zeros()
+        };
         // The target's orientation axes in the device frame (zero for a point target).
         let target_axes = target.map(|t| self.target_rotation_axes(x, t).1.map(|a| f.r * a));
         let nc = columns.len();
@@ -169,7 +176,8 @@ impl Model {
                     OpKind::Rot(_) => {
                         let w = start.r * place.axis;
                         let origin = start.t + start.r * place.origin;
-                        *dp += w.cross(&(point - origin)) * g;
+                        let moved = if place.device { point } else { point - shifted };
+                        *dp += w.cross(&(moved - origin)) * g;
                         *dw += w * g;
                     }
                     OpKind::Fixed => {}
@@ -200,11 +208,12 @@ impl Model {
                     let params = x.get(slot.params.clone()).unwrap_or(&[]);
                     slot.effect.gradient_in(&obs.q, &obs.context, params, grad);
                     let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
-                    match slot.op {
-                        Some(op) => op_motion(op, g, &mut dp, &mut dw),
+                    match (slot.op, slot.shift) {
+                        (Some(op), _) => op_motion(op, g, &mut dp, &mut dw),
+                        (None, Some(dir)) => dp = prepared.device_rotation() * dir * g,
                         // Device scale: the unscaled position, undoing the factor below.
-                        None if scale != 0.0 => dp = point * (g / scale),
-                        None => {}
+                        (None, None) if scale != 0.0 => dp = point * (g / scale),
+                        (None, None) => {}
                     }
                 }
                 Some(_) => {
