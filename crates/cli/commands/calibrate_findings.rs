@@ -47,6 +47,31 @@ pub fn text(outliers: Option<&OutliersDoc>, verdict: &VerdictDoc) -> String {
             );
         }
     }
+    if let Some(o) = outliers.filter(|o| !o.given_back.is_empty()) {
+        let _ = writeln!(
+            s,
+            "outliers given back: {} point(s) an earlier judgement left out, given back by one against a model with effects (in the fit or the validation figures)",
+            o.given_back.len()
+        );
+        for g in &o.given_back {
+            let _ = writeln!(
+                s,
+                "  line {}{}, target {}{}: {}",
+                g.line,
+                g.config
+                    .as_deref()
+                    .map(|c| format!(", config {c}"))
+                    .unwrap_or_default(),
+                g.target,
+                if g.split == "validation" {
+                    " (validation)"
+                } else {
+                    ""
+                },
+                g.reason,
+            );
+        }
+    }
     let _ = writeln!(
         s,
         "verdict: {} ({}{})",

@@ -26,8 +26,8 @@ pub use dh_calib::findings::DEFAULT_ALPHA;
 // How far from zero, in standard errors, an effect parameter must be to count as identified.
 pub use dh_calib::pipeline::IDENTIFIED_SIGMAS;
 pub use dh_calib::pipeline::{
-    documents, DiagnosisDoc, OutlierDoc, OutliersDoc, RoundDoc, StructureDoc, TestDoc, TrialDoc,
-    VerdictDoc,
+    documents, DiagnosisDoc, GivenBackDoc, JudgedDoc, OutlierDoc, OutliersDoc, RoundDoc,
+    StructureDoc, TestDoc, TrialDoc, VerdictDoc,
 };
 
 // Contacts (ball-in-socket layouts): the distances of each contact.

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use dh_calib::pipeline::{CalibrationDoc, CandidateDoc, StructureDoc, TestDoc};
+use dh_calib::pipeline::{CalibrationDoc, CandidateDoc, OutliersDoc, StructureDoc, TestDoc};
 
 use super::page::{self, esc, fixed, mm, sci, table_with, NA};
 
@@ -32,6 +32,7 @@ pub(super) fn outliers(doc: &CalibrationDoc) -> String {
         }
     ));
     if o.points.is_empty() {
+        s.push_str(&given_back(o));
         return s;
     }
     let rows: Vec<Vec<String>> = o
@@ -60,6 +61,46 @@ pub(super) fn outliers(doc: &CalibrationDoc) -> String {
         ],
         &rows,
         &classes,
+    ));
+    s.push_str(&given_back(o));
+    s
+}
+
+/// The points given back: left out by an earlier judgement, not outliers of the final model.
+fn given_back(o: &OutliersDoc) -> String {
+    if o.given_back.is_empty() {
+        return String::new();
+    }
+    let mut s = page::para(&format!(
+        "{} point(s) given back: left out by an earlier judgement, given back by one against a model with effects; they are in the fit (calibration) or the held-out figures (validation). Their size against the model that left them out and against the final model:",
+        o.given_back.len()
+    ));
+    let rows: Vec<Vec<String>> = o
+        .given_back
+        .iter()
+        .map(|g| {
+            vec![
+                g.line.to_string(),
+                g.config.as_deref().map_or_else(|| NA.into(), esc),
+                esc(&g.target),
+                esc(&g.split),
+                fixed(g.before.sigmas, 1),
+                fixed(g.after.sigmas, 1),
+                esc(&g.reason),
+            ]
+        })
+        .collect();
+    s.push_str(&page::table(
+        &[
+            "#line",
+            "pose",
+            "target",
+            "split",
+            "#before [sigma]",
+            "#final [sigma]",
+            "why",
+        ],
+        &rows,
     ));
     s
 }
