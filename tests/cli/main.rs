@@ -30,6 +30,7 @@ mod outputs;
 mod pose6;
 mod predict;
 mod predict_effects;
+mod predict_sag;
 mod report;
 mod roundtrip;
 mod sdf;

@@ -356,6 +356,8 @@ pub fn unit_of(name: &str) -> &'static str {
             // Radians, metres for a prismatic joint (the report's effect table says which).
             Some("backlash_direction") => "rad",
             Some("gear_ratio" | "coupling") => "rad/rad",
+            // Metres of sag at a lever arm of 1 m (see `crate::effects::GravitySag`).
+            Some("gravity_sag") => "1/m^2",
             _ => "1",
         };
     }

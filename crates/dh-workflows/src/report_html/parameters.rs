@@ -16,6 +16,7 @@ pub(super) fn shown(v: f64, unit: &str) -> (String, &'static str) {
         "rad" => (fixed(v.to_degrees(), 5), "deg"),
         "rad/(N m)" => (sci(v, 4), "rad/(N m)"),
         "rad/rad" => (sci(v, 4), "rad/rad"),
+        "1/m^2" => (sci(v, 4), "1/m^2"),
         _ => (sci(v, 4), "1"),
     }
 }
