@@ -28,7 +28,7 @@
 //! and the next round fits without it.
 //!
 //! Every judgement after the first carries the points it gave back ([`OutlierReport::given_back`]):
-//! how far off each was against the model that left it out and against the model that gave it
+//! how far off each was against the model that first left it out and against the model that gave it
 //! back (a later judgement updates the latter, so the diagnosis's report gives the figures
 //! against the final model). Validation points are judged again in the same way: a clean
 //! held-out pose that only an unmodelled effect put far off comes back into the held-out
@@ -107,6 +107,26 @@ pub struct Outlier {
     pub residual: f64,
     /// The same in units of the per-axis scale (`‖r / s‖`).
     pub sigmas: f64,
+    /// When an earlier judgement (against a model with fewer effects) left the point out
+    /// too, its figures there: the first judgement's (the geometric model's, in a diagnosis).
+    pub first: Option<Judged>,
+}
+
+impl Outlier {
+    /// The figures of the judgement that first left the point out: [`Outlier::first`], else
+    /// this one's, made by `report` (whose outlier it is).
+    pub fn first_judged(&self, report: &OutlierReport) -> Judged {
+        self.first.clone().unwrap_or_else(|| Judged {
+            residual: self.residual,
+            sigmas: self.sigmas,
+            threshold: if self.validation {
+                report.validation_threshold
+            } else {
+                report.threshold
+            },
+            effects: report.effects.clone(),
+        })
+    }
 }
 
 /// What the screen found.
@@ -186,7 +206,7 @@ pub struct GivenBack {
     pub target: String,
     /// `true` for a validation sample.
     pub validation: bool,
-    /// Against the model that left it out.
+    /// Against the model that first left it out (the geometric model, in a diagnosis).
     pub before: Judged,
     /// Against the model of the latest judgement (the final model's, in a diagnosis's report):
     /// within its threshold, unless a later model put it beyond (it stays given back: a second

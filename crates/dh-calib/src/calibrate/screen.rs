@@ -260,6 +260,12 @@ pub(crate) fn screen_from(
                     validation: v,
                     residual: r.norm(),
                     sigmas: t,
+                    first: before.and_then(|b| {
+                        b.outliers
+                            .iter()
+                            .find(|o| o.sample == i)
+                            .map(|o| o.first_judged(b))
+                    }),
                 });
             }
         }
@@ -292,16 +298,7 @@ pub(crate) fn screen_from(
                                     config: o.config.clone(),
                                     target: o.target.clone(),
                                     validation: o.validation,
-                                    before: Judged {
-                                        residual: o.residual,
-                                        sigmas: o.sigmas,
-                                        threshold: if o.validation {
-                                            b.validation_threshold
-                                        } else {
-                                            b.threshold
-                                        },
-                                        effects: b.effects.clone(),
-                                    },
+                                    before: o.first_judged(b),
                                     after: judged(o.sample, o.validation),
                                 },
                             ))

@@ -93,7 +93,7 @@ pub struct GivenBackDoc {
     pub target: String,
     /// `calibration` or `validation`.
     pub split: String,
-    /// Against the model that left it out.
+    /// Against the model that first left it out.
     pub before: JudgedDoc,
     /// Against the final model.
     pub after: JudgedDoc,
