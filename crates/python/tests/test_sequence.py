@@ -68,7 +68,7 @@ def test_predict_in_sequence_is_the_clis_and_puts_each_pose_on_its_flank(backlas
     with pytest.warns(UserWarning, match=r"at 1 of 40 row\(s\)"):
         np.testing.assert_array_equal(tool(cal, q, sequence=True).points, seq.points)
     # Without the order: the CLI's midway prediction, the half backlash in the uncertainty.
-    with pytest.warns(UserWarning, match=r"at 40 of 40 row\(s\).*--sequence"):
+    with pytest.warns(UserWarning, match=r"at 40 of 40 row\(s\).*with sequence=True"):
         mid = tool(cal, q)
     np.testing.assert_array_equal(mid.points, cli(args)[["x", "y", "z"]].to_numpy())
     assert np.all(np.linalg.norm(mid.uncertainty[1:, :3], axis=1) > np.linalg.norm(seq.uncertainty[1:, :3], axis=1))
@@ -111,7 +111,7 @@ def test_drift_is_predicted_along_the_sequence(tmp_path):
     assert r.parameter("drift")["identified"], r.parameter("drift")
     measured = pd.read_csv(data, comment="#")
     seq = urdf_dh.predict(cal, data, sequence=True)
-    with pytest.warns(UserWarning, match=r"'drift' \(c = 1\.0.*session's start.*--sequence"):
+    with pytest.warns(UserWarning, match=r"'drift' \(c = 1\.0.*session's start.*with sequence=True"):
         start = urdf_dh.predict(cal, data)
     expected = cli(["predict", "--model", str(cal), "--joints", str(data), "--sequence"])
     np.testing.assert_array_equal(seq.points, expected[["x", "y", "z"]].to_numpy())

@@ -349,6 +349,12 @@ def _names(targets: Union[None, str, Sequence[str]]) -> List[str]:
     return list(targets)
 
 
+def _as_python(lines: Sequence[str]) -> List[str]:
+    """The library's warnings of predict/compensate with the CLI's ``--sequence`` named as
+    this package's ``sequence=True``."""
+    return [line.replace("with --sequence", "with sequence=True") for line in lines]
+
+
 def _warn_all(lines: Sequence[str]) -> None:
     for line in lines:
         warnings.warn(line, stacklevel=3)
@@ -443,7 +449,7 @@ def predict(
         angle_unit,
         bool(sequence),
     )
-    _warn_all(native[-1])
+    _warn_all(_as_python(native[-1]))
     return Prediction(native)
 
 
@@ -490,7 +496,7 @@ def compensate(
         angle_unit,
         bool(sequence),
     )
-    _warn_all(notes)
+    _warn_all(_as_python(notes))
     return (
         np.array(q, dtype=float).reshape(-1, len(columns)),
         np.array(errors, dtype=float).reshape(-1, 4),
