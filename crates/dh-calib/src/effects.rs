@@ -252,8 +252,8 @@ pub struct Candidates {
 
 /// Every applicable candidate for automatic diagnosis: per revolute joint `gear_ratio`,
 /// `gear_harmonic`, `gear_harmonic2`, `gear_harmonic:J:2`, `gravity_sag` (of a serial robot,
-/// where the joint's axis is not parallel to gravity: [`GravitySag`]) and, with inertials,
-/// `compliance`
+/// where the joint's axis is not parallel to gravity: [`GravitySag`]; with inertials a rival
+/// of the compliances, decided by the held-out RMS) and, with inertials, `compliance`
 /// and `lateral_compliance` of joints that
 /// gravity loads (typical torque above 1e-6 of the largest; `compliance` also for prismatic
 /// joints); `coupling:J:K` for joints `K` within

@@ -24,7 +24,8 @@
 //! docs): a 1 mm error of a 1 m arm changes a 0.3 mm sag by 1 µm, and the effect stays linear
 //! in `c`. A joint whose axis is parallel to gravity (or runs through the tip) has no lever arm:
 //! the label is refused for it ([`MIN_SAG_LEVER`]), and automatic diagnosis proposes it for
-//! the other revolute joints of a serial robot.
+//! the other revolute joints of a serial robot (with link inertials, as a rival of the
+//! compliances, decided by the held-out RMS: see `crate::rivals`).
 
 use super::*;
 

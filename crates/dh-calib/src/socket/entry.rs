@@ -82,9 +82,9 @@ pub fn diagnose_sockets(
             let mut skipped = c.skipped;
             skipped.push(
                 "backlash_direction, drift: not searched on contacts (contact data carries no \
-                 sample order); gear_harmonic2, gear_harmonic:J:2, gravity_sag: not searched on \
-                 contacts (the contact selection does not compare rival effects of one joint or \
-                 one load), name them with --effects"
+                 sample order); gear_harmonic2, gear_harmonic:J:2: not searched on contacts (the \
+                 contact selection does not compare rival effects of one joint), name them with \
+                 --effects"
                     .into(),
             );
             let pool = c
@@ -93,13 +93,7 @@ pub fn diagnose_sockets(
                 .filter(|e| {
                     let l = e.label();
                     let both_harmonics = l.starts_with("gear_harmonic:") && l.ends_with(":2");
-                    // A sag along gravity is a rival of the compliances carrying the same load
-                    // (Boby's contacts took gravity_sag:joint_2 for lateral_compliance:joint_5
-                    // at a worse held-out RMS): without the rival comparison, named only.
-                    !(e.uses_sequence()
-                        || l.starts_with("gear_harmonic2:")
-                        || both_harmonics
-                        || l.starts_with("gravity_sag:"))
+                    !(e.uses_sequence() || l.starts_with("gear_harmonic2:") || both_harmonics)
                 })
                 .collect();
             let auto = Auto {
