@@ -188,23 +188,24 @@ fn helix(n: usize, reverse_mimic: bool) -> String {
     s + "</robot>\n"
 }
 
+/// A 600-joint helix of skew axes extracts and proves in JSON, with or without a reverse chain
+/// of mimics. Before, the walking DH frame's rounding grew about 1.3x per joint: the proof
+/// failed at 80 joints and the table held NaN from joint 103 (written as JSON `null` until the
+/// extraction refused it). The frame is now put back on each given axis when it drifts
+/// (`dh_core::extract`'s `reanchor`): the table stays within 1e-10 m of the URDF.
 #[test]
-fn a_chain_whose_frames_lose_all_precision_is_refused_not_written_with_nan() {
-    // Before: `extract --format json` wrote the tool pose as null (NaN), caught only by the
-    // read back ("tool.xyz[0]: invalid type: unit value"). The NaN is born in the extraction
-    // (joint 103's `a`), with or without the reverse mimic chain.
+fn a_long_helix_of_skew_axes_extracts_and_proves() {
     let dir = tempfile::tempdir().unwrap();
     for mimic in [true, false] {
         let path = dir.path().join(format!("helix_{mimic}.urdf"));
         std::fs::write(&path, helix(600, mimic)).unwrap();
         let (code, out, err) = exec(&["extract", path.to_str().unwrap(), "--format", "json"]);
-        assert_eq!(code, 2, "{err}");
-        assert!(out.is_empty(), "{out}");
-        assert!(
-            err.contains("extraction failed: joint 'j")
-                && err.contains("the chain's frames lost all precision")
-                && err.contains("expected a finite number, found NaN"),
-            "{err}"
-        );
+        assert_eq!(code, 0, "{err}");
+        assert!(!out.contains("null"), "{out}");
+        let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let v = &json["verification"];
+        assert_eq!(v["passed"], true, "{v}");
+        let worst = v["max_position_error"].as_f64().unwrap();
+        assert!(worst < 1e-10, "mimic {mimic}: {worst:e} m");
     }
 }

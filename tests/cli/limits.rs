@@ -43,12 +43,36 @@ fn input_beyond_the_size_limit_is_refused() {
     assert_eq!(
         out,
         format!(
-            "exit: 2\n--- stdout\n--- stderr\nurdf-dh: error: <stdin>: invalid URDF: expected a \
-             urdf of at most {} bytes, found more\nhint: a robot description is a few megabytes \
+            "exit: 2\n--- stdout\n--- stderr\nurdf-dh: error: <stdin>: invalid robot file: expected \
+             a robot description of at most {} bytes, found more\nhint: a robot description is a few megabytes \
              at most (meshes live in their own files): check what is being read\n",
             urdf_axes::MAX_URDF_BYTES
         )
     );
+}
+
+/// An oversized MJCF or SDFormat file is not called a URDF: its format is not known before it
+/// is read, so the error names a robot file.
+#[test]
+fn an_oversized_mjcf_or_sdformat_file_is_named_a_robot_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (name, head) in [
+        ("big.xml", "<mujoco model='m'>"),
+        ("big.sdf", "<sdf version='1.7'>"),
+    ] {
+        let path = dir.path().join(name);
+        let mut bytes = head.as_bytes().to_vec();
+        bytes.resize(urdf_axes::MAX_URDF_BYTES + 1, b' ');
+        std::fs::write(&path, bytes).expect("written");
+        let out = run(&["extract", path.to_str().expect("utf-8")], None);
+        assert!(
+            out.contains(&format!(
+                "{name}: invalid robot file: expected a robot description of at most {} bytes",
+                urdf_axes::MAX_URDF_BYTES
+            )) && !out.contains("URDF"),
+            "{out}"
+        );
+    }
 }
 
 /// A 4000-joint chain in which each joint mimics the next (drivers after their followers)

@@ -30,6 +30,7 @@ mod outputs;
 mod pose6;
 mod predict;
 mod predict_effects;
+mod predict_sag;
 mod predict_time;
 mod report;
 mod roundtrip;

@@ -12,7 +12,7 @@ import http from 'node:http';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch, suite } from './harness.mjs';
 
 const WEB = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
 const ROOT = path.resolve(WEB, '..');
@@ -22,25 +22,9 @@ const CLI = path.resolve(process.argv[2] || path.join(ROOT, 'target/debug/urdf-d
 const SHOTS = process.env.SCREENSHOTS || '';
 const PANDA = path.join(ROOT, 'fixtures/robots/franka_panda');
 
-let passed = 0;
-let failed = 0;
+const { test, assert, run, finish } = suite();
 const figures = [];
 
-async function test(name, fn) {
-  const t0 = Date.now();
-  try {
-    await fn();
-    passed++;
-    console.log(`ok    ${name} (${Date.now() - t0} ms)`);
-  } catch (e) {
-    failed++;
-    console.log(`FAIL  ${name}: ${e && e.stack ? e.stack : e}`);
-  }
-}
-
-function assert(cond, message) {
-  if (!cond) throw new Error(message);
-}
 
 function assertEqual(got, want, what) {
   if (got !== want) {
@@ -197,12 +181,9 @@ async function main() {
   assert(fs.existsSync(CLI), `no CLI binary at ${CLI}`);
   const server = await serve();
   const origin = `http://127.0.0.1:${server.address().port}`;
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'urdf-dh-chromium-'));
   const downloads = fs.mkdtempSync(path.join(os.tmpdir(), 'urdf-dh-downloads-'));
   // A fresh profile: playwright passes it as --user-data-dir.
-  const context = await chromium.launchPersistentContext(profile, {
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+  const { context, profile } = await launch('urdf-dh-chromium-', ['--use-angle=swiftshader', '--enable-unsafe-swiftshader'], {
     downloadsPath: downloads,
     acceptDownloads: true,
     viewport: { width: 1500, height: 900 },
@@ -648,13 +629,7 @@ async function main() {
   const { gzipSync } = await import('node:zlib');
   figures.push(`wasm: ${wasm.length} bytes, ${gzipSync(wasm, { level: 9 }).length} bytes gzipped; app.js ${fs.statSync(path.join(DIST, 'app.js')).size} bytes, ${gzipSync(fs.readFileSync(path.join(DIST, 'app.js')), { level: 9 }).length} gzipped`);
   figures.push(`outputs compared with the CLI: ${sameness.exact} byte for byte, ${sameness.noise} equal but for the last digits of numbers (libm)`);
-  for (const f of figures) console.log(`figure: ${f}`);
-  console.log(`${passed} passed, ${failed} failed`);
-  process.exit(failed === 0 ? 0 : 1);
+  finish(figures.map((f) => `figure: ${f}`));
 }
 
-main().catch((e) => {
-  console.log(`FAIL  the test run: ${e && e.stack ? e.stack : e}`);
-  console.log(`${passed} passed, ${failed + 1} failed`);
-  process.exit(1);
-});
+run(main);

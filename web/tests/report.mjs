@@ -15,31 +15,14 @@ import http from 'node:http';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch, suite } from './harness.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..', '..');
 const CLI = path.resolve(process.argv[2] || path.join(ROOT, 'target/debug/urdf-dh'));
 const SHOTS = process.env.SCREENSHOTS || '';
 const UR5 = path.join(ROOT, 'fixtures/robots/ur5/vendor.yaml');
 
-let passed = 0;
-let failed = 0;
-
-async function test(name, fn) {
-  const t0 = Date.now();
-  try {
-    await fn();
-    passed++;
-    console.log(`ok    ${name} (${Date.now() - t0} ms)`);
-  } catch (e) {
-    failed++;
-    console.log(`FAIL  ${name}: ${e && e.stack ? e.stack : e}`);
-  }
-}
-
-function assert(cond, message) {
-  if (!cond) throw new Error(message);
-}
+const { test, assert, run } = suite();
 
 function cli(args) {
   const r = spawnSync(CLI, args, { cwd: ROOT, encoding: 'utf8' });
@@ -88,11 +71,7 @@ async function main() {
   });
   await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
   const origin = `http://127.0.0.1:${server.address().port}`;
-  const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'urdf-dh-report-profile-'));
-  const context = await chromium.launchPersistentContext(profile, {
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking', '--disable-component-update', '--disable-sync'],
-  });
+  const { context, profile } = await launch('urdf-dh-report-profile-');
   // Every request but the page's own is aborted and counted: the page needs none.
   const requests = [];
   await context.route('**/*', (route) => {
@@ -180,12 +159,6 @@ async function main() {
   server.close();
   fs.rmSync(dir, { recursive: true, force: true });
   fs.rmSync(profile, { recursive: true, force: true });
-  console.log(`${passed} passed, ${failed} failed`);
-  process.exit(failed === 0 ? 0 : 1);
 }
 
-main().catch((e) => {
-  console.log(`FAIL  the test run: ${e && e.stack ? e.stack : e}`);
-  console.log(`${passed} passed, ${failed + 1} failed`);
-  process.exit(1);
-});
+run(main);

@@ -70,7 +70,8 @@ pub struct CalibrateCli {
     /// gear_ratio:joint_2,gear_ratio:joint_3. Labels: gear_ratio:J, gear_harmonic:J (once per
     /// turn), gear_harmonic2:J (twice), gear_harmonic:J:2 (both), coupling:J:K, scale,
     /// parallel_tilt:J, backlash_direction:J (after the direction of J's last motion, in the
-    /// file's pose order), drift (lengths growing with the pose order), and with link masses
+    /// file's pose order), drift (lengths growing with the pose order), gravity_sag:J (the tip
+    /// sinking along gravity with the cube of its lever arm about J), and with link masses
     /// compliance:J, lateral_compliance:J, backlash:J.
     #[arg(long, value_name = "none|auto|LIST", default_value = "none")]
     effects: EffectsChoice,
@@ -112,7 +113,8 @@ pub struct CalibrateCli {
     /// compliance is skipped].
     #[arg(long, value_name = "FILE")]
     inertials: Option<String>,
-    /// Gravity in the robot's base link frame, m/s² [default: 0,0,-9.80665].
+    /// Gravity in the robot's base link frame, m/s² [default: 0,0,-9.80665]: the gravity
+    /// effects' and the verdict's gravity structure tests' direction.
     #[arg(
         long,
         value_name = "X,Y,Z",

@@ -47,6 +47,9 @@ pub fn text(outliers: Option<&OutliersDoc>, verdict: &VerdictDoc) -> String {
             );
         }
     }
+    if let Some(o) = outliers {
+        s.push_str(&given_back(o));
+    }
     let _ = writeln!(
         s,
         "verdict: {} ({}{})",
@@ -62,4 +65,88 @@ pub fn text(outliers: Option<&OutliersDoc>, verdict: &VerdictDoc) -> String {
         let _ = writeln!(s, "  {n}");
     }
     s
+}
+
+/// Text lines for the points given back, each with why (none: empty).
+fn given_back(o: &OutliersDoc) -> String {
+    let mut s = String::new();
+    if o.given_back.is_empty() {
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "outliers given back: {} point(s) an earlier judgement left out, given back by one against a model with effects (in the fit or the validation figures)",
+        o.given_back.len()
+    );
+    for g in &o.given_back {
+        let _ = writeln!(
+            s,
+            "  line {}{}, target {}{}: {}",
+            g.line,
+            g.config
+                .as_deref()
+                .map(|c| format!(", config {c}"))
+                .unwrap_or_default(),
+            g.target,
+            if g.split == "validation" {
+                " (validation)"
+            } else {
+                ""
+            },
+            g.reason,
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dh_workflows::fit::{GivenBackDoc, JudgedDoc};
+
+    fn judged(sigmas: f64, effects: &[&str]) -> JudgedDoc {
+        JudgedDoc {
+            residual: sigmas * 2e-5,
+            sigmas,
+            threshold: 4.2,
+            effects: effects.iter().map(|e| e.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn the_points_given_back_are_printed_with_why() {
+        let outliers = OutliersDoc {
+            level: 0.01,
+            scale: 2e-5,
+            scale_source: "known".into(),
+            threshold: 4.6,
+            kept: false,
+            rms_with: 4e-5,
+            rms_without: 4e-5,
+            effects: vec!["backlash_direction:j2".into()],
+            rounds: 1,
+            converged: true,
+            points: vec![],
+            given_back: vec![GivenBackDoc {
+                line: 13,
+                config: Some("p11".into()),
+                target: "t1".into(),
+                split: "validation".into(),
+                before: judged(5.2, &[]),
+                after: judged(1.9, &["backlash_direction:j2"]),
+                reason: "5.2 sigma against the geometric model, 1.9 sigma against the geometry \
+                         and backlash_direction:j2"
+                    .into(),
+            }],
+        };
+        let s = given_back(&outliers);
+        assert!(s.starts_with("outliers given back: 1 point(s)"), "{s}");
+        assert!(
+            s.contains(
+                "  line 13, config p11, target t1 (validation): 5.2 sigma against the geometric \
+                 model, 1.9 sigma against the geometry and backlash_direction:j2\n"
+            ),
+            "{s}"
+        );
+    }
 }

@@ -107,7 +107,8 @@ pub struct SimulateCli {
     #[arg(long = "effect", value_name = "LABEL=VALUE")]
     effects: Vec<String>,
     /// Link masses for the gravity effects (compliance:J, lateral_compliance:J, backlash:J), as
-    /// calibrate --inertials reads them; the truth file keeps them so that it predicts.
+    /// calibrate --inertials reads them; the truth file keeps them so that it predicts. A
+    /// gravity_sag:J needs none (its gravity: this file's `gravity`, else -z of the base).
     #[arg(long, value_name = "FILE")]
     inertials: Option<String>,
     /// A geometric error of the true robot, NAME=VALUE in metres or radians (e.g.

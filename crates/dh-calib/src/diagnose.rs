@@ -106,8 +106,9 @@ parameters) minus k*sigma^2*ln(m); refit the best in turn until one passes (a) F
 at alpha/K (Bonferroni over the K eligible candidates), (b) lower BIC on calibration data, (c) a \
 one-sided Wilcoxon signed-rank test at alpha, paired over pose groups, of the held-out squared errors \
 (validation split, else cross-validation); then refit its rivals (eligible candidates changing \
-the same quantity of the same joint, or the device scale) and add the best of those that pass \
-(lowest BIC; within 2 of it, lowest held-out RMS); of nested rivals (the terms of one among the \
+the same quantity of the same joint, or the device scale; a sag along gravity and the effects of \
+the gravity torques, one load) and add the best of those that pass (lowest BIC; within 2 of it, \
+lowest held-out RMS; rivals of one load, lowest held-out RMS); of nested rivals (the terms of one among the \
 other's) keep the simpler unless an extra-sum-of-squares F test finds the extra terms significant \
 at alpha; stop when none of the tried candidates passes; aliased candidates (sine < 1e-3) are \
 never selected";

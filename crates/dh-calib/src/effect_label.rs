@@ -18,6 +18,10 @@ pub struct EffectContext {
     pub tree: DhTree,
     /// Gravity torques; `None` when the robot has no inertials.
     pub gravity: Option<Arc<GravityModel>>,
+    /// Gravity in the base link frame (m/s²) for the effects that need its direction alone
+    /// (`gravity_sag`) when there are no inertials; [`EffectContext::gravity`]'s own vector
+    /// is used when there are. Default [`GravityModel::default_gravity`].
+    pub gravity_vector: nalgebra::Vector3<f64>,
 }
 
 impl EffectContext {
@@ -26,6 +30,7 @@ impl EffectContext {
         Self {
             tree: DhTree::serial(table),
             gravity: None,
+            gravity_vector: GravityModel::default_gravity(),
         }
     }
 }

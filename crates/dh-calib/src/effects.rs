@@ -18,6 +18,7 @@
 //! | `backlash_direction:J` | `theta_J += b · s_J`, `s_J` the sign of `J`'s last motion (`d_J` for a prismatic joint) | `backlash_direction:J` (rad; m) |
 //! | `drift` | device positions `× (1 + c · t)`, `t` the pose's place in the sequence in `[0, 1]` | `drift` (1) |
 //! | `thermal_growth` | robot positions `× (1 + k (1 − exp(−t/tau)))` about the base origin (every `a`, `d`, the tool and target offsets), `t` the sample's time since the set's first (s), or its place in the sequence without times | `thermal_growth.k` (1), `thermal_growth.ln_tau` (ln of tau in s) |
+//! | `gravity_sag:J` | tip and targets move `c · abs(l_J)³` along gravity, `l_J` the tip's gravity lever arm about `J`'s axis (m) | `gravity_sag:J` (1/m², metres of sag at a 1 m lever arm) |
 //!
 //! `backlash_direction`, `drift` and `thermal_growth` depend on the order (or the time) of the
 //! samples, not on the joint values alone: see [`crate::effects_order`] for `s_J` and `t`, and
@@ -31,6 +32,9 @@
 //! the gear flank changes over a small torque band instead of a discontinuous sign, which keeps
 //! the model differentiable. A backlash is in the list for explicit use; automatic diagnosis
 //! does not propose it (it is a rescaled compliance wherever the torque keeps its sign).
+//!
+//! `gravity_sag:J` needs the gravity direction alone (`--gravity`, else `-z` of the base link),
+//! not inertials: see [`GravitySag`] for the lever arm's frames and where a joint has none.
 //!
 //! `parallel_tilt:J` applies only where the model holds a tilt at zero, i.e. for a pair within
 //! [`crate::model::NEAR_PARALLEL`] of parallel that the geometric step does not already
@@ -182,6 +186,11 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
                 driver_row: k,
             }))
         }
+        "gravity_sag" => {
+            want(1)?;
+            let r = revolute(args[0])?;
+            Ok(Arc::new(GravitySag::new(label, ctx, args[0], r)?))
+        }
         "scale" => {
             want(0)?;
             Ok(Arc::new(Scale))
@@ -206,7 +215,7 @@ pub fn parse_label_in(label: &str, ctx: &EffectContext) -> Result<Arc<dyn Effect
         _ => Err(bad_label(
             label,
             format!(
-                "expected one of gear_ratio, gear_harmonic, gear_harmonic2, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash, backlash_direction, drift, thermal_growth; found '{kind}'"
+                "expected one of gear_ratio, gear_harmonic, gear_harmonic2, compliance, lateral_compliance, coupling, scale, parallel_tilt, backlash, backlash_direction, drift, thermal_growth, gravity_sag; found '{kind}'"
             ),
         )),
     }
@@ -244,7 +253,9 @@ pub struct Candidates {
 }
 
 /// Every applicable candidate for automatic diagnosis: per revolute joint `gear_ratio`,
-/// `gear_harmonic`, `gear_harmonic2`, `gear_harmonic:J:2` and, with inertials, `compliance`
+/// `gear_harmonic`, `gear_harmonic2`, `gear_harmonic:J:2`, `gravity_sag` (of a serial robot,
+/// where the joint's axis is not parallel to gravity: [`GravitySag`]; with inertials a rival
+/// of the compliances, decided by the held-out RMS) and, with inertials, `compliance`
 /// and `lateral_compliance` of joints that
 /// gravity loads (typical torque above 1e-6 of the largest; `compliance` also for prismatic
 /// joints); `coupling:J:K` for joints `K` within
@@ -288,6 +299,10 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
             if g.torque_scale(j, TorqueAxis::Lateral) > 1e-6 * big {
                 push(format!("lateral_compliance:{}", r.name));
             }
+        }
+        if r.kind == JointKind::Revolute {
+            // Refused (and so skipped) where the joint's axis is parallel to gravity.
+            push(format!("gravity_sag:{}", r.name));
         }
         if r.kind == JointKind::Revolute {
             for (k, o) in rows.iter().enumerate() {
@@ -334,5 +349,7 @@ pub fn candidates(ctx: &EffectContext, tilt_rows: &[usize]) -> Candidates {
 // other's items, re-exported here.
 mod models;
 pub use models::*;
+mod sag;
+pub use sag::{GravitySag, MIN_SAG_LEVER};
 #[cfg(test)]
 mod tests;

@@ -393,6 +393,26 @@ impl GravityModel {
         torque
     }
 
+    /// The gravity lever arm (metres) of the first chain's tip about row `row`'s axis at `q`,
+    /// at the nominal geometry in the base link frame: `l = z · ((p − o) × ĝ)`, `o`, `z` a
+    /// point of the axis and its unit direction, `p` the tip's origin (the table's tool
+    /// applied) and `ĝ` the unit gravity direction (the torque, N m, of a weight of 1 N at
+    /// the tip). 0 for a row or `q` out of range, or without gravity.
+    pub fn lever(&self, q: &[f64], row: usize) -> f64 {
+        let Some(at) = self.frames_at(q) else {
+            return 0.0;
+        };
+        let (Some(r), Some(tip)) = (self.tree.rows().get(row), at.frames.tips.first()) else {
+            return 0.0;
+        };
+        let norm = self.gravity.norm();
+        if norm == 0.0 {
+            return 0.0;
+        }
+        let (origin, z) = at.frames.axis(row, r);
+        z.dot(&(tip.translation.vector - origin).cross(&(self.gravity / norm)))
+    }
+
     /// Every row's torque about its joint axis at `q`.
     pub fn torques(&self, q: &[f64]) -> Vec<f64> {
         (0..self.tree.rows().len())

@@ -27,6 +27,13 @@
 //! the first round's least-squares fit, but its own residual stays far beyond any threshold,
 //! and the next round fits without it.
 //!
+//! Every judgement after the first carries the points it gave back ([`OutlierReport::given_back`]):
+//! how far off each was against the model that first left it out and against the model that gave it
+//! back (a later judgement updates the latter, so the diagnosis's report gives the figures
+//! against the final model). Validation points are judged again in the same way: a clean
+//! held-out pose that only an unmodelled effect put far off comes back into the held-out
+//! figures once the model has the effect.
+//!
 //! Validation samples are judged against the fit of the kept calibration points with the
 //! bound over their own number, and with a scale no smaller than the robust one of the
 //! validation residuals themselves (a fit that extrapolates badly to every held-out pose is a
@@ -100,6 +107,26 @@ pub struct Outlier {
     pub residual: f64,
     /// The same in units of the per-axis scale (`‖r / s‖`).
     pub sigmas: f64,
+    /// When an earlier judgement (against a model with fewer effects) left the point out
+    /// too, its figures there: the first judgement's (the geometric model's, in a diagnosis).
+    pub first: Option<Judged>,
+}
+
+impl Outlier {
+    /// The figures of the judgement that first left the point out: [`Outlier::first`], else
+    /// this one's, made by `report` (whose outlier it is).
+    pub fn first_judged(&self, report: &OutlierReport) -> Judged {
+        self.first.clone().unwrap_or_else(|| Judged {
+            residual: self.residual,
+            sigmas: self.sigmas,
+            threshold: if self.validation {
+                report.validation_threshold
+            } else {
+                report.threshold
+            },
+            effects: report.effects.clone(),
+        })
+    }
 }
 
 /// What the screen found.
@@ -113,6 +140,8 @@ pub struct OutlierReport {
     pub source: ScaleSource,
     /// Threshold on `‖r / s‖` for the calibration points.
     pub threshold: f64,
+    /// Threshold on `‖r / s‖` for the validation points (the bound over their own number).
+    pub validation_threshold: f64,
     /// The flagged points, in file order.
     pub outliers: Vec<Outlier>,
     /// `true` when they were kept in the fit (`--keep-outliers`).
@@ -129,6 +158,74 @@ pub struct OutlierReport {
     pub rounds: usize,
     /// `false` when [`MAX_ROUNDS`] ended the iteration before the flagged set settled.
     pub converged: bool,
+    /// The points an earlier judgement left out and a later one gave back (a judgement
+    /// against a model with effects the first did not have), in file order: they are in the
+    /// fit (calibration) or the held-out figures (validation). Empty for a first judgement.
+    pub given_back: Vec<GivenBack>,
+}
+
+/// How far off one point was against one model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Judged {
+    /// 3-D distance between modelled and measured point (metres).
+    pub residual: f64,
+    /// The same in units of the per-axis scale (`‖r / s‖`).
+    pub sigmas: f64,
+    /// The threshold on `sigmas` of that judgement (the point's split's).
+    pub threshold: f64,
+    /// The effects of the model besides the geometry (labels; empty: the geometric model).
+    pub effects: Vec<String>,
+}
+
+impl Judged {
+    /// `against the geometric model` or `against the geometry and <labels>`.
+    pub fn model(&self) -> String {
+        model_name(&self.effects)
+    }
+}
+
+/// `the geometric model` for no effects, else `the geometry and <labels>`.
+pub fn model_name(effects: &[String]) -> String {
+    if effects.is_empty() {
+        "the geometric model".into()
+    } else {
+        format!("the geometry and {}", effects.join(", "))
+    }
+}
+
+/// A point left out by one judgement and given back by a later one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GivenBack {
+    /// Index into [`Measurements::samples`].
+    pub sample: usize,
+    /// 1-based line of the sample in its file (0 when generated).
+    pub line: usize,
+    /// Pose identifier of the sample, when it has one.
+    pub config: Option<String>,
+    /// Target name.
+    pub target: String,
+    /// `true` for a validation sample.
+    pub validation: bool,
+    /// Against the model that first left it out (the geometric model, in a diagnosis).
+    pub before: Judged,
+    /// Against the model of the latest judgement (the final model's, in a diagnosis's report):
+    /// within its threshold, unless a later model put it beyond (it stays given back: a second
+    /// judgement only gives points back).
+    pub after: Judged,
+}
+
+impl GivenBack {
+    /// Why it was given back: `5.2 sigma against the geometric model, 1.1 sigma against the
+    /// geometry and backlash_direction:j2`.
+    pub fn reason(&self) -> String {
+        format!(
+            "{:.1} sigma against {}, {:.1} sigma against {}",
+            self.before.sigmas,
+            self.before.model(),
+            self.after.sigmas,
+            self.after.model()
+        )
+    }
 }
 
 impl OutlierReport {
@@ -139,6 +236,16 @@ impl OutlierReport {
             .filter(|o| !o.validation)
             .map(|o| o.sample)
             .collect()
+    }
+
+    /// Every flagged sample, calibration and validation, when they were left out (none with
+    /// `--keep-outliers`).
+    pub fn left_out(&self) -> BTreeSet<usize> {
+        if self.kept {
+            BTreeSet::new()
+        } else {
+            self.outliers.iter().map(|o| o.sample).collect()
+        }
     }
 
     /// `data` without the flagged samples.

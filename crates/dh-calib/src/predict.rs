@@ -402,6 +402,16 @@ impl Calibrated {
         })
     }
 
+    /// The value `c` of the model's `drift` effect (the device scale `1 + c · t` over the
+    /// session, `t` in `[0, 1]`; dimensionless), `None` without one.
+    pub fn drift(&self) -> Option<f64> {
+        self.model
+            .effects()
+            .into_iter()
+            .find(|(e, _)| e.label() == "drift")
+            .and_then(|(_, r)| self.x.get(r.start).copied())
+    }
+
     /// The `backlash_direction` effects of the model: (label, parameter index, row, `b`).
     pub fn backlash_effects(&self) -> Vec<(String, usize, usize, f64)> {
         self.model

@@ -101,6 +101,7 @@ fn humanoid_context(tree: &DhTree) -> EffectContext {
         gravity: Some(Arc::new(
             GravityModel::new(tree, &inertials, GravityModel::default_gravity()).unwrap(),
         )),
+        gravity_vector: GravityModel::default_gravity(),
     }
 }
 

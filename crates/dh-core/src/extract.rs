@@ -6,7 +6,10 @@
 //! Input lines and the tip pose are in the base link frame. The construction walks the axes
 //! keeping `S`, the current standard DH frame, whose z axis is the table's version of the
 //! current joint axis. Every row is computed in `S`'s own coordinates and `S` then advances by
-//! that row's transform, so snapping one pair never makes a later row inconsistent. The free
+//! that row's transform, so snapping one pair never makes a later row inconsistent; after an
+//! unsnapped step `S` lies on the next axis as given, and is put back there when its rounding
+//! has drifted (`reanchor`), so that errors do not compound along a long chain of skew axes.
+//! The tool is taken from the rows composed, the table's own forward kinematics. The free
 //! choices, made so that tables read like vendor sheets:
 //! - frame 0: z along joint 1 (its URDF direction, so `q` keeps its sign), origin at the point of
 //!   axis 1 nearest the base origin, x along x_1 so that `theta_1 = 0`; the base transform
@@ -228,6 +231,36 @@ const ILL_CONDITIONED_ANGLE: f64 = 0.1;
 /// Relative rounding allowance per transform in a chain, in units of machine epsilon.
 const ROUNDING_ULPS: f64 = 64.0;
 
+/// Drift of the walking frame from the axis it should lie on (radians of its z axis, and its
+/// origin's distance in units of the input scale) beyond which it is put back on that axis
+/// ([`reanchor`]): a thousand rounding units. A frame advanced row by row carries the rounding
+/// of every row before it, and on a long chain of skew axes each step amplifies what it
+/// receives (the feet of a common normal move by the error over the sine of the pair's
+/// angle): a helix of axes 0.3 rad apart grew it about 1.3x per joint, failing its proof at 80
+/// joints and reaching NaN at 103. Below this the frame is left as advanced, so that
+/// well-conditioned chains keep their values to the bit.
+const REANCHOR_DRIFT: f64 = 1e3 * f64::EPSILON;
+
+/// `frame` (a DH frame whose z axis should be `line`, in the same coordinates) moved onto
+/// `line` when it has drifted from it by more than [`REANCHOR_DRIFT`]: z along the line's
+/// direction (with the frame's sense), the origin at its foot on the line, x made orthogonal
+/// to the new z. `scale` (metres) turns the relative drift into a distance.
+fn reanchor(frame: Isometry3<f64>, line: &Line, scale: f64) -> Isometry3<f64> {
+    let z = frame.rotation * Vector3::z();
+    let origin = frame.translation.vector;
+    let e = line.direction();
+    let e = if z.dot(&e) < 0.0 { -e } else { e };
+    let foot = line.foot_of(&origin);
+    let tilt = (z - e).norm();
+    let shift = (origin - foot).norm();
+    if tilt <= REANCHOR_DRIFT && shift <= REANCHOR_DRIFT * scale {
+        return frame;
+    }
+    let x = frame.rotation * Vector3::x();
+    let x = (x - e * x.dot(&e)).normalize();
+    from_axes(foot, x, e)
+}
+
 /// A row computed in the current frame's coordinates, with the snap it needed.
 struct Step {
     theta: f64,
@@ -316,6 +349,9 @@ pub fn extract(
         })
         .collect();
     let mut last_standard_frame = frame;
+    // The table's own frames, the rows composed from the base: `frame` may be put back on its
+    // axis ([`reanchor`]), the table's forward kinematics is this.
+    let mut composed = frame;
     for i in 0..n {
         let ax = &axes[i];
         let step = match axes.get(i + 1) {
@@ -338,6 +374,7 @@ pub fn extract(
             // Absorb theta_1 into the base so that the table starts at theta_1 = 0.
             base = frame * rot_z(row.theta);
             frame = base;
+            composed = base;
             row.theta = 0.0;
             half_theta = HALF_OF_ZERO;
         }
@@ -369,17 +406,23 @@ pub fn extract(
                 });
             }
         }
-        last_standard_frame = frame;
+        last_standard_frame = composed;
         // `row.transform(Convention::Standard, 0.0)` (rows of an extraction have no tilt), from
         // the halves the step kept.
-        frame *= standard_from_halves(row.a, row.d, half_theta, half_alpha);
+        let advance = standard_from_halves(row.a, row.d, half_theta, half_alpha);
+        frame *= advance;
+        composed *= advance;
+        // An unsnapped step lands on the next axis as given: keep the walking frame there.
+        if let (Some(next), None) = (axes.get(i + 1), step.snap) {
+            frame = reanchor(frame, &next.line, input_scale);
+        }
         rows.push(row);
     }
 
     let mut table = DhTable {
         convention: Convention::Standard,
         base,
-        tool: frame.inverse() * tip,
+        tool: composed.inverse() * tip,
         rows,
     };
     if convention == Convention::Modified {
@@ -444,12 +487,10 @@ pub fn extract(
     })
 }
 
-/// Refuses a table with a value that is not a finite number: where the frames of a long chain
-/// of skew axes lose all precision (each DH frame is the previous one times the row's
-/// transform, and a 4000-joint helix of axes 0.3 rad apart grows its rounding about 1.5x per
-/// joint: 1e49 m at 100 joints, infinite and then NaN beyond 500), the table would carry NaN
-/// into every writer (JSON `null`); this is where it is born, and the error names the first
-/// joint whose parameters, or the base or tool, are lost.
+/// Refuses a table with a value that is not a finite number, naming the first joint whose
+/// parameters, or the base or tool, are lost, so that no writer carries NaN (JSON `null`). A
+/// guard: the frames of a long chain of skew axes once grew their rounding about 1.3x per joint
+/// (NaN at joint 103 of a helix of axes 0.3 rad apart), which [`reanchor`] now stops.
 fn check_extracted_finite(table: &DhTable) -> Result<(), CoreError> {
     let lost = |what: String, value: f64| CoreError::NonFinite {
         what: format!(

@@ -23,12 +23,13 @@ pub use dh_calib::pipeline::{
 
 // The findings beyond the fit: outliers, diagnosis, the verdict, and the test's level.
 pub use dh_calib::findings::DEFAULT_ALPHA;
-// How far from zero, in standard errors, an effect parameter must be to count as identified.
-pub use dh_calib::pipeline::IDENTIFIED_SIGMAS;
+// When a parameter counts as identified: an effect's estimate, in standard errors from zero; a
+// geometric parameter's standard error at the measured points, in noise floors.
 pub use dh_calib::pipeline::{
-    documents, DiagnosisDoc, OutlierDoc, OutliersDoc, RoundDoc, StructureDoc, TestDoc, TrialDoc,
-    VerdictDoc,
+    documents, DiagnosisDoc, GivenBackDoc, JudgedDoc, OutlierDoc, OutliersDoc, RoundDoc,
+    StructureDoc, TestDoc, TrialDoc, VerdictDoc,
 };
+pub use dh_calib::pipeline::{GEOMETRIC_FLOOR_RATIO, IDENTIFIED_SIGMAS};
 
 // Contacts (ball-in-socket layouts): the distances of each contact.
 pub use dh_calib::socket::{ContactDistance, SocketReport};

@@ -27,14 +27,15 @@ pub use source::{
 ///
 /// # Errors
 /// The file cannot be read; the message names it. Too long: [`urdf_axes::UrdfError::TooLarge`]
-/// in the context "`NAME`: invalid URDF".
+/// in the context "`NAME`: invalid robot file" (the format, told by the root element, is not
+/// known before the file is read).
 pub fn read_robot_bytes(path: &str) -> Result<Vec<u8>> {
     read_capped(path, urdf_axes::MAX_URDF_BYTES)?.map_err(|t| {
         anyhow::Error::new(urdf_axes::UrdfError::TooLarge {
             size: t.size,
             limit: t.limit,
         })
-        .context(format!("{}: invalid URDF", display_name(path)))
+        .context(format!("{}: invalid robot file", display_name(path)))
     })
 }
 

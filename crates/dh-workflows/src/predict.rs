@@ -84,6 +84,21 @@ pub fn backlash_warnings(model: &CalibratedModel, input: &JointInput) -> Vec<Str
         .collect()
 }
 
+/// The warning for a `drift` effect of `model` when `input`'s rows have no place in a sequence
+/// ([`in_sequence`]) and are predicted in the device frame: they are predicted at the session's
+/// start (`t = 0`, the device scale the calibration started with), which a pose measured later
+/// in the session misses by up to `|c|` times its distance from the device. `None` otherwise
+/// (the base link frame does not see the device's scale).
+pub fn drift_warning(model: &CalibratedModel, input: &JointInput, frame: Frame) -> Option<String> {
+    let c = model.calibrated.drift()?;
+    (frame == Frame::Device && input.contexts.is_empty() && !input.rows.is_empty()).then(|| {
+        format!(
+            "'drift' (c = {c:.3e}): the rows' place in the session is not known, predicted at the session's start (t = 0): a pose measured later is off by up to {:.1} ppm of its distance from the device, not in the uncertainty; give the rows in the order they were measured with --sequence to follow the drift",
+            c.abs() * 1e6
+        )
+    })
+}
+
 /// Reads `path`'s joint values for `model`'s measured columns ([`crate::measured::DataFile`],
 /// `units` the file's), or those of `given` (arrays a library caller hands over in `units`;
 /// `path` then only names them in messages).
@@ -357,6 +372,7 @@ pub fn predict(
     warnings.extend(limit_warnings(model, input, joints_name));
     warnings.extend(backlash_warnings(model, input));
     let contexts = timed_contexts(model, input)?;
+    warnings.extend(drift_warning(model, input, frame));
     // Blocks of rows on every core (each row depends on its own values alone).
     let blocks = input.rows.len().div_ceil(BLOCK_ROWS);
     let predict_block = |b: usize| -> Vec<Predicted> {

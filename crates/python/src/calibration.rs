@@ -253,7 +253,7 @@ type PredictOut = (
 /// ([`dh_workflows::predict::predict`], as `urdf-dh predict` computes them); `joints` are arrays,
 /// or None to read the file `joints_name`.
 #[pyfunction]
-#[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit))]
+#[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit, sequence))]
 #[allow(clippy::too_many_arguments)]
 fn predict(
     py: Python<'_>,
@@ -267,6 +267,7 @@ fn predict(
     session: Option<String>,
     length_unit: &str,
     angle_unit: &str,
+    sequence: bool,
 ) -> PyResult<PredictOut> {
     let go = || -> anyhow::Result<PredictOut> {
         let units = units(length_unit, angle_unit)?;
@@ -276,7 +277,10 @@ fn predict(
         let (frame, first) = frame_of(&mut calibrated, asked, session.as_deref(), &origin)?;
         warnings.splice(0..0, first);
         let given = joints.map(arrays).transpose()?;
-        let input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
+        let mut input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
+        if sequence {
+            dh_workflows::predict::in_sequence(&calibrated, &mut input);
+        }
         let p = dh_workflows::predict::predict(
             &calibrated,
             frame,
@@ -360,7 +364,7 @@ type CompensateOut = (Vec<Vec<f64>>, Vec<[f64; 4]>, Vec<String>, Vec<String>);
 /// Corrected joint values ([`dh_workflows::compensate::compensate`], as `urdf-dh compensate`
 /// computes them); `joints` are arrays, or None to read the file `joints_name`.
 #[pyfunction]
-#[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit))]
+#[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit, sequence))]
 #[allow(clippy::too_many_arguments)]
 fn compensate(
     py: Python<'_>,
@@ -374,6 +378,7 @@ fn compensate(
     max_change: Option<String>,
     length_unit: &str,
     angle_unit: &str,
+    sequence: bool,
 ) -> PyResult<CompensateOut> {
     let go = || -> anyhow::Result<CompensateOut> {
         let units = units(length_unit, angle_unit)?;
@@ -385,14 +390,21 @@ fn compensate(
             tip.as_deref(),
             Convention::Standard,
         )?;
-        let (calibrated, warnings) = calibrated(&model, None, None)?;
+        let (calibrated, mut warnings) = calibrated(&model, None, None)?;
         same_joints(
             &nominal_model.table,
             &calibrated,
             (&display_name(&nominal), &display_name(&model)),
         )?;
         let given = joints.map(arrays).transpose()?;
-        let input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
+        let mut input = read_joints(&joints_name, given.as_ref(), &calibrated, units)?;
+        if sequence {
+            dh_workflows::predict::in_sequence(&calibrated, &mut input);
+        }
+        warnings.extend(dh_workflows::predict::backlash_warnings(
+            &calibrated,
+            &input,
+        ));
         let options = CompensateOptions {
             orientation: !position_only,
             max_change,

@@ -20,7 +20,7 @@ pub enum UrdfError {
     },
     /// The document is larger than [`crate::MAX_URDF_BYTES`] (refused before reading it all).
     #[error(
-        "expected a urdf of at most {limit} bytes, found {}",
+        "expected a robot description of at most {limit} bytes, found {}",
         .size.map_or_else(|| "more".to_owned(), |s| format!("{s} bytes"))
     )]
     TooLarge {
@@ -319,6 +319,26 @@ pub enum UrdfError {
         /// Joints in the cycle.
         length: usize,
         /// Line of the first joint's `<mimic>`.
+        line: Option<usize>,
+    },
+    /// A chain of mimics (each joint following the next) whose composed map from the joint
+    /// that mimics none, `q = m · q_root + o`, has `|m|` or `|o|` beyond 1e9 (or overflows):
+    /// each link may be within range and the product still not (1e9 per link over 40 links
+    /// is beyond any float), so the joint's value over the root's range is not a number.
+    #[error(
+        "joint '{joint}'{}: mimic: expected its chain of drivers to '{root}' to compose to a multiplier and offset of magnitude at most 1e9, found {what} {value:e}",
+        at(.line)
+    )]
+    MimicChainOutOfRange {
+        /// The mimicking joint.
+        joint: String,
+        /// The joint at the end of its drivers, which mimics none.
+        root: String,
+        /// `multiplier` or `offset`.
+        what: &'static str,
+        /// The composed value (may be infinite).
+        value: f64,
+        /// Line of the joint's `<mimic>`.
         line: Option<usize>,
     },
     /// A `<mimic>` whose driver is not a revolute, continuous or prismatic joint.

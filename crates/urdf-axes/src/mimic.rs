@@ -1,9 +1,10 @@
 //! Mimic drivers over the whole model: each must exist, move, and lead to a joint that mimics
-//! none. Linear in the number of joints (each joint has at most one driver, so the drivers
-//! form a functional graph, walked once).
+//! none, through maps that compose to a finite one. Linear in the number of joints (each joint
+//! has at most one driver, so the drivers form a functional graph, walked once).
 
 use std::collections::HashMap;
 
+use crate::check::MAX_MAGNITUDE;
 use crate::robot::Joint;
 use crate::UrdfError;
 
@@ -11,7 +12,8 @@ use crate::UrdfError;
 const SHOWN_CYCLE: usize = 8;
 
 /// Records in [`Joint::fault`] a mimic of an undefined joint, of a joint that does not move,
-/// or a mimic cycle (on every joint of the cycle). Joints that already have a fault keep it.
+/// a mimic cycle (on every joint of the cycle), or a chain of drivers whose composed map is
+/// beyond [`MAX_MAGNITUDE`] ([`composed_out_of_range`]). Joints that already have a fault keep it.
 pub(crate) fn check_mimics(joints: &mut [Joint], index: &HashMap<String, usize>) {
     let n = joints.len();
     // Per joint: the index of its driver, for joints whose mimic is sound so far.
@@ -72,6 +74,70 @@ pub(crate) fn check_mimics(joints: &mut [Joint], index: &HashMap<String, usize>)
                     length,
                     line: j.mimic_line.or(Some(j.line)),
                 });
+            }
+            if let Some(slot) = driver.get_mut(k) {
+                *slot = None;
+            }
+        }
+    }
+    composed_out_of_range(joints, &driver);
+}
+
+/// Composes each joint's map from the joint at the end of its drivers, `q = m · q_root + o`
+/// (radians or metres), and records [`UrdfError::MimicChainOutOfRange`] on a joint whose `|m|`
+/// or `|o|` is beyond [`MAX_MAGNITUDE`] or not finite. `driver` holds each sound joint's driver
+/// and no cycle (cut by the caller). Each joint's map is computed once: a walk stops at a joint
+/// already composed, so the whole model costs O(joints).
+fn composed_out_of_range(joints: &mut [Joint], driver: &[Option<usize>]) {
+    let n = joints.len();
+    // Per joint: (multiplier, offset, root) once composed.
+    let mut map: Vec<Option<(f64, f64, usize)>> = vec![None; n];
+    let mut path = Vec::new();
+    for start in 0..n {
+        path.clear();
+        let mut k = start;
+        // Walk up to a composed joint or a root (a joint with no sound driver).
+        let (mut m, mut o, root) = loop {
+            if let Some(done) = map.get(k).copied().flatten() {
+                break done;
+            }
+            match driver.get(k).copied().flatten() {
+                Some(d) if path.len() < n => {
+                    path.push(k);
+                    k = d;
+                }
+                _ => {
+                    if let Some(slot) = map.get_mut(k) {
+                        *slot = Some((1.0, 0.0, k));
+                    }
+                    break (1.0, 0.0, k);
+                }
+            }
+        };
+        // Compose back down: q_j = m_j · q_driver + o_j.
+        for &j in path.iter().rev() {
+            let Some(spec) = joints.get(j).and_then(|jt| jt.mimic.as_ref()) else {
+                continue;
+            };
+            m *= spec.multiplier;
+            o = spec.multiplier * o + spec.offset;
+            if let Some(slot) = map.get_mut(j) {
+                *slot = Some((m, o, root));
+            }
+            let bad = [("multiplier", m), ("offset", o)]
+                .into_iter()
+                .find(|(_, v)| !v.is_finite() || v.abs() > MAX_MAGNITUDE);
+            let root_name = joints.get(root).map(|r| r.name.clone()).unwrap_or_default();
+            if let (Some((what, value)), Some(jt)) = (bad, joints.get_mut(j)) {
+                if jt.fault.is_none() {
+                    jt.fault = Some(UrdfError::MimicChainOutOfRange {
+                        joint: jt.name.clone(),
+                        root: root_name,
+                        what,
+                        value,
+                        line: jt.mimic_line.or(Some(jt.line)),
+                    });
+                }
             }
         }
     }

@@ -250,3 +250,66 @@ fn overflow_while_composing() {
     );
     assert_message(&e, &["joint 'far'", "origin xyz", "1e308", "line 3"]);
 }
+
+/// A serial chain `l0 -> l1 -> ... -> ln` of revolute joints `j1..jn`, each `jk` (k > 1)
+/// mimicking `j(k-1)` with `multiplier` and `offset`.
+fn mimic_chain(n: usize, multiplier: &str, offset: &str) -> UrdfModel {
+    let mut l = vec![
+        "<robot name=\"mimics\">".to_owned(),
+        "<link name=\"l0\"/>".to_owned(),
+    ];
+    for k in 1..=n {
+        let mimic = if k > 1 {
+            format!(
+                "<mimic joint=\"j{}\" multiplier=\"{multiplier}\" offset=\"{offset}\"/>",
+                k - 1
+            )
+        } else {
+            String::new()
+        };
+        l.push(format!(
+            "<link name=\"l{k}\"/><joint name=\"j{k}\" type=\"revolute\"><parent link=\"l{}\"/>\
+             <child link=\"l{k}\"/><origin xyz=\"0 0 0.1\"/><axis xyz=\"0 {} {}\"/>\
+             <limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>{mimic}</joint>",
+            k - 1,
+            k % 2,
+            (k + 1) % 2
+        ));
+    }
+    l.push("</robot>".to_owned());
+    let refs: Vec<&str> = l.iter().map(String::as_str).collect();
+    UrdfModel::parse(&lines(&refs)).expect("each mimic is within range")
+}
+
+/// Mimics within range one by one can compose beyond any joint value (1e9 per link over 40
+/// links overflows to infinity, which the proof then printed as `inf m`): the first joint
+/// whose composed multiplier or offset is beyond 1e9 is refused, naming the root; the chain
+/// before it is still read.
+#[test]
+fn a_chain_of_mimics_that_composes_beyond_range_is_refused() {
+    let m = mimic_chain(40, "1e9", "0");
+    let e = m.chain(None, Some("l40")).unwrap_err();
+    let UrdfError::MimicChainOutOfRange {
+        joint, root, what, ..
+    } = &e
+    else {
+        panic!("got {e:?}")
+    };
+    assert_eq!(
+        (joint.as_str(), root.as_str(), *what),
+        ("j3", "j1", "multiplier")
+    );
+    assert_message(&e, &["joint 'j3'", "'j1'", "multiplier 1e18"]);
+    assert!(
+        m.chain(None, Some("l2")).is_ok(),
+        "j2 = 1e9 q1 is within range"
+    );
+    // Offsets compose too: o3 = m3 o2 + o3 = 1e4 · 1e5 + 1e5 (the multiplier 1e8 is in range).
+    let offsets = mimic_chain(3, "1e4", "1e5");
+    let e = offsets.chain(None, Some("l3")).unwrap_err();
+    assert_message(&e, &["joint 'j3'", "offset 1.0001e9"]);
+    // A long chain of unit mimics (4000 links) stays within range and costs linear time.
+    assert!(mimic_chain(4000, "1", "0.001")
+        .chain(None, Some("l4000"))
+        .is_ok());
+}

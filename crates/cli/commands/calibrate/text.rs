@@ -256,23 +256,38 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
             if p.identified { "" } else { "  not identified" }
         );
     }
-    let unidentified: Vec<&str> = doc
-        .parameters
-        .iter()
-        .filter(|p| p.free && !p.identified)
-        .map(|p| p.name.as_str())
-        .collect();
-    if !unidentified.is_empty() {
+    let unidentified = |effects: bool| -> Vec<String> {
+        doc.parameters
+            .iter()
+            .filter(|p| p.free && !p.identified && p.is_effect() == effects)
+            .map(|p| crate::guard::escape(&p.name).into_owned())
+            .collect()
+    };
+    let effects = unidentified(true);
+    if !effects.is_empty() {
         let _ = writeln!(
             s,
             "not identified by this data ({}): {}: each estimate is within {} standard errors of zero, as consistent with no effect as with the estimate; kept in the model, its uncertainty covers zero",
-            unidentified.len(),
-            unidentified
-                .iter()
-                .map(|n| crate::guard::escape(n))
-                .collect::<Vec<_>>()
-                .join(", "),
+            effects.len(),
+            effects.join(", "),
             dh_workflows::fit::IDENTIFIED_SIGMAS
+        );
+    }
+    let geometric = unidentified(false);
+    if !geometric.is_empty() {
+        let _ = writeln!(
+            s,
+            "geometric parameters not identified by this data ({}): {}: each standard error, as a length at the measured points, exceeds {} x {} ({} {}): the poses barely tell it from the others; kept at its estimate, its uncertainty is what the data allow",
+            geometric.len(),
+            geometric.join(", "),
+            dh_workflows::fit::GEOMETRIC_FLOOR_RATIO,
+            if doc.noise_floor.is_some() {
+                "the noise floor"
+            } else {
+                "the fit's RMS residual (the noise is not known)"
+            },
+            l(doc.noise_floor.unwrap_or(doc.rms_after)),
+            lu.symbol()
         );
     }
     let rpy = |r: [f64; 3]| {

@@ -170,6 +170,7 @@ pub(crate) fn context(robot: &Robot) -> Result<EffectContext, Error> {
     Ok(EffectContext {
         tree: robot.tree.clone(),
         gravity,
+        gravity_vector: robot.gravity,
     })
 }
 

@@ -27,6 +27,11 @@ pub struct CalibrationOptions {
     /// Outlier screening before the fit ([`crate::outliers`]): on by default, flagged points
     /// left out unless `keep`.
     pub outliers: crate::outliers::OutlierOptions,
+    /// The gravity of the verdict's gravity structure tests (`structure`): its direction for
+    /// the lever arms and, when it has link masses, the torques about each joint. `None`:
+    /// gravity along `-z` of the base link, no torque test. [`crate::diagnose`] sets it from
+    /// its inertials and gravity.
+    pub gravity: Option<Arc<crate::gravity::GravityModel>>,
 }
 
 impl Default for CalibrationOptions {
@@ -41,6 +46,7 @@ impl Default for CalibrationOptions {
             effects: Vec::new(),
             target_branches: Vec::new(),
             outliers: crate::outliers::OutlierOptions::default(),
+            gravity: None,
         }
     }
 }

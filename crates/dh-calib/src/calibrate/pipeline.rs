@@ -85,13 +85,13 @@ pub(crate) struct Fitted<'a> {
 
 /// Builds the session of `data` with `effects` and runs its geometric step. The screen judges
 /// the points against the geometry and `judged_with` (declared effects, or those a diagnosis
-/// selected), flagging only samples `within` when given; without them its first round is
+/// selected), flagging only samples the judgement `before` left out when given; without them its first round is
 /// that fit (the same calibration samples, the
 /// geometric parameters fitted without effects), so data without outliers are fitted once. When the screen leaves samples out
 /// (and they are not kept), the session is built anew from the samples kept, placed in the
 /// whole file's sequence: a dropped pose was still visited, so the direction of the next
 /// one's motion and the time are the file's. `screened`: the findings of that screen, made
-/// before (by [`screen_from`] with no first round, the same `judged_with` and `within`), used
+/// before (by [`screen_from`] with no first round, the same `judged_with` and `before`), used
 /// instead of screening again. The geometric step's cross-validation folds are fitted as
 /// `folds` says.
 pub(crate) fn fitted_session<'a>(
@@ -99,10 +99,7 @@ pub(crate) fn fitted_session<'a>(
     data: &Measurements,
     options: &'a CalibrationOptions,
     effects: &[Arc<dyn Effect>],
-    (judged_with, within): (
-        &[Arc<dyn Effect>],
-        Option<&std::collections::BTreeSet<usize>>,
-    ),
+    (judged_with, before): (&[Arc<dyn Effect>], Option<&crate::outliers::OutlierReport>),
     screened: Option<crate::outliers::OutlierReport>,
     folds: Folds,
 ) -> Result<Fitted<'a>, CalibError> {
@@ -141,7 +138,7 @@ pub(crate) fn fitted_session<'a>(
             options,
             Some((&session, &geo)),
             judged_with,
-            within,
+            before,
         )?,
     };
     if scan.kept || scan.outliers.is_empty() {

@@ -7,7 +7,8 @@ use std::collections::BTreeSet;
 use super::*;
 use crate::data::Split;
 use crate::outliers::{
-    threshold, Outlier, OutlierReport, ScaleSource, CHI2_3_MEDIAN, MAX_ROUNDS, MIN_SCALE,
+    threshold, GivenBack, Judged, Outlier, OutlierReport, ScaleSource, CHI2_3_MEDIAN, MAX_ROUNDS,
+    MIN_SCALE,
 };
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -55,9 +56,11 @@ pub(crate) fn check_level(options: &CalibrationOptions) -> Result<(), CalibError
     Ok(())
 }
 
-/// [`screen`] against the geometry and `effects`, flagging only calibration samples in
-/// `within` when given (a second judgement gives points back, never takes more), whose first
-/// round is `first` (used only without `effects`): a session of all of `data` (prepared in its own order) whose geometric
+/// [`screen`] against the geometry and `effects`, flagging only the samples (calibration and
+/// validation) that the judgement `before` left out when given (a second judgement gives
+/// points back, never takes more): the report's [`OutlierReport::given_back`] lists those it
+/// gives back with their figures against both models, and carries `before`'s, judged against
+/// this model. Its first round is `first` (used only without `effects`): a session of all of `data` (prepared in its own order) whose geometric
 /// step has run. Its calibration samples are those the first round fits, and its geometric
 /// parameters are fitted without effects, so the round needs no fit of its own (on millions
 /// of samples, the fit is most of a calibration's time).
@@ -67,9 +70,25 @@ pub(crate) fn screen_from(
     options: &CalibrationOptions,
     first: Option<(&Session<'_>, &Geometric)>,
     effects: &[Arc<dyn Effect>],
-    within: Option<&BTreeSet<usize>>,
+    before: Option<&OutlierReport>,
 ) -> Result<OutlierReport, CalibError> {
     let first = first.filter(|_| effects.is_empty());
+    let within: Option<BTreeSet<usize>> =
+        before.map(|b| b.outliers.iter().map(|o| o.sample).collect());
+    // The points whose figures the report gives: those `before` left out or gave back.
+    let watched: BTreeSet<usize> = before
+        .iter()
+        .flat_map(|b| {
+            b.outliers
+                .iter()
+                .map(|o| o.sample)
+                .chain(b.given_back.iter().map(|g| g.sample))
+        })
+        .collect();
+    let labels: Vec<String> = effects
+        .iter()
+        .map(|e| crate::effects::label_of(e.as_ref()))
+        .collect();
     let level = options.outliers.level;
     let own_full;
     let full = match first {
@@ -215,6 +234,7 @@ pub(crate) fn screen_from(
         };
         let mut now = BTreeSet::new();
         let mut found = Vec::new();
+        let mut seen = std::collections::HashMap::new();
         let mut source = ScaleSource::Robust;
         for (i, (v, k)) in (0..n).map(place).enumerate() {
             let r = if v { &val_r[k] } else { &cal_r[k] };
@@ -225,7 +245,10 @@ pub(crate) fn screen_from(
                 source = src;
                 t
             };
-            let eligible = v || within.is_none_or(|w| w.contains(&i));
+            if watched.contains(&i) {
+                seen.insert(i, (r.norm(), t));
+            }
+            let eligible = within.as_ref().is_none_or(|w| w.contains(&i));
             if eligible && t > if v { t_val } else { t_cal } {
                 now.insert(i);
                 let s = &data.samples[i];
@@ -237,12 +260,53 @@ pub(crate) fn screen_from(
                     validation: v,
                     residual: r.norm(),
                     sigmas: t,
+                    first: before.and_then(|b| {
+                        b.outliers
+                            .iter()
+                            .find(|o| o.sample == i)
+                            .map(|o| o.first_judged(b))
+                    }),
                 });
             }
         }
         let now_cal: BTreeSet<usize> = now.iter().copied().filter(|&i| !place(i).0).collect();
         let settled = now_cal == flagged;
         if settled || rounds >= MAX_ROUNDS {
+            let judged = |i: usize, validation: bool| {
+                let (residual, sigmas) = seen.get(&i).copied().unwrap_or((0.0, 0.0));
+                Judged {
+                    residual,
+                    sigmas,
+                    threshold: if validation { t_val } else { t_cal },
+                    effects: labels.clone(),
+                }
+            };
+            let given_back = match before {
+                None => Vec::new(),
+                Some(b) => {
+                    let mut g: Vec<GivenBack> =
+                        b.given_back
+                            .iter()
+                            .map(|g| GivenBack {
+                                after: judged(g.sample, g.validation),
+                                ..g.clone()
+                            })
+                            .chain(b.outliers.iter().filter(|o| !now.contains(&o.sample)).map(
+                                |o| GivenBack {
+                                    sample: o.sample,
+                                    line: o.line,
+                                    config: o.config.clone(),
+                                    target: o.target.clone(),
+                                    validation: o.validation,
+                                    before: o.first_judged(b),
+                                    after: judged(o.sample, o.validation),
+                                },
+                            ))
+                            .collect();
+                    g.sort_by_key(|g| g.sample);
+                    g
+                }
+            };
             let known_scale = (0..data.samples.len())
                 .filter_map(known)
                 .map(|s| s.norm() / 3f64.sqrt())
@@ -261,16 +325,15 @@ pub(crate) fn screen_from(
                 },
                 source,
                 threshold: t_cal,
+                validation_threshold: t_val,
                 outliers: found,
+                given_back,
                 kept: options.outliers.keep,
                 rms_with: rms_with.unwrap_or(rms),
                 rms_without: Stats::of(&without).map_or(0.0, |s| s.rms),
                 rounds,
                 converged: settled,
-                effects: effects
-                    .iter()
-                    .map(|e| crate::effects::label_of(e.as_ref()))
-                    .collect(),
+                effects: labels,
             });
         }
         flagged = now_cal;

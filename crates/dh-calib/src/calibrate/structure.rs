@@ -31,16 +31,21 @@
 //! joint `j` the lever arm of the tip about its axis under gravity (metres),
 //!
 //! ```text
-//! l_j = z_j · ((p − o_j) × ĝ),   ĝ = −z of the robot's base link frame,
+//! l_j = z_j · ((p − o_j) × ĝ),   ĝ the unit gravity direction of the base link frame,
 //! ```
 //!
 //! (`o_j`, `z_j` the axis' point and direction, `p` the tip's origin, all at the nominal
-//! geometry in the base link frame; the torque of a unit weight at the tip), is a variable:
-//! the pose-mean residuals (per target, as the joints' tests) are regressed on `1, l, l², l³`
+//! geometry in the base link frame; the torque of a unit weight at the tip; `ĝ` from
+//! [`super::CalibrationOptions::gravity`], `--gravity`, else `−z`), is a variable: the
+//! pose-mean residuals (per target, as the joints' tests) are regressed on `1, l, l², l³`
 //! (`l` in units of the arm's size), per device axis, F test as the joints'. A joint whose
-//! lever arm stays below [`MIN_LEVER`] of the arm's size over the poses (a vertical axis)
-//! has no test. Variable `gravity lever at <joint>`. Serial robots only (a tree's branches
-//! carry their own tips).
+//! lever arm stays below [`MIN_LEVER`] of the arm's size over the poses (an axis along
+//! gravity) has no test. Variable `gravity lever at <joint>`. With link masses (inertials),
+//! the gravity torque `tau_j` about each joint's axis ([`crate::gravity`], N m, nominal
+//! geometry) is a variable too, the same way (`tau` in units of its RMS over the poses): a
+//! compliance or sag that follows the load rather than the tip's reach. A joint whose torque
+//! stays below [`MIN_TORQUE`] of the largest joint's has no test. Variable `gravity torque at
+//! <joint>`. Serial robots only (a tree's branches carry their own tips).
 
 use dh_core::{Convention, DhTable, JointKind};
 use nalgebra::{DMatrix, Vector3};
@@ -48,6 +53,7 @@ use nalgebra::{DMatrix, Vector3};
 use super::{Prepared, Session};
 use crate::findings::StructureCheck;
 use crate::fit;
+use crate::gravity::TorqueAxis;
 use crate::model::Observation;
 use crate::stats;
 
@@ -55,6 +61,11 @@ use crate::stats;
 /// size gets no lever test (its axis is vertical or runs through the tip): the residual cannot
 /// depend on a variable that does not vary.
 pub(crate) const MIN_LEVER: f64 = 0.05;
+
+/// A joint whose gravity torque has an RMS over the poses below this fraction of the largest
+/// joint's gets no torque test (its axis is along gravity, or it carries no mass): as the
+/// compliance candidates' bound ([`crate::effects::candidates`]).
+pub(crate) const MIN_TORQUE: f64 = 1e-6;
 
 /// Beyond this many units (pose means per target for the lever tests, pose groups for the
 /// time test) the tests read an evenly spaced subset of them: a lever arm costs a forward
@@ -190,33 +201,65 @@ pub(super) fn time_check(
     })
 }
 
-/// The joints of `session`'s robot whose gravity lever arm varies enough to be tested, with
-/// each unit's lever arm (metres; the unit's first sample's joint values): `(row, levers)`.
+/// A gravity structure variable of the verdict (see the module docs): its name, its value at
+/// each picked unit, and the scale it is divided by before its powers are taken (the arm's
+/// size for a lever arm, metres; the values' RMS for a torque, N m).
+pub(super) struct GravityVariable {
+    pub(super) variable: String,
+    pub(super) values: Vec<f64>,
+    pub(super) scale: f64,
+}
+
+/// The gravity structure variables of `session`'s robot: the lever arm (metres) of each
+/// joint whose lever arm varies enough to be tested, then, when the calibration's gravity has
+/// link masses ([`super::CalibrationOptions::gravity`]), the gravity torque (N m) of each
+/// joint it loads, at each unit (the unit's first sample's joint values): `(picked, variables)`.
 /// `units` are the first samples of the units (`None`: unit `u` is sample `u`). Empty for a
 /// tree.
-pub(super) fn lever_arms(
+pub(super) fn gravity_variables(
     session: &Session<'_>,
     units: Option<&[usize]>,
     count: usize,
-) -> (Vec<usize>, Vec<(usize, Vec<f64>)>) {
+) -> (Vec<usize>, Vec<GravityVariable>) {
     let tree = session.model.tree();
     if !tree.branches().is_empty() || count == 0 {
         return (Vec::new(), Vec::new());
     }
     let table: &DhTable = tree.trunk();
     let rows = &table.rows;
+    // The unit gravity direction in the base link frame.
+    let down = session
+        .options
+        .gravity
+        .as_ref()
+        .map(|g| g.gravity())
+        .filter(|g| g.norm() > 0.0 && g.iter().all(|v| v.is_finite()))
+        .map_or(-Vector3::z(), |g| g / g.norm());
+    let masses = session
+        .options
+        .gravity
+        .as_ref()
+        .filter(|g| g.tree().rows().len() == rows.len() && g.carried_mass(0) > 0.0);
     let step = count.div_ceil(UNITS_MAX).max(1);
     let picked: Vec<usize> = (0..count).step_by(step).collect();
     let mut levers: Vec<Vec<f64>> = vec![Vec::with_capacity(picked.len()); rows.len()];
+    let mut torques: Vec<Vec<f64>> = match masses {
+        Some(_) => vec![Vec::with_capacity(picked.len()); rows.len()],
+        None => Vec::new(),
+    };
     for &u in &picked {
         let i = units.map_or(u, |f| f[u]);
+        let q = session.prep.cal.get(i).map(|o| &o.q[..]);
+        if let (Some(g), Some(q)) = (masses, q) {
+            for (j, t) in torques.iter_mut().enumerate() {
+                t.push(g.torque(q, j, TorqueAxis::Joint));
+            }
+        } else {
+            torques.iter_mut().for_each(|t| t.push(0.0));
+        }
         // A sample whose joint values the table cannot take (none reach here: the model
         // checked them) has no lever arm: 0 keeps the lists aligned with `picked`.
-        let frames = session
-            .prep
-            .cal
-            .get(i)
-            .and_then(|o| table.frames(&o.q).ok());
+        let frames = q.and_then(|q| table.frames(q).ok());
         let Some(frames) = frames else {
             levers.iter_mut().for_each(|l| l.push(0.0));
             continue;
@@ -230,7 +273,7 @@ pub(super) fn lever_arms(
             let l = if r.kind == JointKind::Revolute {
                 let z = axis.rotation * Vector3::z();
                 let arm = tip.translation.vector - axis.translation.vector;
-                z.dot(&arm.cross(&-Vector3::z()))
+                z.dot(&arm.cross(&down))
             } else {
                 0.0
             };
@@ -238,34 +281,46 @@ pub(super) fn lever_arms(
         }
     }
     let size = table.size().max(f64::MIN_POSITIVE);
-    let tested = levers
+    let rms = |l: &[f64]| (l.iter().map(|v| v * v).sum::<f64>() / l.len().max(1) as f64).sqrt();
+    let mut tested: Vec<GravityVariable> = levers
         .into_iter()
         .enumerate()
-        .filter(|(j, l)| {
-            rows[*j].mimic.is_none()
-                && !l.is_empty()
-                && (l.iter().map(|v| v * v).sum::<f64>() / l.len() as f64).sqrt()
-                    >= MIN_LEVER * size
+        .filter(|(j, l)| rows[*j].mimic.is_none() && !l.is_empty() && rms(l) >= MIN_LEVER * size)
+        .map(|(j, values)| GravityVariable {
+            variable: format!("gravity lever at {}", rows[j].name),
+            values,
+            scale: size,
         })
         .collect();
+    // A torque test where the joint carries a torque above `MIN_TORQUE` of the largest one's
+    // RMS (a joint whose axis is along gravity carries none).
+    let biggest = torques.iter().map(|t| rms(t)).fold(0.0, f64::max);
+    for (j, values) in torques.into_iter().enumerate() {
+        let scale = rms(&values);
+        if rows[j].mimic.is_none() && biggest > 0.0 && scale >= MIN_TORQUE * biggest {
+            tested.push(GravityVariable {
+                variable: format!("gravity torque at {}", rows[j].name),
+                values,
+                scale,
+            });
+        }
+    }
     (picked, tested)
 }
 
-/// The lever test of joint `row` (see the module docs): the unit means `means` at the units
-/// `picked` (indices into `means`) against the lever arms `levers` (metres, one per picked
-/// unit), F test at `level`; the bins of the picked units' means against the lever arm.
-#[allow(clippy::too_many_arguments)]
+/// The test of the gravity variable `var` (see the module docs): the unit means `means` at
+/// the units `picked` (indices into `means`) against `1, v, v², v³` (`v` the variable over
+/// its scale), F test at `level`; the bins of the picked units' means against the variable.
 pub(super) fn lever_check(
-    session: &Session<'_>,
-    row: usize,
+    var: &GravityVariable,
     picked: &[usize],
-    levers: &[f64],
     means: &[Vector3<f64>],
     free: usize,
     level: f64,
     bins: impl Fn(&[f64], &[Vector3<f64>]) -> Vec<(f64, f64, f64)>,
 ) -> Option<StructureCheck> {
-    let size = session.model.tree().trunk().size().max(f64::MIN_POSITIVE);
+    let size = var.scale.max(f64::MIN_POSITIVE);
+    let levers = &var.values;
     let nb = 4;
     let mut qr = fit::Tsqr::new(nb + 3);
     let mut x = [0.0; 7];
@@ -287,7 +342,7 @@ pub(super) fn lever_check(
     let share = (free as f64 * picked.len() as f64 / means.len().max(1) as f64).round() as usize;
     let (f, p) = f_test(&r, nb, 3, ss, 3 * picked.len(), share, true)?;
     Some(StructureCheck {
-        variable: format!("gravity lever at {}", session.model.tree().rows()[row].name),
+        variable: var.variable.clone(),
         statistic: f,
         p_value: p,
         significant: p < level,

@@ -369,7 +369,7 @@ fn structure_checks(
         .collect();
     // The gravity lever arms of the joints that have one (see `structure`), read first: their
     // count is part of the Bonferroni level of every test.
-    let (picked, levers) = super::structure::lever_arms(session, firsts, means.len());
+    let (picked, levers) = super::structure::gravity_variables(session, firsts, means.len());
     // Each joint, the pose order, time, and each gravity lever arm.
     let k_tests = (joints.len() + 2 + levers.len()) as f64;
     let level = alpha / k_tests;
@@ -382,13 +382,11 @@ fn structure_checks(
             // this thread instead.
             Err(_) => joints.iter().filter_map(|&j| check(j)).collect(),
         };
-    for (row, l) in &levers {
+    for var in &levers {
         let bin = |v: &[f64], m: &[Vector3<f64>]| bins(|| v.iter().copied(), m, 8);
         out.extend(super::structure::lever_check(
-            session,
-            *row,
+            var,
             &picked,
-            l,
             means,
             fit.free.len(),
             level,

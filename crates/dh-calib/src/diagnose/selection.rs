@@ -3,9 +3,7 @@
 //! refit and judge the best and their rivals, add the winner, repeat; then the final
 //! residual's structure and the notes.
 
-use std::collections::BTreeSet;
-
-use crate::outliers::OutlierReport;
+use crate::outliers::{GivenBack, OutlierReport};
 
 use super::*;
 
@@ -44,6 +42,7 @@ pub(crate) fn effect_context(
     Ok(EffectContext {
         tree: tree.clone(),
         gravity,
+        gravity_vector: diag.gravity,
     })
 }
 
@@ -57,12 +56,15 @@ pub(crate) fn effect_context(
 /// The outlier screen first judges the points against the geometric fit, before any effect is
 /// known; a pose that only an unmodelled effect puts far off (the most gravity-loaded poses
 /// before a compliance is added) is then left out, and with it the evidence for that effect.
-/// So when points were left out, they are judged again against the geometry and the effects
-/// selected so far once the selection has added 1, 2, 4, 8... effects, and at its end (a
-/// second judgement only gives points back: the tighter scale of a better model never takes
-/// more); as soon as it gives some back, the selection stops and runs again from the start
-/// with them, judged against those effects (at most [`MAX_REJUDGE`] times), and a note says
-/// so; the points given back are then judged against the final model too, in a second note.
+/// So when points were left out (calibration or validation), they are judged again against
+/// the geometry and the effects selected so far once the selection has added 1, 2, 4, 8...
+/// effects, and at its end (a second judgement only gives points back: the tighter scale of a
+/// better model never takes more); as soon as it gives some back, the selection stops and
+/// runs again from the start with them (in the fit, or in the held-out figures), judged
+/// against those effects (at most [`MAX_REJUDGE`] times), and a note says so; the points given
+/// back are then judged against the final model too, in a second note, and the report's
+/// [`OutlierReport::given_back`] gives each one's figures against the model that left it out
+/// and against the final model.
 /// Declared labels are judged with from the start.
 ///
 /// # Errors
@@ -75,7 +77,7 @@ pub fn diagnose_tree(
     diag: &DiagnoseOptions,
 ) -> Result<Report, CalibError> {
     let mut judged: Option<Rejudged> = None;
-    let mut first_left = BTreeSet::new();
+    let mut first_left = 0;
     let mut passes = 0;
     loop {
         match diagnose_judged(
@@ -88,34 +90,46 @@ pub fn diagnose_tree(
         )? {
             Judgement::Again(again) => {
                 if passes == 0 {
-                    first_left = again.1.clone();
+                    first_left = again.1.left_out().len();
                 }
                 judged = Some(*again);
                 passes += 1;
             }
             Judgement::Final(mut report, confirmed, effects) => {
-                let left = left_out(report.outliers.as_ref()).unwrap_or_default();
-                let count = left.len();
+                let count = report.outliers.as_ref().map_or(0, |s| s.left_out().len());
+                // The judgement against the final model, when one was made at the end of the
+                // run, carries the figures of the points given back against that model.
+                let final_judgement = match &confirmed {
+                    Some((_, again)) => Some(again.clone()),
+                    None if passes > 0 => given_back_check(tree, data, options, &report, &effects)?,
+                    None => None,
+                };
+                let judged_with = report
+                    .outliers
+                    .as_ref()
+                    .map(|s| s.effects.clone())
+                    .unwrap_or_default();
+                if let (Some(scan), Some(check)) = (report.outliers.as_mut(), &final_judgement) {
+                    scan.given_back = check.given_back.clone();
+                }
                 if passes > 0 {
-                    let judged = report
-                        .outliers
-                        .as_ref()
-                        .map(|s| s.effects.join(", "))
-                        .unwrap_or_default();
                     report.notes.push(format!(
-                        "outliers judged again against the geometry and {judged}: {count} \
-                         point(s) left out instead of the {} of the geometric fit; \
+                        "outliers judged again against the geometry and {}: {count} \
+                         point(s) left out instead of the {first_left} of the geometric fit; \
                          the selection ran again with the points given back ({passes} time(s))",
-                        first_left.len()
+                        judged_with.join(", ")
                     ));
-                    let given_back: BTreeSet<usize> =
-                        first_left.difference(&left).copied().collect();
-                    if let Some(note) =
-                        given_back_check(tree, data, options, &report, &effects, &given_back)?
+                    if let Some(check) = final_judgement
+                        .as_ref()
+                        .filter(|_| judged_with != report.selected_effects)
                     {
-                        report.notes.push(note);
+                        report.notes.push(given_back_note(
+                            &check.given_back,
+                            effects.len(),
+                            check.threshold,
+                        ));
                     }
-                } else if let Some(with) = confirmed {
+                } else if let Some((with, _)) = confirmed {
                     report.notes.push(format!(
                         "the {count} point(s) left out are outliers of the final model too \
                          (judged again against the geometry and {with})"
@@ -127,37 +141,47 @@ pub fn diagnose_tree(
     }
 }
 
-/// The points given back judged against the final model, when it has effects the judgement
-/// that gave them back did not: that judgement's model was looser, so a point it gave back
-/// may still be far off the final one. They stay in the fit either way (a second judgement
-/// only gives points back); the note names those beyond the final model's threshold.
+/// The points given back judged against the final model when no judgement was made against
+/// it at the end of the run (its screen judged against fewer effects and gave back all it
+/// left out, or the run could not judge again): that judgement's model was looser, so a point
+/// it gave back may still be far off the final one. Nothing is left out by it (a second
+/// judgement only gives points back): it gives the figures of the points given back.
 fn given_back_check(
     tree: &DhTree,
     data: &Measurements,
     options: &CalibrationOptions,
     report: &Report,
     effects: &[Arc<dyn Effect>],
-    given_back: &BTreeSet<usize>,
-) -> Result<Option<String>, CalibError> {
-    let judged_with = report.outliers.as_ref().map(|s| &s.effects);
-    if given_back.is_empty() || judged_with == Some(&report.selected_effects) {
-        return Ok(None);
-    }
-    let check =
-        crate::calibrate::screen_from(tree, data, options, None, effects, Some(given_back))?;
-    let beyond: Vec<String> = check
+) -> Result<Option<OutlierReport>, CalibError> {
+    let Some(scan) = report
         .outliers
+        .as_ref()
+        .filter(|s| !s.given_back.is_empty() && s.effects != report.selected_effects)
+    else {
+        return Ok(None);
+    };
+    let only_given_back = OutlierReport {
+        outliers: Vec::new(),
+        ..scan.clone()
+    };
+    crate::calibrate::screen_from(tree, data, options, None, effects, Some(&only_given_back))
+        .map(Some)
+}
+
+/// The note on the points given back, judged against the final model of `count` effects
+/// (calibration threshold `threshold`): none beyond its threshold, or those that are (they stay
+/// in: a second judgement only gives points back).
+fn given_back_note(given_back: &[GivenBack], count: usize, threshold: f64) -> String {
+    let beyond: Vec<String> = given_back
         .iter()
-        .filter(|o| !o.validation)
-        .map(|o| format!("line {} ({:.1} sigma)", o.line, o.sigmas))
+        .filter(|g| g.after.sigmas > g.after.threshold)
+        .map(|g| format!("line {} ({:.1} sigma)", g.line, g.after.sigmas))
         .collect();
     let n = given_back.len();
     let model = format!(
-        "the final model (the geometry and {} effect(s), threshold {:.1} sigma)",
-        effects.len(),
-        check.threshold
+        "the final model (the geometry and {count} effect(s), threshold {threshold:.1} sigma)"
     );
-    Ok(Some(if beyond.is_empty() {
+    if beyond.is_empty() {
         format!("none of the {n} point(s) given back is an outlier of {model}")
     } else {
         format!(
@@ -166,22 +190,27 @@ fn given_back_check(
             beyond.len(),
             beyond.join(", ")
         )
-    }))
+    }
 }
 
 /// Most times [`diagnose_tree`] judges the outliers again and reruns the selection.
 pub const MAX_REJUDGE: usize = 3;
 
-/// The effects a second outlier judgement used, the samples it could flag, and its findings
-/// (the screen of the next run: the same judgement, made once).
-type Rejudged = (Vec<Arc<dyn Effect>>, BTreeSet<usize>, OutlierReport);
+/// The effects a second outlier judgement used, the judgement before it (whose left-out
+/// samples it could flag), and its findings (the screen of the next run: the same judgement,
+/// made once).
+type Rejudged = (Vec<Arc<dyn Effect>>, OutlierReport, OutlierReport);
 
 /// What one selection run leads to: its report (with the effects the points left out were
-/// judged against again and confirmed as outliers, if so, and the effects it selected), or
-/// another run with the effects selected so far, giving back the points left out that are not
-/// outliers of them.
+/// judged against again and confirmed as outliers, and that judgement, if so, and the effects
+/// it selected), or another run with the effects selected so far, giving back the points left
+/// out that are not outliers of them.
 enum Judgement {
-    Final(Box<Report>, Option<String>, Vec<Arc<dyn Effect>>),
+    Final(
+        Box<Report>,
+        Option<(String, OutlierReport)>,
+        Vec<Arc<dyn Effect>>,
+    ),
     Again(Box<Rejudged>),
 }
 
@@ -189,20 +218,15 @@ enum Judgement {
 enum Rejudgement {
     /// Nothing to judge again.
     Nothing,
-    /// The points left out are outliers of the effects (their labels) too.
-    Confirmed(String),
-    /// Not all: the points left out, and the new judgement.
-    Changed(BTreeSet<usize>, OutlierReport),
+    /// The points left out are outliers of the effects (their labels) too: that judgement.
+    Confirmed(String, OutlierReport),
+    /// Not all: the judgement before, and the new one.
+    Changed(OutlierReport, OutlierReport),
 }
 
-/// The calibration samples a screen left out (none when it kept them).
-fn left_out(scan: Option<&OutlierReport>) -> Option<BTreeSet<usize>> {
-    scan.filter(|s| !s.kept).map(|s| s.flagged_calibration())
-}
-
-/// Whether the selection must run again (see [`diagnose_tree`]): the points `scan` left out,
-/// judged against the geometry and the `effects` selected, unless none were left out, no
-/// effect was selected or the screen already judged with them.
+/// Whether the selection must run again (see [`diagnose_tree`]): the points `scan` left out
+/// (calibration and validation), judged against the geometry and the `effects` selected,
+/// unless none were left out, no effect was selected or the screen already judged with them.
 fn rejudge(
     tree: &DhTree,
     data: &Measurements,
@@ -214,17 +238,17 @@ fn rejudge(
         .iter()
         .map(|e| crate::effects::label_of(e.as_ref()))
         .collect();
-    let Some(before) = left_out(scan).filter(|b| !b.is_empty()) else {
+    let Some(scan) = scan.filter(|s| !s.left_out().is_empty()) else {
         return Ok(Rejudgement::Nothing);
     };
-    if effects.is_empty() || scan.map(|s| &s.effects) == Some(&labels) {
+    if effects.is_empty() || scan.effects == labels {
         return Ok(Rejudgement::Nothing);
     }
-    let again = crate::calibrate::screen_from(tree, data, options, None, effects, Some(&before))?;
-    if again.flagged_calibration() == before {
-        return Ok(Rejudgement::Confirmed(labels.join(", ")));
+    let again = crate::calibrate::screen_from(tree, data, options, None, effects, Some(scan))?;
+    if again.left_out() == scan.left_out() {
+        return Ok(Rejudgement::Confirmed(labels.join(", "), again));
     }
-    Ok(Rejudgement::Changed(before, again))
+    Ok(Rejudgement::Changed(scan.clone(), again))
 }
 
 /// One diagnosis whose outlier screen judges the points against the geometry and the effects
@@ -244,6 +268,18 @@ fn diagnose_judged(
     may_rejudge: bool,
 ) -> Result<Judgement, CalibError> {
     let ctx = effect_context(tree, diag)?;
+    // The verdict's gravity structure tests read the gravity (and masses) of the effects.
+    let options = &CalibrationOptions {
+        gravity: Some(match &ctx.gravity {
+            Some(g) => g.clone(),
+            None => Arc::new(GravityModel::new(
+                tree,
+                &crate::gravity::Inertials::default(),
+                diag.gravity,
+            )?),
+        }),
+        ..options.clone()
+    };
     let mut notes = Vec::new();
     // Which candidates the model can carry.
     let probe = Model::new_tree(tree, &[], &options.model)?;
@@ -537,7 +573,9 @@ fn diagnose_judged(
                                 return Ok(Judgement::Again(Box::new((so_far, before, again))))
                             }
                             Rejudgement::Nothing => confirmed = None,
-                            Rejudgement::Confirmed(labels) => confirmed = Some(labels),
+                            Rejudgement::Confirmed(labels, again) => {
+                                confirmed = Some((labels, again))
+                            }
                         }
                         judged_last = selected.len();
                     }
@@ -603,7 +641,7 @@ fn diagnose_judged(
                 return Ok(Judgement::Again(Box::new((effects, before, again))))
             }
             Rejudgement::Nothing => {}
-            Rejudgement::Confirmed(labels) => confirmed = Some(labels),
+            Rejudgement::Confirmed(labels, again) => confirmed = Some((labels, again)),
         }
     }
     let effect_parameters = effect_estimates(&session.model, &last, &selected);

@@ -96,6 +96,7 @@ fn candidates_cover_every_joint_and_name_what_is_skipped() {
     let ctx = EffectContext {
         tree: DhTree::serial(&t),
         gravity: Some(Arc::new(g)),
+        gravity_vector: GravityModel::default_gravity(),
     };
     let c = candidates(&ctx, &[]);
     let labels: Vec<String> = c.effects.iter().map(|e| e.label()).collect();

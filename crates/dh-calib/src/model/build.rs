@@ -303,7 +303,7 @@ impl Model {
                 reason: "expected each effect once, found it twice".into(),
             });
         }
-        let op = if matches!(effect.field(), EffectField::Scale | EffectField::Growth) {
+        let op = if matches!(effect.field(), EffectField::Scale | EffectField::Growth | EffectField::Shift) {
             None
         } else {
             let row =
@@ -334,7 +334,7 @@ impl Model {
                         })
                     }
                 },
-                EffectField::Scale | EffectField::Growth => ops.theta,
+                EffectField::Scale | EffectField::Growth | EffectField::Shift => ops.theta,
             })
         };
         let e = self.effects.len();
@@ -343,10 +343,12 @@ impl Model {
             self.push_param(name, Block::Effect(e), Field::Effect(k), Unit::Other);
         }
         let params = start..self.parameters.len();
+        let shift = (effect.field() == EffectField::Shift).then(|| effect.shift_direction());
         self.effects.push(EffectSlot {
             effect,
             params: params.clone(),
             op,
+            shift,
         });
         Ok(params)
     }

@@ -31,6 +31,10 @@ pub enum EffectField {
     /// included) is multiplied by `1 + delta`, about the base link's origin; the device frame
     /// is not scaled. The effect's [`Effect::joint`] is ignored.
     Growth,
+    /// A translation of the robot in its base link frame (metres): the tip and every target
+    /// move by `delta` along [`Effect::shift_direction`], after the chain (no joint turns
+    /// it), before the device frame. A sag under gravity ([`crate::effects::GravitySag`]).
+    Shift,
 }
 
 /// A non-geometric error source: a change of one row's `theta`, `d`, `alpha` or tilt, or of the
@@ -104,6 +108,11 @@ pub trait Effect: fmt::Debug + Send + Sync {
     fn shape_grid(&self, span: f64) -> Vec<f64> {
         let _ = span;
         Vec::new()
+    }
+    /// For an [`EffectField::Shift`] effect, the unit direction of its translation in the
+    /// robot's base link frame; zero for every other effect (the default).
+    fn shift_direction(&self) -> nalgebra::Vector3<f64> {
+        nalgebra::Vector3::zeros()
     }
 }
 

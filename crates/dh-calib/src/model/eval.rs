@@ -93,6 +93,46 @@ impl Model {
         o + (p - o) * g
     }
 
+    /// `Σ delta · direction` of the shift effects at `x`, `q` and `ctx` (metres, the robot's
+    /// base link frame; zero without one): how far the tip and the targets move after the
+    /// chain ([`super::EffectField::Shift`]).
+    pub(super) fn shift_at(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> Vector3<f64> {
+        let mut out = Vector3::zeros();
+        for slot in &self.effects {
+            if let Some(dir) = slot.shift {
+                let params = x.get(slot.params.clone()).unwrap_or(&[]);
+                if params.iter().any(|p| *p != 0.0) {
+                    out += dir * slot.effect.delta_in(q, ctx, params);
+                }
+            }
+        }
+        out
+    }
+
+    /// [`Model::chain`] of the op values `v` (at `x`, `q`, `ctx`) along the chain `ops` (device
+    /// block first), the shift effects' translation added: in the base link frame, turned into
+    /// the device frame by the device block's rotation.
+    pub(super) fn shifted_chain(
+        &self,
+        x: &[f64],
+        q: &[f64],
+        ctx: &SampleContext,
+        v: &[f64],
+        ops: &[usize],
+    ) -> Frame {
+        let mut f = self.chain(v, None, ops);
+        if self.has_shift() {
+            let device = self.chain(v, None, ops.get(..DEVICE_OPS).unwrap_or(ops));
+            f.t += device.r * self.shift_at(x, q, ctx);
+        }
+        f
+    }
+
+    /// Whether the model has a shift effect (see [`Model::shift_at`]).
+    pub(super) fn has_shift(&self) -> bool {
+        self.effects.iter().any(|s| s.shift.is_some())
+    }
+
     /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before
     /// op `i` for the ops visited, and `on[i]` whether op `i` was visited.
     pub(super) fn chain(
@@ -203,7 +243,7 @@ impl Model {
     ) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, q, ctx, &mut v);
-        let mut f = self.chain(&v, None, self.chain_ops(chain));
+        let mut f = self.shifted_chain(x, q, ctx, &v, self.chain_ops(chain));
         f.t = self.grown(x, q, ctx, (chain, DEVICE_BLOCK), f.t) * self.scale_factor(x, q, ctx);
         f.to_iso()
     }
@@ -231,7 +271,9 @@ impl Model {
         self.op_values(x, q, ctx, &mut v);
         let ops = self.chain_ops(chain);
         let mut f = self.chain(&v, None, ops.get(DEVICE_OPS..).unwrap_or(&[]));
-        // In the base link frame the growth's origin is the frame's own.
+        // The shift in the base link frame, then the growth about its origin (the frame's own),
+        // as in the device frame.
+        f.t += self.shift_at(x, q, ctx);
         f.t *= self.growth_factor(x, q, ctx);
         f.to_iso()
     }

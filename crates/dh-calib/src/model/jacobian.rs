@@ -184,6 +184,13 @@ impl Model {
             Some(w) => left_jacobian_inverse(&phi) * w,
             None => Matrix3::zeros(),
         };
+        // The shift effects' translation in the device frame: ops after the device block do
+        // not turn it (it is along gravity in the base link frame whatever the joints).
+        let shifted = if self.has_shift() {
+            prepared.device_rotation() * self.shift_at(x, &obs.q, &obs.context)
+        } else {
+            Vector3::zeros()
+        };
         // The target's orientation axes in the device frame (zero for a point target).
         let target_axes = target.map(|t| self.target_rotation_axes(x, t).1.map(|a| f.r * a));
         // With a robot growth `G` about the base origin `o`: the grown point, the factor, and
@@ -193,12 +200,6 @@ impl Model {
         let grown = match growth {
             Some((g, o)) if g != 1.0 => o + (point - o) * g,
             _ => point,
-        };
-        let device_ops: &[usize] = if growth.is_some() {
-            let ops = self.session_ops(chain, obs.session);
-            &ops[..ops.len().min(super::ops::DEVICE_OPS)]
-        } else {
-            &[]
         };
         let nc = columns.len();
         let rows = obs.observation.residual_count();
@@ -212,10 +213,13 @@ impl Model {
                 };
                 // The frame before op `o`: the start of its step times its place in the step.
                 let start = &starts[place.step];
-                let (moved, grows) = if device_ops.contains(&o) {
+                // A device op moves the grown robot rigidly, its shift included; any other op
+                // moves a point of the robot (not the shift, which is after the chain in the
+                // base link frame), and its motion grows by `G`.
+                let (moved, grows) = if place.device {
                     (grown, 1.0)
                 } else {
-                    (point, g_factor)
+                    (point - shifted, g_factor)
                 };
                 match self.ops[o].kind {
                     OpKind::Trans(_) => *dp += (start.r * place.axis) * (g * grows),
@@ -253,15 +257,17 @@ impl Model {
                     let params = x.get(slot.params.clone()).unwrap_or(&[]);
                     slot.effect.gradient_in(&obs.q, &obs.context, params, grad);
                     let g = grad.get(c - slot.params.start).copied().unwrap_or(0.0);
-                    match slot.op {
-                        Some(op) => op_motion(op, g, &mut dp, &mut dw),
-                        // Robot growth: the position from the base origin, ungrown.
-                        None if slot.effect.field() == super::EffectField::Growth => {
+                    match (slot.op, slot.shift) {
+                        (Some(op), _) => op_motion(op, g, &mut dp, &mut dw),
+                        // A shift: along its direction in the device frame, grown with the robot.
+                        (None, Some(dir)) => dp = prepared.device_rotation() * dir * (g * g_factor),
+                        // Robot growth: the position from the base origin, ungrown (the shift in).
+                        (None, None) if slot.effect.field() == super::EffectField::Growth => {
                             dp = (point - origin) * g;
                         }
                         // Device scale: the unscaled position, undoing the factor below.
-                        None if scale != 0.0 => dp = grown * (g / scale),
-                        None => {}
+                        (None, None) if scale != 0.0 => dp = grown * (g / scale),
+                        (None, None) => {}
                     }
                 }
                 Some(_) => {

@@ -89,8 +89,11 @@ pub(super) struct Op {
 pub(super) struct EffectSlot {
     pub(super) effect: Arc<dyn Effect>,
     pub(super) params: Range<usize>,
-    /// The op the effect changes; `None` for the device scale.
+    /// The op the effect changes; `None` for the device scale and a shift.
     pub(super) op: Option<usize>,
+    /// A shift's unit direction in the base link frame ([`super::EffectField::Shift`]);
+    /// `None` for every other effect.
+    pub(super) shift: Option<Vector3<f64>>,
 }
 
 /// Op indices of one row.

@@ -17,9 +17,9 @@ use std::cell::RefCell;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
-use super::ops::{Frame, OpKind};
+use super::ops::{Frame, OpKind, DEVICE_OPS};
 use super::{Model, SampleContext};
 
 /// The session key of a chain measured in the `device` block's frame whatever the sample's
@@ -50,6 +50,10 @@ pub(super) struct Place {
     pub(super) step: usize,
     pub(super) axis: Vector3<f64>,
     pub(super) origin: Vector3<f64>,
+    /// Whether the op is in the chain's device block, before the base link frame: its motion
+    /// carries the shift effects' translation with the rest ([`super::EffectField::Shift`]),
+    /// which the ops after it do not turn.
+    pub(super) device: bool,
 }
 
 /// One chain (an op list) prepared at one `x`.
@@ -59,6 +63,9 @@ pub(super) struct PreparedChain {
     effects: Vec<usize>,
     /// Per model op: where it acts on this chain (`None` off the chain).
     places: Vec<Option<Place>>,
+    /// The rotation of the chain's device block at `x` (the base link frame's axes in the
+    /// device frame): what turns a shift into the device frame.
+    device_rotation: Matrix3<f64>,
 }
 
 impl PreparedChain {
@@ -69,7 +76,14 @@ impl PreparedChain {
         let mut places = vec![None; model.ops.len()];
         // The run of constant ops being multiplied, if any.
         let mut run: Option<Frame> = None;
-        for &i in ops {
+        let mut device = Frame::IDENTITY;
+        for (k, &i) in ops.iter().enumerate() {
+            let in_device = k < DEVICE_OPS;
+            if in_device {
+                let o = &model.ops[i];
+                let v = o.value + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0);
+                device.apply(o.kind, v, &o.fixed);
+            }
             let o = &model.ops[i];
             let moved: Vec<usize> = (0..model.effects.len())
                 .filter(|&s| model.effects[s].op == Some(i))
@@ -88,6 +102,7 @@ impl PreparedChain {
                     step: steps.len(),
                     axis,
                     origin: Vector3::zeros(),
+                    device: in_device,
                 });
                 steps.push(Step::Var {
                     op: i,
@@ -99,6 +114,7 @@ impl PreparedChain {
                     step: steps.len(),
                     axis: f.r * axis,
                     origin: f.t,
+                    device: in_device,
                 });
                 // As `Model::op_values` computes it for an op without joint or effect.
                 let v = o.value + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0);
@@ -112,7 +128,13 @@ impl PreparedChain {
             steps,
             effects,
             places,
+            device_rotation: device.r,
         }
+    }
+
+    /// The rotation of the chain's device block (see the field).
+    pub(super) fn device_rotation(&self) -> &Matrix3<f64> {
+        &self.device_rotation
     }
 
     /// Where op `op` acts on this chain (`None` off the chain).
@@ -160,6 +182,9 @@ impl PreparedChain {
                     f.apply(o.kind, v, &o.fixed);
                 }
             }
+        }
+        if model.has_shift() {
+            f.t += self.device_rotation * model.shift_at(x, q, ctx);
         }
         f
     }

@@ -117,9 +117,11 @@ impl Model {
     ) -> Isometry3<f64> {
         let mut v = Vec::with_capacity(self.ops.len());
         self.op_values(x, q, ctx, &mut v);
-        let f = self.chain(
+        let f = self.shifted_chain(
+            x,
+            q,
+            ctx,
             &v,
-            None,
             self.session_ops(self.target_chain(target), session),
         );
         let p = (f.t + f.r * self.target_at(x, target)) * self.scale_factor(x, q, ctx);

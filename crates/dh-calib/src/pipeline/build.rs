@@ -69,6 +69,8 @@ impl CalibrationDoc {
             .filter(|s| s.split == Split::Validation)
             .count();
         let (outliers, verdict, diagnosis) = documents(report);
+        // Geometric parameters: their standard errors at the points against the noise floor.
+        let judge = super::Identification::new(report, data.samples.len() - val_count);
         CalibrationDoc {
             model: names.model.clone(),
             data: names.data.clone(),
@@ -130,7 +132,7 @@ impl CalibrationDoc {
                     std_error: p.std_error,
                     free: p.free,
                     identified: p.free
-                        && ParameterDoc::identifies(&p.name, p.estimate, p.std_error),
+                        && ParameterDoc::identifies(&p.name, p.estimate, p.std_error, &judge),
                 })
                 .collect(),
             fixed: report.fixed.iter().map(FixedDoc::from).collect(),

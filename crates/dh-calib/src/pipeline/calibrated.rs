@@ -179,7 +179,7 @@ pub enum CalibratedError {
     #[error("effects: {0}")]
     Effects(CalibError),
     /// Gravity effects in a file without the gravity model they were fitted with.
-    #[error("effects: {} need the link masses and nominal geometry the calibration was run with (`calibration.gravity_model`), which the file does not hold", .effects.iter().map(|e| format!("'{e}'")).collect::<Vec<_>>().join(", "))]
+    #[error("effects: {} need the gravity, link masses and nominal geometry the calibration was run with (`calibration.gravity_model`), which the file does not hold", .effects.iter().map(|e| format!("'{e}'")).collect::<Vec<_>>().join(", "))]
     MissingGravity {
         /// The gravity effects' parameters.
         effects: Vec<String>,

@@ -96,10 +96,13 @@ pub struct ParameterDoc {
     /// Estimated (`false`: held at nominal).
     pub free: bool,
     /// Identified by this data: free, and for an effect's parameter an estimate at least
-    /// [`IDENTIFIED_SIGMAS`] standard errors from zero ([`ParameterDoc::identifies`]). An
-    /// effect parameter that is not is estimated and kept (the fit and its covariance are
-    /// unchanged), but the data cannot tell it from no effect at all. Reports before this key
-    /// read as `true`.
+    /// [`IDENTIFIED_SIGMAS`] standard errors from zero; for a geometric parameter of the robot
+    /// (a length or an angle; the setup's device, session and target frames are not judged) a
+    /// standard error, as a length at the measured points, within [`super::GEOMETRIC_FLOOR_RATIO`] times the set's noise floor
+    /// ([`ParameterDoc::identifies`], [`super::Identification`]). A parameter that is not is estimated
+    /// and kept (the fit and its covariance are unchanged), but the data cannot tell it from
+    /// no effect at all (an effect) or barely move it (a geometric parameter). Reports before
+    /// this key read as `true`.
     #[serde(default = "identified_by_default")]
     pub identified: bool,
 }
@@ -112,21 +115,29 @@ fn identified_by_default() -> bool {
 /// identified by the data ([`ParameterDoc::identified`]): below it, the two-sided 95 %
 /// interval of the estimate (±1.96 SE, rounded up) holds zero, i.e. the data are as consistent
 /// with no effect as with the estimate. Geometric parameters are not judged this way: their
-/// nominal value is a design value, and a change smaller than its standard error means the data
-/// confirm the nominal to that precision, not that they cannot see the parameter.
+/// nominal value is a design value and their correction can legitimately be about zero (the
+/// data then confirm the nominal to that precision); they are judged by
+/// [`super::GEOMETRIC_FLOOR_RATIO`].
 pub const IDENTIFIED_SIGMAS: f64 = 2.0;
 
 impl ParameterDoc {
     /// Whether a free parameter `name` estimated as `estimate` with standard error `std_error`
     /// (`None`: no covariance, nothing to judge by) is identified by the data (see
-    /// [`ParameterDoc::identified`]).
-    pub fn identifies(name: &str, estimate: f64, std_error: Option<f64>) -> bool {
+    /// [`ParameterDoc::identified`]): an effect's by [`IDENTIFIED_SIGMAS`], a geometric one's
+    /// by [`super::GEOMETRIC_FLOOR_RATIO`] with `judge`.
+    pub fn identifies(
+        name: &str,
+        estimate: f64,
+        std_error: Option<f64>,
+        judge: &super::Identification,
+    ) -> bool {
         match std_error {
             None => true,
             Some(se) if super::is_effect(name) => estimate.abs() >= IDENTIFIED_SIGMAS * se,
-            Some(_) => true,
+            Some(_) => judge.identifies(name),
         }
     }
+
     /// Whether this is an effect's parameter (see [`super::is_effect`]), whatever its unit.
     pub fn is_effect(&self) -> bool {
         super::is_effect(&self.name)
@@ -358,6 +369,8 @@ pub fn unit_of(name: &str) -> &'static str {
             Some("gear_ratio" | "coupling") => "rad/rad",
             // `thermal_growth.ln_tau`: the natural log of tau in seconds.
             Some("thermal_growth.ln_tau") => "ln s",
+            // Metres of sag at a lever arm of 1 m (see `crate::effects::GravitySag`).
+            Some("gravity_sag") => "1/m^2",
             _ => "1",
         };
     }

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::doc::CandidateDoc;
 use crate::calibrate::Report;
 use crate::findings::{Diagnosis, NoiseTest, ResidualTest, StructureCheck, Verdict};
-use crate::outliers::{OutlierReport, ScaleSource};
+use crate::outliers::{Judged, OutlierReport, ScaleSource};
 
 /// One flagged point (JSON `outliers.points`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -52,6 +52,62 @@ pub struct OutliersDoc {
     pub converged: bool,
     /// The flagged points, in file order.
     pub points: Vec<OutlierDoc>,
+    /// The points a first judgement left out and a later one gave back (against a model with
+    /// effects), in file order: in the fit or the held-out figures.
+    #[serde(default)]
+    pub given_back: Vec<GivenBackDoc>,
+}
+
+/// How far off a point was against one model (JSON `outliers.given_back[].before`, `after`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JudgedDoc {
+    /// 3-D residual (metres).
+    pub residual: f64,
+    /// The same over the per-axis scale.
+    pub sigmas: f64,
+    /// That judgement's threshold for the point's split, in units of the scale.
+    pub threshold: f64,
+    /// The model's effects besides the geometry (empty: geometric only).
+    pub effects: Vec<String>,
+}
+
+impl From<&Judged> for JudgedDoc {
+    fn from(j: &Judged) -> Self {
+        JudgedDoc {
+            residual: j.residual,
+            sigmas: j.sigmas,
+            threshold: j.threshold,
+            effects: j.effects.clone(),
+        }
+    }
+}
+
+/// One point given back (JSON `outliers.given_back`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GivenBackDoc {
+    /// 1-based line of the sample in the data file (0 when generated).
+    pub line: usize,
+    /// The sample's pose identifier.
+    pub config: Option<String>,
+    /// Target name.
+    pub target: String,
+    /// `calibration` or `validation`.
+    pub split: String,
+    /// Against the model that first left it out.
+    pub before: JudgedDoc,
+    /// Against the final model.
+    pub after: JudgedDoc,
+    /// Why, in words: `5.2 sigma against the geometric model, 1.1 sigma against the geometry
+    /// and backlash_direction:j2`.
+    pub reason: String,
+}
+
+fn split_name(validation: bool) -> String {
+    if validation {
+        "validation".into()
+    } else {
+        "calibration".into()
+    }
 }
 
 impl From<&OutlierReport> for OutliersDoc {
@@ -77,13 +133,22 @@ impl From<&OutlierReport> for OutliersDoc {
                     line: o.line,
                     config: o.config.clone(),
                     target: o.target.clone(),
-                    split: if o.validation {
-                        "validation".into()
-                    } else {
-                        "calibration".into()
-                    },
+                    split: split_name(o.validation),
                     residual: o.residual,
                     sigmas: o.sigmas,
+                })
+                .collect(),
+            given_back: r
+                .given_back
+                .iter()
+                .map(|g| GivenBackDoc {
+                    line: g.line,
+                    config: g.config.clone(),
+                    target: g.target.clone(),
+                    split: split_name(g.validation),
+                    before: JudgedDoc::from(&g.before),
+                    after: JudgedDoc::from(&g.after),
+                    reason: g.reason(),
                 })
                 .collect(),
         }

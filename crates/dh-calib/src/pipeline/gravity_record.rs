@@ -207,8 +207,15 @@ impl GravityRecord {
     }
 }
 
-/// The effect kinds whose values need link masses (see [`crate::effects`]).
-pub const GRAVITY_EFFECTS: [&str; 3] = ["compliance", "lateral_compliance", "backlash"];
+/// The effect kinds whose values need the gravity model (see [`crate::effects`]): link masses
+/// and nominal geometry, or for `gravity_sag` the gravity and nominal geometry alone (its
+/// record's `links` are then empty).
+pub const GRAVITY_EFFECTS: [&str; 4] = [
+    "compliance",
+    "lateral_compliance",
+    "backlash",
+    "gravity_sag",
+];
 
 /// Whether the effect parameter `name` belongs to a gravity effect ([`GRAVITY_EFFECTS`]).
 pub fn needs_gravity(name: &str) -> bool {

@@ -64,6 +64,7 @@ fn context(tree: &DhTree, options: &PipelineOptions) -> Result<EffectContext, Pi
             )),
             None => None,
         },
+        gravity_vector: options.gravity,
     })
 }
 

@@ -81,10 +81,10 @@ pub fn diagnose_sockets(
             let c = effects::candidates(&ctx, &probe.tilt_rows());
             let mut skipped = c.skipped;
             skipped.push(
-                "backlash_direction, drift, thermal_growth: not searched on contacts (contact data carries no \
-                 sample order); gear_harmonic2, gear_harmonic:J:2: not searched on contacts (the \
-                 contact selection does not compare rival effects of one joint), name them with \
-                 --effects"
+                "backlash_direction, drift, thermal_growth: not searched on contacts (contact data \
+                 carries no sample order); gear_harmonic2, gear_harmonic:J:2, gravity_sag: not \
+                 searched on contacts (the contact selection does not compare rival effects of one \
+                 joint or one load), name them with --effects"
                     .into(),
             );
             let pool = c
@@ -93,7 +93,13 @@ pub fn diagnose_sockets(
                 .filter(|e| {
                     let l = e.label();
                     let both_harmonics = l.starts_with("gear_harmonic:") && l.ends_with(":2");
-                    !(e.uses_sequence() || l.starts_with("gear_harmonic2:") || both_harmonics)
+                    // A sag along gravity is a rival of the compliances carrying the same load,
+                    // decided by the held-out RMS (`crate::rivals`), which the contact selection
+                    // does not compare: named with a label only.
+                    !(e.uses_sequence()
+                        || l.starts_with("gear_harmonic2:")
+                        || both_harmonics
+                        || l.starts_with("gravity_sag:"))
                 })
                 .collect();
             let auto = Auto {

@@ -103,6 +103,7 @@ impl Arm {
         EffectContext {
             tree: DhTree::serial(&self.table),
             gravity: Some(Arc::new(g)),
+            gravity_vector: GravityModel::default_gravity(),
         }
     }
 }

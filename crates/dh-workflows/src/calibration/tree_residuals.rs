@@ -84,6 +84,7 @@ pub fn tree_residuals(t: &Tree) -> Result<TreeResiduals> {
             Some(i) => Some(Arc::new(GravityModel::new(nominal, i, inputs.gravity)?)),
             None => None,
         },
+        gravity_vector: inputs.gravity,
     };
     let effects = report
         .selected_effects

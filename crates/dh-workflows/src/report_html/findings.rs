@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use dh_calib::pipeline::{CalibrationDoc, CandidateDoc, StructureDoc, TestDoc};
+use dh_calib::pipeline::{CalibrationDoc, CandidateDoc, OutliersDoc, StructureDoc, TestDoc};
 
 use super::page::{self, esc, fixed, mm, sci, table_with, NA};
 
@@ -32,6 +32,7 @@ pub(super) fn outliers(doc: &CalibrationDoc) -> String {
         }
     ));
     if o.points.is_empty() {
+        s.push_str(&given_back(o));
         return s;
     }
     let rows: Vec<Vec<String>> = o
@@ -60,6 +61,46 @@ pub(super) fn outliers(doc: &CalibrationDoc) -> String {
         ],
         &rows,
         &classes,
+    ));
+    s.push_str(&given_back(o));
+    s
+}
+
+/// The points given back: left out by an earlier judgement, not outliers of the final model.
+fn given_back(o: &OutliersDoc) -> String {
+    if o.given_back.is_empty() {
+        return String::new();
+    }
+    let mut s = page::para(&format!(
+        "{} point(s) given back: left out by an earlier judgement, given back by one against a model with effects; they are in the fit (calibration) or the held-out figures (validation). Their size against the model that left them out and against the final model:",
+        o.given_back.len()
+    ));
+    let rows: Vec<Vec<String>> = o
+        .given_back
+        .iter()
+        .map(|g| {
+            vec![
+                g.line.to_string(),
+                g.config.as_deref().map_or_else(|| NA.into(), esc),
+                esc(&g.target),
+                esc(&g.split),
+                fixed(g.before.sigmas, 1),
+                fixed(g.after.sigmas, 1),
+                esc(&g.reason),
+            ]
+        })
+        .collect();
+    s.push_str(&page::table(
+        &[
+            "#line",
+            "pose",
+            "target",
+            "split",
+            "#before [sigma]",
+            "#final [sigma]",
+            "why",
+        ],
+        &rows,
     ));
     s
 }
@@ -295,4 +336,61 @@ pub(super) fn verdict(doc: &CalibrationDoc) -> String {
         )));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dh_calib::pipeline::{GivenBackDoc, JudgedDoc};
+
+    fn judged(sigmas: f64, effects: &[&str]) -> JudgedDoc {
+        JudgedDoc {
+            residual: sigmas * 2e-5,
+            sigmas,
+            threshold: 4.2,
+            effects: effects.iter().map(|e| e.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn the_points_given_back_are_listed_with_both_sizes_and_why() {
+        let mut o = OutliersDoc {
+            level: 0.01,
+            scale: 2e-5,
+            scale_source: "known".into(),
+            threshold: 4.6,
+            kept: false,
+            rms_with: 4e-5,
+            rms_without: 3e-5,
+            effects: vec!["backlash_direction:j2".into()],
+            rounds: 1,
+            converged: true,
+            points: vec![],
+            given_back: vec![],
+        };
+        assert_eq!(given_back(&o), "");
+        o.given_back.push(GivenBackDoc {
+            line: 13,
+            config: Some("p11".into()),
+            target: "t1".into(),
+            split: "validation".into(),
+            before: judged(5.2, &[]),
+            after: judged(1.9, &["backlash_direction:j2"]),
+            reason: "5.2 sigma against the geometric model, 1.9 sigma against the geometry and \
+                     backlash_direction:j2"
+                .into(),
+        });
+        let html = given_back(&o);
+        assert!(html.contains("1 point(s) given back"), "{html}");
+        for cell in [
+            "<td>p11</td>",
+            "<td>validation</td>",
+            "5.2 sigma against the geometric model, 1.9 sigma against the geometry and backlash_direction:j2",
+        ] {
+            assert!(html.contains(cell), "{cell} in {html}");
+        }
+        for n in ["13", "5.2", "1.9"] {
+            assert!(html.contains(&format!(">{n}</td>")), "{n} in {html}");
+        }
+    }
 }

@@ -16,6 +16,7 @@ pub(super) fn shown(v: f64, unit: &str) -> (String, &'static str) {
         "rad" => (fixed(v.to_degrees(), 5), "deg"),
         "rad/(N m)" => (sci(v, 4), "rad/(N m)"),
         "rad/rad" => (sci(v, 4), "rad/rad"),
+        "1/m^2" => (sci(v, 4), "1/m^2"),
         _ => (sci(v, 4), "1"),
     }
 }
@@ -41,7 +42,11 @@ pub(super) fn parameters(doc: &CalibrationDoc) -> String {
             let (estimate, _) = shown(p.estimate, &p.unit);
             let (change, _) = shown(p.estimate - p.nominal, &p.unit);
             vec![
-                esc(&p.name),
+                if p.identified {
+                    esc(&p.name)
+                } else {
+                    format!("{} (not identified)", esc(&p.name))
+                },
                 unit.into(),
                 nominal,
                 estimate,
@@ -67,6 +72,7 @@ pub(super) fn parameters(doc: &CalibrationDoc) -> String {
         ],
         &rows,
     ));
+    s.push_str(&unidentified(doc));
     if !doc.fixed.is_empty() {
         let rows: Vec<Vec<String>> = doc
             .fixed
@@ -84,6 +90,47 @@ pub(super) fn parameters(doc: &CalibrationDoc) -> String {
             .collect();
         s.push_str("<h3>Held at nominal (not identifiable from the data)</h3>\n");
         s.push_str(&table(&["parameter", "absorbed by"], &rows));
+    }
+    s
+}
+
+/// The paragraphs naming the free parameters the data did not identify
+/// ([`dh_calib::pipeline::ParameterDoc::identified`]): effect parameters within
+/// [`dh_calib::pipeline::IDENTIFIED_SIGMAS`] standard errors of zero, geometric ones whose
+/// standard error at the measured points exceeds [`dh_calib::pipeline::GEOMETRIC_FLOOR_RATIO`] times the
+/// noise floor; empty when every one is identified.
+fn unidentified(doc: &CalibrationDoc) -> String {
+    let names = |effects: bool| -> Vec<String> {
+        doc.parameters
+            .iter()
+            .filter(|p| p.free && !p.identified && p.is_effect() == effects)
+            .map(|p| esc(&p.name))
+            .collect()
+    };
+    let mut s = String::new();
+    let effects = names(true);
+    if !effects.is_empty() {
+        s.push_str(&page::muted(&format!(
+            "Not identified by this data ({}): {}: each estimate is within {} standard errors of zero, as consistent with no effect as with the estimate.",
+            effects.len(),
+            effects.join(", "),
+            dh_calib::pipeline::IDENTIFIED_SIGMAS
+        )));
+    }
+    let geometric = names(false);
+    if !geometric.is_empty() {
+        s.push_str(&page::muted(&format!(
+            "Geometric parameters not identified by this data ({}): {}: each standard error, as a length at the measured points, exceeds {} x {} ({} mm): the poses barely tell it from the others.",
+            geometric.len(),
+            geometric.join(", "),
+            dh_calib::pipeline::GEOMETRIC_FLOOR_RATIO,
+            if doc.noise_floor.is_some() {
+                "the noise floor"
+            } else {
+                "the fit's RMS residual (the noise is not known)"
+            },
+            mm(doc.noise_floor.unwrap_or(doc.rms_after))
+        )));
     }
     s
 }

@@ -105,6 +105,7 @@ def predict(
     session: Optional[str],
     length_unit: str,
     angle_unit: str,
+    sequence: bool,
 ) -> Tuple[
     List[str],
     List[str],
@@ -128,6 +129,7 @@ def compensate(
     max_change: Optional[str],
     length_unit: str,
     angle_unit: str,
+    sequence: bool,
 ) -> Tuple[List[List[float]], List[Tuple[float, float, float, float]], List[str], List[str]]:
     """(corrected joint values, per pose position_before, orientation_before, position_error,
     orientation_error, the poses not compensated as `config (line N): why`, warnings); in the

@@ -349,6 +349,12 @@ def _names(targets: Union[None, str, Sequence[str]]) -> List[str]:
     return list(targets)
 
 
+def _as_python(lines: Sequence[str]) -> List[str]:
+    """The library's warnings of predict/compensate with the CLI's ``--sequence`` named as
+    this package's ``sequence=True``."""
+    return [line.replace("with --sequence", "with sequence=True") for line in lines]
+
+
 def _warn_all(lines: Sequence[str]) -> None:
     for line in lines:
         warnings.warn(line, stacklevel=3)
@@ -403,6 +409,7 @@ def predict(
     tip: Optional[str] = None,
     length_unit: str = "m",
     angle_unit: str = "rad",
+    sequence: bool = False,
 ) -> Prediction:
     """The calibrated model's target positions (or tool poses, ``targets="tool"``) at joint
     values, with their standard uncertainty, as ``urdf-dh predict`` computes them.
@@ -415,6 +422,11 @@ def predict(
         session: with a calibration of several measurement sessions, predict every pose from
             this session's device frame (default: each row's ``session`` column of a CSV or
             DataFrame, else the first session's).
+        sequence: the poses are in the order the robot moves through them (``--sequence``):
+            each joint's approach direction (for a ``backlash_direction`` effect) is the sign of
+            its last motion, and a ``drift`` effect reads each pose's place in the order, as
+            ``calibrate`` reads a measurement file (default: unknown, the backlash added to the
+            uncertainty with a warning, and no drift).
 
     Raises:
         UrdfDhError: bad model or joint values (the CLI's message).
@@ -425,9 +437,19 @@ def predict(
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
     name, arrays = _source(joints, columns, "joints", points=False)
     native = _native.predict(
-        os.fspath(model), name, arrays, base, tip, _names(targets), frame, session, length_unit, angle_unit
+        os.fspath(model),
+        name,
+        arrays,
+        base,
+        tip,
+        _names(targets),
+        frame,
+        session,
+        length_unit,
+        angle_unit,
+        bool(sequence),
     )
-    _warn_all(native[-1])
+    _warn_all(_as_python(native[-1]))
     return Prediction(native)
 
 
@@ -442,10 +464,11 @@ def compensate(
     max_change: Optional[float] = None,
     length_unit: str = "m",
     angle_unit: str = "rad",
+    sequence: bool = False,
 ) -> Tuple[np.ndarray, np.ndarray, List[str]]:
     """Corrected joint values with which the calibrated ``model`` puts its tool where
     ``nominal`` puts it at the commanded ``joints`` (same forms as :func:`predict`), as
-    ``urdf-dh compensate`` computes them.
+    ``urdf-dh compensate`` computes them. ``sequence`` as in :func:`predict` (``--sequence``).
 
     Returns:
         ``(q, errors, failures)``: the corrected joint values (poses x joints), per pose the
@@ -471,8 +494,9 @@ def compensate(
         None if max_change is None else repr(float(max_change)),
         length_unit,
         angle_unit,
+        bool(sequence),
     )
-    _warn_all(notes)
+    _warn_all(_as_python(notes))
     return (
         np.array(q, dtype=float).reshape(-1, len(columns)),
         np.array(errors, dtype=float).reshape(-1, 4),

@@ -58,6 +58,26 @@ pub(crate) struct Frame {
     pub pose_line: usize,
 }
 
+/// The private key prefix of a joint's frame before sdformat 1.7 (see
+/// [`JointSpec::frame_key`]); never shown in a message ([`Frame::shown`]).
+const OLD_JOINT_KEY: &str = "\u{0}joint ";
+
+impl Frame {
+    /// The frame as a message names it: its element and its scoped name as written, e.g.
+    /// `joint 'wrist_1'` (never the private key of a joint before 1.7).
+    pub(crate) fn shown(&self) -> String {
+        let element = match self.kind {
+            Kind::World => "world",
+            Kind::Model { .. } => "model",
+            Kind::Link => "link",
+            Kind::Joint { .. } => "joint",
+            Kind::Frame { .. } => "frame",
+        };
+        let name = self.name.strip_prefix(OLD_JOINT_KEY).unwrap_or(&self.name);
+        format!("{element} '{name}'")
+    }
+}
+
 /// A `<joint>` as written, its names scoped.
 #[derive(Clone, Debug)]
 pub(crate) struct JointSpec<'a, 'i> {
@@ -167,8 +187,8 @@ impl<'a, 'i> Graph<'a, 'i> {
             let first_line = self.frames.get(first).map_or(0, |f| f.line);
             return Err(UrdfError::Sdf {
                 message: format!(
-                    "'{}': expected unique names in a model (links, joints, frames and nested models share one scope), found it defined again (first at line {first_line})",
-                    frame.name
+                    "{}: expected unique names in a model (links, joints, frames and nested models share one scope), found it defined again (first at line {first_line})",
+                    frame.shown()
                 ),
                 line: Some(frame.line),
             });
@@ -302,7 +322,7 @@ impl<'a, 'i> Graph<'a, 'i> {
                     let frame_key = if modern {
                         name.clone()
                     } else {
-                        format!("\u{0}joint {name}")
+                        format!("{OLD_JOINT_KEY}{name}")
                     };
                     self.add(Frame {
                         name: frame_key.clone(),
@@ -363,8 +383,8 @@ impl<'a, 'i> Graph<'a, 'i> {
                 if on_path.get(k).copied().unwrap_or(false) {
                     return Err(UrdfError::Sdf {
                         message: format!(
-                            "{}: expected poses that lead to the world frame, found a cycle of relative_to through '{}'",
-                            f.name, f.name
+                            "{}: expected poses that lead to the world frame, found a cycle of relative_to through it",
+                            f.shown()
                         ),
                         line: Some(f.pose_line),
                     });
@@ -379,10 +399,16 @@ impl<'a, 'i> Graph<'a, 'i> {
                         Some(&next) => k = next,
                         None => {
                             return Err(UrdfError::Sdf {
-                                message: format!(
-                                    "'{}': expected its pose relative to a frame of its model, found '{p}', which no link, joint, frame or model defines",
-                                    f.name
-                                ),
+                                message: match &f.kind {
+                                    Kind::Joint { child } if child == p => format!(
+                                        "{}: expected its <child> to name a link or frame of its model, found '{p}', which no link, joint, frame or model defines",
+                                        f.shown()
+                                    ),
+                                    _ => format!(
+                                        "{}: expected its pose relative to a frame of its model, found '{p}', which no link, joint, frame or model defines",
+                                        f.shown()
+                                    ),
+                                },
                                 line: Some(f.pose_line),
                             })
                         }

@@ -328,6 +328,29 @@ fn unresolvable_frames_are_errors_naming_the_line() {
     );
 }
 
+/// A joint whose child no element defines is named as written, in every version: before 1.7
+/// its frame has a private key (a joint may share a link's name), which a message never shows.
+#[test]
+fn a_joint_with_an_unknown_child_is_named_as_written() {
+    let body = "<link name='a'/>\n<joint name='j' type='revolute'><parent>a</parent><child>nope</child><axis><xyz>0 0 1</xyz></axis></joint>\n";
+    for version in ["1.6", "1.7"] {
+        let e = UrdfModel::parse(&sdf(version, body)).expect_err(version);
+        let text = e.to_string();
+        assert!(
+            text.contains("joint 'j': expected its <child> to name a link or frame of its model, found 'nope'"),
+            "{version}: {text}"
+        );
+        assert!(!text.contains('\u{0}'), "{version}: {text:?}");
+    }
+    let cycle = "<frame name='f'><pose relative_to='g'/></frame>\n<frame name='g'><pose relative_to='f'/></frame>\n<link name='a'/>\n";
+    let e = UrdfModel::parse(&sdf("1.7", cycle)).expect_err("cycle");
+    assert!(
+        e.to_string()
+            .contains("frame 'f': expected poses that lead to the world frame"),
+        "{e}"
+    );
+}
+
 /// SDFormat before 1.7 gave links and joints names of their own (gazebo_models' UR10 has a link
 /// and a joint `wrist_1`); from 1.7 one scope holds both.
 #[test]
