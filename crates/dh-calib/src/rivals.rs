@@ -11,7 +11,7 @@
 //! A sag along gravity (`gravity_sag:J`) and the effects driven by the gravity torques
 //! (`compliance`, `lateral_compliance`, `backlash`, of any joint) are rivals too: they are
 //! deflections under one load, and explain much of one another on a robot with link masses.
-//! Among such rivals the lower held-out RMS decides ([`best`]): a sag is a stand-in for the
+//! Among such rivals the lower held-out RMS decides (`best`): a sag is a stand-in for the
 //! compliances as much as they are for it, and the BIC of the calibration data cannot tell
 //! the physical one from the stand-in (on Boby's 36 tracker poses the sag of joint 2 had the
 //! lower BIC by 4.3 and the higher held-out RMS than `lateral_compliance:joint_5`).
