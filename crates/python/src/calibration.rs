@@ -33,13 +33,14 @@ use crate::to_py;
 /// values), the `sigma` column or None, the text columns (`target`, `config`, `session`,
 /// `set`) by name, and a 6-DoF device's orientation: `qw, qx, qy, qz` (`rows × 4` flattened,
 /// NaN rows for points) and `sigma_rot`, or None; the per-axis sigmas `sx, sy, sz` (`rows × 3`
-/// flattened) or None.
+/// flattened) or None; the `time` column (seconds, NaN for a row without one) or None.
 pub(crate) type ArraysIn = (
     Vec<String>,
     Vec<f64>,
     Vec<f64>,
     Option<Vec<f64>>,
     HashMap<String, Vec<String>>,
+    Option<Vec<f64>>,
     Option<Vec<f64>>,
     Option<Vec<f64>>,
     Option<Vec<f64>>,
@@ -50,7 +51,7 @@ pub(crate) type ArraysIn = (
 /// # Errors
 /// A text column that is not one of `target`, `config`, `session`, `set`.
 pub(crate) fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
-    let (joint_names, q, points, sigma, mut labels, quaternion, sigma_rot, sigma_axes) = a;
+    let (joint_names, q, points, sigma, mut labels, quaternion, sigma_rot, sigma_axes, time) = a;
     let mut take = |k: &str| labels.remove(k);
     let out = SampleArrays {
         joint_names,
@@ -64,9 +65,8 @@ pub(crate) fn arrays(a: ArraysIn) -> anyhow::Result<SampleArrays> {
         quaternion,
         sigma_rot,
         sigma_axes,
-        // Times from Python are not taken yet: effects of time refuse the rows, naming the
-        // missing `time` column.
-        time: None,
+        // Checked by the library as a file's `time` cells: one per row, finite or NaN (none).
+        time,
     };
     if let Some(k) = labels.keys().next() {
         anyhow::bail!("expected text columns target, config, session or set, found '{k}'");

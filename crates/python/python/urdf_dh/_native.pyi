@@ -11,14 +11,15 @@ RowTuple = Tuple[
 # Measurements or joint values as arrays: joint names, joint values (rows x joints) and points
 # (rows x 3, empty for joint values) flattened row-major, the sigma column or None, the text
 # columns (target, config, session, set) by name, and a 6-DoF device's qw, qx, qy, qz (rows x 4
-# flattened, NaN rows for points) and sigma_rot, or None, and the per-axis sigmas sx, sy, sz
-# (rows x 3 flattened) or None.
+# flattened, NaN rows for points) and sigma_rot, or None, the per-axis sigmas sx, sy, sz
+# (rows x 3 flattened) or None, and each row's time (seconds, NaN for none) or None.
 Arrays = Tuple[
     List[str],
     List[float],
     List[float],
     Optional[List[float]],
     Dict[str, List[str]],
+    Optional[List[float]],
     Optional[List[float]],
     Optional[List[float]],
     Optional[List[float]],

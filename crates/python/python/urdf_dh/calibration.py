@@ -6,20 +6,23 @@ extension), so the results, the checks on the input and the messages are the com
 Measurements may be a file path, a pandas ``DataFrame`` (columns named as in the measurement CSV:
 one per joint, ``x``, ``y``, ``z``, optional ``target``, ``config``, ``sigma`` (or ``sx``, ``sy``,
 ``sz`` per axis), ``set``,
-``session``, and a 6-DoF device's ``qw``, ``qx``, ``qy``, ``qz``, ``sigma_rot``, NaN in the rows of
-points) or a numpy array (one column per measured joint of the model in its order, then
+``session``, ``time`` (seconds), and a 6-DoF device's ``qw``, ``qx``, ``qy``, ``qz``, ``sigma_rot``,
+NaN in the rows of points) or a numpy array (one column per measured joint of the model in its order, then
 ``x``, ``y``, ``z``). A DataFrame or an array is handed over as arrays, no file is written: the
 library checks its values as it checks a file's cells, and an error names the row (0-based, as
 numpy and pandas count) and the column. Units are those of the options (``length_unit``,
-``angle_unit``); every report is in metres and radians.
+``angle_unit``); every report is in metres and radians. Each row's time (seconds, any origin; NaN
+for a row without one), which an effect of time (``thermal_growth``) reads, is a DataFrame's
+``time`` column or the ``time=`` argument (a 1-D array, one per row), as a file's ``time`` column.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import warnings
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -34,16 +37,20 @@ _POINT_COLUMNS = ("x", "y", "z", "sigma")
 _AXIS_SIGMAS = ("sx", "sy", "sz")
 # A 6-DoF device's orientation: all five or none.
 _ORIENTATION = ("qw", "qx", "qy", "qz", "sigma_rot")
+# Each row's time (seconds), for effects of time.
+_TIME = "time"
 
 # What the library is given for a DataFrame or array: joint names, joint values and points
 # (flattened row-major), the sigma column, the text columns, the orientation (qw, qx, qy, qz
-# flattened, NaN rows for points), sigma_rot, and the per-axis sigmas (sx, sy, sz flattened).
+# flattened, NaN rows for points), sigma_rot, the per-axis sigmas (sx, sy, sz flattened), and
+# each row's time (seconds, NaN for none).
 _Arrays = Tuple[
     List[str],
     List[float],
     List[float],
     Optional[List[float]],
     Dict[str, List[str]],
+    Optional[List[float]],
     Optional[List[float]],
     Optional[List[float]],
     Optional[List[float]],
@@ -77,13 +84,16 @@ def _text(values: Any) -> List[str]:
 
 def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
     """The arrays of a DataFrame, its columns used by name. ``points``: measurements (x, y, z,
-    sigma read; other reserved columns refused), else joint values (points ignored). ``strict``:
-    every other column is a joint and must be numeric (no model names the joints)."""
+    sigma read; other reserved columns refused), else joint values (points ignored); ``time``
+    read in both. ``strict``: every other column is a joint and must be numeric (no model names
+    the joints)."""
     reserved = set(_native.RESERVED_COLUMNS)
     columns = [str(c) for c in frame.columns]
     if points:
         other = [
-            c for c in columns if c in reserved and c not in _LABELS + _POINT_COLUMNS + _ORIENTATION + _AXIS_SIGMAS
+            c
+            for c in columns
+            if c in reserved and c not in _LABELS + _POINT_COLUMNS + _ORIENTATION + _AXIS_SIGMAS + (_TIME,)
         ]
         if other:
             raise _native.UrdfDhError(
@@ -122,7 +132,36 @@ def _frame_arrays(frame: Any, what: str, points: bool, strict: bool) -> _Arrays:
         axes = _together(frame, columns, _AXIS_SIGMAS, what, "per-axis sigma columns")
         if axes is not None:
             sigma_axes = axes.ravel().tolist()
-    return names, q.ravel().tolist(), xyz, sigma, labels, quaternion, sigma_rot, sigma_axes
+    time = _times(frame[_TIME], what) if _TIME in columns else None
+    return names, q.ravel().tolist(), xyz, sigma, labels, quaternion, sigma_rot, sigma_axes, time
+
+
+def _times(values: Any, what: str) -> List[float]:
+    """A time column or ``time=`` argument (seconds) as floats: 1-D, numbers (NaN for a row
+    without a time); its length and finiteness are checked by the library, by row."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise _native.UrdfDhError(f"{what}: 'time': expected numbers (seconds)") from None
+    if array.ndim != 1:
+        raise _native.UrdfDhError(f"{what}: 'time': expected a 1-D array (one time per row), found shape {array.shape}")
+    return array.tolist()
+
+
+def _with_time(arrays: Optional[_Arrays], time: Any, what: str, argument: str) -> Optional[_Arrays]:
+    """``arrays`` with the times of the ``time=`` argument (named ``argument``): refused beside
+    a file (its ``time`` column is read) and beside a DataFrame's own ``time`` column."""
+    if time is None:
+        return arrays
+    if arrays is None:
+        raise _native.UrdfDhError(
+            f"{argument}: with {what} given as a file, the times are its 'time' column; pass them there"
+        )
+    if arrays[8] is not None:
+        raise _native.UrdfDhError(
+            f"{argument}: {what} has a 'time' column already; give the times once"
+        )
+    return arrays[:8] + (_times(time, what),)  # type: ignore[return-value]
 
 
 def _together(frame: Any, columns: List[str], group: Sequence[str], what: str, label: str) -> Any:
@@ -160,7 +199,7 @@ def _arrays(
         )
     j = len(columns)
     xyz = array[:, j:].ravel().tolist() if points else []
-    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}, None, None, None
+    return list(columns), array[:, :j].ravel().tolist(), xyz, None, {}, None, None, None, None
 
 
 def _source(
@@ -268,6 +307,8 @@ def calibrate(
     length_unit: str = "m",
     angle_unit: str = "rad",
     out: Optional[PathLike] = None,
+    time: Any = None,
+    validate_time: Any = None,
 ) -> Report:
     """Fits ``model`` (a URDF or DH sheet path; None: start from circle-point analysis) to
     measured points, as ``urdf-dh calibrate`` does.
@@ -284,6 +325,11 @@ def calibrate(
             (default 0.01, ``--alpha``).
         out: write the calibrated model there (a sheet, or a URDF for ``.urdf``), proved as
             written; :func:`predict` and :func:`compensate` read it.
+        time: each row's time in seconds (a 1-D array, NaN for a row without one), with
+            ``data`` as a DataFrame without a ``time`` column or an array: what
+            ``thermal_growth`` reads (``t`` since the first timed row), as a file's ``time``
+            column. Without times an effect of time reads the pose order.
+        validate_time: the same for ``validate``.
         The other options are the CLI's (``--sigma`` in ``length_unit``, ...).
 
     Raises:
@@ -296,6 +342,7 @@ def calibrate(
     if model is not None and not _is_path(data) and not _is_frame(data):
         columns = _joints(model, base, tip)
     data_name, arrays = _source(data, columns, "data", points=True, strict=model is None)
+    arrays = _with_time(arrays, time, "data", "time")
     validate_name, validate_arrays = None, None
     if validate is not None:
         if arrays is None and not _is_path(validate):
@@ -306,6 +353,9 @@ def calibrate(
         if model is not None and vcols is None and not _is_path(validate) and not _is_frame(validate):
             vcols = _joints(model, base, tip)
         validate_name, validate_arrays = _source(validate, vcols, "validate", points=True, strict=model is None)
+        validate_arrays = _with_time(validate_arrays, validate_time, "validate", "validate_time")
+    elif validate_time is not None:
+        raise _native.UrdfDhError("validate_time: expected it with validate, found no validate")
     if isinstance(effects, str) or effects is None:
         effects_text = effects
     else:
@@ -353,6 +403,21 @@ def _as_python(lines: Sequence[str]) -> List[str]:
     """The library's warnings of predict/compensate with the CLI's ``--sequence`` named as
     this package's ``sequence=True``."""
     return [line.replace("with --sequence", "with sequence=True") for line in lines]
+
+
+@contextlib.contextmanager
+def _python_hint() -> Iterator[None]:
+    """An error's hint with the CLI's options named as this package's arguments (``--sequence``
+    as ``sequence=True``, a ``time`` column as ``time=``)."""
+    try:
+        yield
+    except _native.UrdfDhError as e:
+        hint = getattr(e, "hint", None)
+        if hint:
+            e.hint = hint.replace("with --sequence", "with sequence=True").replace(
+                "add each row's time in seconds", "add each row's time in seconds (time=, or a 'time' column)"
+            )
+        raise
 
 
 def _warn_all(lines: Sequence[str]) -> None:
@@ -410,6 +475,7 @@ def predict(
     length_unit: str = "m",
     angle_unit: str = "rad",
     sequence: bool = False,
+    time: Any = None,
 ) -> Prediction:
     """The calibrated model's target positions (or tool poses, ``targets="tool"``) at joint
     values, with their standard uncertainty, as ``urdf-dh predict`` computes them.
@@ -427,6 +493,11 @@ def predict(
             its last motion, and a ``drift`` effect reads each pose's place in the order, as
             ``calibrate`` reads a measurement file (default: unknown, the backlash added to the
             uncertainty with a warning, and no drift).
+        time: each pose's time in seconds (a 1-D array, one per row; a DataFrame's ``time``
+            column or a file's otherwise): a ``thermal_growth`` calibration is evaluated at
+            ``t`` since the first row (the robot as at the calibration's first sample). Without
+            times it is refused, naming the missing time, unless ``sequence=True`` (a
+            calibration whose data had no times: the pose order).
 
     Raises:
         UrdfDhError: bad model or joint values (the CLI's message).
@@ -436,19 +507,21 @@ def predict(
         columns = _joints(model, base, tip)
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
     name, arrays = _source(joints, columns, "joints", points=False)
-    native = _native.predict(
-        os.fspath(model),
-        name,
-        arrays,
-        base,
-        tip,
-        _names(targets),
-        frame,
-        session,
-        length_unit,
-        angle_unit,
-        bool(sequence),
-    )
+    arrays = _with_time(arrays, time, "joints", "time")
+    with _python_hint():
+        native = _native.predict(
+            os.fspath(model),
+            name,
+            arrays,
+            base,
+            tip,
+            _names(targets),
+            frame,
+            session,
+            length_unit,
+            angle_unit,
+            bool(sequence),
+        )
     _warn_all(_as_python(native[-1]))
     return Prediction(native)
 
@@ -465,10 +538,12 @@ def compensate(
     length_unit: str = "m",
     angle_unit: str = "rad",
     sequence: bool = False,
+    time: Any = None,
 ) -> Tuple[np.ndarray, np.ndarray, List[str]]:
     """Corrected joint values with which the calibrated ``model`` puts its tool where
     ``nominal`` puts it at the commanded ``joints`` (same forms as :func:`predict`), as
-    ``urdf-dh compensate`` computes them. ``sequence`` as in :func:`predict` (``--sequence``).
+    ``urdf-dh compensate`` computes them. ``sequence`` (``--sequence``) and ``time`` (each
+    pose's time in seconds, for ``thermal_growth``) as in :func:`predict`.
 
     Returns:
         ``(q, errors, failures)``: the corrected joint values (poses x joints), per pose the
@@ -483,19 +558,21 @@ def compensate(
     if not _is_path(joints) and not _is_frame(joints):
         joints = np.atleast_2d(np.asarray(joints, dtype=float))
     name, arrays = _source(joints, columns, "joints", points=False)
-    q, errors, failures, notes = _native.compensate(
-        os.fspath(nominal),
-        os.fspath(model),
-        name,
-        arrays,
-        base,
-        tip,
-        position_only,
-        None if max_change is None else repr(float(max_change)),
-        length_unit,
-        angle_unit,
-        bool(sequence),
-    )
+    arrays = _with_time(arrays, time, "joints", "time")
+    with _python_hint():
+        q, errors, failures, notes = _native.compensate(
+            os.fspath(nominal),
+            os.fspath(model),
+            name,
+            arrays,
+            base,
+            tip,
+            position_only,
+            None if max_change is None else repr(float(max_change)),
+            length_unit,
+            angle_unit,
+            bool(sequence),
+        )
     _warn_all(_as_python(notes))
     return (
         np.array(q, dtype=float).reshape(-1, len(columns)),
