@@ -111,6 +111,17 @@ pub struct SimulateCli {
     /// gravity_sag:J needs none (its gravity: this file's `gravity`, else -z of the base).
     #[arg(long, value_name = "FILE")]
     inertials: Option<String>,
+    /// Gravity in the robot's base link frame, m/s² [default: the inertials file's `gravity`,
+    /// else 0,0,-9.80665]: the direction of a gravity_sag:J and of the inertials' torques, as
+    /// calibrate --gravity takes it.
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_parser = crate::guard::gravity
+    )]
+    gravity: Option<Vec<f64>>,
     /// A geometric error of the true robot, NAME=VALUE in metres or radians (e.g.
     /// elbow_joint.a=0.0005); repeatable.
     #[arg(long = "error", value_name = "NAME=VALUE", allow_hyphen_values = true)]
@@ -159,6 +170,7 @@ impl SimulateCli {
                 arc: self.arc,
                 effects: self.effects,
                 inertials: self.inertials,
+                gravity: self.gravity,
                 errors: self.errors,
                 random_errors: self.random_errors,
                 targets: self.targets,

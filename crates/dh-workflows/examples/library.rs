@@ -44,6 +44,7 @@ fn main() -> anyhow::Result<()> {
         arc: None,
         effects: vec![],
         inertials: None,
+        gravity: None,
         errors: vec!["shoulder_lift_joint.a=0.0005".into()],
         random_errors: None,
         targets: 1,

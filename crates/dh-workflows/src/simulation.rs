@@ -59,6 +59,10 @@ pub struct SimulationRequest {
     /// `backlash:J`): an inertials file as `calibrate --inertials` reads it (its `gravity` key
     /// included); `None`: gravity effects are refused.
     pub inertials: Option<String>,
+    /// Gravity in the robot's base link frame (m/s², three values), as `calibrate --gravity`:
+    /// the direction of a planted `gravity_sag:J` and the gravity of the inertials' torques.
+    /// `None`: the inertials file's `gravity`, else `(0, 0, -9.80665)`.
+    pub gravity: Option<Vec<f64>>,
     /// Geometric errors by parameter name (`joint_2.a=0.001`).
     pub errors: Vec<String>,
     /// Random errors on every DH parameter: largest length (metres) and angle (radians).
@@ -248,9 +252,23 @@ pub fn simulate(
         ));
     }
     let mut ctx = EffectContext::serial(table);
+    let given = match args.gravity.as_deref() {
+        None => None,
+        Some([x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => {
+            Some(nalgebra::Vector3::new(*x, *y, *z))
+        }
+        Some(g) => {
+            anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
+        }
+    };
+    if let Some(g) = given {
+        ctx.gravity_vector = g;
+    }
     if let Some(path) = &args.inertials {
         let (inertials, gravity) = crate::calibration::read_inertials(path, table)?;
-        let gravity = gravity.unwrap_or_else(GravityModel::default_gravity);
+        let gravity = given
+            .or(gravity)
+            .unwrap_or_else(GravityModel::default_gravity);
         ctx.gravity = Some(Arc::new(
             GravityModel::serial(table, &inertials, gravity)
                 .map_err(|e| anyhow::anyhow!("{}: {e}", crate::input::display_name(path)))?,

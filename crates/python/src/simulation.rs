@@ -67,6 +67,7 @@ fn simulate(
             arc: arc.map(|v| checked("arc", &v, guard::arc)).transpose()?,
             effects,
             inertials: None,
+            gravity: None,
             errors,
             random_errors: random_errors
                 .map(|v| checked("random_errors", &v, guard::random_errors))
