@@ -174,5 +174,37 @@ fn auto_names_a_warm_up_of_the_robot_in_time() {
     assert!(z.abs() < 3.0, "k {z:.2} standard errors off");
     let z = recovered(&report, "thermal_growth.ln_tau", 7.09);
     assert!(z.abs() < 3.0, "ln tau {z:.2} standard errors off");
+    // Beside ln tau, tau in seconds with its standard error by the delta method (JSON and
+    // text); the fitted parameter is ln tau still.
+    let p = report["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "thermal_growth.ln_tau")
+        .unwrap();
+    let (ln_tau, se) = (
+        p["estimate"].as_f64().unwrap(),
+        p["std_error"].as_f64().unwrap(),
+    );
+    let d = &p["derived"];
+    assert_eq!(
+        (&d["name"], &d["unit"]),
+        (
+            &serde_json::json!("thermal_growth.tau"),
+            &serde_json::json!("s")
+        )
+    );
+    let (tau, se_tau) = (
+        d["estimate"].as_f64().unwrap(),
+        d["std_error"].as_f64().unwrap(),
+    );
+    // JSON numbers round-trip: the same doubles as exp and the product give.
+    assert_eq!((tau, se_tau), (ln_tau.exp(), ln_tau.exp() * se), "{d}");
+    let shown = format!("(tau {tau:.4e} +- {se_tau:.1e} s)");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("  thermal_growth.ln_tau = ") && l.ends_with(&shown)),
+        "{shown} in {text}"
+    );
     assert!(!text.contains("no `time` column"), "{text}");
 }

@@ -372,16 +372,29 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
                         .unwrap_or_default()
                 )
             });
+            // A derived quantity beside it (tau of thermal_growth.ln_tau), as the stiffness.
+            let derived = p.derived.as_ref().map(|d| {
+                format!(
+                    "  ({} {:.4e}{} {})",
+                    d.name.rsplit('.').next().unwrap_or(&d.name),
+                    d.estimate,
+                    d.std_error
+                        .map(|e| format!(" +- {e:.1e}"))
+                        .unwrap_or_default(),
+                    d.unit
+                )
+            });
             let _ = writeln!(
                 s,
-                "  {} = {:.6e}{} {}{}",
+                "  {} = {:.6e}{} {}{}{}",
                 p.name,
                 p.estimate,
                 p.std_error
                     .map(|e| format!(" +- {e:.1e}"))
                     .unwrap_or_default(),
                 p.unit,
-                stiffness.unwrap_or_default()
+                stiffness.unwrap_or_default(),
+                derived.unwrap_or_default()
             );
         }
     }

@@ -133,6 +133,12 @@ impl CalibrationDoc {
                     free: p.free,
                     identified: p.free
                         && ParameterDoc::identifies(&p.name, p.estimate, p.std_error, &judge),
+                    derived: super::doc::DerivedDoc::of(
+                        &p.name,
+                        p.estimate,
+                        p.std_error,
+                        crate::effects_order::has_times(data),
+                    ),
                 })
                 .collect(),
             fixed: report.fixed.iter().map(FixedDoc::from).collect(),

@@ -105,6 +105,49 @@ pub struct ParameterDoc {
     /// this key read as `true`.
     #[serde(default = "identified_by_default")]
     pub identified: bool,
+    /// A quantity derived from this parameter for reading, beside it ([`DerivedDoc::of`]: the
+    /// time constant of `thermal_growth.ln_tau`); absent for other parameters. The parameter
+    /// and the fit are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub derived: Option<DerivedDoc>,
+}
+
+/// A quantity derived from a parameter for reading (JSON `parameters[].derived`), with its
+/// standard error to first order (the delta method: `se_f = |f'(x)| se_x`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DerivedDoc {
+    /// Name (`thermal_growth.tau`).
+    pub name: String,
+    /// Unit: `s`, or `session` (a fraction of the set's pose order, when the samples had no
+    /// times).
+    pub unit: String,
+    /// Value at the parameter's estimate.
+    pub estimate: f64,
+    /// Standard error by the delta method; `None` without the parameter's.
+    pub std_error: Option<f64>,
+}
+
+impl DerivedDoc {
+    /// The quantity derived from parameter `name` estimated as `estimate` with `std_error`:
+    /// for `thermal_growth.ln_tau`, the time constant `tau = exp(ln_tau)` (see
+    /// `crate::effects_thermal`) with `se_tau = tau * se_ln_tau`, in seconds when the
+    /// samples had times (`timed`), else in fractions of the session (the pose order from 0
+    /// to 1). `None` for any other parameter, and when `tau` overflows a double.
+    pub fn of(name: &str, estimate: f64, std_error: Option<f64>, timed: bool) -> Option<Self> {
+        let ln_tau = crate::model::Effect::parameter_names(&crate::effects_thermal::ThermalGrowth)
+            .into_iter()
+            .nth(1)?;
+        if name != ln_tau {
+            return None;
+        }
+        let tau = estimate.exp();
+        tau.is_finite().then(|| DerivedDoc {
+            name: format!("{}.tau", crate::effects_thermal::LABEL),
+            unit: if timed { "s" } else { "session" }.into(),
+            estimate: tau,
+            std_error: std_error.map(|se| tau * se).filter(|se| se.is_finite()),
+        })
+    }
 }
 
 fn identified_by_default() -> bool {
@@ -471,5 +514,36 @@ impl SessionDoc {
                 rpy: s.device.rpy,
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod derived_tests {
+    use super::DerivedDoc;
+
+    /// tau = exp(ln_tau) with se_tau = tau se_ln_tau: ln 1200 +- 0.25 is 1200 +- 300 s.
+    #[test]
+    fn thermal_growth_tau_is_exp_ln_tau_with_its_delta_method_error() {
+        let d = DerivedDoc::of("thermal_growth.ln_tau", 1200f64.ln(), Some(0.25), true)
+            .expect("ln_tau derives tau");
+        assert_eq!(
+            (d.name.as_str(), d.unit.as_str()),
+            ("thermal_growth.tau", "s")
+        );
+        assert!((d.estimate - 1200.0).abs() < 1e-9, "{}", d.estimate);
+        assert!((d.std_error.unwrap_or(f64::NAN) - 300.0).abs() < 1e-9);
+        let untimed = DerivedDoc::of("thermal_growth.ln_tau", -1.0, None, false);
+        assert_eq!(
+            untimed.map(|d| (d.unit, d.std_error)),
+            Some(("session".into(), None))
+        );
+        assert_eq!(
+            DerivedDoc::of("thermal_growth.k", 6e-5, Some(1e-6), true),
+            None
+        );
+        assert_eq!(
+            DerivedDoc::of("thermal_growth.ln_tau", 1e3, Some(1.0), true),
+            None
+        );
     }
 }

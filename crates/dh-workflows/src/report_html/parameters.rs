@@ -72,6 +72,7 @@ pub(super) fn parameters(doc: &CalibrationDoc) -> String {
         ],
         &rows,
     ));
+    s.push_str(&derived(&free));
     s.push_str(&unidentified(doc));
     if !doc.fixed.is_empty() {
         let rows: Vec<Vec<String>> = doc
@@ -92,6 +93,26 @@ pub(super) fn parameters(doc: &CalibrationDoc) -> String {
         s.push_str(&table(&["parameter", "absorbed by"], &rows));
     }
     s
+}
+
+/// A paragraph per quantity derived from a free parameter
+/// ([`dh_calib::pipeline::ParameterDoc::derived`]: the time constant `tau` of
+/// `thermal_growth.ln_tau`), with its standard error by the delta method; empty without one.
+fn derived(free: &[&dh_calib::pipeline::ParameterDoc]) -> String {
+    free.iter()
+        .filter_map(|p| p.derived.as_ref().map(|d| (p, d)))
+        .map(|(p, d)| {
+            page::muted(&format!(
+                "{} = exp({}) = {} {} (standard error {} {}, delta method).",
+                esc(&d.name),
+                esc(&p.name),
+                sci(d.estimate, 4),
+                esc(&d.unit),
+                sci(d.std_error, 2),
+                esc(&d.unit)
+            ))
+        })
+        .collect()
 }
 
 /// The paragraphs naming the free parameters the data did not identify
@@ -216,5 +237,29 @@ mod tests {
     fn setup_parameters_are_told_from_the_robots() {
         assert!(is_setup("device.rx") && is_setup("target.t1.x") && is_setup("session.s2.z"));
         assert!(!is_setup("elbow_joint.a") && !is_setup("base.x") && !is_setup("gear_ratio:j2"));
+    }
+
+    /// The page gives tau = exp(ln_tau) in seconds beside `thermal_growth.ln_tau`, with its
+    /// delta-method standard error: ln 1200 +- 0.25 is 1.2e3 +- 3.0e2 s.
+    #[test]
+    fn thermal_growth_tau_is_shown_in_seconds() {
+        use dh_calib::pipeline::{DerivedDoc, ParameterDoc};
+        let param = |name: &str, estimate: f64, se: f64| ParameterDoc {
+            name: name.into(),
+            unit: dh_calib::pipeline::unit_of(name).into(),
+            nominal: 0.0,
+            estimate,
+            std_error: Some(se),
+            free: true,
+            identified: true,
+            derived: DerivedDoc::of(name, estimate, Some(se), true),
+        };
+        let ln_tau = param("thermal_growth.ln_tau", 1200f64.ln(), 0.25);
+        let k = param("thermal_growth.k", 6e-5, 6e-6);
+        assert_eq!(
+            derived(&[&k, &ln_tau]),
+            page::muted("thermal_growth.tau = exp(thermal_growth.ln_tau) = 1.2000e3 s (standard error 3.00e2 s, delta method).")
+        );
+        assert_eq!(derived(&[&k]), "");
     }
 }
