@@ -415,7 +415,7 @@ def _python_hint() -> Iterator[None]:
         hint = getattr(e, "hint", None)
         if hint:
             e.hint = hint.replace("with --sequence", "with sequence=True").replace(
-                "add each row's time in seconds", "add each row's time in seconds (time=, or a 'time' column)"
+                "add each row's time in seconds", "give each row's time in seconds with time= or a 'time' column"
             )
         raise
 
