@@ -237,7 +237,8 @@ class Report:
         val_rms_before, val_rms_after: validation RMS (m), or None.
         steps: one dict per step (``label``, ``free``, ``rms``, ``val_rms``, ...).
         parameters: one dict per parameter (``name``, ``unit``, ``nominal``, ``estimate``,
-            ``std_error``, ``free``).
+            ``std_error``, ``free``, ``identified``; beside ``thermal_growth.ln_tau`` a
+            ``derived`` dict: ``tau`` = exp(ln_tau) in s with its delta-method standard error).
         selected_effects: labels of the effects estimated in the last step.
         device: ``T_device_base`` (4x4): the robot's base link in the measuring device's frame.
         targets: target name -> position in the tip frame (m).
