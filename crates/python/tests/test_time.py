@@ -125,3 +125,25 @@ def test_bad_times_raise_the_cli_messages(warm):
     empty[5] = np.nan
     with pytest.raises(urdf_dh.UrdfDhError, match=r"<joints>: line 7, column 'time': expected the row's time \(seconds\) for thermal_growth, found an empty cell"):
         urdf_dh.predict(cal, q, time=empty)
+
+
+def test_validation_arrays_take_their_times_as_a_validation_file(warm, tmp_path):
+    _, data, _, _, _ = warm
+    lines = [line for line in open(data) if not line.startswith("#")]
+    first, rest = tmp_path / "first.csv", tmp_path / "rest.csv"
+    first.write_text("".join(lines[:81]))
+    rest.write_text(lines[0] + "".join(lines[81:]))
+    from_files = urdf_dh.calibrate(UR5, first, validate=rest, effects=["thermal_growth"])
+    a, b = read(first), read(rest)
+    from_arrays = urdf_dh.calibrate(
+        UR5,
+        a[JOINTS + XYZ].to_numpy(),
+        time=a["time"].to_numpy(),
+        validate=b[JOINTS + XYZ].to_numpy(),
+        validate_time=b["time"].to_numpy(),
+        effects=["thermal_growth"],
+    )
+    assert from_arrays.val_rms_after == from_files.val_rms_after
+    assert [p["estimate"] for p in from_arrays.parameters] == [p["estimate"] for p in from_files.parameters]
+    with pytest.raises(urdf_dh.UrdfDhError, match="validate_time: expected it with validate, found no validate"):
+        urdf_dh.calibrate(UR5, a[JOINTS + XYZ].to_numpy(), validate_time=b["time"].to_numpy())
