@@ -115,6 +115,7 @@ impl Model {
             target_chain: targets.iter().map(|(_, c)| *c).collect(),
             target_params: 0,
             effects: Vec::new(),
+            free_slots: Default::default(),
             pairs,
             session_chains: Vec::new(),
             target_frames: vec![None; targets.len()],
@@ -303,7 +304,10 @@ impl Model {
                 reason: "expected each effect once, found it twice".into(),
             });
         }
-        let op = if matches!(effect.field(), EffectField::Scale | EffectField::Growth | EffectField::Shift) {
+        let op = if matches!(
+            effect.field(),
+            EffectField::Scale | EffectField::Growth | EffectField::Shift
+        ) {
             None
         } else {
             let row =
@@ -344,6 +348,13 @@ impl Model {
         }
         let params = start..self.parameters.len();
         let shift = (effect.field() == EffectField::Shift).then(|| effect.shift_direction());
+        let slots = &mut self.free_slots;
+        match effect.field() {
+            EffectField::Scale => slots.scale.push(e),
+            EffectField::Growth => slots.growth.push(e),
+            EffectField::Shift => slots.shift.push(e),
+            _ => {}
+        }
         self.effects.push(EffectSlot {
             effect,
             params: params.clone(),

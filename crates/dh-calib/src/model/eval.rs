@@ -42,17 +42,21 @@ impl Model {
 
     /// Whether the model has a robot growth effect.
     pub(super) fn has_growth(&self) -> bool {
-        self.effects
-            .iter()
-            .any(|s| s.op.is_none() && s.effect.field() == EffectField::Growth)
+        !self.free_slots.growth.is_empty()
     }
 
+    /// `1 + Σ` of the effects of `field` (the device scale or the robot growth) at `x`, `q`
+    /// and `ctx`, in slot order.
     fn factor_of(&self, field: EffectField, x: &[f64], q: &[f64], ctx: &SampleContext) -> f64 {
-        1.0 + self
-            .effects
+        let slots = match field {
+            EffectField::Scale => &self.free_slots.scale,
+            EffectField::Growth => &self.free_slots.growth,
+            _ => return 1.0,
+        };
+        1.0 + slots
             .iter()
-            .filter(|s| s.op.is_none() && s.effect.field() == field)
-            .map(|slot| {
+            .map(|&e| {
+                let slot = &self.effects[e];
                 let params = x.get(slot.params.clone()).unwrap_or(&[]);
                 slot.effect.delta_in(q, ctx, params)
             })
@@ -98,7 +102,8 @@ impl Model {
     /// chain ([`super::EffectField::Shift`]).
     pub(super) fn shift_at(&self, x: &[f64], q: &[f64], ctx: &SampleContext) -> Vector3<f64> {
         let mut out = Vector3::zeros();
-        for slot in &self.effects {
+        for &e in &self.free_slots.shift {
+            let slot = &self.effects[e];
             if let Some(dir) = slot.shift {
                 let params = x.get(slot.params.clone()).unwrap_or(&[]);
                 if params.iter().any(|p| *p != 0.0) {
@@ -130,7 +135,7 @@ impl Model {
 
     /// Whether the model has a shift effect (see [`Model::shift_at`]).
     pub(super) fn has_shift(&self) -> bool {
-        self.effects.iter().any(|s| s.shift.is_some())
+        !self.free_slots.shift.is_empty()
     }
 
     /// Frame at the end of `ops` (op indices in order); `before[i]` receives the frame before

@@ -45,10 +45,9 @@ impl Model {
 
     /// Whether `columns` hold a parameter of a robot growth effect.
     fn growth_column(&self, columns: &[usize]) -> bool {
-        self.effects.iter().any(|s| {
-            s.op.is_none()
-                && s.effect.field() == super::EffectField::Growth
-                && columns.iter().any(|c| s.params.contains(c))
+        self.free_slots.growth.iter().any(|&e| {
+            let params = &self.effects[e].params;
+            columns.iter().any(|c| params.contains(c))
         })
     }
 
@@ -262,7 +261,7 @@ impl Model {
                         // A shift: along its direction in the device frame, grown with the robot.
                         (None, Some(dir)) => dp = prepared.device_rotation() * dir * (g * g_factor),
                         // Robot growth: the position from the base origin, ungrown (the shift in).
-                        (None, None) if slot.effect.field() == super::EffectField::Growth => {
+                        (None, None) if self.free_slots.growth.contains(&e) => {
                             dp = (point - origin) * g;
                         }
                         // Device scale: the unscaled position, undoing the factor below.

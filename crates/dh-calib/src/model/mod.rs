@@ -104,6 +104,17 @@ use crate::tree::DhTree;
 use dh_core::DhTable;
 use ops::{EffectSlot, Op, RowOps};
 
+/// Indices into [`Model`]'s effect slots of the effects that change no op.
+#[derive(Clone, Debug, Default)]
+struct FreeSlots {
+    /// [`EffectField::Scale`] effects (the device scale).
+    scale: Vec<usize>,
+    /// [`EffectField::Growth`] effects (the robot growth).
+    growth: Vec<usize>,
+    /// [`EffectField::Shift`] effects.
+    shift: Vec<usize>,
+}
+
 /// The parametrised measurement model (see the module docs for frames and parameters).
 #[derive(Clone, Debug)]
 pub struct Model {
@@ -121,6 +132,10 @@ pub struct Model {
     target_chain: Vec<usize>,
     target_params: usize,
     effects: Vec<EffectSlot>,
+    /// The effect slots without an op, by field, in slot order: what every evaluation scans
+    /// for the device scale, the robot growth and the shifts (kept by [`Model::add_effect`],
+    /// so that a model with many candidate effects does not ask each for its field per sample).
+    free_slots: FreeSlots,
     pairs: Vec<PairParametrisation>,
     /// Per session with its own device block: the session index and its op indices of each
     /// chain (its block instead of the device block).
