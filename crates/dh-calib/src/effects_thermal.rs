@@ -107,6 +107,12 @@ impl Effect for ThermalGrowth {
     }
     fn delta_in(&self, _q: &[f64], context: &SampleContext, params: &[f64]) -> f64 {
         let k = params.first().copied().unwrap_or(0.0);
+        // No growth at `k = 0` whatever tau (the shape is finite and not negative, so this is
+        // `k · shape` to the bit): the candidate is in every evaluation of the diagnosis, at
+        // `k = 0` with its start's tau until it is selected, and the exponential is skipped.
+        if k == 0.0 {
+            return k;
+        }
         let ln_tau = params.get(1).copied().unwrap_or(0.0);
         k * shape(time_of(context), ln_tau).0
     }
