@@ -476,12 +476,25 @@ fn diagnose_judged(
                 // pass is added (see `rivals`).
                 let mut passed = vec![(e, round.trials.len() - 1, fitted)];
                 if !forced {
+                    // The round's linearised held-out RMS of a candidate.
+                    let val = |x: usize| {
+                        table
+                            .iter()
+                            .find(|(y, _)| *y == x)
+                            .and_then(|(_, c)| c.val_rms)
+                    };
                     let rivals: Vec<Wanted> = eligible
                         .iter()
                         .filter(|&&(r, _, _)| {
                             r != e
                                 && !rejected.contains(&r)
                                 && rivals::are_rivals(pool[e].as_ref(), pool[r].as_ref())
+                                && !rivals::cannot_win(
+                                    pool[e].as_ref(),
+                                    pool[r].as_ref(),
+                                    val(e),
+                                    val(r),
+                                )
                         })
                         .map(|c| (c.0, c.2))
                         .collect();

@@ -234,8 +234,8 @@ mod tests {
     #[test]
     fn a_sag_beside_a_thermal_growth_has_the_analytic_jacobian() {
         let (mut m, mut x, _) = model(Vector3::new(0.0, 0.0, -9.81));
-        let growth = parse_label_in("thermal_growth", &context(Vector3::new(0.0, 0.0, -9.81)))
-            .unwrap();
+        let growth =
+            parse_label_in("thermal_growth", &context(Vector3::new(0.0, 0.0, -9.81))).unwrap();
         let range = m.add_effect(growth).unwrap();
         // k = 1 %, ln tau = 0 (tau = 1 s, at times 0 to 2 s: well inside its curve).
         x.resize(m.parameter_count(), 0.0);
