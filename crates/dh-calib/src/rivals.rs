@@ -21,7 +21,7 @@ use crate::model::{Effect, EffectField};
 
 /// Relative margin of the round's linearised held-out RMS within which a rival of one load (a
 /// sag against a gravity-torque effect, or the reverse) is refitted beside the candidate that
-/// passed: the held-out RMS decides between them ([`best`]), and the linearised figure of the
+/// passed: the held-out RMS decides between them (`best`), and the linearised figure of the
 /// candidate table is the refit's to about 1e-5 relative on Boby's tracker set (these effects
 /// are linear in their parameter). A rival more than 2 % worse cannot win, and its refit was
 /// most of the work the sags added to the real sets (Boby: 9 refits, 22 % more instructions).
