@@ -103,6 +103,21 @@ function assertSameOutput(got, want, what) {
   assertEqual(got, want, what);
 }
 
+// `testid`'s text now ('' while the page has no such element), and once it differs from `before`: a dropped file is read and processed after
+// setInputFiles returns, so the element is read when the page has updated it (or after 10 s,
+// when the assertion on the returned text says what stayed).
+async function currentText(page, testid) {
+  return await page.evaluate((q) => document.querySelector(q)?.textContent ?? '', `[data-testid="${testid}"]`);
+}
+
+async function changedText(page, testid, before) {
+  const sel = `[data-testid="${testid}"]`;
+  await page
+    .waitForFunction(([q, b]) => (document.querySelector(q)?.textContent ?? '') !== b, [sel, before], { timeout: 10000 })
+    .catch(() => {});
+  return await page.getByTestId(testid).textContent();
+}
+
 // The CLI run in `cwd` (so that file names print as the page names them); stdout, stderr, code.
 function cli(args, cwd, env = undefined) {
   const r = spawnSync(CLI, args, { cwd, encoding: 'utf8', maxBuffer: 64 << 20, env: env ? { ...process.env, ...env } : undefined });
@@ -322,8 +337,9 @@ async function main() {
   });
 
   await test('check the vendor sheet: MATCH, and the JSON is the CLI\'s', async () => {
+    const before = await currentText(page, 'check-verdict');
     await page.getByTestId('sheet-file').setInputFiles(path.join(PANDA, 'vendor.yaml'));
-    const head = await page.getByTestId('check-verdict').textContent();
+    const head = await changedText(page, 'check-verdict', before);
     const want = cli(['check', 'robot.urdf', '--sheet', 'vendor.yaml', '--format', 'json'], PANDA);
     const report = JSON.parse(want.out);
     assertEqual(/^MATCH/.test(head), report.matches, `check verdict '${head}'`);
@@ -339,8 +355,9 @@ async function main() {
     const wrong = sheet.replace(/d: 0\.316/, 'd: 0.326');
     assert(wrong !== sheet, 'the fixture changed: no "d: 0.316" in vendor.yaml');
     fs.writeFileSync(path.join(tmp, 'wrong.yaml'), wrong);
+    const before = await currentText(page, 'check-verdict');
     await page.getByTestId('sheet-file').setInputFiles(path.join(tmp, 'wrong.yaml'));
-    const head = await page.getByTestId('check-verdict').textContent();
+    const head = await changedText(page, 'check-verdict', before);
     assert(/^MISMATCH/.test(head), `check verdict '${head}'`);
     const marked = await page.locator('[data-testid="dh-table"] td.diff').evaluateAll((tds) => tds.map((td) => `${td.parentElement.dataset.joint} ${td.dataset.param}`));
     const want = JSON.parse(cli(['check', pandaUrdf, '--sheet', path.join(tmp, 'wrong.yaml'), '--format', 'json'], PANDA).out);
@@ -353,8 +370,9 @@ async function main() {
   await test('a broken URDF: the CLI\'s error on the page, no table', async () => {
     const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'urdf-dh-bad-'));
     fs.writeFileSync(path.join(tmp, 'bad.urdf'), '<robot name="r"><link name="a"/><joint name="j" type="revolute"><parent link="a"/><child link="nowhere"/></joint></robot>');
+    const before = await currentText(page, 'error');
     await page.getByTestId('urdf-file').setInputFiles(path.join(tmp, 'bad.urdf'));
-    const shown = await page.getByTestId('error').textContent();
+    const shown = await changedText(page, 'error', before);
     const want = cli(['extract', 'bad.urdf'], tmp);
     assertEqual(want.code, 2, 'CLI exit code');
     const first = want.err.split('\n').find((l) => l.startsWith('urdf-dh: error: '));
