@@ -27,28 +27,28 @@ payloads:
 /// A CSV row by column name.
 type Row = HashMap<String, String>;
 
-fn table(path: &str) -> Vec<HashMap<String, String>> {
+pub(crate) fn table(path: &str) -> Vec<HashMap<String, String>> {
     csv_rows(&std::fs::read_to_string(path).unwrap())
 }
 
-fn num(row: &HashMap<String, String>, k: &str) -> f64 {
+pub(crate) fn num(row: &HashMap<String, String>, k: &str) -> f64 {
     row[k].parse().unwrap()
 }
 
-fn xyz(row: &HashMap<String, String>) -> [f64; 3] {
+pub(crate) fn xyz(row: &HashMap<String, String>) -> [f64; 3] {
     [num(row, "x"), num(row, "y"), num(row, "z")]
 }
 
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-fn rms(v: &[f64]) -> f64 {
+pub(crate) fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
 
 /// The tool in the base frame predicted by `model` at the rows of `joints`, written to `out`.
-fn tool(model: &str, joints: &str, out: &str) -> Vec<HashMap<String, String>> {
+pub(crate) fn tool(model: &str, joints: &str, out: &str) -> Vec<HashMap<String, String>> {
     predict_tool(model, joints, out, &[]).0
 }
 

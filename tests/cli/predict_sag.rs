@@ -6,47 +6,15 @@
 
 use std::collections::HashMap;
 
-use crate::common::{csv_rows, exec, ok, simulate};
+use crate::common::{exec, ok, simulate};
+use crate::predict_effects::{dist as dist_xyz, num, rms, table, tool, xyz};
+
+/// The distance between the points of two rows (metres).
+fn dist(a: &HashMap<String, String>, b: &HashMap<String, String>) -> f64 {
+    dist_xyz(xyz(a), xyz(b))
+}
 
 const UR5: &str = "fixtures/robots/ur5/vendor.yaml";
-
-fn table(path: &str) -> Vec<HashMap<String, String>> {
-    csv_rows(&std::fs::read_to_string(path).unwrap())
-}
-
-fn num(row: &HashMap<String, String>, k: &str) -> f64 {
-    row[k].parse().unwrap()
-}
-
-fn dist(a: &HashMap<String, String>, b: &HashMap<String, String>) -> f64 {
-    ["x", "y", "z"]
-        .iter()
-        .map(|k| (num(a, k) - num(b, k)).powi(2))
-        .sum::<f64>()
-        .sqrt()
-}
-
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
-}
-
-/// The tool in the base frame predicted by `model` at the rows of `joints`.
-fn tool(model: &str, joints: &str, out: &str) -> Vec<HashMap<String, String>> {
-    ok(&[
-        "predict",
-        "--model",
-        model,
-        "--joints",
-        joints,
-        "--targets",
-        "tool",
-        "--frame",
-        "base",
-        "--out",
-        out,
-    ]);
-    table(out)
-}
 
 #[test]
 fn a_gravity_sag_is_selected_written_read_back_predicted_and_compensated() {
