@@ -85,31 +85,7 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         inputs.table.rows.len(),
         doc.data
     );
-    let validation = match doc.validation.method.as_str() {
-        "split" => format!(
-            "validation on {} held-out samples{}",
-            doc.validation_samples,
-            doc.validate
-                .as_deref()
-                .map(|v| format!(" ({v})"))
-                .unwrap_or_default()
-        ),
-        "k-fold" => format!(
-            "{}-fold cross-validation over {} poses{}",
-            doc.validation.folds.unwrap_or(0),
-            doc.validation.groups.unwrap_or(0),
-            doc.validation
-                .training_subsample
-                .map(|n| format!(" (each fold fitted on about {n} evenly spaced training samples)"))
-                .unwrap_or_default()
-                + if doc.validation.fold_fits.as_deref() == Some("one-step") {
-                    " (each fold one Gauss-Newton step from the fit of all samples)"
-                } else {
-                    ""
-                }
-        ),
-        _ => "no validation (fewer than 2 poses)".to_string(),
-    };
+    let validation = doc.validation_words();
     let _ = writeln!(
         s,
         "data: {} calibration samples of {} target(s) ({}); {validation}",

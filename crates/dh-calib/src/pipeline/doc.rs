@@ -204,6 +204,39 @@ impl CalibrationDoc {
             .map(|p| (p.name.clone(), p.estimate))
             .collect()
     }
+
+    /// How the held-out figures were made, in words (the text report's `data:` line and the
+    /// report page): the held-out samples of a split, or the folds, poses and fit of a k-fold
+    /// cross-validation.
+    pub fn validation_words(&self) -> String {
+        match self.validation.method.as_str() {
+            "split" => format!(
+                "validation on {} held-out samples{}",
+                self.validation_samples,
+                self.validate
+                    .as_deref()
+                    .map(|v| format!(" ({v})"))
+                    .unwrap_or_default()
+            ),
+            "k-fold" => format!(
+                "{}-fold cross-validation over {} poses{}{}",
+                self.validation.folds.unwrap_or(0),
+                self.validation.groups.unwrap_or(0),
+                self.validation
+                    .training_subsample
+                    .map(|n| {
+                        format!(" (each fold fitted on about {n} evenly spaced training samples)")
+                    })
+                    .unwrap_or_default(),
+                if self.validation.fold_fits.as_deref() == Some("one-step") {
+                    " (each fold one Gauss-Newton step from the fit of all samples)"
+                } else {
+                    ""
+                }
+            ),
+            _ => "no validation (fewer than 2 poses)".into(),
+        }
+    }
 }
 
 /// A parameter held at nominal.

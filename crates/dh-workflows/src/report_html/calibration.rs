@@ -183,30 +183,6 @@ fn summary(doc: &CalibrationDoc) -> String {
     s
 }
 
-fn validation_words(doc: &CalibrationDoc) -> String {
-    match doc.validation.method.as_str() {
-        "split" => format!(
-            "validation on {} held-out samples{}",
-            doc.validation_samples,
-            doc.validate
-                .as_deref()
-                .map(|v| format!(" ({v})"))
-                .unwrap_or_default()
-        ),
-        "k-fold" => format!(
-            "{}-fold cross-validation over {} poses{}",
-            doc.validation.folds.unwrap_or(0),
-            doc.validation.groups.unwrap_or(0),
-            if doc.validation.fold_fits.as_deref() == Some("one-step") {
-                " (each fold one Gauss-Newton step from the fit of all samples)"
-            } else {
-                ""
-            }
-        ),
-        _ => "no validation (fewer than 2 poses)".into(),
-    }
-}
-
 fn steps(doc: &CalibrationDoc) -> String {
     let groups: Vec<(String, Vec<Option<f64>>)> = doc
         .steps
@@ -229,7 +205,7 @@ fn steps(doc: &CalibrationDoc) -> String {
         &chart,
         &format!(
             "Each step's RMS 3-D distance between modelled and measured points; {}.",
-            validation_words(doc)
+            doc.validation_words()
         ),
     );
     let rows: Vec<Vec<String>> = doc
@@ -458,7 +434,7 @@ fn settings(doc: &CalibrationDoc, report: &Report, request: &CalibrationRequest)
     );
     let mut rows = vec![
         vec!["effects asked for".into(), esc(&effects)],
-        vec!["validation".into(), esc(&validation_words(doc))],
+        vec!["validation".into(), esc(&doc.validation_words())],
         vec![
             "significance level (alpha) of the diagnosis and verdict".into(),
             fixed(request.alpha, 4),
