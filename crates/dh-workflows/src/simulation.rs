@@ -252,15 +252,7 @@ pub fn simulate(
         ));
     }
     let mut ctx = EffectContext::serial(table);
-    let given = match args.gravity.as_deref() {
-        None => None,
-        Some([x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => {
-            Some(nalgebra::Vector3::new(*x, *y, *z))
-        }
-        Some(g) => {
-            anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
-        }
-    };
+    let given = crate::calibration::gravity_given(args.gravity.as_deref())?;
     if let Some(g) = given {
         ctx.gravity_vector = g;
     }

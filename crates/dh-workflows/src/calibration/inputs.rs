@@ -95,6 +95,23 @@ pub fn read_inertials(path: &str, table: &DhTable) -> Result<(Inertials, Option<
     Ok((inertials, gravity))
 }
 
+/// The gravity vector `--gravity` gives (m/s², the robot's base link frame), `None` when it
+/// gives none.
+///
+/// # Errors
+/// Not three finite numbers.
+pub fn gravity_given(values: Option<&[f64]>) -> Result<Option<Vector3<f64>>> {
+    match values {
+        None => Ok(None),
+        Some([x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => {
+            Ok(Some(Vector3::new(*x, *y, *z)))
+        }
+        Some(g) => {
+            anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
+        }
+    }
+}
+
 /// What the gravity effects need: `--inertials`, else a URDF model's `<inertial>` masses
 /// (rows named like its joints), with `--payload` and `--gravity`. `None` when there are no
 /// masses at all.
@@ -133,13 +150,8 @@ pub fn gravity_inputs(
         }
         _ => None,
     };
-    if let Some(g) = &args.gravity {
-        match g.as_slice() {
-            [x, y, z] if g.iter().all(|v| v.is_finite()) => gravity = Vector3::new(*x, *y, *z),
-            _ => {
-                anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
-            }
-        }
+    if let Some(g) = gravity_given(args.gravity.as_deref())? {
+        gravity = g;
     }
     if let Some(p) = &args.payload {
         match p.as_slice() {
@@ -370,4 +382,26 @@ pub fn read_data_for(
         keep_targets(&mut data, &args.targets, &data_name)?;
     }
     Ok(data)
+}
+
+#[cfg(test)]
+mod gravity_tests {
+    use super::*;
+
+    /// calibrate, its tree form and simulate read `--gravity` through this one function.
+    #[test]
+    fn gravity_is_three_finite_numbers_or_an_error_naming_the_option() {
+        assert_eq!(gravity_given(None).unwrap(), None);
+        assert_eq!(
+            gravity_given(Some(&[-9.81, 0.0, 0.0])).unwrap(),
+            Some(Vector3::new(-9.81, 0.0, 0.0))
+        );
+        for bad in [&[1.0, 2.0][..], &[0.0, f64::NAN, 1.0][..]] {
+            let e = gravity_given(Some(bad)).unwrap_err().to_string();
+            assert!(
+                e.starts_with("--gravity: expected three finite numbers X,Y,Z in m/s², found"),
+                "{e}"
+            );
+        }
+    }
 }

@@ -39,8 +39,8 @@ use dh_calib::pipeline::{Plan, Progress, Silent};
 use crate::tree_sheet::TreeSheet;
 
 pub use inputs::{
-    enough_samples, gravity_inputs, keep_targets, load_inputs, read_data_for, read_inertials,
-    read_sets, too_few, Inputs,
+    enough_samples, gravity_given, gravity_inputs, keep_targets, load_inputs, read_data_for,
+    read_inertials, read_sets, too_few, Inputs,
 };
 pub use request::{CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFECTS};
 pub use residuals::{residuals, Residuals};

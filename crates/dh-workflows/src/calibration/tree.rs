@@ -182,13 +182,8 @@ pub fn load_tree(
         }
         None => None,
     };
-    if let Some(g) = &args.gravity {
-        match g.as_slice() {
-            [x, y, z] if g.iter().all(|v| v.is_finite()) => gravity = Vector3::new(*x, *y, *z),
-            _ => {
-                anyhow::bail!("--gravity: expected three finite numbers X,Y,Z in m/s², found {g:?}")
-            }
-        }
+    if let Some(g) = super::inputs::gravity_given(args.gravity.as_deref())? {
+        gravity = g;
     }
     Ok(TreeInputs {
         sheet,
