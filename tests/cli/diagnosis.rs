@@ -207,4 +207,11 @@ fn auto_names_a_warm_up_of_the_robot_in_time() {
         "{shown} in {text}"
     );
     assert!(!text.contains("no `time` column"), "{text}");
+    // ln tau's unit, in the JSON and in the text's parameter table: the log of seconds.
+    assert_eq!(p["unit"], "ln s", "{p}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("  thermal_growth.ln_tau ") && l.contains(" [ln s] ")),
+        "{text}"
+    );
 }

@@ -20,6 +20,23 @@ fn standard_errors_below_the_printed_digits_switch_to_scientific() {
     assert_eq!(std_error(1.3e-7, "m", mm), "1.3e-4");
 }
 
+/// The parameter table prints an effect's unit as the JSON names it (`ln s` for
+/// `thermal_growth.ln_tau`, not `1`), lengths and angles in the data's units.
+#[test]
+fn the_parameter_table_prints_each_effects_own_unit() {
+    let units = DataUnits {
+        length: LengthUnit::Mm,
+        angle: AngleUnit::Deg,
+    };
+    assert_eq!(unit_label("ln s", units), "ln s");
+    assert_eq!(unit_label("ln session", units), "ln session");
+    assert_eq!(unit_label("1/m^2", units), "1/m^2");
+    assert_eq!(unit_label("rad/(N m)", units), "rad/(N m)");
+    assert_eq!(unit_label("1", units), "1");
+    assert_eq!(unit_label("m", units), "mm");
+    assert_eq!(unit_label("rad", units), "deg");
+}
+
 #[test]
 fn effects_choice_parses() {
     assert_eq!("none".parse(), Ok(EffectsChoice::None));

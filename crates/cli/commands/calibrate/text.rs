@@ -56,11 +56,13 @@ pub(super) fn value(v: f64, unit: &str, units: DataUnits) -> String {
     }
 }
 
-pub(super) fn unit_label(unit: &str, units: DataUnits) -> &'static str {
+/// The unit printed in brackets in the parameter table: lengths and angles in `units`, any
+/// other unit as the JSON names it (`1`, `rad/(N m)`, `1/m^2`, `ln s`...).
+pub(super) fn unit_label(unit: &str, units: DataUnits) -> &str {
     match unit {
         "m" => units.length.symbol(),
         "rad" => units.angle.symbol(),
-        _ => "1",
+        other => other,
     }
 }
 
@@ -214,15 +216,25 @@ pub(super) fn text(doc: &CalibrationDoc, inputs: &Inputs) -> String {
         "estimated parameters (nominal -> estimate +- standard error):"
     );
     let width = crate::guard::column_width(doc.parameters.iter().map(|p| p.name.as_str()), 4);
-    for p in doc.parameters.iter().filter(|p| {
-        p.free
-            && !p.name.starts_with("device.")
-            && !p.name.starts_with("session.")
-            && !p.name.starts_with("target.")
-    }) {
+    let listed: Vec<_> = doc
+        .parameters
+        .iter()
+        .filter(|p| {
+            p.free
+                && !p.name.starts_with("device.")
+                && !p.name.starts_with("session.")
+                && !p.name.starts_with("target.")
+        })
+        .collect();
+    // The unit column as wide as its widest unit (`ln session`), at least the 3 of `rad`.
+    let unit_width = listed
+        .iter()
+        .map(|p| unit_label(&p.unit, units).chars().count())
+        .fold(3, usize::max);
+    for p in listed {
         let _ = writeln!(
             s,
-            "  {:<width$} [{:>3}] {:>13} -> {:>13} +- {}{}",
+            "  {:<width$} [{:>unit_width$}] {:>13} -> {:>13} +- {}{}",
             crate::guard::escape(&p.name),
             unit_label(&p.unit, units),
             value(p.nominal, &p.unit, units),

@@ -71,6 +71,7 @@ impl CalibrationDoc {
         let (outliers, verdict, diagnosis) = documents(report);
         // Geometric parameters: their standard errors at the points against the noise floor.
         let judge = super::Identification::new(report, data.samples.len() - val_count);
+        let timed = crate::effects_order::has_times(data);
         CalibrationDoc {
             model: names.model.clone(),
             data: names.data.clone(),
@@ -126,19 +127,14 @@ impl CalibrationDoc {
                 .iter()
                 .map(|p| ParameterDoc {
                     name: p.name.clone(),
-                    unit: super::doc::unit_of(&p.name).into(),
+                    unit: super::doc::unit_in(&p.name, timed).into(),
                     nominal: p.nominal,
                     estimate: p.estimate,
                     std_error: p.std_error,
                     free: p.free,
                     identified: p.free
                         && ParameterDoc::identifies(&p.name, p.estimate, p.std_error, &judge),
-                    derived: super::doc::DerivedDoc::of(
-                        &p.name,
-                        p.estimate,
-                        p.std_error,
-                        crate::effects_order::has_times(data),
-                    ),
+                    derived: super::doc::DerivedDoc::of(&p.name, p.estimate, p.std_error, timed),
                 })
                 .collect(),
             fixed: report.fixed.iter().map(FixedDoc::from).collect(),

@@ -457,6 +457,17 @@ pub fn unit_of(name: &str) -> &'static str {
     }
 }
 
+/// The unit of parameter `name` in a calibration whose samples had times (`timed`) or not:
+/// [`unit_of`], except `thermal_growth.ln_tau`, the natural log of tau in fractions of the
+/// session (`ln session`: the pose order from 0 to 1, see `crate::effects_thermal`) when the
+/// samples had no times.
+pub fn unit_in(name: &str, timed: bool) -> &'static str {
+    match unit_of(name) {
+        "ln s" if !timed => "ln session",
+        unit => unit,
+    }
+}
+
 /// The DH convention of a report's model: `standard` or `modified`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -552,7 +563,18 @@ impl SessionDoc {
 
 #[cfg(test)]
 mod derived_tests {
-    use super::DerivedDoc;
+    use super::{unit_in, DerivedDoc};
+
+    /// `ln_tau` is in `ln s` with times, in `ln session` without; the other parameters'
+    /// units do not depend on it.
+    #[test]
+    fn ln_tau_is_in_ln_seconds_or_ln_sessions() {
+        assert_eq!(unit_in("thermal_growth.ln_tau", true), "ln s");
+        assert_eq!(unit_in("thermal_growth.ln_tau", false), "ln session");
+        assert_eq!(unit_in("thermal_growth.k", false), "1");
+        assert_eq!(unit_in("gravity_sag:j2", false), "1/m^2");
+        assert_eq!(unit_in("j2.a", false), "m");
+    }
 
     /// tau = exp(ln_tau) with se_tau = tau se_ln_tau: ln 1200 +- 0.25 is 1200 +- 300 s.
     #[test]

@@ -9,15 +9,12 @@ use dh_calib::pipeline::CalibrationDoc;
 use super::page::{self, esc, fixed, mm, sci, table, tiles};
 
 /// A parameter's value in the page's units: lengths in mm, angles in degrees, others as they
-/// are; and the unit's symbol.
-pub(super) fn shown(v: f64, unit: &str) -> (String, &'static str) {
+/// are; and the unit's symbol (any other unit as the JSON names it: `rad/(N m)`, `ln s`...).
+pub(super) fn shown(v: f64, unit: &str) -> (String, &str) {
     match unit {
         "m" => (fixed(v * 1e3, 4), "mm"),
         "rad" => (fixed(v.to_degrees(), 5), "deg"),
-        "rad/(N m)" => (sci(v, 4), "rad/(N m)"),
-        "rad/rad" => (sci(v, 4), "rad/rad"),
-        "1/m^2" => (sci(v, 4), "1/m^2"),
-        _ => (sci(v, 4), "1"),
+        other => (sci(v, 4), other),
     }
 }
 
@@ -237,6 +234,17 @@ mod tests {
     fn setup_parameters_are_told_from_the_robots() {
         assert!(is_setup("device.rx") && is_setup("target.t1.x") && is_setup("session.s2.z"));
         assert!(!is_setup("elbow_joint.a") && !is_setup("base.x") && !is_setup("gear_ratio:j2"));
+    }
+
+    /// The parameter table's unit column names an effect's unit as the JSON does: `ln s` (or
+    /// `ln session` without times) for `thermal_growth.ln_tau`, not `1`.
+    #[test]
+    fn the_unit_column_names_each_effects_own_unit() {
+        assert_eq!(shown(7.09, "ln s"), ("7.0900e0".into(), "ln s"));
+        assert_eq!(shown(-1.0, "ln session").1, "ln session");
+        assert_eq!(shown(6e-4, "1/m^2").1, "1/m^2");
+        assert_eq!(shown(6e-5, "1").1, "1");
+        assert_eq!(shown(0.1, "m"), ("100.0000".into(), "mm"));
     }
 
     /// The page gives tau = exp(ln_tau) in seconds beside `thermal_growth.ln_tau`, with its
