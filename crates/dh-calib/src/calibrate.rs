@@ -70,7 +70,7 @@ pub(crate) use shape_start::{best_shape, sequence_span, shape_start};
 mod structure;
 mod verdict;
 pub use screen::screen;
-pub(crate) use screen::{check_level, screen_from};
+pub(crate) use screen::{check_level, confirmed_at, screen_from, Confirmation};
 pub(crate) use verdict::*;
 #[cfg(test)]
 mod tests;

@@ -3,6 +3,7 @@
 //! refit and judge the best and their rivals, add the winner, repeat; then the final
 //! residual's structure and the notes.
 
+use crate::calibrate::{confirmed_at, Confirmation};
 use crate::outliers::{GivenBack, OutlierReport};
 
 use super::*;
@@ -101,7 +102,9 @@ pub fn diagnose_tree(
                 // run, carries the figures of the points given back against that model.
                 let final_judgement = match &confirmed {
                     Some((_, again)) => Some(again.clone()),
-                    None if passes > 0 => given_back_check(tree, data, options, &report, &effects)?,
+                    None if passes > 0 => given_back_check(tree, data, options, &report, &effects)?
+                        .as_ref()
+                        .map(Confirmation::of),
                     None => None,
                 };
                 let judged_with = report
@@ -201,6 +204,10 @@ pub const MAX_REJUDGE: usize = 3;
 /// made once).
 type Rejudged = (Vec<Arc<dyn Effect>>, OutlierReport, OutlierReport);
 
+/// The fit a judgement again may read instead of fitting (see [`confirmed_at`]): the run's
+/// session, the point of its latest fit and the number of its free parameters.
+type FitAt<'a, 's> = (&'a crate::calibrate::Session<'s>, &'a [f64], usize);
+
 /// What one selection run leads to: its report (with the effects the points left out were
 /// judged against again and confirmed as outliers, and that judgement, if so, and the effects
 /// it selected), or another run with the effects selected so far, giving back the points left
@@ -208,7 +215,7 @@ type Rejudged = (Vec<Arc<dyn Effect>>, OutlierReport, OutlierReport);
 enum Judgement {
     Final(
         Box<Report>,
-        Option<(String, OutlierReport)>,
+        Option<(String, Confirmation)>,
         Vec<Arc<dyn Effect>>,
     ),
     Again(Box<Rejudged>),
@@ -218,8 +225,9 @@ enum Judgement {
 enum Rejudgement {
     /// Nothing to judge again.
     Nothing,
-    /// The points left out are outliers of the effects (their labels) too: that judgement.
-    Confirmed(String, OutlierReport),
+    /// The points left out are outliers of the effects (their labels) too: that judgement's
+    /// figures.
+    Confirmed(String, Confirmation),
     /// Not all: the judgement before, and the new one.
     Changed(OutlierReport, OutlierReport),
 }
@@ -227,12 +235,16 @@ enum Rejudgement {
 /// Whether the selection must run again (see [`diagnose_tree`]): the points `scan` left out
 /// (calibration and validation), judged against the geometry and the `effects` selected,
 /// unless none were left out, no effect was selected or the screen already judged with them.
+/// When they are all outliers of the run's fit `at` of those effects (the points `scan` kept),
+/// that is the judgement, made without a fit ([`confirmed_at`]); else the screen judges them
+/// again, fitting from all points in.
 fn rejudge(
     tree: &DhTree,
     data: &Measurements,
     options: &CalibrationOptions,
     scan: Option<&OutlierReport>,
     effects: &[Arc<dyn Effect>],
+    at: FitAt<'_, '_>,
 ) -> Result<Rejudgement, CalibError> {
     let labels: Vec<String> = effects
         .iter()
@@ -244,9 +256,15 @@ fn rejudge(
     if effects.is_empty() || scan.effects == labels {
         return Ok(Rejudgement::Nothing);
     }
+    if let Some(c) = confirmed_at(tree, data, options, at, effects, scan)? {
+        return Ok(Rejudgement::Confirmed(labels.join(", "), c));
+    }
     let again = crate::calibrate::screen_from(tree, data, options, None, effects, Some(scan))?;
     if again.left_out() == scan.left_out() {
-        return Ok(Rejudgement::Confirmed(labels.join(", "), again));
+        return Ok(Rejudgement::Confirmed(
+            labels.join(", "),
+            Confirmation::of(&again),
+        ));
     }
     Ok(Rejudgement::Changed(scan.clone(), again))
 }
@@ -581,7 +599,8 @@ fn diagnose_judged(
                     if may_rejudge && !forced && selected.len().is_power_of_two() {
                         let so_far: Vec<Arc<dyn Effect>> =
                             selected.iter().map(|&e| pool[e].clone()).collect();
-                        match rejudge(tree, data, options, scan.as_ref(), &so_far)? {
+                        let at = (&session, &last.x[..], free.len());
+                        match rejudge(tree, data, options, scan.as_ref(), &so_far, at)? {
                             Rejudgement::Changed(before, again) => {
                                 return Ok(Judgement::Again(Box::new((so_far, before, again))))
                             }
@@ -649,7 +668,8 @@ fn diagnose_judged(
     let effects: Vec<Arc<dyn Effect>> = selected.iter().map(|&e| pool[e].clone()).collect();
     if may_rejudge && judged_last != selected.len() {
         confirmed = None;
-        match rejudge(tree, data, options, scan.as_ref(), &effects)? {
+        let at = (&session, &last.x[..], free.len());
+        match rejudge(tree, data, options, scan.as_ref(), &effects, at)? {
             Rejudgement::Changed(before, again) => {
                 return Ok(Judgement::Again(Box::new((effects, before, again))))
             }
