@@ -73,6 +73,47 @@ fn shape(t: f64, ln_tau: f64) -> (f64, f64) {
     (-(-x).exp_m1(), x * e)
 }
 
+/// What the `t` of a calibration's effects of time was: a calibrated sheet's
+/// `calibration.time_unit` (YAML `s` or `pose_order`), so that a prediction reads its rows'
+/// times in the same unit (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum TimeUnit {
+    /// Seconds since the set's first timed sample: the data had a `time` column.
+    #[serde(rename = "s")]
+    Seconds,
+    /// The pose order in `[0, 1]` (the first pose 0, the last 1): the data had no times, and
+    /// `tau` is a fraction of the session.
+    #[serde(rename = "pose_order")]
+    PoseOrder,
+}
+
+impl TimeUnit {
+    /// The unit of `t` in a calibration of `data` whose estimated effect parameters are
+    /// `names` (see [`crate::model`]): `None` when none is `thermal_growth`'s (no effect of
+    /// time), else seconds when a sample of `data` has a time, the pose order otherwise.
+    pub fn of_calibration<'a>(
+        names: impl IntoIterator<Item = &'a str>,
+        data: &crate::data::Measurements,
+    ) -> Option<TimeUnit> {
+        let prefix = format!("{LABEL}.");
+        names.into_iter().any(|n| n.starts_with(&prefix)).then(|| {
+            if crate::effects_order::has_times(data) {
+                TimeUnit::Seconds
+            } else {
+                TimeUnit::PoseOrder
+            }
+        })
+    }
+
+    /// The YAML word (`s`, `pose_order`).
+    pub fn word(self) -> &'static str {
+        match self {
+            TimeUnit::Seconds => "s",
+            TimeUnit::PoseOrder => "pose_order",
+        }
+    }
+}
+
 /// The time `t` an effect of time reads in `context`: its time in seconds when the samples
 /// carry one, else its place in the pose order.
 pub fn time_of(context: &SampleContext) -> f64 {
@@ -196,6 +237,24 @@ mod tests {
         assert_eq!(g, [1.0, 0.0]);
         e.gradient_in(&[], &at(7200.0), &[1e-4, 800.0], &mut g);
         assert_eq!(g, [0.0, 0.0]);
+    }
+
+    /// A calibration records its effects of time's unit only with one; the YAML words are
+    /// `s` and `pose_order`.
+    #[test]
+    fn time_units_are_recorded_with_an_effect_of_time() {
+        let untimed = crate::data::Measurements::default();
+        let names = ["thermal_growth.k", "thermal_growth.ln_tau"];
+        assert_eq!(
+            TimeUnit::of_calibration(names, &untimed),
+            Some(TimeUnit::PoseOrder)
+        );
+        assert_eq!(TimeUnit::of_calibration(["drift", "scale"], &untimed), None);
+        for u in [TimeUnit::Seconds, TimeUnit::PoseOrder] {
+            let yaml = serde_yaml::to_string(&u).unwrap_or_default();
+            assert_eq!(yaml.trim(), u.word());
+            assert_eq!(serde_yaml::from_str::<TimeUnit>(u.word()).ok(), Some(u));
+        }
     }
 
     #[test]

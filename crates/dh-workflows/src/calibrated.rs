@@ -7,6 +7,7 @@
 //! module finds and reads the file and words the errors.
 
 use anyhow::{Context, Result};
+use dh_calib::effects_thermal::TimeUnit;
 use dh_calib::joints::JointMap;
 pub use dh_calib::pipeline::CovarianceDoc;
 use dh_calib::pipeline::{CalibratedError, CalibratedRobot, CalibrationRecord, TruthRecord};
@@ -36,6 +37,10 @@ pub struct CalibratedModel {
     /// The first session's name (whose frame `calibrated` holds), when the file gives it
     /// (`calibrate --out` writes it with several sessions; older sheets lack it).
     pub first_session: Option<String>,
+    /// What the `t` of its effects of time was (the `calibration` or `truth` section's
+    /// `time_unit`: seconds, or the pose order in `[0, 1]`); `None` without an effect of time,
+    /// and for a sheet written before it was kept (see [`crate::predict::timed_contexts`]).
+    pub time_unit: Option<TimeUnit>,
     /// The covariance as the file holds it (every session's device frame in it).
     covariance: Option<Covariance>,
 }
@@ -182,6 +187,7 @@ fn assemble(
         joints,
         sessions: robot.sessions,
         first_session: robot.first_session,
+        time_unit: robot.time_unit,
         covariance: robot.covariance,
     })
 }

@@ -162,6 +162,13 @@ pub fn model_text(
             .flatten(),
         targets: doc.targets.clone(),
         effects: doc.estimated_effects(),
+        time_unit: dh_calib::effects_thermal::TimeUnit::of_calibration(
+            doc.parameters
+                .iter()
+                .filter(|p| p.is_estimated_effect())
+                .map(|p| p.name.as_str()),
+            data,
+        ),
         covariance: report.covariance.as_ref().map(CovarianceDoc::of),
         // Only with an effect that needs it: the masses are no part of a geometric model.
         gravity_model: gravity.and_then(|g| GravityRecord::of(g)),
@@ -361,6 +368,10 @@ pub struct CalibrationSection {
     pub targets: Vec<TargetDoc>,
     /// The estimated effects' values by label (SI units).
     pub effects: Vec<(String, f64)>,
+    /// What the `t` of the effects of time was (`s` or `pose_order`), with one
+    /// (`dh_calib::effects_thermal::TimeUnit`): what a prediction checks its rows against.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_unit: Option<dh_calib::effects_thermal::TimeUnit>,
     /// Covariance of the last step's free parameters: what `predict` propagates.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub covariance: Option<CovarianceDoc>,

@@ -138,6 +138,9 @@ pub struct TruthSection {
     /// The gravity model of planted gravity effects (see `dh_calib::pipeline::GravityRecord`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gravity_model: Option<GravityRecord>,
+    /// With a planted effect of time, the unit of its `t`: seconds (the samples carry times).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_unit: Option<dh_calib::effects_thermal::TimeUnit>,
 }
 
 /// The CPA sweeps: home at the middle of each joint's range, one arc for all.
@@ -397,6 +400,10 @@ pub fn simulate(
             TargetDoc::list(&truth.targets)
         },
         errors: truth.errors.clone(),
+        time_unit: dh_calib::effects_thermal::TimeUnit::of_calibration(
+            applied.iter().map(|(n, _)| n.as_str()),
+            &data,
+        ),
         effects: applied,
         gravity_model,
     };

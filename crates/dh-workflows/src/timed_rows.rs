@@ -3,6 +3,7 @@
 //! (seconds), or from the rows' order.
 
 use anyhow::Result;
+use dh_calib::effects_thermal::TimeUnit;
 use dh_calib::model::SampleContext;
 
 use crate::calibrated::CalibratedModel;
@@ -29,9 +30,15 @@ fn time_effects(model: &CalibratedModel) -> Vec<String> {
 /// `time` column the rows' order ([`crate::predict::in_sequence`]) is `t`, in `[0, 1]`: right for a
 /// calibration whose data had no times (its `tau` is then a fraction of the session).
 ///
+/// The model's [`CalibratedModel::time_unit`] says which the calibration had: rows given in
+/// the other unit are refused. A model that does not say (a sheet written before it was kept)
+/// takes the rows as given: a `time` column as seconds, else the pose order of `--sequence`.
+///
 /// # Errors
 /// An effect of time with neither a `time` column nor the rows in sequence (naming the
-/// effect, the missing column and the file); a row without a time where others have one.
+/// effect, the missing column and the file); a row without a time where others have one; a
+/// model fitted on seconds given rows without times, or fitted on the pose order given rows
+/// with times (naming both files and the column).
 pub fn timed_contexts<'a>(
     model: &CalibratedModel,
     input: &'a JointInput,
@@ -42,7 +49,22 @@ pub fn timed_contexts<'a>(
         return Ok(Cow::Borrowed(&input.contexts));
     }
     let effects = effects.join(", ");
+    let origin = &model.loaded.origin;
     let Some(first) = input.rows.iter().find_map(|r| r.time) else {
+        if model.time_unit == Some(TimeUnit::Seconds) {
+            return Err(hinted(
+                format!(
+                    "{}: the calibration's {effects} needs each row's time: expected a 'time' column (seconds), found none ({origin} was fitted on times in seconds, `time_unit: s`{})",
+                    input.name,
+                    if input.contexts.is_empty() {
+                        ""
+                    } else {
+                        "; the rows' order of --sequence is no time in seconds"
+                    }
+                ),
+                "add each row's time in seconds, the first row at the robot's start (as the calibration's first sample)",
+            ));
+        }
         if !input.contexts.is_empty() {
             return Ok(Cow::Borrowed(&input.contexts));
         }
@@ -54,6 +76,15 @@ pub fn timed_contexts<'a>(
             "add each row's time in seconds (the first row at the robot's start, as the calibration's first sample), or, for a calibration whose data had no times, give the rows in the order of its session with --sequence",
         ));
     };
+    if model.time_unit == Some(TimeUnit::PoseOrder) {
+        return Err(hinted(
+            format!(
+                "{}: column 'time': the calibration's {effects} was fitted on the pose order in [0, 1] ({origin}: `time_unit: pose_order`, its data had no times): expected no 'time' column, found one (seconds)",
+                input.name
+            ),
+            "drop the 'time' column and give the rows in the order of the calibration's session with --sequence, or calibrate again on data with a 'time' column",
+        ));
+    }
     let mut contexts = if input.contexts.is_empty() {
         vec![SampleContext::default(); input.rows.len()]
     } else {

@@ -14,6 +14,7 @@ use thiserror::Error;
 use super::{needs_gravity, GravityRecord};
 use crate::covariance::Covariance;
 use crate::effects::EffectContext;
+use crate::effects_thermal::TimeUnit;
 use crate::fit::CalibError;
 use crate::predict::{effects_from_parameters, Calibrated};
 
@@ -125,6 +126,12 @@ pub struct CalibrationRecord {
     /// when the calibration selected any (sheets written before it was kept lack it).
     #[serde(default)]
     pub gravity_model: Option<GravityRecord>,
+    /// What the `t` of its effects of time was (`s`: the data had a `time` column;
+    /// `pose_order`: they had none), with an effect of time (`thermal_growth`). Sheets written
+    /// before it was kept lack it: a prediction then takes its rows' `time` column as seconds
+    /// and, without one, `--sequence`'s pose order, as the user gives them.
+    #[serde(default)]
+    pub time_unit: Option<TimeUnit>,
 }
 
 /// What a prediction reads of a `simulate` truth file's `truth` section: the simulated robot's
@@ -146,6 +153,9 @@ pub struct TruthRecord {
     /// The gravity model of planted gravity effects.
     #[serde(default)]
     pub gravity_model: Option<GravityRecord>,
+    /// What the `t` of the planted effects of time was (`simulate` writes times: `s`).
+    #[serde(default)]
+    pub time_unit: Option<TimeUnit>,
 }
 
 impl TruthRecord {
@@ -157,6 +167,7 @@ impl TruthRecord {
             targets: self.targets,
             covariance: None,
             gravity_model: self.gravity_model,
+            time_unit: self.time_unit,
             sessions: self
                 .sessions
                 .into_iter()
@@ -227,6 +238,9 @@ pub struct CalibratedRobot {
     pub first_session: Option<String>,
     /// The covariance as the record holds it (every session's device frame in it).
     pub covariance: Option<Covariance>,
+    /// What the `t` of its effects of time was, when the record says
+    /// ([`CalibrationRecord::time_unit`]).
+    pub time_unit: Option<TimeUnit>,
 }
 
 impl CalibratedRobot {
@@ -306,6 +320,7 @@ impl CalibratedRobot {
             sessions,
             first_session: record.first_session.clone(),
             covariance,
+            time_unit: record.time_unit,
         })
     }
 }
