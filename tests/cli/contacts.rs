@@ -372,6 +372,31 @@ fn a_planted_gear_harmonic_in_contacts_is_selected_and_a_declared_one_estimated(
     assert!(declared["candidates"].as_array().unwrap().is_empty());
 }
 
+/// `thermal_growth` cannot be selected on contacts (`auto` does not search it: contact data
+/// carries no sample order) and naming it is refused, exit 2 naming the effect, so that no
+/// contact calibration carries it (and none lacks its derived tau).
+#[test]
+fn thermal_growth_is_refused_on_contacts() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = path(dir.path(), "contacts.csv");
+    contacts(&data, 12, None, 5);
+    let (code, _, err) = crate::common::exec(&[
+        "calibrate",
+        "--model",
+        PANDA,
+        "--data",
+        &data,
+        "--effects",
+        "thermal_growth",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("effect 'thermal_growth'")
+            && err.contains("expected an effect of the joint values, found one of the sample order, which contact data does not carry"),
+        "{err}"
+    );
+}
+
 #[test]
 fn effects_auto_on_simulated_points_shows_the_candidates_and_the_planted_effect() {
     let dir = tempfile::tempdir().unwrap();
