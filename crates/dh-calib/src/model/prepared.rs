@@ -37,8 +37,9 @@ pub(super) fn next_revision() -> u64 {
 enum Step {
     /// The product of consecutive ops that depend on `x` alone (device frame units: metres).
     Const(Frame),
-    /// An op whose value depends on the sample (joint value, effect): its index in the model's
-    /// ops and the range of [`PreparedChain::effects`] holding the effect slots that move it.
+    /// An op whose value depends on the sample (joint value, effect moving it at this `x`): its
+    /// index in the model's ops and the range of [`PreparedChain::effects`] holding the effect
+    /// slots that move it.
     Var { op: usize, effects: Range<usize> },
 }
 
@@ -85,8 +86,18 @@ impl PreparedChain {
                 device.apply(o.kind, v, &o.fixed);
             }
             let o = &model.ops[i];
+            // The effects that move the op at this `x`: an effect whose parameters are all
+            // zero moves nothing (`Effect::delta_in` of zeros), so an op moved by such effects
+            // alone is constant here and joins its run.
             let moved: Vec<usize> = (0..model.effects.len())
-                .filter(|&s| model.effects[s].op == Some(i))
+                .filter(|&s| {
+                    let slot = &model.effects[s];
+                    slot.op == Some(i)
+                        && x.get(slot.params.clone())
+                            .unwrap_or(&[])
+                            .iter()
+                            .any(|p| *p != 0.0)
+                })
                 .collect();
             let axis = match o.kind {
                 OpKind::Trans(a) | OpKind::Rot(a) => Vector3::ith(a as usize, 1.0),
@@ -172,12 +183,11 @@ impl PreparedChain {
                     let mut v = o.value
                         + o.param.and_then(|p| x.get(p)).copied().unwrap_or(0.0)
                         + o.joint.and_then(|j| q.get(j)).copied().unwrap_or(0.0);
+                    // The effects that move the op at this `x` (see `PreparedChain::new`).
                     for &e in &self.effects[effects.clone()] {
                         let slot = &model.effects[e];
                         let params = x.get(slot.params.clone()).unwrap_or(&[]);
-                        if params.iter().any(|p| *p != 0.0) {
-                            v += slot.effect.delta_in(q, ctx, params);
-                        }
+                        v += slot.effect.delta_in(q, ctx, params);
                     }
                     f.apply(o.kind, v, &o.fixed);
                 }
@@ -306,6 +316,87 @@ mod tests {
                 assert!((got.r - want.r).norm() < 1e-12, "{session}");
             }
         }
+    }
+
+    /// A twist of `j2`'s row by `q₂` times the parameter: an effect on an op with no joint.
+    #[derive(Debug)]
+    struct Twist;
+
+    impl crate::model::Effect for Twist {
+        fn parameter_names(&self) -> Vec<String> {
+            vec!["twist".into()]
+        }
+        fn joint(&self) -> &str {
+            "j2"
+        }
+        fn field(&self) -> crate::model::EffectField {
+            crate::model::EffectField::Alpha
+        }
+        fn delta(&self, q: &[f64], params: &[f64]) -> f64 {
+            q[1] * params[0]
+        }
+        fn gradient(&self, q: &[f64], _params: &[f64], out: &mut [f64]) {
+            out[0] = q[1];
+        }
+        fn scales(&self, _length: f64) -> Vec<f64> {
+            vec![1.0]
+        }
+    }
+
+    /// An op moved only by an effect whose parameters are zero is constant at that `x`: it
+    /// joins its run (one step fewer), the frame is the op-by-op chain's, and the Jacobian
+    /// column of the effect's parameter there is still its derivative (central differences).
+    #[test]
+    fn an_op_moved_only_by_an_effect_at_zero_joins_its_run() {
+        let table = ur5();
+        let mut m = Model::new(&table, &["t".into()], &ModelOptions::default()).unwrap();
+        m.add_effect(Arc::new(Twist)).unwrap();
+        let c = m.effects()[0].1.start;
+        let mut x: Vec<f64> = (0..m.parameter_count())
+            .map(|i| 1e-3 * ((i as f64 * 0.7).sin() + 0.1))
+            .collect();
+        x[c] = 0.0;
+        let mut tilted = x.clone();
+        tilted[c] = 2e-3;
+        let steps = |x: &[f64]| m.with_prepared(x, 0, 0, |p| p.steps.len());
+        assert_eq!(
+            steps(&x) + 2,
+            steps(&tilted),
+            "the twist op and the run it splits"
+        );
+        let ctx = SampleContext::default();
+        let q = [0.3, -1.2, 0.8, 0.1, 1.5, -0.4];
+        for x in [&x, &tilted] {
+            let mut v = Vec::new();
+            m.op_values(x, &q, &ctx, &mut v);
+            let want = m.chain(&v, None, m.session_ops(0, 0));
+            let got = m.with_prepared(x, 0, 0, |p| p.frame(&m, x, &q, &ctx, None));
+            assert!((got.t - want.t).norm() < 1e-12);
+            assert!((got.r - want.r).norm() < 1e-12);
+        }
+        let obs = Observed::new(
+            q.to_vec(),
+            Observation::Point {
+                target: 0,
+                point: Vector3::new(0.1, 0.2, 0.3),
+            },
+        );
+        let (mut r, mut jac) = ([0.0; 3], [0.0; 3]);
+        m.jacobian(&x, &obs, &[c], &mut r, &mut jac);
+        let h = 1e-6;
+        let at = |d: f64| {
+            let mut y = x.clone();
+            y[c] = d;
+            let mut r = [0.0; 3];
+            m.residuals(&y, &obs, &mut r);
+            r
+        };
+        let (plus, minus) = (at(h), at(-h));
+        for k in 0..3 {
+            let fd = (plus[k] - minus[k]) / (2.0 * h);
+            assert!((jac[k] - fd).abs() < 1e-8, "{k}: {} {fd}", jac[k]);
+        }
+        assert!(jac.iter().any(|j| j.abs() > 1e-3), "{jac:?}");
     }
 
     #[test]
