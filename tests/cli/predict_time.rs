@@ -240,8 +240,9 @@ fn the_sheet_records_its_time_unit_and_predictions_refuse_the_other() {
             assert_eq!(code, 2, "{args:?}: {err}");
             assert!(
                 err.contains(&format!(
-                    "untimed.csv: the calibration's thermal_growth needs each row's time: expected a 'time' column (seconds), found none ({name} was fitted on times in seconds, `time_unit: s`; the rows' order of --sequence is no time in seconds)"
-                )) && err.contains("hint: add each row's time in seconds"),
+                    "untimed.csv: the calibration's thermal_growth needs each row's time: expected a 'time' column (seconds), found none ({name} was fitted on times in seconds, `time_unit: s`)"
+                )) && err.contains("hint: add each row's time in seconds")
+                    && err.contains("the rows' order given with --sequence is no time in seconds"),
                 "{err}"
             );
         }

@@ -54,15 +54,17 @@ pub fn timed_contexts<'a>(
         if model.time_unit == Some(TimeUnit::Seconds) {
             return Err(hinted(
                 format!(
-                    "{}: the calibration's {effects} needs each row's time: expected a 'time' column (seconds), found none ({origin} was fitted on times in seconds, `time_unit: s`{})",
-                    input.name,
+                    "{}: the calibration's {effects} needs each row's time: expected a 'time' column (seconds), found none ({origin} was fitted on times in seconds, `time_unit: s`)",
+                    input.name
+                ),
+                format!(
+                    "add each row's time in seconds, the first row at the robot's start (as the calibration's first sample){}",
                     if input.contexts.is_empty() {
                         ""
                     } else {
-                        "; the rows' order of --sequence is no time in seconds"
+                        "; the rows' order given with --sequence is no time in seconds"
                     }
                 ),
-                "add each row's time in seconds, the first row at the robot's start (as the calibration's first sample)",
             ));
         }
         if !input.contexts.is_empty() {

@@ -98,9 +98,13 @@ def test_without_times_the_refusal_names_the_missing_time(warm):
     _, _, _, cal, program = warm
     q = read(program)[JOINTS].to_numpy()
     for call in (lambda: urdf_dh.predict(cal, q), lambda: urdf_dh.compensate(UR5, cal, q)):
-        with pytest.raises(urdf_dh.UrdfDhError, match=r"<joints>: the calibration's thermal_growth needs each row's time: expected a 'time' column \(seconds\), found none") as e:
+        with pytest.raises(urdf_dh.UrdfDhError, match=r"<joints>: the calibration's thermal_growth needs each row's time: expected a 'time' column \(seconds\), found none \(.*was fitted on times in seconds, `time_unit: s`\)") as e:
             call()
-        assert "time=" in e.value.hint and "sequence=True" in e.value.hint
+        # The calibration's data had times: the rows' order would be no time in seconds.
+        assert "time=" in e.value.hint and "sequence=True" not in e.value.hint
+    with pytest.raises(urdf_dh.UrdfDhError, match="was fitted on times in seconds") as e:
+        urdf_dh.predict(cal, q, sequence=True)
+    assert "the rows' order given with sequence=True is no time in seconds" in e.value.hint
 
 
 def test_bad_times_raise_the_cli_messages(warm):
