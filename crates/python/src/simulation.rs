@@ -24,12 +24,14 @@ fn checked<T>(name: &str, value: &str, guard: fn(&str) -> Result<T, String>) -> 
 }
 
 /// Simulates measurements of `model`; `effects` and `errors` as the command line's `--effect`
-/// and `--error` values (`LABEL=V[,V...]`, `NAME=V`), `random_errors` as `LENGTH,ANGLE`; the
-/// numbers arrive as text, checked by the command line's guards. `data_name` and `truth_name`
+/// and `--error` values (`LABEL=V[,V...]`, `NAME=V`), `random_errors` as `LENGTH,ANGLE`,
+/// `gravity` as `--gravity`'s values (m/s² in the base link frame, each checked by its guard,
+/// their count by the library's `dh_workflows::calibration::gravity_given`); the numbers arrive
+/// as text, checked by the command line's guards. `data_name` and `truth_name`
 /// name the files in the truth and the CSV's comment. Returns the CSV, the truth as JSON and
 /// as YAML, and the warnings (`urdf-dh: warning:` lines).
 #[pyfunction]
-#[pyo3(signature = (model, base, tip, poses, noise, orientation_noise, cpa, arc, effects, errors, random_errors, targets, repeats, validation, sessions, seed, data_name, truth_name))]
+#[pyo3(signature = (model, base, tip, poses, noise, orientation_noise, cpa, arc, effects, errors, random_errors, targets, repeats, validation, sessions, seed, data_name, truth_name, gravity=None))]
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     py: Python<'_>,
@@ -51,6 +53,7 @@ fn simulate(
     seed: u64,
     data_name: String,
     truth_name: String,
+    gravity: Option<Vec<String>>,
 ) -> PyResult<(String, String, String, String)> {
     let go = || -> anyhow::Result<(String, String, String, String)> {
         let request = SimulationRequest {
@@ -67,7 +70,13 @@ fn simulate(
             arc: arc.map(|v| checked("arc", &v, guard::arc)).transpose()?,
             effects,
             inertials: None,
-            gravity: None,
+            gravity: gravity
+                .map(|g| {
+                    g.iter()
+                        .map(|v| checked("gravity", v, guard::gravity))
+                        .collect::<anyhow::Result<Vec<f64>>>()
+                })
+                .transpose()?,
             errors,
             random_errors: random_errors
                 .map(|v| checked("random_errors", &v, guard::random_errors))

@@ -50,3 +50,27 @@ def test_bad_options_are_the_clis_errors():
         urdf_dh.simulate(UR5, errors={"no_such_joint.a": 1e-3})
     with pytest.raises(TypeError):
         urdf_dh.simulate(UR5, errors="elbow_joint.a=1e-3")
+
+
+def test_gravity_plants_a_sag_along_it_as_the_cli_does(tmp_path):
+    # A robot on a wall (gravity along -x): the same data and truth as `simulate --gravity`.
+    wall = (-9.81, 0.0, 0.0)
+    sag = {"gravity_sag:shoulder_lift_joint": 6e-4}
+    sim = urdf_dh.simulate(UR5, poses=30, noise=NOISE, effects=sag, gravity=wall, seed=67, name="w.csv")
+    out, truth = tmp_path / "w.csv", tmp_path / "w.truth.yaml"
+    _native.run(["simulate", "--model", str(UR5), "--poses", "30", "--noise", repr(NOISE), "--seed", "67",
+                 "--gravity", "-9.81,0,0", "--effect", "gravity_sag:shoulder_lift_joint=6e-4", "--out", str(out)])
+    assert sim.csv == out.read_text()
+    assert sim.truth_yaml == truth.read_text()
+    assert sim.truth["truth"]["gravity_model"]["gravity"] == list(wall)
+    # Without it the sag hangs along -z: other points.
+    down = urdf_dh.simulate(UR5, poses=30, noise=NOISE, effects=sag, seed=67, name="w.csv")
+    assert down.truth["truth"]["gravity_model"]["gravity"] == [0.0, 0.0, -9.80665]
+    assert down.csv != sim.csv
+
+
+def test_bad_gravity_is_the_clis_error():
+    with pytest.raises(urdf_dh.UrdfDhError, match=r"--gravity: expected three finite numbers X,Y,Z in m/s², found \[0\.0, -9\.81\]"):
+        urdf_dh.simulate(UR5, gravity=(0.0, -9.81))
+    with pytest.raises(urdf_dh.UrdfDhError, match=r"gravity: expected an acceleration in m/s² in \[-100, 100\], found 1000\.0"):
+        urdf_dh.simulate(UR5, gravity=(1000.0, 0.0, 0.0))

@@ -155,6 +155,7 @@ def simulate(
     seed: int,
     data_name: str,
     truth_name: str,
+    gravity: Optional[List[str]] = None,
 ) -> Tuple[str, str, str, str]: ...
 def write_outputs(
     inputs: List[Tuple[str, str]],

@@ -92,6 +92,7 @@ def simulate(
     cpa: bool = False,
     arc: Optional[float] = None,
     orientation_noise: Optional[float] = None,
+    gravity: Optional[Sequence[float]] = None,
     base: Optional[str] = None,
     tip: Optional[str] = None,
     name: str = "simulated.csv",
@@ -110,6 +111,8 @@ def simulate(
         targets, repeats, validation, sessions, seed: as ``urdf-dh simulate``'s options.
         cpa: sweep one joint at a time (circle-point analysis data), each by ``arc`` radians.
         orientation_noise: a 6-DoF device: noise of each orientation per axis, radians.
+        gravity: ``(x, y, z)``, m/s² in the robot's base link frame (default ``(0, 0, -9.80665)``):
+            the direction of a planted ``gravity_sag:J``, as ``urdf-dh simulate --gravity``.
         name: the data's name in the truth (and the truth's, ``<stem>.truth.yaml``, in the CSV).
 
     Raises:
@@ -135,6 +138,7 @@ def simulate(
         int(seed),
         name,
         f"{stem}.truth.yaml",
+        None if gravity is None else [repr(float(v)) for v in gravity],
     )
     _warn(stderr)
     return Simulation(csv=csv, truth=json.loads(truth_json), truth_yaml=truth_yaml, model=os.fspath(model))
