@@ -1,6 +1,8 @@
-use std::fmt;
-
 use thiserror::Error;
+
+mod wording;
+pub(crate) use wording::list;
+use wording::{at, counted, cycle, first, joint_cycle, suggest};
 
 /// Everything that can be wrong with a URDF or with the chain asked of it.
 ///
@@ -464,101 +466,6 @@ impl UrdfError {
                 | UrdfError::JointCount { .. }
                 | UrdfError::Geometry { .. }
         )
-    }
-}
-
-/// Formats an optional line as ` (line N)`.
-struct At(Option<usize>);
-
-impl fmt::Display for At {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0 {
-            Some(n) => write!(f, " (line {n})"),
-            None => Ok(()),
-        }
-    }
-}
-
-fn at(line: &Option<usize>) -> At {
-    At(*line)
-}
-
-/// Formats an optional first definition as ` at line N`.
-struct First(Option<usize>);
-
-impl fmt::Display for First {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0 {
-            Some(n) => write!(f, " (first defined at line {n})"),
-            None => Ok(()),
-        }
-    }
-}
-
-fn first(line: &Option<usize>) -> First {
-    First(*line)
-}
-
-/// Names shown in one message at most; a URDF with thousands of leaves or stray links must not
-/// produce a message of thousands of names.
-const SHOWN: usize = 8;
-
-/// Formats names as `'a', 'b', 'c'`, the first [`SHOWN`] and how many more.
-pub(crate) fn list(names: &[String]) -> String {
-    let mut s = names
-        .iter()
-        .take(SHOWN)
-        .map(|n| format!("'{n}'"))
-        .collect::<Vec<_>>()
-        .join(", ");
-    if names.len() > SHOWN {
-        s.push_str(&format!(" and {} more", names.len() - SHOWN));
-    }
-    s
-}
-
-/// Formats candidate tips as `'a' (6 moving joints), 'b' (6 moving joints)`, the first [`SHOWN`]
-/// and how many more.
-fn counted(names: &[String], moving: &[usize]) -> String {
-    let mut s = names
-        .iter()
-        .zip(moving)
-        .take(SHOWN)
-        .map(|(n, m)| format!("'{n}' ({m} moving joint{})", if *m == 1 { "" } else { "s" }))
-        .collect::<Vec<_>>()
-        .join(", ");
-    if names.len() > SHOWN {
-        s.push_str(&format!(" and {} more", names.len() - SHOWN));
-    }
-    s
-}
-
-/// Formats a mimic cycle as `a -> b -> a`, a long one (shortened, see
-/// [`UrdfError::MimicCycle`]) as its start, `...`, its end and its length.
-fn joint_cycle(joints: &[String], length: usize) -> String {
-    if joints.len() > length {
-        return joints.join(" -> ");
-    }
-    let head = joints.get(..SHOWN - 2).unwrap_or(joints).join(" -> ");
-    let tail = joints.get(SHOWN - 2..).unwrap_or(&[]).join(" -> ");
-    format!("{head} -> ... -> {tail} ({length} joints)")
-}
-
-/// Formats a cycle as `a -> b -> a`; a long one as its start, `...`, its end and its length.
-fn cycle(links: &[String]) -> String {
-    if links.len() <= SHOWN + 1 {
-        return links.join(" -> ");
-    }
-    let head = links.get(..SHOWN - 2).unwrap_or(&[]).join(" -> ");
-    let tail = links.get(links.len() - 2..).unwrap_or(&[]).join(" -> ");
-    format!("{head} -> ... -> {tail} ({} links)", links.len() - 1)
-}
-
-fn suggest(candidates: &[String]) -> String {
-    if candidates.is_empty() {
-        String::new()
-    } else {
-        format!("; candidates: {}", list(candidates))
     }
 }
 
