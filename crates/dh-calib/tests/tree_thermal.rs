@@ -1,6 +1,8 @@
 //! A warm-up (`thermal_growth`) of a tree robot: a torso with two arms whose every length grows
 //! along an exponential in time, measured at both hands with each sample's time, is fitted by
 //! a tree calibration that names the effect, its growth and time constant recovered.
+// The figures of a run are printed for `--nocapture`, as the other diagnosis tests do.
+#![allow(clippy::print_stdout)]
 
 use dh_calib::calibrate::CalibrationOptions;
 use dh_calib::data::{Measurements, Sample, Split};
