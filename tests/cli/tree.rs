@@ -455,3 +455,49 @@ fn the_dlr_tree_calibrates_through_the_cli() {
     assert_eq!(tree[1]["targets"], serde_json::json!(["right"]));
     assert_eq!(tree[2]["targets"], serde_json::json!(["left"]));
 }
+
+/// A tree calibration with `thermal_growth` records in its calibrated sheet what the effect's
+/// `t` was, as a serial one does: `calibration.time_unit: pose_order` for data without times,
+/// `s` for the same rows with a `time` column.
+#[test]
+fn a_tree_sheet_records_the_time_unit_of_its_warm_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let nominal = path(dir.path(), "tree.yaml");
+    std::fs::write(&nominal, tree_sheet(&[])).unwrap();
+    let truth = TreeSheet::parse(&tree_sheet(&PLANTED), "truth.yaml").unwrap();
+    let untimed = path(dir.path(), "d.csv");
+    write_data(&truth, 40, 3, &untimed);
+    // The same rows with their times, poses 30 s apart.
+    let timed_text: String = std::fs::read_to_string(&untimed)
+        .unwrap()
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i {
+            0 => format!("{l},time\n"),
+            _ => format!("{l},{}\n", ((i - 1) / 2) as f64 * 30.0),
+        })
+        .collect();
+    let timed = path(dir.path(), "t.csv");
+    std::fs::write(&timed, timed_text).unwrap();
+    for (data, word) in [(&untimed, "pose_order"), (&timed, "s")] {
+        let out = path(dir.path(), "calibrated.yaml");
+        let (code, _, err) = exec(&[
+            "calibrate",
+            "--model",
+            &nominal,
+            "--data",
+            data,
+            "--effects",
+            "thermal_growth",
+            "--out",
+            &out,
+        ]);
+        assert!(code == 0 || code == 1, "{err}");
+        let sheet = std::fs::read_to_string(&out).unwrap();
+        let keys: Vec<&str> = sheet
+            .lines()
+            .filter(|l| l.trim_start().starts_with("time_unit:"))
+            .collect();
+        assert_eq!(keys, [format!("  time_unit: {word}")], "{sheet}");
+    }
+}

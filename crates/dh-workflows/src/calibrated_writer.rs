@@ -162,13 +162,7 @@ pub fn model_text(
             .flatten(),
         targets: doc.targets.clone(),
         effects: doc.estimated_effects(),
-        time_unit: dh_calib::effects_thermal::TimeUnit::of_calibration(
-            doc.parameters
-                .iter()
-                .filter(|p| p.is_estimated_effect())
-                .map(|p| p.name.as_str()),
-            data,
-        ),
+        time_unit: doc.time_unit(data),
         covariance: report.covariance.as_ref().map(CovarianceDoc::of),
         // Only with an effect that needs it: the masses are no part of a geometric model.
         gravity_model: gravity.and_then(|g| GravityRecord::of(g)),

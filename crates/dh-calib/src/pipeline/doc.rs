@@ -205,6 +205,23 @@ impl CalibrationDoc {
             .collect()
     }
 
+    /// What the `t` of its effects of time was, for the calibrated sheet
+    /// (`calibration.time_unit`): [`crate::effects_thermal::TimeUnit::of_calibration`] of its
+    /// estimated effect parameters and the `data` it was fitted to; `None` without an effect of
+    /// time.
+    pub fn time_unit(
+        &self,
+        data: &crate::data::Measurements,
+    ) -> Option<crate::effects_thermal::TimeUnit> {
+        crate::effects_thermal::TimeUnit::of_calibration(
+            self.parameters
+                .iter()
+                .filter(|p| p.is_estimated_effect())
+                .map(|p| p.name.as_str()),
+            data,
+        )
+    }
+
     /// How the held-out figures were made, in words (the text report's `data:` line and the
     /// report page): the held-out samples of a split, or the folds, poses and fit of a k-fold
     /// cross-validation.

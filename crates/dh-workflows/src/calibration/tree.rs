@@ -224,6 +224,10 @@ struct TreeCalibrationSection {
     summary: SectionSummary,
     targets: Vec<TreeTargetDoc>,
     effects: Vec<(String, f64)>,
+    /// What the `t` of the effects of time was (`s` or `pose_order`), with one, as a serial
+    /// sheet records it (`dh_calib::effects_thermal::TimeUnit`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    time_unit: Option<dh_calib::effects_thermal::TimeUnit>,
 }
 
 /// A fitted target and the branch it rides on.
@@ -276,6 +280,7 @@ pub(super) fn tree_bytes(
             })
             .collect(),
         effects: doc.estimated_effects(),
+        time_unit: doc.time_unit(&inputs.data),
     };
     out.calibration = Some(serde_yaml::to_value(&section)?);
     Ok(if path.to_ascii_lowercase().ends_with(".json") {
