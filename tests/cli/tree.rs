@@ -499,5 +499,7 @@ fn a_tree_sheet_records_the_time_unit_of_its_warm_up() {
             .filter(|l| l.trim_start().starts_with("time_unit:"))
             .collect();
         assert_eq!(keys, [format!("  time_unit: {word}")], "{sheet}");
+        // The sheet still reads as a tree sheet.
+        TreeSheet::parse(&sheet, "calibrated.yaml").unwrap();
     }
 }
