@@ -7,11 +7,12 @@
 use std::io::Write;
 
 use anyhow::Result;
+use dh_calib::calibrate::Report;
 use dh_calib::data::Measurements;
 use dh_calib::gravity::{GravityModel, Inertials};
 use dh_calib::pipeline::{
-    self, target_branches, Calibration, CalibrationDoc, PipelineError, Progress, Start,
-    TreeCalibration,
+    self, needs_gravity, target_branches, Calibration, GravityRecord, PipelineError, Progress,
+    SessionDoc, SessionFrameDoc, Start, TreeCalibration,
 };
 use dh_calib::tree::DhTree;
 use nalgebra::Vector3;
@@ -20,11 +21,13 @@ use serde::Serialize;
 use super::inputs::{enough_samples, read_data_for};
 use super::serial::{check_sigma, pipeline_options};
 use super::CalibrationRequest;
+use crate::calibrated::CovarianceDoc;
 use crate::calibrated_writer::SectionSummary;
 use crate::error::hinted;
 use crate::input::{display_name, read_text};
 use crate::model::LoadedModel;
 use crate::sheet::parse_doc;
+use crate::sheet::EffectDoc;
 use crate::tree_sheet::{InertialsDoc, TreeSheet};
 
 /// The tree sheet `args.model` names, with its file name: `None` for a URDF, a serial sheet,
@@ -217,13 +220,25 @@ pub(super) fn tree_error(e: PipelineError, tree: &DhTree, data_name: &str) -> an
     }
 }
 
-/// The `calibration` section of a calibrated tree sheet (metres, radians).
+/// The `calibration` section of a calibrated tree sheet (metres, radians): the serial sheet's
+/// keys (see [`crate::calibrated_writer::CalibrationSection`]), each target with its branch,
+/// and the gravity model of a tree.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 struct TreeCalibrationSection {
     #[serde(flatten)]
     summary: SectionSummary,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    sessions: Vec<SessionFrameDoc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    first_session: Option<String>,
     targets: Vec<TreeTargetDoc>,
     effects: Vec<(String, f64)>,
+    /// Covariance of the last step's free parameters: what `predict` propagates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    covariance: Option<CovarianceDoc>,
+    /// The link masses and nominal tree of the gravity effects, with any selected.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gravity_model: Option<GravityRecord>,
 }
 
 /// A fitted target and the branch it rides on.
@@ -233,18 +248,32 @@ struct TreeTargetDoc {
     branch: String,
     /// Position in the branch's tip frame (metres).
     xyz: [f64; 3],
+    /// A 6-DoF target's rotation in the tip frame (URDF roll, pitch, yaw; radians).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rpy: Option<[f64; 3]>,
 }
 
-/// The calibrated tree sheet as written to `path` (JSON for `.json`, else YAML).
+/// The gravity model of the effects of `report` that need one (compliance, backlash), from
+/// the tree's nominal geometry and masses as the calibration used them; `None` without such an
+/// effect or without masses.
+fn tree_gravity(inputs: &TreeInputs, report: &Report) -> Option<GravityRecord> {
+    let needs = report.selected_effects.iter().any(|e| needs_gravity(e));
+    let inertials = inputs.inertials.as_ref().filter(|_| needs)?;
+    let g = GravityModel::new(&inputs.sheet.tree, inertials, inputs.gravity).ok()?;
+    GravityRecord::of(&g)
+}
+
+/// The calibrated tree sheet as written to `path` (JSON for `.json`, else YAML): the tree, its
+/// estimated `effects`, and the `calibration` section predict reads.
 ///
 /// # Errors
 /// Serialisation failures.
 pub(super) fn tree_bytes(
     path: &str,
     inputs: &TreeInputs,
-    calibrated: &DhTree,
-    doc: &CalibrationDoc,
+    calibration: &TreeCalibration,
 ) -> Result<String> {
+    let (calibrated, doc) = (&calibration.calibrated, &calibration.doc.report);
     let sheet = &inputs.sheet;
     let mut out = TreeSheet::to_doc(
         calibrated,
@@ -258,8 +287,24 @@ pub(super) fn tree_bytes(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     ));
+    let effects: Vec<EffectDoc> = doc
+        .parameters
+        .iter()
+        .filter(|p| p.is_estimated_effect())
+        .map(|p| EffectDoc {
+            name: p.name.clone(),
+            value: p.estimate,
+            unit: p.unit.to_string(),
+            std_error: p.std_error,
+        })
+        .collect();
+    out.effects = (!effects.is_empty()).then_some(effects);
     let section = TreeCalibrationSection {
         summary: SectionSummary::of(doc),
+        sessions: SessionDoc::frames(&doc.sessions),
+        first_session: (doc.sessions.len() > 1)
+            .then(|| doc.sessions.first().map(|s| s.name.clone()))
+            .flatten(),
         targets: doc
             .targets
             .iter()
@@ -273,9 +318,16 @@ pub(super) fn tree_bytes(
                     .map(|b| b.name.clone())
                     .unwrap_or_default(),
                 xyz: t.xyz,
+                rpy: t.rpy,
             })
             .collect(),
         effects: doc.estimated_effects(),
+        covariance: calibration
+            .report
+            .covariance
+            .as_ref()
+            .map(CovarianceDoc::of),
+        gravity_model: tree_gravity(inputs, &calibration.report),
     };
     out.calibration = Some(serde_yaml::to_value(&section)?);
     Ok(if path.to_ascii_lowercase().ends_with(".json") {
@@ -322,7 +374,6 @@ pub(super) fn calibrate_tree(
 impl Tree {
     /// The calibrated tree sheet as written to `path`.
     pub(super) fn model_file(&self, path: &str) -> Result<String> {
-        let c = &self.calibration;
-        tree_bytes(path, &self.inputs, &c.calibrated, &c.doc.report)
+        tree_bytes(path, &self.inputs, &self.calibration)
     }
 }
