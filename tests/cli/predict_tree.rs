@@ -300,59 +300,95 @@ fn a_branch_is_compensated_and_the_true_robot_reaches_the_wanted_points() {
 }
 
 /// The tree sheet `calibrate --out` writes reads back (`load_calibrated`) as the calibration
-/// in memory: the same points and uncertainties of both branches' targets and tools.
+/// in memory: the same points and uncertainties of both branches' targets and tools, without
+/// effects and with a gear ratio on the right arm and the compliance of the left one (whose
+/// gravity torques the sheet's `gravity_model` carries: the nominal tree and its masses).
 #[test]
 fn a_written_tree_predicts_as_the_calibration_in_memory() {
     let dir = tempfile::tempdir().unwrap();
-    let nominal = path(dir.path(), "tree.yaml");
-    std::fs::write(&nominal, tree_sheet(&[])).unwrap();
     let truth = TreeSheet::parse(&tree_sheet(&PLANTED), "truth.yaml").unwrap();
-    let data = path(dir.path(), "d.csv");
-    write_data(&truth, 40, 27, &data);
-    let out = path(dir.path(), "cal.yaml");
-    let mut request =
-        dh_workflows::calibration::CalibrationRequest::new(Some(nominal.clone()), &data);
-    request.out = Some(out.clone());
-    request.effects = dh_workflows::fit::EffectsChoice::None;
-    let mut warnings = Vec::new();
-    let mut run = dh_workflows::calibration::run(&request, &mut warnings).unwrap();
-    let text = run.model_file(&out, None, &mut warnings).unwrap().unwrap();
-    std::fs::write(&out, &text).unwrap();
-    let dh_workflows::calibration::Calibrated::Tree(tree) = &run else {
-        panic!("a tree's calibration")
-    };
-    let c = &tree.calibration;
-    let ctx = dh_calib::effects::EffectContext {
-        tree: c.calibrated.clone(),
-        ..dh_calib::effects::EffectContext::serial(c.calibrated.trunk())
-    };
-    let memory =
-        Calibrated::from_tree_report(&c.report, &c.target_branches, &ctx).expect("in memory");
-    let back = dh_workflows::calibrated::load_calibrated(&out, None, None).unwrap();
-    let file = &back.calibrated;
-    assert!(file.has_covariance() && memory.has_covariance());
-    assert_eq!(file.targets().len(), 2);
-    let mut rng = ChaCha8Rng::seed_from_u64(28);
-    for _ in 0..10 {
-        let q: Vec<f64> = (0..8).map(|_| rng.random_range(-1.5..1.5)).collect();
-        for frame in [Frame::Device, Frame::Base] {
-            for k in 0..2 {
-                let d = (file.point(&q, k, frame) - memory.point(&q, k, frame)).norm();
-                assert!(d < 1e-9, "target {k}: {d:e} m");
-                let (a, b) = (
-                    file.point_uncertainty(&q, k, frame).unwrap(),
-                    memory.point_uncertainty(&q, k, frame).unwrap(),
-                );
-                assert!((a - b).norm() <= 1e-6 * b.norm(), "{a} against {b}");
-                let (a, b) = (file.tool_of(&q, k, frame), memory.tool_of(&q, k, frame));
-                let (dp, dr) = dh_core::pose::pose_error(&a, &b);
-                assert!(dp < 1e-9 && dr < 1e-9, "tool {k}: {dp:e} m, {dr:e} rad");
-                let (a, b) = (
-                    file.tool_uncertainty_of(&q, k, frame).unwrap(),
-                    memory.tool_uncertainty_of(&q, k, frame).unwrap(),
-                );
-                assert!((a - b).norm() <= 1e-6 * b.norm(), "{a} against {b}");
+    let masses = "inertials:\n  com_frame: dh\n  links:\n    - {joint: r2, mass: 3.0, com: [0.15, 0, 0]}\n    - {joint: l2, mass: 3.0, com: [0.15, 0, 0]}\n  payloads:\n    - {branch: l, mass: 1.0, com: [0, 0, 0.05]}\n";
+    let r2 = truth.tree.row_index("r2").unwrap();
+    for (name, effects) in [
+        ("plain", None),
+        ("effects", Some("gear_ratio:r2,compliance:l2")),
+    ] {
+        let nominal = path(dir.path(), &format!("{name}.yaml"));
+        let sheet = tree_sheet(&[]) + if effects.is_some() { masses } else { "" };
+        std::fs::write(&nominal, sheet).unwrap();
+        let data = path(dir.path(), &format!("{name}.csv"));
+        crate::tree::write_data_with(&truth, 40, 27, &data, &|q| q[r2] *= 1.0 + 3e-3);
+        let out = path(dir.path(), &format!("{name}_cal.yaml"));
+        let mut request =
+            dh_workflows::calibration::CalibrationRequest::new(Some(nominal.clone()), &data);
+        request.out = Some(out.clone());
+        request.effects = match effects {
+            Some(list) => {
+                dh_workflows::fit::EffectsChoice::List(list.split(',').map(String::from).collect())
+            }
+            None => dh_workflows::fit::EffectsChoice::None,
+        };
+        let mut warnings = Vec::new();
+        let mut run = dh_workflows::calibration::run(&request, &mut warnings).unwrap();
+        let text = run.model_file(&out, None, &mut warnings).unwrap().unwrap();
+        std::fs::write(&out, &text).unwrap();
+        assert_eq!(text.contains("gravity_model:"), effects.is_some(), "{text}");
+        let dh_workflows::calibration::Calibrated::Tree(tree) = &run else {
+            panic!("a tree's calibration")
+        };
+        let c = &tree.calibration;
+        let inputs = &tree.inputs;
+        let ctx = dh_calib::effects::EffectContext {
+            tree: inputs.sheet.tree.clone(),
+            gravity: inputs.inertials.as_ref().map(|i| {
+                std::sync::Arc::new(
+                    dh_calib::gravity::GravityModel::new(&inputs.sheet.tree, i, inputs.gravity)
+                        .unwrap(),
+                )
+            }),
+            gravity_vector: inputs.gravity,
+        };
+        let memory =
+            Calibrated::from_tree_report(&c.report, &c.target_branches, &ctx).expect("in memory");
+        let back = dh_workflows::calibrated::load_calibrated(&out, None, None).unwrap();
+        let file = &back.calibrated;
+        assert!(file.has_covariance() && memory.has_covariance());
+        assert_eq!(file.targets().len(), 2);
+        assert_eq!(
+            file.model().parameter_count(),
+            memory.model().parameter_count(),
+            "{name}"
+        );
+        let mut rng = ChaCha8Rng::seed_from_u64(28);
+        for _ in 0..10 {
+            let q: Vec<f64> = (0..8).map(|_| rng.random_range(-1.5..1.5)).collect();
+            for frame in [Frame::Device, Frame::Base] {
+                for k in 0..2 {
+                    let d = (file.point(&q, k, frame) - memory.point(&q, k, frame)).norm();
+                    assert!(d < 1e-9, "{name}: target {k}: {d:e} m");
+                    let (a, b) = (
+                        file.point_uncertainty(&q, k, frame).unwrap(),
+                        memory.point_uncertainty(&q, k, frame).unwrap(),
+                    );
+                    assert!((a - b).norm() <= 1e-6 * b.norm(), "{name}: {a} against {b}");
+                    let (a, b) = (file.tool_of(&q, k, frame), memory.tool_of(&q, k, frame));
+                    let (dp, dr) = dh_core::pose::pose_error(&a, &b);
+                    assert!(
+                        dp < 1e-9 && dr < 1e-9,
+                        "{name}: tool {k}: {dp:e} m, {dr:e} rad"
+                    );
+                    let (a, b) = (
+                        file.tool_uncertainty_of(&q, k, frame).unwrap(),
+                        memory.tool_uncertainty_of(&q, k, frame).unwrap(),
+                    );
+                    assert!((a - b).norm() <= 1e-6 * b.norm(), "{name}: {a} against {b}");
+                }
             }
         }
+        // The CLI predicts from it (before: refused as a tree sheet).
+        let joints = path(dir.path(), "q.csv");
+        joint_rows(3, 29, 1.0, &joints);
+        let (code, _, err) = exec(&["predict", "--model", &out, "--joints", &joints]);
+        assert_eq!(code, 0, "{name}: {err}");
     }
 }

@@ -101,7 +101,7 @@ pub(crate) fn write_data(truth: &TreeSheet, poses: usize, seed: u64, file: &str)
 
 /// [`write_data`] with the points at joint values `moved` changes (the file keeps the
 /// commanded ones): how a planted effect on the joint values shows.
-fn write_data_with(
+pub(crate) fn write_data_with(
     truth: &TreeSheet,
     poses: usize,
     seed: u64,
