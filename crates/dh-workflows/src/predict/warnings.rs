@@ -33,7 +33,7 @@ pub fn backlash_warnings(model: &CalibratedModel, input: &JointInput) -> Vec<Str
 }
 
 /// The warning for a `drift` effect of `model` when `input`'s rows have no place in a sequence
-/// ([`in_sequence`]) and are predicted in the device frame: they are predicted at the session's
+/// ([`in_sequence`](super::in_sequence)) and are predicted in the device frame: they are predicted at the session's
 /// start (`t = 0`, the device scale the calibration started with), which a pose measured later
 /// in the session misses by up to `|c|` times its distance from the device. `None` otherwise
 /// (the base link frame does not see the device's scale).
