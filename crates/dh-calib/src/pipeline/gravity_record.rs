@@ -107,8 +107,8 @@ fn bad(reason: String) -> CalibError {
 }
 
 impl GravityRecord {
-    /// The record of a robot's gravity model `g` (a serial robot's, or a tree's with its
-    /// branches); `None` is kept for callers of older versions and never returned.
+    /// The record of a robot's gravity model `g`: a serial robot's, or a tree's with its
+    /// branches and each payload's branch. Always `Some` since trees are recorded too.
     pub fn of(g: &GravityModel) -> Option<Self> {
         let tree = g.tree();
         let table = tree.trunk();
