@@ -6,14 +6,16 @@
 
 use std::io::Write;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use dh_calib::calibrate::Report;
 use dh_calib::data::Measurements;
+use dh_calib::effects::EffectContext;
 use dh_calib::gravity::{GravityModel, Inertials};
 use dh_calib::pipeline::{
     self, needs_gravity, target_branches, Calibration, GravityRecord, PipelineError, Progress,
     SessionDoc, SessionFrameDoc, Start, TreeCalibration,
 };
+use dh_calib::predict::{Calibrated, Frame};
 use dh_calib::tree::DhTree;
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -372,8 +374,63 @@ pub(super) fn calibrate_tree(
 }
 
 impl Tree {
-    /// The calibrated tree sheet as written to `path`.
+    /// The calibrated tree sheet as written to `path`, proved: read back as `predict` reads
+    /// it, it predicts every measured point as the fitted tree does (see [`prove_tree`]).
+    ///
+    /// # Errors
+    /// Serialisation failures; a sheet that does not read back or predicts otherwise (a defect
+    /// of the writer, reported as such).
     pub(super) fn model_file(&self, path: &str) -> Result<String> {
-        tree_bytes(path, &self.inputs, &self.calibration)
+        let text = tree_bytes(path, &self.inputs, &self.calibration)?;
+        prove_tree(path, &text, self)?;
+        Ok(text)
     }
+}
+
+/// The proof on a written tree sheet: `predict` reads `text` back (tree, effects, gravity model,
+/// device frame, targets on their branches) and its predictions of every measured point, in the
+/// device frame, are the fitted tree's within [`crate::written::WRITTEN_TOLERANCE`].
+///
+/// # Errors
+/// A sheet that does not read back, or predicts a point farther than the tolerance from the
+/// fit, naming the largest deviation.
+fn prove_tree(path: &str, text: &str, t: &Tree) -> Result<()> {
+    let (c, inputs) = (&t.calibration, &t.inputs);
+    let tree = &inputs.sheet.tree;
+    let gravity = match &inputs.inertials {
+        Some(i) => GravityModel::new(tree, i, inputs.gravity)
+            .ok()
+            .map(std::sync::Arc::new),
+        None => None,
+    };
+    let ctx = EffectContext {
+        tree: tree.clone(),
+        gravity,
+        gravity_vector: inputs.gravity,
+    };
+    // A fit the library cannot rebuild in memory has nothing to compare with (as for a serial
+    // sheet): the reading back is still required.
+    let fitted = Calibrated::from_tree_report(&c.report, &c.target_branches, &ctx).ok();
+    let name = crate::text::output_name(path);
+    let back = crate::calibrated::calibrated_sheet(text, &name).with_context(|| {
+        format!("{name}: the calibrated tree sheet does not read back for predict (a defect of the writer)")
+    })?;
+    let Some(fitted) = fitted else {
+        return Ok(());
+    };
+    let q = crate::calibrated_writer::row_values(&tree.joint_table(), &inputs.data)?;
+    let frame = Frame::Device;
+    let mut worst = 0.0f64;
+    for (q, s) in q.iter().zip(&inputs.data.samples) {
+        let d =
+            (back.calibrated.point(q, s.target, frame) - fitted.point(q, s.target, frame)).norm();
+        worst = worst.max(if d.is_finite() { d } else { f64::INFINITY });
+    }
+    if worst > crate::written::WRITTEN_TOLERANCE {
+        anyhow::bail!(
+            "{name}: read back, the calibrated tree sheet predicts a measured point {worst:e} m from the fit (tolerance {:e} m): a defect of the writer",
+            crate::written::WRITTEN_TOLERANCE
+        );
+    }
+    Ok(())
 }
