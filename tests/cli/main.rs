@@ -32,6 +32,7 @@ mod predict;
 mod predict_effects;
 mod predict_sag;
 mod predict_time;
+mod predict_tree;
 mod report;
 mod roundtrip;
 mod sdf;

@@ -10,11 +10,11 @@ use std::path::Path;
 
 use anyhow::Result;
 use dh_workflows::calibrated::load_calibrated;
-use dh_workflows::compensate::{failed_poses, same_joints, CompensateOptions, DEFAULT_MAX_CHANGE};
-use dh_workflows::geometry::Convention;
+use dh_workflows::compensate::{
+    failed_poses, same_joints, CompensateOptions, NominalModel, DEFAULT_MAX_CHANGE,
+};
 use dh_workflows::input::display_name;
 use dh_workflows::measured::DataUnits;
-use dh_workflows::model::load_model;
 use dh_workflows::units::{AngleUnit, LengthUnit};
 
 use crate::commands::predict::{cell, joint_cell, quoted, read_joints};
@@ -24,7 +24,7 @@ use crate::error::Outcome;
 #[derive(Debug, clap::Args)]
 pub struct CompensateCli {
     /// The nominal model the robot program was computed with (URDF with --base/--tip, or a
-    /// DH sheet).
+    /// DH sheet; for a calibrated tree, the nominal tree sheet).
     #[arg(long, value_name = "NOMINAL")]
     nominal: String,
     /// Base link of a URDF nominal model.
@@ -42,6 +42,10 @@ pub struct CompensateCli {
     /// carried over, other columns are ignored.
     #[arg(long, value_name = "Q.csv")]
     joints: String,
+    /// With a calibrated tree: the branch whose tool is compensated (only the joints of its
+    /// chain, the trunk's and the branch's, move) [default: the only branch].
+    #[arg(long, value_name = "NAME")]
+    branch: Option<String>,
     /// Match the tool's position only, not its orientation.
     #[arg(long)]
     position_only: bool,
@@ -78,6 +82,8 @@ pub struct CompensateArgs {
     pub model: String,
     /// Commanded joint values.
     pub joints: String,
+    /// A calibrated tree's branch ([`CompensateCli`]'s `--branch`).
+    pub branch: Option<String>,
     /// Position only.
     pub position_only: bool,
     /// Largest joint change in radians (metres for prismatic joints).
@@ -102,6 +108,7 @@ impl CompensateCli {
             tip: self.tip,
             model: self.model,
             joints: self.joints,
+            branch: self.branch,
             position_only: self.position_only,
             max_change: self.max_change.unwrap_or(DEFAULT_MAX_CHANGE),
             units: DataUnits {
@@ -125,15 +132,20 @@ pub fn compensate(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> Result<Outcome> {
-    let nominal = load_model(
+    let mut model = load_calibrated(&args.model, None, None)?;
+    let (n_origin, c_origin) = (display_name(&args.nominal), display_name(&args.model));
+    if let Some(b) = &args.branch {
+        model.choose_branch(b, &c_origin)?;
+    }
+    let chain = model.tool_chain("compensate", &c_origin)?;
+    // A calibrated tree reaches what the nominal tree's branch reaches.
+    let nominal = NominalModel::load(
         &args.nominal,
         args.base.as_deref(),
         args.tip.as_deref(),
-        Convention::Standard,
+        &model,
     )?;
-    let model = load_calibrated(&args.model, None, None)?;
-    let (n_origin, c_origin) = (display_name(&args.nominal), display_name(&args.model));
-    same_joints(&nominal.table, &model, (&n_origin, &c_origin))?;
+    same_joints(&nominal.rows(), &model, (&n_origin, &c_origin))?;
     for w in model
         .loaded
         .warnings
@@ -152,11 +164,17 @@ pub fn compensate(
     let options = CompensateOptions {
         orientation: !args.position_only,
         max_change: args.max_change,
+        chain,
         ..CompensateOptions::default()
     };
     let (lu, au) = (args.units.length, args.units.angle);
+    let branch = if model.is_tree() {
+        format!(", the tool of branch '{}'", model.branch_name(chain))
+    } else {
+        String::new()
+    };
     let mut text = format!(
-        "# compensated by urdf-dh compensate: {c_origin} reaching what {n_origin} reaches at the commanded values ({}); joints in {} ({} for prismatic), errors of the tool in the base link frame: position_* in {}, orientation_* in {}; status: compensated, or why not (max_change, unreachable, no_convergence, beyond_limits: those rows hold the nearest values found, not a correction)\n",
+        "# compensated by urdf-dh compensate: {c_origin} reaching what {n_origin} reaches at the commanded values ({}{branch}); joints in {} ({} for prismatic), errors of the tool in the base link frame: position_* in {}, orientation_* in {}; status: compensated, or why not (max_change, unreachable, no_convergence, beyond_limits: those rows hold the nearest values found, not a correction)\n",
         if args.position_only { "position only" } else { "position and orientation" },
         au.symbol(),
         lu.symbol(),
@@ -181,7 +199,7 @@ pub fn compensate(
         (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut sum_before = 0.0;
     let mut sum_after = 0.0;
-    let rows = dh_workflows::compensate::compensate(&nominal.table, &model, &input, &options)?;
+    let rows = nominal.compensate(&model, &input, &options)?;
     let failed = failed_poses(&rows, args.max_change, lu, au);
     for (row, given) in rows.iter().zip(&input.rows) {
         let c = &row.result;

@@ -50,6 +50,11 @@ pub struct PredictCli {
     /// [default: the calibration's targets, else tool].
     #[arg(long, value_name = "NAME,...|tool", value_delimiter = ',')]
     targets: Vec<String>,
+    /// With a calibrated tree: the branch whose targets (by default) or tool (`--targets
+    /// tool`) are predicted [default: every target on its own branch; the tool needs one
+    /// chosen when the tree has several branches].
+    #[arg(long, value_name = "NAME")]
+    branch: Option<String>,
     /// Frame of the predictions [default: device when the model has a calibration section,
     /// else base].
     #[arg(long, value_enum)]
@@ -89,6 +94,8 @@ pub struct PredictArgs {
     pub joints: String,
     /// Targets, or `["tool"]`; empty: the default.
     pub targets: Vec<String>,
+    /// A calibrated tree's branch ([`PredictCli`]'s `--branch`); `None`: every branch.
+    pub branch: Option<String>,
     /// Frame; `None`: the default.
     pub frame: Option<FrameChoice>,
     /// Measurement session of the device frame; `None`: the first.
@@ -113,6 +120,7 @@ impl PredictCli {
             tip: self.tip,
             joints: self.joints,
             targets: self.targets,
+            branch: self.branch,
             frame: self.frame,
             session: self.session,
             units: DataUnits {
@@ -168,6 +176,9 @@ fn push_quoted(t: &mut String, s: &str) {
 pub fn predict(args: &PredictArgs, out: &mut dyn Write, err: &mut dyn Write) -> Result<Outcome> {
     let mut model = load_calibrated(&args.model, args.base.as_deref(), args.tip.as_deref())?;
     let origin = display_name(&args.model);
+    if let Some(b) = &args.branch {
+        model.choose_branch(b, &origin)?;
+    }
     let asked = args.frame.map(|f| match f {
         FrameChoice::Device => Frame::Device,
         FrameChoice::Base => Frame::Base,

@@ -11,6 +11,10 @@
 //! [`JOINT_STEP`]), halved until the error falls: a redundant arm stays nearest the
 //! commanded values, an arm with fewer than six joints gets the least-squares pose. With
 //! [`CompensateOptions::orientation`] off only the position is matched.
+//!
+//! For a tree ([`crate::tree`]) the tool is one branch's tip ([`CompensateOptions::chain`])
+//! and only the columns that drive its chain (the trunk's and the branch's joints) move; a
+//! trunk joint moved for one branch moves every other branch too.
 
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
@@ -43,6 +47,11 @@ pub struct CompensateOptions {
     /// prismatic joint): a calibration corrects by fractions of a degree, and a pose that needs
     /// more is at or near a singularity, where a large reconfiguration is no correction.
     pub max_change: f64,
+    /// The chain whose tool is compensated: a tree's branch (index into its branches, see
+    /// [`crate::tree`]), 0 for a serial robot. Only the joints of that chain (the trunk's and
+    /// the branch's) move: the other columns do not move its tool, and the minimum-norm step
+    /// leaves them at their commanded values.
+    pub chain: usize,
 }
 
 impl Default for CompensateOptions {
@@ -53,6 +62,7 @@ impl Default for CompensateOptions {
             orientation_tolerance: 1e-9,
             max_iterations: 100,
             max_change: DEFAULT_MAX_CHANGE,
+            chain: 0,
         }
     }
 }
@@ -83,9 +93,9 @@ pub struct Compensated {
     pub at_max_change: Vec<usize>,
 }
 
-/// The pose of the calibrated tool at columns `q`, in the base link frame.
-fn pose(calibrated: &Calibrated, map: &JointMap, q: &[f64]) -> Isometry3<f64> {
-    calibrated.tool(&map.rows(q), Frame::Base)
+/// The pose of the calibrated tool of chain `chain` at columns `q`, in the base link frame.
+fn pose(calibrated: &Calibrated, map: &JointMap, q: &[f64], chain: usize) -> Isometry3<f64> {
+    calibrated.tool_of(&map.rows(q), chain, Frame::Base)
 }
 
 /// Position and orientation errors from `at` to `goal`: `p* − p` and the rotation vector of
@@ -97,8 +107,9 @@ fn errors(goal: &Isometry3<f64>, at: &Isometry3<f64>) -> (Vector3<f64>, Vector3<
     )
 }
 
-/// The joint columns at which `calibrated` (a serial robot) puts its tool at `goal` (base link
-/// frame), from `seed` (the commanded columns; see the module docs).
+/// The joint columns at which `calibrated` puts the tool of chain
+/// [`CompensateOptions::chain`] (a serial robot's tool, or a tree's branch's) at `goal` (base
+/// link frame), from `seed` (the commanded columns; see the module docs).
 pub fn compensate(
     calibrated: &Calibrated,
     map: &JointMap,
@@ -109,7 +120,7 @@ pub fn compensate(
     let weight = calibrated.model().length_scale().max(1e-3);
     let dims = if options.orientation { 6 } else { 3 };
     let residual = |q: &[f64]| -> DVector<f64> {
-        let (p, r) = errors(goal, &pose(calibrated, map, q));
+        let (p, r) = errors(goal, &pose(calibrated, map, q, options.chain));
         let mut e = DVector::zeros(dims);
         e.fixed_rows_mut::<3>(0).copy_from(&p);
         if options.orientation {
@@ -118,10 +129,21 @@ pub fn compensate(
         e
     };
     let done = |q: &[f64]| {
-        let (p, r) = errors(goal, &pose(calibrated, map, q));
+        let (p, r) = errors(goal, &pose(calibrated, map, q, options.chain));
         p.norm() <= options.position_tolerance
             && (!options.orientation || r.norm() <= options.orientation_tolerance)
     };
+    // The columns that drive a row of the chain; the others stay at their commanded values,
+    // even where an effect (the trunk's compliance under another branch's weight) lets them
+    // move the tool a little.
+    let chain_rows = calibrated.tree().chain_rows(options.chain);
+    let movable: Vec<bool> = (0..map.columns.len())
+        .map(|c| {
+            chain_rows
+                .iter()
+                .any(|&r| r < map.matrix.nrows() && map.matrix[(r, c)] != 0.0)
+        })
+        .collect();
     let mut q = seed.to_vec();
     let mut e = residual(&q);
     let mut iterations = 0;
@@ -131,7 +153,7 @@ pub fn compensate(
         iterations += 1;
         let mut jac = DMatrix::zeros(dims, q.len());
         let mut qp = q.clone();
-        for c in 0..q.len() {
+        for c in (0..q.len()).filter(|&c| movable.get(c).copied().unwrap_or(true)) {
             qp[c] = q[c] + JOINT_STEP;
             let plus = residual(&qp);
             qp[c] = q[c] - JOINT_STEP;
@@ -177,14 +199,17 @@ pub fn compensate(
             break;
         }
     }
-    let (p, r) = errors(goal, &pose(calibrated, map, &q));
-    let (p0, r0) = errors(goal, &pose(calibrated, map, seed));
+    let (p, r) = errors(goal, &pose(calibrated, map, &q, options.chain));
+    let (p0, r0) = errors(goal, &pose(calibrated, map, seed, options.chain));
     let rows = map.rows(&q);
     let beyond_limits = calibrated
         .table()
         .rows
         .iter()
         .zip(&rows)
+        .enumerate()
+        .filter(|(i, _)| chain_rows.contains(i))
+        .map(|(_, rv)| rv)
         .filter(|(row, v)| {
             row.limits
                 .as_ref()

@@ -34,7 +34,7 @@ use std::sync::Arc;
 use dh_core::DhTable;
 use nalgebra::{DMatrix, DVectorView, Isometry3, UnitQuaternion, Vector3, Vector6};
 
-use crate::effects::{parse_label_in, EffectContext};
+use crate::effects::EffectContext;
 use crate::fit::CalibError;
 use crate::model::{
     Block, Effect, EffectField, Model, ModelOptions, Observation, Observed, SampleContext,
@@ -64,6 +64,12 @@ pub struct Calibrated {
     context: SampleContext,
     /// The covariance and the parameters it is of.
     covariance: Option<Propagation>,
+    /// How many of the model's targets are the calibration's (the rest are the tips of a
+    /// tree's chains, see `predict::tree`).
+    real_targets: usize,
+    /// Per chain of a tree: the model's target at its tip (empty for a serial robot, whose
+    /// tool is the model's own tip).
+    tools: Vec<usize>,
 }
 
 impl Calibrated {
@@ -81,7 +87,20 @@ impl Calibrated {
         targets: &[(String, Vector3<f64>)],
     ) -> Result<Self, CalibError> {
         let names: Vec<String> = targets.iter().map(|(n, _)| n.clone()).collect();
-        let mut model = Model::new(table, &names, &ModelOptions::default())?;
+        let model = Model::new(table, &names, &ModelOptions::default())?;
+        let positions: Vec<Vector3<f64>> = targets.iter().map(|(_, t)| *t).collect();
+        Self::build(model, effects, device, &positions)
+    }
+
+    /// The calibrated robot of `model` (built with every target, the calibration's first):
+    /// `effects` added at their values, the device frame and the first `positions.len()`
+    /// targets set (tip frame, metres).
+    fn build(
+        mut model: Model,
+        effects: &[EffectValues],
+        device: &Isometry3<f64>,
+        positions: &[Vector3<f64>],
+    ) -> Result<Self, CalibError> {
         let mut values = Vec::new();
         for (effect, v) in effects {
             let range = model.add_effect(effect.clone())?;
@@ -94,7 +113,7 @@ impl Calibrated {
             values.push((range, v.clone()));
         }
         model.set_device(device);
-        for (k, (_, t)) in targets.iter().enumerate() {
+        for (k, t) in positions.iter().enumerate() {
             model.set_target(k, *t);
         }
         let mut x = vec![0.0; model.parameter_count()];
@@ -108,6 +127,8 @@ impl Calibrated {
             x,
             context: SampleContext::default(),
             covariance: None,
+            real_targets: positions.len(),
+            tools: Vec::new(),
         })
     }
 
@@ -121,21 +142,7 @@ impl Calibrated {
         report: &crate::calibrate::Report,
         ctx: &EffectContext,
     ) -> Result<Self, CalibError> {
-        let values: Vec<(String, f64)> = report
-            .parameters
-            .iter()
-            .map(|p| (p.name.clone(), p.estimate))
-            .collect();
-        let mut effects = Vec::new();
-        for label in &report.selected_effects {
-            let effect = parse_label_in(label, ctx)?;
-            let v = effect
-                .parameter_names()
-                .iter()
-                .map(|n| values.iter().find(|(m, _)| m == n).map_or(0.0, |(_, v)| *v))
-                .collect();
-            effects.push((effect, v));
-        }
+        let effects = report_effects(report, ctx)?;
         let c = Self::new(
             &report.calibrated,
             &effects,
@@ -244,9 +251,11 @@ impl Calibrated {
         self.model.nominal()
     }
 
-    /// Target names and positions in the tip frame (metres).
+    /// Target names and positions in the tip frame (metres); a tree's target is in the tip
+    /// frame of its branch ([`Calibrated::target_branch`]).
     pub fn targets(&self) -> &[(String, Vector3<f64>)] {
-        self.model.targets()
+        let all = self.model.targets();
+        &all[..self.real_targets.min(all.len())]
     }
 
     /// Where target `k` is at row values `q` (one per table row), metres.
@@ -257,7 +266,13 @@ impl Calibrated {
     /// The tip (tool) frame at row values `q`; in [`Frame::Device`] its position carries the
     /// device scale.
     pub fn tool(&self, q: &[f64], frame: Frame) -> Isometry3<f64> {
-        self.tool_at(&self.x, q, frame)
+        self.tool_at(&self.x, q, 0, frame)
+    }
+
+    /// The tip frame of chain `chain` (a tree's branch index, see [`Calibrated::chains`]; 0
+    /// for a serial robot) at row values `q`, as [`Calibrated::tool`].
+    pub fn tool_of(&self, q: &[f64], chain: usize, frame: Frame) -> Isometry3<f64> {
+        self.tool_at(&self.x, q, chain, frame)
     }
 
     /// A 6-DoF target's orientation at row values `q`: the tip's rotation in `frame` times the
@@ -292,7 +307,9 @@ impl Calibrated {
         target: usize,
         frame: Frame,
     ) -> UnitQuaternion<f64> {
-        self.tool_at(x, q, frame).rotation * self.model.target_rotation_at(x, target)
+        self.tool_at(x, q, self.model.target_chain(target), frame)
+            .rotation
+            * self.model.target_rotation_at(x, target)
     }
 
     fn point_at(&self, x: &[f64], q: &[f64], target: usize, frame: Frame) -> Vector3<f64> {
@@ -309,10 +326,10 @@ impl Calibrated {
         }
     }
 
-    fn tool_at(&self, x: &[f64], q: &[f64], frame: Frame) -> Isometry3<f64> {
+    fn tool_at(&self, x: &[f64], q: &[f64], chain: usize, frame: Frame) -> Isometry3<f64> {
         match frame {
-            Frame::Device => self.model.tip_of_in(x, q, &self.context, 0),
-            Frame::Base => self.model.robot_fk_in(x, q, &self.context, 0),
+            Frame::Device => self.model.tip_of_in(x, q, &self.context, chain),
+            Frame::Base => self.model.robot_fk_in(x, q, &self.context, chain),
         }
     }
 
@@ -331,7 +348,23 @@ impl Calibrated {
     /// Standard uncertainty of [`Calibrated::tool`]: position per axis (metres), then rotation
     /// about each axis of `frame` (radians); `None` without a covariance.
     pub fn tool_uncertainty(&self, q: &[f64], frame: Frame) -> Option<Vector6<f64>> {
-        let u = self.propagate(q, Of::Tool, frame, 0..6)?;
+        self.tool_uncertainty_of(q, 0, frame)
+    }
+
+    /// Standard uncertainty of [`Calibrated::tool_of`], as [`Calibrated::tool_uncertainty`]:
+    /// a tree's tip is propagated as the frame of a target at its origin, which no parameter
+    /// of the covariance moves but through the chain.
+    pub fn tool_uncertainty_of(
+        &self,
+        q: &[f64],
+        chain: usize,
+        frame: Frame,
+    ) -> Option<Vector6<f64>> {
+        let of = match self.tools.get(chain) {
+            Some(&k) => Of::TargetFrame(k),
+            None => Of::Tool,
+        };
+        let u = self.propagate(q, of, frame, 0..6)?;
         Some(Vector6::from_column_slice(&u))
     }
 
@@ -499,59 +532,11 @@ struct Propagation {
     moves_device: Vec<bool>,
 }
 
-/// The effects of a written calibration: `values` are its effect parameters by name
-/// (`gear_ratio:j2`, `gear_harmonic:j1.sin`, ...), grouped into the effects they belong to
-/// (labels parsed in `ctx`), in the order first named.
-///
-/// # Errors
-/// [`CalibError::BadOption`] for a name that belongs to no effect `ctx` can parse, or an
-/// effect with some of its parameters missing; as [`parse_label_in`].
-pub fn effects_from_parameters(
-    values: &[(String, f64)],
-    ctx: &EffectContext,
-) -> Result<Vec<EffectValues>, CalibError> {
-    let mut out: Vec<EffectValues> = Vec::new();
-    let mut used = vec![false; values.len()];
-    for (i, (name, _)) in values.iter().enumerate() {
-        if used[i] {
-            continue;
-        }
-        // The label is the name, or the name without its last `.part`s (the parameter).
-        let mut label = name.as_str();
-        let effect = loop {
-            let parsed = parse_label_in(label, ctx);
-            match parsed {
-                Ok(e) if e.parameter_names().contains(name) => break e,
-                Ok(_) | Err(_) => match label.rfind('.') {
-                    Some(dot) => label = &label[..dot],
-                    None => {
-                        // The label's own error says what is wrong with the name.
-                        parse_label_in(name, ctx)?;
-                        return Err(CalibError::BadOption {
-                            what: format!("effect parameter '{name}'"),
-                            reason: "expected the name of an effect's parameter".into(),
-                        });
-                    }
-                },
-            }
-        };
-        let mut v = Vec::new();
-        for p in effect.parameter_names() {
-            let at =
-                values
-                    .iter()
-                    .position(|(n, _)| *n == p)
-                    .ok_or_else(|| CalibError::BadOption {
-                        what: format!("effect '{}'", effect.label()),
-                        reason: format!("expected a value of its parameter '{p}', found none"),
-                    })?;
-            used[at] = true;
-            v.push(values[at].1);
-        }
-        out.push((effect, v));
-    }
-    Ok(out)
-}
-
 #[cfg(test)]
 mod tests;
+
+mod effect_values;
+mod tree;
+
+pub use effect_values::effects_from_parameters;
+use effect_values::report_effects;

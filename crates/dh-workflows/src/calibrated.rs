@@ -2,7 +2,10 @@
 //! --out` (its table, `effects`, and the `calibration` section's device frame, targets and
 //! covariance), `simulate`'s truth file (the `truth` section's device frame, targets and
 //! effects: the simulated robot itself, without uncertainty), or any other model (a URDF chain,
-//! a sheet) taken as exact, without device frame, targets or uncertainty. The sections and the
+//! a sheet) taken as exact, without device frame, targets or uncertainty. A tree sheet
+//! (`branches`, written by `calibrate --out` for a tree) is read the same way: its rows are the
+//! tree's in joint order and each target rides on the branch its `branch` names (see
+//! [`crate::predict`] for choosing a branch). The sections and the
 //! robot they make are `dh_calib::pipeline`'s (`CalibrationRecord`, `CalibratedRobot`); this
 //! module finds and reads the file and words the errors.
 
@@ -18,7 +21,8 @@ use nalgebra::Isometry3;
 use crate::error::hinted;
 use crate::input::display_name;
 use crate::model::{is_urdf, load_model, sheet_model, LoadedModel};
-use crate::sheet::parse_doc;
+use crate::sheet::{parse_doc, SheetDoc};
+use crate::tree_sheet::TreeSheet;
 
 /// A calibrated model, ready to predict.
 pub struct CalibratedModel {
@@ -43,6 +47,10 @@ pub struct CalibratedModel {
     pub time_unit: Option<TimeUnit>,
     /// The covariance as the file holds it (every session's device frame in it).
     covariance: Option<Covariance>,
+    /// A tree's branch chosen for predictions and compensation (index into its branches, see
+    /// [`CalibratedModel::choose_branch`]); `None`: every branch (targets each on their own),
+    /// or a serial robot.
+    pub branch: Option<usize>,
 }
 
 impl CalibratedModel {
@@ -134,8 +142,11 @@ pub fn load_calibrated(
 /// # Errors
 /// As [`crate::sheet::Sheet::parse`]; a `calibration` section or `effects` that do not read.
 pub fn calibrated_sheet(text: &str, origin: &str) -> Result<CalibratedModel> {
-    let loaded = sheet_model(text, origin)?.loaded;
     let doc = parse_doc(text, origin)?;
+    if doc.branches.is_some() {
+        return calibrated_tree(doc, text, origin);
+    }
+    let loaded = sheet_model(text, origin)?.loaded;
     let mut effect_values: Vec<(String, f64)> = doc
         .effects
         .unwrap_or_default()
@@ -159,13 +170,49 @@ pub fn calibrated_sheet(text: &str, origin: &str) -> Result<CalibratedModel> {
     assemble(loaded, record, effect_values, origin)
 }
 
+/// The calibrated model of a tree sheet (`branches`; see [`crate::tree_sheet`]): its tree,
+/// `effects` and `calibration` section (each target on the branch it names), or the tree
+/// taken as exact without one.
+///
+/// # Errors
+/// As [`TreeSheet::parse`]; a `calibration` section or `effects` that do not read; a target
+/// on no branch of the tree.
+fn calibrated_tree(doc: SheetDoc, text: &str, origin: &str) -> Result<CalibratedModel> {
+    let effect_values: Vec<(String, f64)> = doc
+        .effects
+        .clone()
+        .unwrap_or_default()
+        .into_iter()
+        .map(|e| (e.name, e.value))
+        .collect();
+    let calibration = doc.calibration.clone();
+    let sheet = TreeSheet::from_doc(doc, text, origin)?;
+    let record: CalibrationRecord = match calibration {
+        Some(c) => {
+            serde_yaml::from_value(c).with_context(|| format!("{origin}: calibration section"))?
+        }
+        None => CalibrationRecord::default(),
+    };
+    let loaded = LoadedModel::of_tree(&sheet, origin);
+    let robot = CalibratedRobot::new_tree(&sheet.tree, &effect_values, &record)
+        .map_err(|e| robot_error(e, origin))?;
+    Ok(model_of(loaded, robot))
+}
+
 fn assemble(
     loaded: LoadedModel,
     record: CalibrationRecord,
     effect_values: Vec<(String, f64)>,
     origin: &str,
 ) -> Result<CalibratedModel> {
-    let robot = CalibratedRobot::new(&loaded.table, &effect_values, &record).map_err(|e| match e {
+    let robot = CalibratedRobot::new(&loaded.table, &effect_values, &record)
+        .map_err(|e| robot_error(e, origin))?;
+    Ok(model_of(loaded, robot))
+}
+
+/// The message of a calibrated robot that does not read from the file shown as `origin`.
+fn robot_error(e: CalibratedError, origin: &str) -> anyhow::Error {
+    match e {
         CalibratedError::MissingGravity { .. } => hinted(
             format!("{origin}: {e}"),
             "the file was written before calibrate kept them: calibrate again with the same --inertials and --out, which writes `calibration.gravity_model`",
@@ -178,9 +225,13 @@ fn assemble(
             anyhow::anyhow!("{e}").context(format!("{origin}: calibration"))
         }
         e => anyhow::anyhow!("{origin}: {e}"),
-    })?;
+    }
+}
+
+/// The model of `loaded` and the robot read from its file.
+fn model_of(loaded: LoadedModel, robot: CalibratedRobot) -> CalibratedModel {
     let joints = JointMap::new(&loaded.table, &loaded.coupled);
-    Ok(CalibratedModel {
+    CalibratedModel {
         loaded,
         calibrated: robot.calibrated,
         has_device: robot.has_device,
@@ -189,5 +240,6 @@ fn assemble(
         first_session: robot.first_session,
         time_unit: robot.time_unit,
         covariance: robot.covariance,
-    })
+        branch: None,
+    }
 }

@@ -12,7 +12,9 @@ use dh_calib::compensate::{compensate as solve, Compensated};
 /// The inverse kinematics' options, and the default largest change of a joint value from the
 /// commanded one (radians or metres).
 pub use dh_calib::compensate::{CompensateOptions, DEFAULT_MAX_CHANGE};
+use dh_calib::tree::DhTree;
 use dh_core::DhTable;
+use nalgebra::Isometry3;
 
 use crate::calibrated::CalibratedModel;
 use crate::error::hinted;
@@ -245,6 +247,109 @@ pub fn compensate(
     input: &JointInput,
     options: &CompensateOptions,
 ) -> Result<Vec<CompensatedRow>> {
+    compensate_to(model, input, options, &|q| Ok(nominal.fk(q)?))
+}
+
+/// [`compensate`] for a calibrated tree: the goal is the tip of branch
+/// [`CompensateOptions::chain`] of the nominal tree `nominal` at the commanded values, and
+/// only the joints of that branch's chain move (see [`dh_calib::compensate`]): the trunk's
+/// joints, shared by every branch, move the other branches' tools with them.
+///
+/// # Errors
+/// As [`compensate`]; a nominal tree without that branch.
+pub fn compensate_tree(
+    nominal: &DhTree,
+    model: &CalibratedModel,
+    input: &JointInput,
+    options: &CompensateOptions,
+) -> Result<Vec<CompensatedRow>> {
+    let chain = options.chain;
+    compensate_to(model, input, options, &|q| {
+        nominal
+            .frames(q)?
+            .tips
+            .get(chain)
+            .copied()
+            .ok_or_else(|| anyhow::anyhow!("the nominal tree has no branch {chain}"))
+    })
+}
+
+/// The nominal model of `compensate`: the chain the robot program was computed with, or for a
+/// calibrated tree the nominal tree sheet (whose chosen branch's tool is the goal).
+#[derive(Clone, Debug)]
+pub enum NominalModel {
+    /// A serial model's table (metres, radians).
+    Chain(DhTable),
+    /// A tree sheet's tree.
+    Tree(DhTree),
+}
+
+impl NominalModel {
+    /// Reads the nominal model at `path` for the calibrated `model`: a tree sheet when `model`
+    /// is a tree, else a URDF chain (`base`, `tip`) or a sheet.
+    ///
+    /// # Errors
+    /// As [`crate::model::load_model`]; for a tree, a file that is no tree sheet (naming it,
+    /// with a hint).
+    pub fn load(
+        path: &str,
+        base: Option<&str>,
+        tip: Option<&str>,
+        model: &CalibratedModel,
+    ) -> Result<NominalModel> {
+        if !model.is_tree() {
+            let loaded = crate::model::load_model(path, base, tip, dh_core::Convention::Standard)?;
+            return Ok(NominalModel::Chain(loaded.table));
+        }
+        let origin = crate::input::display_name(path);
+        let text = crate::input::read_text(path)?;
+        let doc = crate::sheet::parse_doc(&text, &origin)?;
+        if doc.branches.is_none() {
+            return Err(hinted(
+                format!(
+                    "{origin}: expected the nominal tree sheet (with 'branches') of the calibrated tree {}, found a model of one chain",
+                    model.loaded.origin
+                ),
+                "give the tree sheet the calibration started from as --nominal",
+            ));
+        }
+        Ok(NominalModel::Tree(
+            crate::tree_sheet::TreeSheet::from_doc(doc, &text, &origin)?.tree,
+        ))
+    }
+
+    /// Every row in joint order (a tree's joint table), for [`same_joints`].
+    pub fn rows(&self) -> DhTable {
+        match self {
+            NominalModel::Chain(t) => t.clone(),
+            NominalModel::Tree(t) => t.joint_table(),
+        }
+    }
+
+    /// [`compensate`] or [`compensate_tree`], as the model is.
+    ///
+    /// # Errors
+    /// As those.
+    pub fn compensate(
+        &self,
+        model: &CalibratedModel,
+        input: &JointInput,
+        options: &CompensateOptions,
+    ) -> Result<Vec<CompensatedRow>> {
+        match self {
+            NominalModel::Chain(t) => compensate(t, model, input, options),
+            NominalModel::Tree(t) => compensate_tree(t, model, input, options),
+        }
+    }
+}
+
+/// Compensates every row of `input` towards `goal(row values)` (base link frame).
+fn compensate_to(
+    model: &CalibratedModel,
+    input: &JointInput,
+    options: &CompensateOptions,
+    goal: &dyn Fn(&[f64]) -> Result<Isometry3<f64>>,
+) -> Result<Vec<CompensatedRow>> {
     let columns = &model.joints.columns;
     // Rows in a sequence are compensated on their joints' flanks ([`JointInput::contexts`]),
     // and at their times for an effect of time.
@@ -255,7 +360,7 @@ pub fn compensate(
         .iter()
         .enumerate()
         .map(|(i, row)| {
-            let goal = nominal.fk(&model.joints.rows(&row.q))?;
+            let goal = goal(&model.joints.rows(&row.q))?;
             let calibrated = match (sequenced.as_mut(), contexts.get(i)) {
                 (Some(c), Some(ctx)) => {
                     c.set_context(ctx.clone());

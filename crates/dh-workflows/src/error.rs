@@ -64,7 +64,7 @@ pub enum SheetError {
     /// A sheet with `branches` given where one chain is expected.
     #[error(
         "{origin}: 'branches': a tree sheet (a trunk and {} branch(es): {}) describes no single \
-         chain; only 'calibrate' reads trees",
+         chain; only 'calibrate', and 'predict' and 'compensate' of its calibration, read trees",
         branches.len(),
         quoted_list(branches)
     )]
@@ -255,9 +255,10 @@ impl SheetError {
                     .into()
             }
             SheetError::TreeNotChain { .. } => {
-                "calibrate the whole tree with: urdf-dh calibrate --model SHEET --data D.csv (from \
-                 a file, not standard input); for other commands give one chain as a serial sheet \
-                 (the trunk's joints followed by one branch's)"
+                "calibrate the whole tree with: urdf-dh calibrate --model SHEET --data D.csv --out \
+                 CAL.yaml (from a file, not standard input), then predict or compensate with \
+                 --model CAL.yaml --branch NAME; for other commands give one chain as a serial \
+                 sheet (the trunk's joints followed by one branch's)"
                     .into()
             }
             SheetError::InertialsNotTree { .. } => {

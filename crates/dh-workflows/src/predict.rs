@@ -47,6 +47,13 @@ pub struct JointInput {
 
 pub use crate::timed_rows::timed_contexts;
 
+mod branch;
+mod sessions;
+mod warnings;
+
+use sessions::session_frames;
+pub use warnings::{backlash_warnings, drift_warning, limit_warnings};
+
 /// Takes `input`'s rows as the order in which the robot moves through them (a robot program, a
 /// measurement file): each joint's approach direction at a row is the sign of its last motion
 /// before it, as `calibrate` reads a measurement file (`dh_calib::effects_order`); at the
@@ -58,45 +65,6 @@ pub fn in_sequence(model: &CalibratedModel, input: &mut JointInput) {
             .zip(&input.rows)
             .map(|(q, r)| (q.as_slice(), r.config.as_deref())),
     );
-}
-
-/// One warning per `backlash_direction:J` of `model` whose approach direction some rows of
-/// `input` do not give: they are predicted midway between the gear's flanks, `±|b|` (half the
-/// backlash) in the joint added to their uncertainty.
-pub fn backlash_warnings(model: &CalibratedModel, input: &JointInput) -> Vec<String> {
-    model
-        .calibrated
-        .backlash_effects()
-        .into_iter()
-        .filter_map(|(label, _, row, b)| {
-            let unknown = (0..input.rows.len())
-                .filter(|&i| input.contexts.get(i).map_or(0.0, |c| c.direction_of(row)) == 0.0)
-                .count();
-            (unknown > 0).then(|| {
-                format!(
-                    "'{}' (b = {b:.3e}): the approach direction of the joint is not known at {unknown} of {} row(s), predicted midway between the gear's flanks with ±{:.3e} (half the backlash) added to the uncertainty; give the rows in the order the robot moves through them with --sequence to predict each on its flank",
-                    escape(&label),
-                    input.rows.len(),
-                    b.abs()
-                )
-            })
-        })
-        .collect()
-}
-
-/// The warning for a `drift` effect of `model` when `input`'s rows have no place in a sequence
-/// ([`in_sequence`]) and are predicted in the device frame: they are predicted at the session's
-/// start (`t = 0`, the device scale the calibration started with), which a pose measured later
-/// in the session misses by up to `|c|` times its distance from the device. `None` otherwise
-/// (the base link frame does not see the device's scale).
-pub fn drift_warning(model: &CalibratedModel, input: &JointInput, frame: Frame) -> Option<String> {
-    let c = model.calibrated.drift()?;
-    (frame == Frame::Device && input.contexts.is_empty() && !input.rows.is_empty()).then(|| {
-        format!(
-            "'drift' (c = {c:.3e}): the rows' place in the session is not known, predicted at the session's start (t = 0): a pose measured later is off by up to {:.1} ppm of its distance from the device, not in the uncertainty; give the rows in the order they were measured with --sequence to follow the drift",
-            c.abs() * 1e6
-        )
-    })
 }
 
 /// Reads `path`'s joint values for `model`'s measured columns ([`crate::measured::DataFile`],
@@ -242,64 +210,19 @@ pub struct Predictions {
     pub warnings: Vec<String>,
 }
 
-/// One warning per joint (table row) whose value leaves its limits at some rows of `input`:
-/// the joint, its limits, how many rows and the first (its line in `joints_name` and value).
-/// A prediction there extrapolates the calibration to where the robot cannot go, which is
-/// allowed (a model can be asked anything) but rarely meant: a value in degrees read as
-/// radians, a wrong column. Radians, or metres for a prismatic joint.
-pub fn limit_warnings(
-    model: &CalibratedModel,
-    input: &JointInput,
-    joints_name: &str,
-) -> Vec<String> {
-    let table = &model.loaded.table;
-    // Per table row: rows outside, and the first (line, value).
-    let mut outside: Vec<(usize, Option<(usize, f64)>)> = vec![(0, None); table.rows.len()];
-    if table.rows.iter().all(|r| r.limits.is_none()) {
-        return Vec::new();
-    }
-    for row in &input.rows {
-        let values = model.joints.rows(&row.q);
-        for ((r, v), o) in table.rows.iter().zip(&values).zip(outside.iter_mut()) {
-            if r.limits
-                .as_ref()
-                .is_some_and(|l| *v < l.lower || *v > l.upper)
-            {
-                o.0 += 1;
-                o.1.get_or_insert((row.line, *v));
-            }
-        }
-    }
-    table
-        .rows
-        .iter()
-        .zip(&outside)
-        .filter_map(|(r, (count, first))| {
-            let (l, (line, value)) = (r.limits.as_ref()?, (*first)?);
-            let unit = match r.kind {
-                JointKind::Prismatic => "m",
-                JointKind::Revolute => "rad",
-            };
-            Some(format!(
-                "{}: joint '{}' is outside its limits [{}, {}] {unit} in {count} row(s), the first at line {line} ({value} {unit}): the prediction extrapolates the calibration to where the robot cannot go",
-                display_name(joints_name),
-                escape(&r.name),
-                l.lower,
-                l.upper,
-            ))
-        })
-        .collect()
-}
-
 /// Predicts with `model` (in `frame`, see [`frame_of`]) at the joint rows of `input` (read
 /// from the file shown as `joints_name`): the `targets` named, or [`TOOL`]; with none, each
 /// row's own target (a measurement file whose every row names a target), else every target of
-/// the calibration, else the tool. `session`: the session asked (see [`frame_of`]); without it
+/// the calibration, else the tool. A tree's targets each ride on their own branch; with a
+/// branch chosen ([`CalibratedModel::choose_branch`]) the default is that branch's targets
+/// (else its tool) at every row, and the tool is that branch's (a tree of several branches
+/// needs one chosen for the tool). `session`: the session asked (see [`frame_of`]); without it
 /// and in the device frame, the rows of a joint file with a `session` column are predicted from
 /// their sessions' device frames.
 ///
 /// # Errors
 /// An unknown target (naming the file's line, or `--targets`), targets and the tool together,
+/// a target on another branch than the one chosen, the tool of a tree without a branch chosen,
 /// sessions of the file unknown to the model; an effect of time without the rows' times
 /// ([`timed_contexts`]).
 pub fn predict(
@@ -332,13 +255,25 @@ pub fn predict(
             )
         })
     };
-    let per_row =
-        targets.is_empty() && !known.is_empty() && input.rows.iter().all(|r| r.target.is_some());
+    // A tree's branch chosen with --branch: its targets only, its tool.
+    let on_branch = |k: usize| {
+        model
+            .branch
+            .is_none_or(|b| model.calibrated.target_branch(k) == b)
+    };
+    let per_row = targets.is_empty()
+        && model.branch.is_none()
+        && !known.is_empty()
+        && input.rows.iter().all(|r| r.target.is_some());
     let wanted: Vec<String> = if targets.is_empty() {
-        if known.is_empty() {
+        let own: Vec<String> = (0..known.len())
+            .filter(|&k| on_branch(k))
+            .map(|k| known[k].0.clone())
+            .collect();
+        if own.is_empty() {
             vec![TOOL.into()]
         } else {
-            known.iter().map(|(n, _)| n.clone()).collect()
+            own
         }
     } else {
         targets.to_vec()
@@ -347,6 +282,11 @@ pub fn predict(
     if tool && wanted.len() > 1 {
         anyhow::bail!("--targets: expected target names or 'tool', found both");
     }
+    let chain = if tool {
+        model.tool_chain("--targets tool", origin)?
+    } else {
+        0
+    };
     // The targets' indices and names: one per row (each row's own), or the same for every row.
     let mut plan: Vec<(usize, String)> = Vec::new();
     if per_row {
@@ -364,7 +304,19 @@ pub fn predict(
         }
     } else if !tool {
         for t in &wanted {
-            plan.push((index_of(t).context("--targets")?, t.clone()));
+            let k = index_of(t).context("--targets")?;
+            if !on_branch(k) {
+                return Err(hinted(
+                    format!(
+                        "--targets: target '{}' of {origin} rides on branch '{}', not on --branch '{}'",
+                        escape(t),
+                        escape(model.branch_name(model.calibrated.target_branch(k))),
+                        escape(model.branch.map_or("", |b| model.branch_name(b)))
+                    ),
+                    "name the chosen branch's targets, or leave --targets out to predict them all",
+                ));
+            }
+            plan.push((k, t.clone()));
         }
     }
     let (frames, row_frame, mut warnings) =
@@ -401,7 +353,7 @@ pub fn predict(
                 frame,
                 &model.joints.rows(&input.rows[i].q),
                 i,
-                tool,
+                tool.then_some(chain),
                 targets,
                 &mut out,
             );
@@ -433,26 +385,29 @@ pub fn predict(
 /// Rows predicted per block of work on one core ([`predict`]).
 const BLOCK_ROWS: usize = 4096;
 
-/// The predictions of one row `i` (row values `q`) by `c` in `frame`: the tool pose, or the
-/// `targets` (index, name), appended to `out`.
+/// The predictions of one row `i` (row values `q`) by `c` in `frame`: the tool pose of chain
+/// `tool` (a tree's branch, 0 for a serial robot), or the `targets` (index, name), appended
+/// to `out`.
 fn predict_row(
     c: &Calibrated,
     frame: Frame,
     q: &[f64],
     i: usize,
-    tool: bool,
+    tool: Option<usize>,
     targets: &[(usize, String)],
     out: &mut Vec<Predicted>,
 ) {
-    if tool {
-        let pose = c.tool(q, frame);
+    if let Some(chain) = tool {
+        let pose = c.tool_of(q, chain, frame);
         let (xyz, rpy) = dh_core::pose::to_xyz_rpy(&pose);
         out.push(Predicted {
             row: i,
             target: TOOL.into(),
             position: Vector3::from(xyz),
             rpy: Some(rpy),
-            uncertainty: c.tool_uncertainty(q, frame).map(|u| u.as_slice().to_vec()),
+            uncertainty: c
+                .tool_uncertainty_of(q, chain, frame)
+                .map(|u| u.as_slice().to_vec()),
         });
         return;
     }
@@ -476,122 +431,6 @@ fn predict_row(
             uncertainty,
         });
     }
-}
-
-/// The robot each row is predicted with: `frames[row_frame[i]]` for row `i`, and the warnings
-/// to show. Without a session asked, in the device frame, a joint file with a `session` column
-/// (a measurement file of several sessions) has each row predicted from its own session's
-/// device frame: the model's first session (its `device`) or one of its other `sessions`.
-///
-/// A name the model does not hold is refused, naming it, its first line and the sessions the
-/// model has: predicted in another session's frame it would be silently wrong by the distance
-/// between the two frames. A sheet written before the first session's name was kept
-/// (`first_session`) leaves one name unmatched: it is taken as the first, with a warning.
-///
-/// # Errors
-/// A session the model does not hold (see above); several sessions in the file of a model
-/// calibrated on one.
-fn session_frames(
-    model: &CalibratedModel,
-    input: &JointInput,
-    frame: Frame,
-    session: Option<&str>,
-    joints_name: &str,
-    origin: &str,
-) -> Result<(Vec<Calibrated>, Vec<usize>, Vec<String>)> {
-    let first = vec![model.calibrated.clone()];
-    // Each name with its first line.
-    let mut names: Vec<(&str, usize)> = Vec::new();
-    for r in &input.rows {
-        if let Some(s) = r.session.as_deref() {
-            if !names.iter().any(|(n, _)| *n == s) {
-                names.push((s, r.line));
-            }
-        }
-    }
-    if session.is_some() || frame == Frame::Base || names.is_empty() {
-        return Ok((first, vec![0; input.rows.len()], Vec::new()));
-    }
-    let file = display_name(joints_name);
-    let quoted = |v: &[&str]| {
-        v.iter()
-            .map(|n| format!("'{}'", escape(n)))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let known: Vec<&str> = model
-        .first_session
-        .as_deref()
-        .into_iter()
-        .chain(model.sessions.iter().map(|(n, _)| n.as_str()))
-        .collect();
-    let unknown: Vec<(&str, usize)> = names
-        .iter()
-        .copied()
-        .filter(|(n, _)| !known.contains(n))
-        .collect();
-    let mut warnings = Vec::new();
-    // The name taken as the first session's, when the model does not give it.
-    let mut assumed_first: Option<&str> = None;
-    if model.sessions.is_empty() && model.first_session.is_none() {
-        // A model of one session: the file's one name is it.
-        if names.len() > 1 {
-            let all: Vec<&str> = names.iter().map(|(n, _)| *n).collect();
-            return Err(hinted(
-                format!(
-                    "{file}: line {}: the file has sessions {}, but {origin} was calibrated on one measurement session",
-                    names[1].1,
-                    quoted(&all)
-                ),
-                "predict every row in the model's device frame with --session left out and one session's rows, or calibrate on every session",
-            ));
-        }
-        return Ok((first, vec![0; input.rows.len()], Vec::new()));
-    }
-    if let Some(&(name, line)) = unknown.first() {
-        if model.first_session.is_some() || unknown.len() > 1 {
-            return Err(hinted(
-                format!(
-                    "{file}: line {line}, column 'session': {} is no session of {origin}; expected one of {}",
-                    quoted(&[name]),
-                    if model.first_session.is_some() {
-                        quoted(&known)
-                    } else {
-                        format!("{} and the first session's, which the model does not name ({} not in it: at most one can be the first)", quoted(&known), quoted(&unknown.iter().map(|(n, _)| *n).collect::<Vec<_>>()))
-                    }
-                ),
-                "a session's rows are predicted from that session's device frame: name the sessions as in the calibration's data, or predict every row from one session with --session NAME",
-            ));
-        }
-        warnings.push(format!(
-            "{file}: session '{}' (first at line {line}) is not named in {origin}, which names {} and holds the first session's frame without its name: '{}' is taken as the first session",
-            escape(name),
-            quoted(&known),
-            escape(name)
-        ));
-        assumed_first = Some(name);
-    }
-    let mut frames = first;
-    let mut index: Vec<(&str, usize)> = Vec::new();
-    for &(n, _) in &names {
-        if Some(n) == assumed_first || Some(n) == model.first_session.as_deref() {
-            index.push((n, 0));
-        } else {
-            frames.push(model.for_session(n)?);
-            index.push((n, frames.len() - 1));
-        }
-    }
-    let row_frame = input
-        .rows
-        .iter()
-        .map(|r| {
-            r.session
-                .as_deref()
-                .and_then(|s| index.iter().find(|(n, _)| *n == s))
-                .map_or(0, |(_, k)| *k)
-        })
-        .collect();
-    Ok((frames, row_frame, warnings))
 }
 
 /// The text of `predicted`, each prediction written by `row`, in blocks on every core and

@@ -1,5 +1,6 @@
 //! Tree sheets: the DH sheet format (see [`crate::sheet`]) with `branches`, for robots whose
-//! chains share a trunk (two arms on one torso). Only `calibrate` reads them; the other
+//! chains share a trunk (two arms on one torso). `calibrate` reads them, and `predict` and
+//! `compensate` read the calibrated tree sheet it writes (`crate::calibrated`); the other
 //! commands take one chain and refuse a tree sheet.
 //!
 //! ```yaml

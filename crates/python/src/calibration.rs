@@ -13,12 +13,13 @@ use dh_workflows::calibrated::{load_calibrated, CalibratedModel};
 use dh_workflows::calibration::{
     self as calibration, CalibrationRequest, GivenData, DEFAULT_FOLDS, DEFAULT_MAX_EFFECTS,
 };
-use dh_workflows::compensate::{failed_poses, same_joints, CompensateOptions, DEFAULT_MAX_CHANGE};
+use dh_workflows::compensate::{
+    failed_poses, same_joints, CompensateOptions, NominalModel, DEFAULT_MAX_CHANGE,
+};
 use dh_workflows::fit::{EffectsChoice, DEFAULT_ALPHA};
 use dh_workflows::geometry::Convention;
 use dh_workflows::input::display_name;
 use dh_workflows::measured::{DataUnits, SampleArrays, RESERVED_COLUMNS};
-use dh_workflows::model::load_model;
 use dh_workflows::output::{write_all, STDIO};
 use dh_workflows::predict::{frame_of, read_joints, Frame};
 use dh_workflows::ranges;
@@ -253,7 +254,7 @@ type PredictOut = (
 /// ([`dh_workflows::predict::predict`], as `urdf-dh predict` computes them); `joints` are arrays,
 /// or None to read the file `joints_name`.
 #[pyfunction]
-#[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit, sequence))]
+#[pyo3(signature = (model, joints_name, joints, base, tip, targets, frame_name, session, length_unit, angle_unit, sequence, branch=None))]
 #[allow(clippy::too_many_arguments)]
 fn predict(
     py: Python<'_>,
@@ -268,12 +269,16 @@ fn predict(
     length_unit: &str,
     angle_unit: &str,
     sequence: bool,
+    branch: Option<String>,
 ) -> PyResult<PredictOut> {
     let go = || -> anyhow::Result<PredictOut> {
         let units = units(length_unit, angle_unit)?;
         let asked = frame(frame_name.as_deref())?;
         let (mut calibrated, mut warnings) = calibrated(&model, base.as_deref(), tip.as_deref())?;
         let origin = display_name(&model);
+        if let Some(b) = &branch {
+            calibrated.choose_branch(b, &origin)?;
+        }
         let (frame, first) = frame_of(&mut calibrated, asked, session.as_deref(), &origin)?;
         warnings.splice(0..0, first);
         let given = joints.map(arrays).transpose()?;
@@ -364,7 +369,7 @@ type CompensateOut = (Vec<Vec<f64>>, Vec<[f64; 4]>, Vec<String>, Vec<String>);
 /// Corrected joint values ([`dh_workflows::compensate::compensate`], as `urdf-dh compensate`
 /// computes them); `joints` are arrays, or None to read the file `joints_name`.
 #[pyfunction]
-#[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit, sequence))]
+#[pyo3(signature = (nominal, model, joints_name, joints, base, tip, position_only, max_change, length_unit, angle_unit, sequence, branch=None))]
 #[allow(clippy::too_many_arguments)]
 fn compensate(
     py: Python<'_>,
@@ -379,20 +384,21 @@ fn compensate(
     length_unit: &str,
     angle_unit: &str,
     sequence: bool,
+    branch: Option<String>,
 ) -> PyResult<CompensateOut> {
     let go = || -> anyhow::Result<CompensateOut> {
         let units = units(length_unit, angle_unit)?;
         let max_change =
             guarded("max_change", max_change, ranges::max_change)?.unwrap_or(DEFAULT_MAX_CHANGE);
-        let nominal_model = load_model(
-            &nominal,
-            base.as_deref(),
-            tip.as_deref(),
-            Convention::Standard,
-        )?;
-        let (calibrated, mut warnings) = calibrated(&model, None, None)?;
+        let (mut calibrated, mut warnings) = calibrated(&model, None, None)?;
+        if let Some(b) = &branch {
+            calibrated.choose_branch(b, &display_name(&model))?;
+        }
+        let chain = calibrated.tool_chain("compensate", &display_name(&model))?;
+        let nominal_model =
+            NominalModel::load(&nominal, base.as_deref(), tip.as_deref(), &calibrated)?;
         same_joints(
-            &nominal_model.table,
+            &nominal_model.rows(),
             &calibrated,
             (&display_name(&nominal), &display_name(&model)),
         )?;
@@ -408,14 +414,10 @@ fn compensate(
         let options = CompensateOptions {
             orientation: !position_only,
             max_change,
+            chain,
             ..CompensateOptions::default()
         };
-        let rows = dh_workflows::compensate::compensate(
-            &nominal_model.table,
-            &calibrated,
-            &input,
-            &options,
-        )?;
+        let rows = nominal_model.compensate(&calibrated, &input, &options)?;
         let (l, a) = (units.length.metres(), units.angle.radians());
         let q = rows
             .iter()
@@ -472,13 +474,19 @@ fn measured_joints(
     tip: Option<String>,
 ) -> PyResult<Vec<String>> {
     let go = || -> anyhow::Result<Vec<String>> {
-        let m = dh_workflows::model::load_model(
+        match dh_workflows::model::load_model(
             model,
             base.as_deref(),
             tip.as_deref(),
             Convention::Standard,
-        )?;
-        Ok(m.measured_joints())
+        ) {
+            Ok(m) => Ok(m.measured_joints()),
+            // A tree sheet (a calibrated tree's): every joint of the tree.
+            Err(e) => match load_calibrated(model, base.as_deref(), tip.as_deref()) {
+                Ok(c) if c.is_tree() => Ok(c.loaded.measured_joints()),
+                _ => Err(e),
+            },
+        }
     };
     py.detach(go).map_err(|e| to_py(py, e))
 }

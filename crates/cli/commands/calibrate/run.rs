@@ -23,19 +23,9 @@ pub fn calibrate(
     more.extend(args.report.iter().map(|p| ("--report", p.as_str())));
     request.check_destinations(&more)?;
     let loaded = match calibration::identify(request)? {
-        Some((sheet, origin)) => {
-            // Said before the fit: what the result can and cannot be used for.
-            if let Some(out) = &request.out {
-                writeln!(
-                    err,
-                    "urdf-dh: warning: {}: a calibrated tree sheet is read by calibrate only; predict and compensate take one chain (a serial sheet of the trunk and one branch), so its effects are not predicted",
-                    crate::guard::output_name(out)
-                )?;
-            }
-            Loaded::Tree(Box::new(calibration::load_tree(
-                request, sheet, origin, err,
-            )?))
-        }
+        Some((sheet, origin)) => Loaded::Tree(Box::new(calibration::load_tree(
+            request, sheet, origin, err,
+        )?)),
         None => Loaded::Serial(Box::new(calibration::load_inputs(request, err)?)),
     };
     let data_name = display_name(&request.data);

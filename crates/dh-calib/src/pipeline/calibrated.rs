@@ -17,6 +17,7 @@ use crate::effects::EffectContext;
 use crate::effects_thermal::TimeUnit;
 use crate::fit::CalibError;
 use crate::predict::{effects_from_parameters, Calibrated};
+use crate::tree::DhTree;
 
 /// Farthest a target may be from the tip (metres) and still be a position on a tool.
 pub const MAX_TARGET_DISTANCE: f64 = 100.0;
@@ -90,6 +91,10 @@ pub struct TargetRecord {
     /// a point target.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rpy: Option<[f64; 3]>,
+    /// The branch it rides on, in a tree's calibration (its position is then in that
+    /// branch's tip frame); absent for a serial robot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub branch: Option<String>,
 }
 
 /// A session's device frame as a sheet holds it (metres, roll-pitch-yaw radians).
@@ -223,6 +228,16 @@ pub enum CalibratedError {
     /// A robot that cannot be built from the table, effects, device and targets.
     #[error("{0}")]
     Robot(CalibError),
+    /// A tree's target without a branch, or on a branch the tree does not have.
+    #[error("calibration: target '{name}': expected the branch it rides on (one of {}), found {}", .branches.iter().map(|b| format!("'{b}'")).collect::<Vec<_>>().join(", "), .found.as_ref().map_or_else(|| "none".to_string(), |b| format!("'{b}'")))]
+    TargetBranch {
+        /// The target.
+        name: String,
+        /// The branch it names, if any.
+        found: Option<String>,
+        /// The tree's branches.
+        branches: Vec<String>,
+    },
 }
 
 /// The calibrated robot of a sheet: ready to predict from the first session's device frame.
@@ -255,11 +270,35 @@ impl CalibratedRobot {
         effects: &[(String, f64)],
         record: &CalibrationRecord,
     ) -> Result<Self, CalibratedError> {
-        let mut ctx = EffectContext::serial(table);
+        Self::of(&DhTree::serial(table), effects, record)
+    }
+
+    /// The robot of a calibrated `tree` (see [`crate::tree`]), as [`CalibratedRobot::new`]:
+    /// each of `record`'s targets rides on the branch its `branch` names. A tree without
+    /// branches is a serial robot.
+    ///
+    /// # Errors
+    /// As [`CalibratedRobot::new`]; [`CalibratedError::TargetBranch`] for a target without a
+    /// branch of the tree.
+    pub fn new_tree(
+        tree: &DhTree,
+        effects: &[(String, f64)],
+        record: &CalibrationRecord,
+    ) -> Result<Self, CalibratedError> {
+        Self::of(tree, effects, record)
+    }
+
+    fn of(
+        tree: &DhTree,
+        effects: &[(String, f64)],
+        record: &CalibrationRecord,
+    ) -> Result<Self, CalibratedError> {
+        let mut ctx = EffectContext::serial(tree.trunk());
+        ctx.tree = tree.clone();
         match &record.gravity_model {
             Some(g) => {
                 ctx.gravity = Some(std::sync::Arc::new(
-                    g.model(table).map_err(CalibratedError::Gravity)?,
+                    g.model_of(tree).map_err(CalibratedError::Gravity)?,
                 ));
             }
             None => {
@@ -301,7 +340,26 @@ impl CalibratedRobot {
             .iter()
             .map(|t| t.rpy.map(|rpy| from_xyz_rpy([0.0; 3], rpy).rotation))
             .collect();
-        let mut calibrated = Calibrated::new(table, &effects, &device, &targets)
+        let robot = if tree.branches().is_empty() {
+            Calibrated::new(tree.trunk(), &effects, &device, &targets)
+        } else {
+            let names: Vec<String> = tree.branches().iter().map(|b| b.name.clone()).collect();
+            let mut on = Vec::with_capacity(targets.len());
+            for ((name, p), t) in targets.iter().zip(&record.targets) {
+                let b = t
+                    .branch
+                    .as_deref()
+                    .and_then(|b| tree.branch_index(b))
+                    .ok_or_else(|| CalibratedError::TargetBranch {
+                        name: name.clone(),
+                        found: t.branch.clone(),
+                        branches: names.clone(),
+                    })?;
+                on.push((name.clone(), *p, b));
+            }
+            Calibrated::new_tree(tree, &effects, &device, &on)
+        };
+        let mut calibrated = robot
             .map_err(CalibratedError::Robot)?
             .with_target_rotations(&rotations);
         let covariance = match &record.covariance {

@@ -177,7 +177,7 @@ fn analytic_uncertainty_matches_central_differences_in_both_frames() {
         let at = c.tool(&q, frame);
         let got = c.tool_uncertainty(&q, frame).unwrap();
         let want = numeric(&c, &cov, |x| {
-            let p = c.tool_at(x, &q, frame);
+            let p = c.tool_at(x, &q, 0, frame);
             let r = (p.rotation * at.rotation.inverse()).scaled_axis();
             let v = p.translation.vector;
             vec![v.x, v.y, v.z, r.x, r.y, r.z]

@@ -6,13 +6,16 @@
 
 use std::io::Write;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
+use dh_calib::calibrate::Report;
 use dh_calib::data::Measurements;
+use dh_calib::effects::EffectContext;
 use dh_calib::gravity::{GravityModel, Inertials};
 use dh_calib::pipeline::{
-    self, target_branches, Calibration, CalibrationDoc, PipelineError, Progress, Start,
-    TreeCalibration,
+    self, needs_gravity, target_branches, Calibration, GravityRecord, PipelineError, Progress,
+    SessionDoc, SessionFrameDoc, Start, TreeCalibration,
 };
+use dh_calib::predict::{Calibrated, Frame};
 use dh_calib::tree::DhTree;
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -20,11 +23,13 @@ use serde::Serialize;
 use super::inputs::{enough_samples, read_data_for};
 use super::serial::{check_sigma, pipeline_options};
 use super::CalibrationRequest;
+use crate::calibrated::CovarianceDoc;
 use crate::calibrated_writer::SectionSummary;
 use crate::error::hinted;
 use crate::input::{display_name, read_text};
 use crate::model::LoadedModel;
 use crate::sheet::parse_doc;
+use crate::sheet::EffectDoc;
 use crate::tree_sheet::{InertialsDoc, TreeSheet};
 
 /// The tree sheet `args.model` names, with its file name: `None` for a URDF, a serial sheet,
@@ -217,17 +222,29 @@ pub(super) fn tree_error(e: PipelineError, tree: &DhTree, data_name: &str) -> an
     }
 }
 
-/// The `calibration` section of a calibrated tree sheet (metres, radians).
+/// The `calibration` section of a calibrated tree sheet (metres, radians): the serial sheet's
+/// keys (see [`crate::calibrated_writer::CalibrationSection`]), each target with its branch,
+/// and the gravity model of a tree.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 struct TreeCalibrationSection {
     #[serde(flatten)]
     summary: SectionSummary,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    sessions: Vec<SessionFrameDoc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    first_session: Option<String>,
     targets: Vec<TreeTargetDoc>,
     effects: Vec<(String, f64)>,
     /// What the `t` of the effects of time was (`s` or `pose_order`), with one, as a serial
     /// sheet records it (`dh_calib::effects_thermal::TimeUnit`).
     #[serde(skip_serializing_if = "Option::is_none")]
     time_unit: Option<dh_calib::effects_thermal::TimeUnit>,
+    /// Covariance of the last step's free parameters: what `predict` propagates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    covariance: Option<CovarianceDoc>,
+    /// The link masses and nominal tree of the gravity effects, with any selected.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gravity_model: Option<GravityRecord>,
 }
 
 /// A fitted target and the branch it rides on.
@@ -237,18 +254,32 @@ struct TreeTargetDoc {
     branch: String,
     /// Position in the branch's tip frame (metres).
     xyz: [f64; 3],
+    /// A 6-DoF target's rotation in the tip frame (URDF roll, pitch, yaw; radians).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rpy: Option<[f64; 3]>,
 }
 
-/// The calibrated tree sheet as written to `path` (JSON for `.json`, else YAML).
+/// The gravity model of the effects of `report` that need one (compliance, backlash), from
+/// the tree's nominal geometry and masses as the calibration used them; `None` without such an
+/// effect or without masses.
+fn tree_gravity(inputs: &TreeInputs, report: &Report) -> Option<GravityRecord> {
+    let needs = report.selected_effects.iter().any(|e| needs_gravity(e));
+    let inertials = inputs.inertials.as_ref().filter(|_| needs)?;
+    let g = GravityModel::new(&inputs.sheet.tree, inertials, inputs.gravity).ok()?;
+    GravityRecord::of(&g)
+}
+
+/// The calibrated tree sheet as written to `path` (JSON for `.json`, else YAML): the tree, its
+/// estimated `effects`, and the `calibration` section predict reads.
 ///
 /// # Errors
 /// Serialisation failures.
 pub(super) fn tree_bytes(
     path: &str,
     inputs: &TreeInputs,
-    calibrated: &DhTree,
-    doc: &CalibrationDoc,
+    calibration: &TreeCalibration,
 ) -> Result<String> {
+    let (calibrated, doc) = (&calibration.calibrated, &calibration.doc.report);
     let sheet = &inputs.sheet;
     let mut out = TreeSheet::to_doc(
         calibrated,
@@ -262,8 +293,24 @@ pub(super) fn tree_bytes(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     ));
+    let effects: Vec<EffectDoc> = doc
+        .parameters
+        .iter()
+        .filter(|p| p.is_estimated_effect())
+        .map(|p| EffectDoc {
+            name: p.name.clone(),
+            value: p.estimate,
+            unit: p.unit.to_string(),
+            std_error: p.std_error,
+        })
+        .collect();
+    out.effects = (!effects.is_empty()).then_some(effects);
     let section = TreeCalibrationSection {
         summary: SectionSummary::of(doc),
+        sessions: SessionDoc::frames(&doc.sessions),
+        first_session: (doc.sessions.len() > 1)
+            .then(|| doc.sessions.first().map(|s| s.name.clone()))
+            .flatten(),
         targets: doc
             .targets
             .iter()
@@ -277,10 +324,17 @@ pub(super) fn tree_bytes(
                     .map(|b| b.name.clone())
                     .unwrap_or_default(),
                 xyz: t.xyz,
+                rpy: t.rpy,
             })
             .collect(),
         effects: doc.estimated_effects(),
         time_unit: doc.time_unit(&inputs.data),
+        covariance: calibration
+            .report
+            .covariance
+            .as_ref()
+            .map(CovarianceDoc::of),
+        gravity_model: tree_gravity(inputs, &calibration.report),
     };
     out.calibration = Some(serde_yaml::to_value(&section)?);
     Ok(if path.to_ascii_lowercase().ends_with(".json") {
@@ -325,9 +379,63 @@ pub(super) fn calibrate_tree(
 }
 
 impl Tree {
-    /// The calibrated tree sheet as written to `path`.
+    /// The calibrated tree sheet as written to `path`, proved: read back as `predict` reads
+    /// it, it predicts every measured point as the fitted tree does (see [`prove_tree`]).
+    ///
+    /// # Errors
+    /// Serialisation failures; a sheet that does not read back or predicts otherwise (a defect
+    /// of the writer, reported as such).
     pub(super) fn model_file(&self, path: &str) -> Result<String> {
-        let c = &self.calibration;
-        tree_bytes(path, &self.inputs, &c.calibrated, &c.doc.report)
+        let text = tree_bytes(path, &self.inputs, &self.calibration)?;
+        prove_tree(path, &text, self)?;
+        Ok(text)
     }
+}
+
+/// The proof on a written tree sheet: `predict` reads `text` back (tree, effects, gravity model,
+/// device frame, targets on their branches) and its predictions of every measured point, in the
+/// device frame, are the fitted tree's within [`crate::written::WRITTEN_TOLERANCE`].
+///
+/// # Errors
+/// A sheet that does not read back, or predicts a point farther than the tolerance from the
+/// fit, naming the largest deviation.
+fn prove_tree(path: &str, text: &str, t: &Tree) -> Result<()> {
+    let (c, inputs) = (&t.calibration, &t.inputs);
+    let tree = &inputs.sheet.tree;
+    let gravity = match &inputs.inertials {
+        Some(i) => GravityModel::new(tree, i, inputs.gravity)
+            .ok()
+            .map(std::sync::Arc::new),
+        None => None,
+    };
+    let ctx = EffectContext {
+        tree: tree.clone(),
+        gravity,
+        gravity_vector: inputs.gravity,
+    };
+    // A fit the library cannot rebuild in memory has nothing to compare with (as for a serial
+    // sheet): the reading back is still required.
+    let fitted = Calibrated::from_tree_report(&c.report, &c.target_branches, &ctx).ok();
+    let name = crate::text::output_name(path);
+    let back = crate::calibrated::calibrated_sheet(text, &name).with_context(|| {
+        format!("{name}: the calibrated tree sheet does not read back for predict (a defect of the writer)")
+    })?;
+    let Some(fitted) = fitted else {
+        return Ok(());
+    };
+    let q = crate::calibrated_writer::row_values(&tree.joint_table(), &inputs.data)?;
+    let frame = Frame::Device;
+    let mut worst = 0.0f64;
+    for (q, s) in q.iter().zip(&inputs.data.samples) {
+        let d =
+            (back.calibrated.point(q, s.target, frame) - fitted.point(q, s.target, frame)).norm();
+        worst = worst.max(if d.is_finite() { d } else { f64::INFINITY });
+    }
+    if worst > crate::written::WRITTEN_TOLERANCE {
+        anyhow::bail!(
+            "{name}: read back, the calibrated tree sheet predicts a measured point {worst:e} m from the fit (tolerance {:e} m): a defect of the writer",
+            crate::written::WRITTEN_TOLERANCE
+        );
+    }
+    Ok(())
 }

@@ -107,6 +107,7 @@ def predict(
     length_unit: str,
     angle_unit: str,
     sequence: bool,
+    branch: Optional[str] = None,
 ) -> Tuple[
     List[str],
     List[str],
@@ -131,6 +132,7 @@ def compensate(
     length_unit: str,
     angle_unit: str,
     sequence: bool,
+    branch: Optional[str] = None,
 ) -> Tuple[List[List[float]], List[Tuple[float, float, float, float]], List[str], List[str]]:
     """(corrected joint values, per pose position_before, orientation_before, position_error,
     orientation_error, the poses not compensated as `config (line N): why`, warnings); in the

@@ -477,6 +477,7 @@ def predict(
     angle_unit: str = "rad",
     sequence: bool = False,
     time: Any = None,
+    branch: Optional[str] = None,
 ) -> Prediction:
     """The calibrated model's target positions (or tool poses, ``targets="tool"``) at joint
     values, with their standard uncertainty, as ``urdf-dh predict`` computes them.
@@ -499,9 +500,14 @@ def predict(
             ``t`` since the first row (the robot as at the calibration's first sample). Without
             times it is refused, naming the missing time, unless ``sequence=True`` (a
             calibration whose data had no times: the pose order).
+        branch: with a calibrated tree (a tree sheet's ``calibrate(..., out=...)``), the branch
+            whose targets (by default) or tool (``targets="tool"``) are predicted (``--branch``;
+            default: every target on its own branch, and the tool of a tree of several branches
+            needs one). The joint values hold every joint of the tree.
 
     Raises:
-        UrdfDhError: bad model or joint values (the CLI's message).
+        UrdfDhError: bad model or joint values, an unknown branch or none where one is needed
+            (the CLI's message).
     """
     columns = None
     if not _is_path(joints) and not _is_frame(joints):
@@ -522,6 +528,7 @@ def predict(
             length_unit,
             angle_unit,
             bool(sequence),
+            branch,
         )
     _warn_all(_as_python(native[-1]))
     return Prediction(native)
@@ -540,11 +547,14 @@ def compensate(
     angle_unit: str = "rad",
     sequence: bool = False,
     time: Any = None,
+    branch: Optional[str] = None,
 ) -> Tuple[np.ndarray, np.ndarray, List[str]]:
     """Corrected joint values with which the calibrated ``model`` puts its tool where
     ``nominal`` puts it at the commanded ``joints`` (same forms as :func:`predict`), as
     ``urdf-dh compensate`` computes them. ``sequence`` (``--sequence``) and ``time`` (each
-    pose's time in seconds, for ``thermal_growth``) as in :func:`predict`.
+    pose's time in seconds, for ``thermal_growth``) as in :func:`predict`. For a calibrated
+    tree, ``nominal`` is the tree sheet it started from and ``branch`` the branch whose tool is
+    compensated (``--branch``; only the trunk's and that branch's joints move).
 
     Returns:
         ``(q, errors, failures)``: the corrected joint values (poses x joints), per pose the
@@ -573,6 +583,7 @@ def compensate(
             length_unit,
             angle_unit,
             bool(sequence),
+            branch,
         )
     _warn_all(_as_python(notes))
     return (
