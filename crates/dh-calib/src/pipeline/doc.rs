@@ -186,10 +186,12 @@ impl ParameterDoc {
         super::is_effect(&self.name)
     }
 
-    /// Whether this is an estimated effect parameter: what a calibrated sheet's `effects` and
-    /// `calibration.effects` list.
+    /// Whether this is a parameter of an effect of the fitted model, free or held at the value
+    /// the fit used (a time constant the data cannot tell is held at its start): what a
+    /// calibrated sheet's `effects` and `calibration.effects` list, so that the model rebuilt
+    /// from the sheet is the one fitted.
     pub fn is_estimated_effect(&self) -> bool {
-        self.free && self.is_effect()
+        self.is_effect()
     }
 }
 
