@@ -58,6 +58,8 @@ mod residuals_at;
 pub(crate) use residuals_at::{ResidualsAt, SessionProblem};
 mod rows_at;
 pub(crate) use rows_at::sample_rows;
+mod left_out;
+pub(crate) use left_out::LeftOut;
 mod session;
 pub(crate) use session::*;
 mod pipeline;

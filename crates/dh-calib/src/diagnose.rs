@@ -89,6 +89,7 @@ use crate::findings::{
 mod selection;
 pub use selection::*;
 mod attempts;
+mod evidence;
 mod fold_normals;
 use attempts::{Attempts, Wanted};
 mod nested;

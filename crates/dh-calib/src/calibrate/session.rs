@@ -27,6 +27,9 @@ pub(crate) struct Session<'a> {
     /// The position residuals of `prep.cal` at the last point asked for
     /// ([`Session::position_residuals`]).
     pub(super) residuals_at: ResidualsAt,
+    /// The points the outlier screen left out, when a diagnosis judges them against its
+    /// candidates' fits ([`LeftOut`]; `None` otherwise).
+    pub(crate) left_out: Option<LeftOut>,
 }
 
 /// What [`Session::identify_factored`] finds: the free and held columns, and the factor it
@@ -187,6 +190,7 @@ impl<'a> Session<'a> {
             targets_nominal,
             coarse,
             residuals_at: ResidualsAt::default(),
+            left_out: None,
         })
     }
 

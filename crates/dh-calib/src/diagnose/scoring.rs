@@ -409,8 +409,25 @@ pub(super) fn judge(
     };
     // A 6-DoF sample's error weighs its orientation in, as the fit does (each part over its
     // own sigma): an effect the angles show and the positions hardly do must pass here too.
-    let held_out =
-        groups.and_then(|g| paired_wilcoxon(&held_before.weighed(), &held_after.weighed(), g));
+    // With a validation split, the left-out validation points that either fit explains are
+    // compared too, over the same points for both (see [`crate::calibrate::LeftOut`]): a
+    // held-out pose that only this candidate's effect explains is its best evidence.
+    let held_out = groups.and_then(|g| {
+        let (mut b, mut a) = (held_before.weighed(), held_after.weighed());
+        let left = match (&session.validation, &session.left_out) {
+            (Validation::Split { .. }, Some(left)) => {
+                left.explained_validation(&session.model, &before.x, &after.x)
+            }
+            _ => Default::default(),
+        };
+        if left.2.is_empty() {
+            return paired_wilcoxon(&b, &a, g);
+        }
+        b.extend(left.0);
+        a.extend(left.1);
+        let groups: Vec<usize> = g.iter().copied().chain(left.2).collect();
+        paired_wilcoxon(&b, &a, &groups)
+    });
     let mut reasons = Vec::new();
     if !forced {
         if f_p.is_nan() || f_p >= f_threshold {

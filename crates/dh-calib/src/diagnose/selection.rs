@@ -68,6 +68,14 @@ pub(crate) fn effect_context(
 /// and against the final model.
 /// Declared labels are judged with from the start.
 ///
+/// A left-out point can be the very evidence for an effect (every pose a direction backlash
+/// reverses), so the candidates are judged with the left-out points too: a candidate's
+/// held-out test (with a validation split) counts the left-out validation points that its fit
+/// or the fit before it explains, for both fits; and at the end of a run, the calibration
+/// points still left out are judged against each remaining candidate (linearised, the kept
+/// points agreeing, then exactly): when one gives back points of two poses or more, the
+/// selection runs again with them, judged against it.
+///
 /// # Errors
 /// Those of [`crate::calibrate::calibrate_tree`]; [`CalibError::BadOption`] /
 /// [`CalibError::MissingJoint`] for a bad label, bad inertials or a bad `alpha`.
@@ -202,7 +210,7 @@ pub const MAX_REJUDGE: usize = 3;
 /// The effects a second outlier judgement used, the judgement before it (whose left-out
 /// samples it could flag), and its findings (the screen of the next run: the same judgement,
 /// made once).
-type Rejudged = (Vec<Arc<dyn Effect>>, OutlierReport, OutlierReport);
+pub(super) type Rejudged = (Vec<Arc<dyn Effect>>, OutlierReport, OutlierReport);
 
 /// The fit a judgement again may read instead of fitting (see [`confirmed_at`]): the run's
 /// session, the point of its latest fit and the number of its free parameters.
@@ -330,7 +338,11 @@ fn diagnose_judged(
     } else {
         Folds::OneStep
     };
-    let crate::calibrate::Fitted { session, geo, scan } = crate::calibrate::fitted_session(
+    let crate::calibrate::Fitted {
+        mut session,
+        geo,
+        scan,
+    } = crate::calibrate::fitted_session(
         tree,
         data,
         options,
@@ -338,6 +350,17 @@ fn diagnose_judged(
         (judged_with, within),
         screened,
         folds,
+    )?;
+    // The points left out, judged against each candidate's fit too.
+    let directions = pool.iter().any(|e| e.uses_sequence());
+    let kept_val_groups = session.prep.val_groups.clone();
+    session.left_out = crate::calibrate::LeftOut::new(
+        tree,
+        data,
+        options,
+        scan.as_ref(),
+        directions,
+        (&kept_val_groups, evidence::MIN_POSES),
     )?;
     let mut steps = geo.steps;
     let mut last = geo.last.outcome;
@@ -675,6 +698,24 @@ fn diagnose_judged(
             }
             Rejudgement::Nothing => {}
             Rejudgement::Confirmed(labels, again) => confirmed = Some((labels, again)),
+        }
+    }
+    // Points still left out that a candidate explains are its evidence: the selection runs
+    // again with them (see `evidence`).
+    if may_rejudge && !forced {
+        let found = evidence::left_out_evidence(
+            tree,
+            data,
+            options,
+            &session,
+            &last.x,
+            &pool,
+            (&selected, &free),
+            scan.as_ref(),
+            diag.alpha,
+        )?;
+        if let Some(again) = found {
+            return Ok(Judgement::Again(Box::new(again)));
         }
     }
     let effect_parameters = effect_estimates(&session.model, &last, &selected);
