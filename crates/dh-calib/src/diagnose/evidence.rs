@@ -102,6 +102,8 @@ fn explaining(
         let c = js.columns(at, k).into_owned();
         at += k;
         let mut set = start.clone();
+        // Whether the points brought within the threshold settled.
+        let mut settled = false;
         for _ in 0..MAX_ROUNDS {
             let rows: Vec<usize> = set.iter().flat_map(|&i| 3 * i..3 * i + 3).collect();
             if rows.len() <= k {
@@ -109,7 +111,8 @@ fn explaining(
             }
             let a = c.select_rows(rows.iter());
             let b = DVector::from_iterator(rows.len(), rows.iter().map(|&q| -rs[q]));
-            let Ok(dc) = a.svd(true, true).solve(&b, 1e-12) else {
+            // Normal equations: a column these points do not move leaves no solution.
+            let Some(dc) = a.tr_mul(&a).cholesky().map(|f| f.solve(&a.tr_mul(&b))) else {
                 break;
             };
             let pred = &rs + &c * &dc;
@@ -117,13 +120,14 @@ fn explaining(
                 .filter(|&i| norm(&pred, i) <= left.threshold)
                 .collect();
             if now == set {
+                settled = true;
                 break;
             }
             set = now;
         }
         let poses: BTreeSet<usize> = set.iter().map(|&i| left.cal_poses[i]).collect();
         let explained_now = set.iter().all(|&i| t0[i] > left.threshold);
-        if poses.len() >= MIN_POSES && explained_now && set.len() * 3 > k {
+        if settled && poses.len() >= MIN_POSES && explained_now && set.len() * 3 > k {
             found.push(Explains {
                 effect: e,
                 poses: poses.len(),
@@ -323,26 +327,24 @@ impl Kept {
             )
             .norm()
         };
-        let n_kept = c_perp.nrows();
+        // Normal equations: the kept points' part once, each left-out point's added.
+        let kept_n = c_perp.tr_mul(&c_perp) / (sigma * sigma);
+        let kept_g = -(c_perp.tr_mul(&self.r_perp)) / (sigma * sigma);
         let mut set = points.clone();
         let mut value = DVector::zeros(k);
+        let mut settled = false;
         for _ in 0..MAX_ROUNDS {
-            let m = n_kept + 3 * set.len();
-            let mut a = DMatrix::zeros(m, k);
-            let mut b = DVector::zeros(m);
-            a.rows_mut(0, n_kept).copy_from(&(c_perp / sigma));
-            b.rows_mut(0, n_kept).copy_from(&(-&self.r_perp / sigma));
-            for (t, &i) in set.iter().enumerate() {
+            let mut normal = kept_n.clone();
+            let mut g = kept_g.clone();
+            for &i in &set {
                 for ax in 0..3 {
-                    let s = left.cal_scales[i][ax];
-                    let at = n_kept + 3 * t + ax;
-                    for c in 0..k {
-                        a[(at, c)] = cl[(row(i, ax), c)] / s;
-                    }
-                    b[at] = -rl[row(i, ax)] / s;
+                    let s2 = left.cal_scales[i][ax].powi(2);
+                    let row = cl.row(row(i, ax));
+                    normal += row.transpose() * row / s2;
+                    g -= row.transpose() * (rl[self.starts[i] + ax] / s2);
                 }
             }
-            let Ok(dc) = a.svd(true, true).solve(&b, 1e-12) else {
+            let Some(dc) = normal.cholesky().map(|f| f.solve(&g)) else {
                 return false;
             };
             let pred = rl + cl * &dc;
@@ -351,6 +353,7 @@ impl Kept {
                 .filter(|&i| standardised(&pred, i) <= left.threshold)
                 .collect();
             if now == set {
+                settled = true;
                 break;
             }
             set = now;
@@ -360,7 +363,8 @@ impl Kept {
         let before = self.r_perp.norm_squared();
         let after = (&self.r_perp + c_perp * &value).norm_squared();
         let bound = crate::outliers::threshold_in(1, alpha, k as f64).powi(2);
-        poses.len() >= MIN_POSES
+        settled
+            && poses.len() >= MIN_POSES
             && fresh
             && after.is_finite()
             && after - before <= bound * sigma * sigma
