@@ -88,6 +88,8 @@ use crate::findings::{
 // other's items, re-exported here.
 mod selection;
 pub use selection::*;
+mod rejudge;
+pub use rejudge::{diagnose_tree, MAX_REJUDGE};
 mod attempts;
 mod evidence;
 mod fold_normals;

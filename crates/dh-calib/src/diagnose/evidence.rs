@@ -18,6 +18,7 @@ use std::collections::BTreeSet;
 
 use nalgebra::{DMatrix, DVector};
 
+use super::rejudge::Rejudged;
 use super::*;
 use crate::calibrate::LeftOut;
 
