@@ -61,7 +61,11 @@ impl LeftOut {
         // validation sample makes) or for left-out calibration points of several poses.
         let mut poses = std::collections::BTreeSet::new();
         for o in scan.outliers.iter().filter(|o| !o.validation) {
-            poses.insert(o.config.clone().unwrap_or_else(|| format!("\0{}", o.sample)));
+            poses.insert(
+                o.config
+                    .clone()
+                    .unwrap_or_else(|| format!("\0{}", o.sample)),
+            );
         }
         if poses.len() < min_poses && scan.outliers.iter().all(|o| !o.validation) {
             return Ok(None);
