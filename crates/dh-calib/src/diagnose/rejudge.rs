@@ -198,8 +198,8 @@ pub(super) enum Rejudgement {
     /// The points left out are outliers of the effects (their labels) too: that judgement's
     /// figures.
     Confirmed(String, Confirmation),
-    /// Not all: the judgement before, and the new one.
-    Changed(OutlierReport, OutlierReport),
+    /// Not all: the judgement before, and the new one (boxed: two reports beside a label).
+    Changed(Box<(OutlierReport, OutlierReport)>),
 }
 
 /// Whether the selection must run again (see [`diagnose_tree`]): the points `scan` left out
@@ -236,5 +236,5 @@ pub(super) fn rejudge(
             Confirmation::of(&again),
         ));
     }
-    Ok(Rejudgement::Changed(scan.clone(), again))
+    Ok(Rejudgement::Changed(Box::new((scan.clone(), again))))
 }

@@ -393,8 +393,9 @@ pub(super) fn diagnose_judged(
                             selected.iter().map(|&e| pool[e].clone()).collect();
                         let at = (&session, &last.x[..], free.len());
                         match rejudge(tree, data, options, scan.as_ref(), &so_far, at)? {
-                            Rejudgement::Changed(before, again) => {
-                                return Ok(Judgement::Again(Box::new((so_far, before, again))))
+                            Rejudgement::Changed(judged) => {
+                                let (before, again) = *judged;
+                                return Ok(Judgement::Again(Box::new((so_far, before, again))));
                             }
                             Rejudgement::Nothing => confirmed = None,
                             Rejudgement::Confirmed(labels, again) => {
@@ -462,8 +463,9 @@ pub(super) fn diagnose_judged(
         confirmed = None;
         let at = (&session, &last.x[..], free.len());
         match rejudge(tree, data, options, scan.as_ref(), &effects, at)? {
-            Rejudgement::Changed(before, again) => {
-                return Ok(Judgement::Again(Box::new((effects, before, again))))
+            Rejudgement::Changed(judged) => {
+                let (before, again) = *judged;
+                return Ok(Judgement::Again(Box::new((effects, before, again))));
             }
             Rejudgement::Nothing => {}
             Rejudgement::Confirmed(labels, again) => confirmed = Some((labels, again)),
