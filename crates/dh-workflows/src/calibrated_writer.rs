@@ -30,6 +30,22 @@ use crate::units::{AngleUnit, LengthUnit};
 use crate::urdf_writer::{check_urdf, urdf_of};
 use crate::written;
 
+/// The sheet's top-level `effects` of a calibration: every parameter of its fitted effects
+/// ([`dh_calib::pipeline::ParameterDoc::is_estimated_effect`]) with its value (SI units), unit
+/// and standard error; the serial and the tree sheet list them alike.
+pub(crate) fn effect_docs(doc: &CalibrationDoc) -> Vec<EffectDoc> {
+    doc.parameters
+        .iter()
+        .filter(|p| p.is_estimated_effect())
+        .map(|p| EffectDoc {
+            name: p.name.clone(),
+            value: p.estimate,
+            unit: p.unit.to_string(),
+            std_error: p.std_error,
+        })
+        .collect()
+}
+
 /// The model a calibration started from, as its calibrated model is written: the nominal
 /// table, the robot's name, the units of a written sheet, the URDF's base and tip links, and
 /// the coupled joints of a sheet.
@@ -171,17 +187,7 @@ pub fn model_text(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     );
-    let effects: Vec<EffectDoc> = doc
-        .parameters
-        .iter()
-        .filter(|p| p.is_estimated_effect())
-        .map(|p| EffectDoc {
-            name: p.name.clone(),
-            value: p.estimate,
-            unit: p.unit.to_string(),
-            std_error: p.std_error,
-        })
-        .collect();
+    let effects = effect_docs(doc);
     // A model whose own rows put a near-parallel pair's common normal far away (an URDF
     // extracted beyond its angular tolerance) is written in the Hayati form: the same
     // kinematics, bounded lengths. The length bound is the size of the model in that form.

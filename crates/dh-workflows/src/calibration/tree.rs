@@ -29,7 +29,6 @@ use crate::error::hinted;
 use crate::input::{display_name, read_text};
 use crate::model::LoadedModel;
 use crate::sheet::parse_doc;
-use crate::sheet::EffectDoc;
 use crate::tree_sheet::{InertialsDoc, TreeSheet};
 
 /// The tree sheet `args.model` names, with its file name: `None` for a URDF, a serial sheet,
@@ -293,17 +292,7 @@ pub(super) fn tree_bytes(
         "calibrated by urdf-dh calibrate from {} against {}: RMS {:.6} m -> {:.6} m",
         doc.model, doc.data, doc.rms_before, doc.rms_after
     ));
-    let effects: Vec<EffectDoc> = doc
-        .parameters
-        .iter()
-        .filter(|p| p.is_estimated_effect())
-        .map(|p| EffectDoc {
-            name: p.name.clone(),
-            value: p.estimate,
-            unit: p.unit.to_string(),
-            std_error: p.std_error,
-        })
-        .collect();
+    let effects = crate::calibrated_writer::effect_docs(doc);
     out.effects = (!effects.is_empty()).then_some(effects);
     let section = TreeCalibrationSection {
         summary: SectionSummary::of(doc),
