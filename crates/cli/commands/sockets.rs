@@ -138,7 +138,7 @@ pub(crate) fn text(doc: &ContactDoc) -> String {
         }
     } else {
         let _ = writeln!(s, "effects: {}", doc.selected_effects.join(", "));
-        for p in doc.parameters.iter().filter(|p| p.is_estimated_effect()) {
+        for p in doc.parameters.iter().filter(|p| p.is_effect()) {
             let _ = writeln!(
                 s,
                 "  {} = {:.6e}{} {}",

@@ -31,12 +31,12 @@ use crate::urdf_writer::{check_urdf, urdf_of};
 use crate::written;
 
 /// The sheet's top-level `effects` of a calibration: every parameter of its fitted effects
-/// ([`dh_calib::pipeline::ParameterDoc::is_estimated_effect`]) with its value (SI units), unit
+/// ([`dh_calib::pipeline::ParameterDoc::is_effect`]) with its value (SI units), unit
 /// and standard error; the serial and the tree sheet list them alike.
 pub(crate) fn effect_docs(doc: &CalibrationDoc) -> Vec<EffectDoc> {
     doc.parameters
         .iter()
-        .filter(|p| p.is_estimated_effect())
+        .filter(|p| p.is_effect())
         .map(|p| EffectDoc {
             name: p.name.clone(),
             value: p.estimate,

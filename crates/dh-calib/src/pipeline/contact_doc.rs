@@ -69,9 +69,11 @@ pub struct ContactParameterDoc {
 }
 
 impl ContactParameterDoc {
-    /// Whether this is an estimated effect parameter (see [`super::is_effect`]).
-    pub fn is_estimated_effect(&self) -> bool {
-        self.free && super::is_effect(&self.name)
+    /// Whether this is an effect's parameter (see [`super::is_effect`]), free or held at the
+    /// value the fit used: what a calibrated sheet of contacts lists, as
+    /// [`super::ParameterDoc::is_effect`] says.
+    pub fn is_effect(&self) -> bool {
+        super::is_effect(&self.name)
     }
 }
 

@@ -181,28 +181,23 @@ impl ParameterDoc {
         }
     }
 
-    /// Whether this is an effect's parameter (see [`super::is_effect`]), whatever its unit.
+    /// Whether this is an effect's parameter (see [`super::is_effect`]), whatever its unit,
+    /// free or held at the value the fit used (a time constant the data cannot tell is held at
+    /// its start): the report lists only the fitted model's effects, so these are what a
+    /// calibrated sheet's `effects` and `calibration.effects` list, and the model rebuilt from
+    /// the sheet is the one fitted.
     pub fn is_effect(&self) -> bool {
         super::is_effect(&self.name)
-    }
-
-    /// Whether this is a parameter of an effect of the fitted model, free or held at the value
-    /// the fit used (a time constant the data cannot tell is held at its start): what a
-    /// calibrated sheet's `effects` and `calibration.effects` list, so that the model rebuilt
-    /// from the sheet is the one fitted.
-    pub fn is_estimated_effect(&self) -> bool {
-        self.is_effect()
     }
 }
 
 impl CalibrationDoc {
-    /// The estimated effects' values by label (SI units, see
-    /// [`ParameterDoc::is_estimated_effect`]): what a calibrated model's `calibration.effects`
-    /// lists.
+    /// The fitted effects' parameter values by name (SI units, see [`ParameterDoc::is_effect`]):
+    /// what a calibrated model's `calibration.effects` lists.
     pub fn estimated_effects(&self) -> Vec<(String, f64)> {
         self.parameters
             .iter()
-            .filter(|p| p.is_estimated_effect())
+            .filter(|p| p.is_effect())
             .map(|p| (p.name.clone(), p.estimate))
             .collect()
     }
@@ -218,7 +213,7 @@ impl CalibrationDoc {
         crate::effects_thermal::TimeUnit::of_calibration(
             self.parameters
                 .iter()
-                .filter(|p| p.is_estimated_effect())
+                .filter(|p| p.is_effect())
                 .map(|p| p.name.as_str()),
             data,
         )

@@ -84,7 +84,7 @@ pub(super) fn contact_model_bytes(
         effects: doc
             .parameters
             .iter()
-            .filter(|p| p.is_estimated_effect())
+            .filter(|p| p.is_effect())
             .map(|p| (p.name.clone(), p.estimate))
             .collect(),
     };
