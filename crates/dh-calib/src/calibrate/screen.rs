@@ -144,6 +144,11 @@ impl<'a> Judge<'a> {
         }
     }
 
+    /// Whether `data` has validation samples.
+    fn has_validation(&self) -> bool {
+        self.places.is_some()
+    }
+
     fn place(&self, i: usize) -> (bool, usize) {
         self.places.as_ref().map_or((false, i), |p| p[i])
     }
@@ -382,11 +387,6 @@ pub(crate) fn screen_from(
             &own_full
         }
     };
-    let nv = data
-        .samples
-        .iter()
-        .filter(|s| s.split == Split::Validation)
-        .count();
     let screen_options = CalibrationOptions {
         effects: vec![],
         ..options.clone()
@@ -418,7 +418,7 @@ pub(crate) fn screen_from(
                 let keep = |i: usize, s: &crate::data::Sample| {
                     s.split == Split::Calibration && !flagged.contains(&i)
                 };
-                let kept = if flagged.is_empty() && nv == 0 {
+                let kept = if flagged.is_empty() && !judge.has_validation() {
                     std::borrow::Cow::Borrowed(data)
                 } else {
                     std::borrow::Cow::Owned(data.filtered(keep))
